@@ -1,0 +1,87 @@
+"""Exceptions raised by bwim.
+
+Contract
+--------
+* :class:`BwimError` is the base of every exception bwim raises on purpose.
+* :class:`InputError` means the caller gave something bwim cannot use: a non-positive
+  dimension, an unknown option, a sensor off the deck.  Its message names the argument and
+  the value, so that a command-line user can fix the input without reading a traceback.
+* :class:`NumericalError` means the input was valid but the numerics failed (for example a
+  stiffness matrix that is not positive definite because the supports leave a mechanism).
+
+Input is validated at the edges with these exceptions, never with ``assert``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+
+__all__ = [
+    "BwimError",
+    "InputError",
+    "NumericalError",
+    "require_choice",
+    "require_finite",
+    "require_positive",
+    "require_range",
+]
+
+
+class BwimError(Exception):
+    """Base class of all bwim errors."""
+
+
+class InputError(BwimError, ValueError):
+    """An argument or input file that bwim cannot use; the message names it."""
+
+
+class NumericalError(BwimError, ArithmeticError):
+    """Valid input on which the numerics failed (singular system, no convergence)."""
+
+
+def _fmt(value: object) -> str:
+    if isinstance(value, float):
+        return f"{value:g}"
+    return repr(value)
+
+
+def require_finite(name: str, value: float) -> float:
+    """Return ``float(value)`` or raise :class:`InputError` if it is not a finite number."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be a number, got {_fmt(value)}") from None
+    if not math.isfinite(v):
+        raise InputError(f"{name} must be finite, got {_fmt(value)}")
+    return v
+
+
+def require_positive(name: str, value: float) -> float:
+    """Return ``float(value)`` or raise :class:`InputError` unless it is finite and > 0."""
+    v = require_finite(name, value)
+    if v <= 0.0:
+        raise InputError(f"{name} must be positive, got {_fmt(value)}")
+    return v
+
+
+def require_range(
+    name: str, value: float, low: float, high: float, *, closed: bool = False
+) -> float:
+    """Return ``float(value)`` or raise unless ``low < value < high`` (``<=`` if closed)."""
+    v = require_finite(name, value)
+    ok = (low <= v <= high) if closed else (low < v < high)
+    if not ok:
+        br = ("[", "]") if closed else ("(", ")")
+        raise InputError(
+            f"{name} must lie in {br[0]}{_fmt(low)}, {_fmt(high)}{br[1]}, got {_fmt(value)}"
+        )
+    return v
+
+
+def require_choice(name: str, value: object, choices: Iterable[str]) -> str:
+    """Return ``value`` if it is one of ``choices`` or raise :class:`InputError`."""
+    options = list(choices)
+    if not isinstance(value, str) or value not in options:
+        raise InputError(f"unknown {name} {_fmt(value)}; expected one of {', '.join(options)}")
+    return value

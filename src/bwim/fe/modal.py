@@ -1,0 +1,91 @@
+"""Lowest natural modes of a bridge model.
+
+Contract
+--------
+* Solves ``K φ = ω² M φ`` on the free DOF for the ``n`` lowest modes by shift-invert
+  Lanczos (``scipy.sparse.linalg.eigsh`` with σ = 0), the inverse operator being the
+  banded Cholesky factor of K.  Tiny systems use a dense solver.
+* Shapes are mass-normalised (``Φᵀ M Φ = I``) and signed so that the largest deflection
+  component of each mode is positive, which makes results reproducible.
+* Frequencies are returned in Hz, ascending; ``omega`` in rad/s.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from bwim.errors import InputError
+
+__all__ = ["Modes", "lowest_modes"]
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Modes:
+    """Natural modes of a bridge model.
+
+    Attributes
+    ----------
+    frequencies : ndarray, shape (n,)
+        Natural frequencies, Hz, ascending.
+    omega : ndarray, shape (n,)
+        Circular frequencies, rad/s.
+    shapes : ndarray, shape (n_free, n)
+        Mass-normalised mode shapes on the model's free DOF.
+    """
+
+    frequencies: np.ndarray
+    omega: np.ndarray
+    shapes: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return self.frequencies.size
+
+
+def lowest_modes(
+    n: int,
+    stiffness_factor: np.ndarray,
+    K: sp.spmatrix,
+    M: sp.spmatrix,
+    deflection_dofs: np.ndarray,
+) -> Modes:
+    """The ``n`` lowest modes.
+
+    Parameters
+    ----------
+    n : int
+        Number of modes.
+    stiffness_factor : ndarray
+        Lower banded Cholesky factor of K (``scipy.linalg.cholesky_banded(lower=True)``).
+    K, M : sparse matrices, shape (n_free, n_free)
+    deflection_dofs : ndarray of int
+        Free-DOF indices of the deflections w, used to fix each mode's sign.
+    """
+    n_free = K.shape[0]
+    if not (isinstance(n, (int, np.integer)) and 1 <= n <= n_free):
+        raise InputError(f"number of modes must be an integer in [1, {n_free}], got {n!r}")
+    if n_free <= 60 or n >= n_free // 2:
+        vals, vecs = sla.eigh(K.toarray(), M.toarray(), subset_by_index=[0, n - 1])
+    else:
+        def solve(v: np.ndarray) -> np.ndarray:
+            return sla.cho_solve_banded((stiffness_factor, True), v)
+
+        op = spla.LinearOperator((n_free, n_free), matvec=solve, dtype=float)
+        v0 = np.random.default_rng(0).standard_normal(n_free)
+        vals, vecs = spla.eigsh(K, k=n, M=M, sigma=0.0, which="LM", OPinv=op, v0=v0)
+    order = np.argsort(vals)
+    vals = vals[order]
+    vecs = vecs[:, order]
+    # mass-normalise and fix the sign
+    mnorm = np.sqrt(np.einsum("ij,ij->j", vecs, M @ vecs))
+    vecs = vecs / mnorm
+    w = vecs[deflection_dofs] if deflection_dofs.size else vecs
+    big = np.argmax(np.abs(w), axis=0)
+    vecs = vecs * np.sign(w[big, np.arange(w.shape[1])])
+    omega = np.sqrt(np.clip(vals, 0.0, None))
+    return Modes(frequencies=omega / (2 * np.pi), omega=omega, shapes=vecs)
