@@ -367,7 +367,7 @@ class Bridge:
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         """``K⁻¹ rhs`` on the free DOF (rhs shape (n_free,) or (n_free, k))."""
-        return sla.cho_solve_banded((self.stiffness_factor(), True), rhs)
+        return sla.cho_solve_banded((self.stiffness_factor(), True), rhs, check_finite=False)
 
     def stiffness_matrix(self) -> sp.csr_matrix:
         """K on the free DOF (CSR)."""

@@ -73,7 +73,7 @@ def lowest_modes(
         vals, vecs = sla.eigh(K.toarray(), M.toarray(), subset_by_index=[0, n - 1])
     else:
         def solve(v: np.ndarray) -> np.ndarray:
-            return sla.cho_solve_banded((stiffness_factor, True), v)
+            return sla.cho_solve_banded((stiffness_factor, True), v, check_finite=False)
 
         op = spla.LinearOperator((n_free, n_free), matvec=solve, dtype=float)
         v0 = np.random.default_rng(0).standard_normal(n_free)

@@ -1,0 +1,22 @@
+"""Run every benchmark and print its tables: ``make bench``."""
+
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from benchmarks import bench_fe  # noqa: E402
+
+
+def main() -> None:
+    print(f"bwim benchmarks on {os.cpu_count()} cores, one BLAS thread")
+    bench_fe.main()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,9 @@
+"""Fast smoke versions of the benchmarks: they run, and their fast paths agree with the
+baselines they are timed against (each benchmark checks that before timing)."""
+
+from benchmarks import bench_fe
+
+
+def test_fe_benchmark_smoke():
+    rows = bench_fe.run(meshes=((6, 4),), repeat=1, min_time=0.0)
+    assert [r[1] for r in rows] == ["assemble K(p)", "factor + 18 solves", "lowest 20 modes"]
