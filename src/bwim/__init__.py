@@ -6,11 +6,15 @@ The public API is listed in ``__all__``; units, axes and signs are in
 
 from importlib.metadata import PackageNotFoundError, version
 
-from bwim import conventions, errors, fe
+from bwim import conventions, dynamics, errors, fe, paper, vehicles
+from bwim.dynamics import simulate
 from bwim.errors import BwimError, InputError, NumericalError
 from bwim.fe import Bridge, Girder, Modes, Supports, composite_section, grid_lines
 from bwim.loads import PointLoad
+from bwim.records import Passage, Record, Truth
+from bwim.road import RoadProfile
 from bwim.sensors import Sensor, SensorKind
+from bwim.vehicles import HalfCar, MovingForces, SprungMass, TractorSemitrailer, Truck3D
 
 try:
     __version__ = version("bwim")
@@ -21,17 +25,30 @@ __all__ = [
     "Bridge",
     "BwimError",
     "Girder",
+    "HalfCar",
     "InputError",
     "Modes",
+    "MovingForces",
     "NumericalError",
+    "Passage",
     "PointLoad",
+    "Record",
+    "RoadProfile",
     "Sensor",
     "SensorKind",
+    "SprungMass",
     "Supports",
+    "TractorSemitrailer",
+    "Truck3D",
+    "Truth",
     "__version__",
     "composite_section",
     "conventions",
+    "dynamics",
     "errors",
     "fe",
     "grid_lines",
+    "paper",
+    "simulate",
+    "vehicles",
 ]

@@ -16,7 +16,10 @@ import numpy as np
 from bwim.fe.bridge import Bridge
 from bwim.fe.girder import Girder, composite_section
 from bwim.fe.mesh import grid_lines
+from bwim.road import RoadProfile
 from bwim.sensors import Sensor
+from bwim.vehicles.library import two_axle_truck
+from bwim.vehicles.types import Truck3D
 
 __all__ = [
     "AXLE_LOADS",
@@ -24,8 +27,10 @@ __all__ = [
     "LANE",
     "SPEED",
     "TRACK_WIDTH",
+    "road",
     "sensors",
     "slab_bridge",
+    "truck",
     "vransko_bridge",
     "vransko_sensors",
 ]
@@ -49,6 +54,12 @@ AXLE_SPACING = 5.5  #: m (paper)
 SPEED = 20.0  #: m/s (paper)
 LANE = 2.0  #: m, vehicle centre line from the right-hand edge, *assumed*
 TRACK_WIDTH = 2.0  #: m, *assumed*
+SAMPLING_RATE = 1000.0  #: Hz, *assumed*
+
+# --- the road (paper §2, §5.1) -----------------------------------------------------------
+ROUGHNESS = 65e-6  #: m³/cycle, G_d(n₀) (paper; its "class C", ISO's class B mean)
+APPROACH = 100.0  #: m of run-up before the bridge, *assumed*
+TYRE_PATCH = 0.24  #: m, moving-average tyre contact length, *assumed* (usual value)
 
 # --- the beam-and-slab bridge after Vransko (paper §5.4) ---------------------------------
 VRANSKO_LENGTH = 24.8  #: m (paper)
@@ -87,6 +98,23 @@ def slab_bridge(
         E=SLAB_E, mu=SLAB_MU, poisson=SLAB_POISSON, damping_ratio=damping_ratio,
         supports="ss-free", zones=zones,
     )
+
+
+def truck() -> Truck3D:
+    """The paper's 2-axle calibration truck (see :func:`bwim.vehicles.two_axle_truck`)."""
+    return two_axle_truck()
+
+
+def road(seed: int = 1, *, approach: float = APPROACH, length: float = 40.0) -> RoadProfile:
+    """The paper's road: G_d(n₀) = 65 × 10⁻⁶ m³/cycle, carpet, smoothed over the tyre patch.
+
+    It covers the approach, a ``length`` m span and a long vehicle (20 m) with a margin,
+    so any of the paper's crossings (and the named vehicles) fit on it.
+    """
+    start = -(approach + 25.0)
+    total = approach + 25.0 + length + 5.0
+    return RoadProfile.iso8608(ROUGHNESS, length=total, start=start, seed=seed).smoothed(
+        TYRE_PATCH)
 
 
 def sensors() -> list[Sensor]:

@@ -7,3 +7,10 @@ from benchmarks import bench_fe
 def test_fe_benchmark_smoke():
     rows = bench_fe.run(meshes=((6, 4),), repeat=1, min_time=0.0)
     assert [r[1] for r in rows] == ["assemble K(p)", "factor + 18 solves", "lowest 20 modes"]
+
+
+def test_vbi_benchmark_smoke():
+    from benchmarks import bench_vbi
+
+    rows, _ = bench_vbi.run(approach=5.0, repeat=1, full=False)
+    assert [r[1] for r in rows] == ["coupled", "iterative"]

@@ -100,11 +100,13 @@ class PointRows:
     """Consistent-load rows of points: ``f[dofs[p]] += vals[p] * P_p``.
 
     ``dofs`` (n, k) are free-DOF indices (constrained DOF point at 0 with value 0).
-    The same rows give the deflection at the points: ``w_p = vals[p] @ u[dofs[p]]``.
+    The same rows give the deflection at the points: ``w_p = vals[p] @ u[dofs[p]]``, and
+    ``slopes`` (when asked for) the slope ``∂w/∂x = slopes[p] @ u[dofs[p]]``.
     """
 
     dofs: np.ndarray
     vals: np.ndarray
+    slopes: np.ndarray | None = None
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)
@@ -279,19 +281,28 @@ class FEModel:
                 size += f" × {self.grid.width:g} m"
             raise InputError(f"{what} at {where} is off the deck ({size})")
 
-    def point_rows(self, x: np.ndarray, y: np.ndarray | None = None) -> PointRows:
-        """Consistent-load (and deflection) rows of points on the deck."""
+    def point_rows(
+        self, x: np.ndarray, y: np.ndarray | None = None, *, slopes: bool = False
+    ) -> PointRows:
+        """Consistent-load (and deflection, optionally slope) rows of points on the deck."""
         x = np.atleast_1d(np.asarray(x, dtype=float))
         loc = self.grid.locate(x, y)
         a, b = self.grid.element_sizes()
         e = loc.element
         if self.is_plate:
-            n, _, _ = bfs_shape(loc.xi, loc.eta, a[e], b[e])
+            hx, dhx, _ = hermite(loc.xi, a[e])
+            hy, _, _ = hermite(loc.eta, b[e])
+            n = np.einsum("pa,pb->pab", hx, hy).reshape(-1, 16)
+            nx = np.einsum("pa,pb->pab", dhx, hy).reshape(-1, 16) if slopes else None
         else:
-            n, _, _ = hermite(loc.xi, a[e])
+            n, nx, _ = hermite(loc.xi, a[e])
         dofs = self.assembler.free_of[self.assembler.sets[0].dofs[e]]
-        vals = np.where(dofs >= 0, n, 0.0)
-        return PointRows(dofs=np.where(dofs >= 0, dofs, 0), vals=vals)
+        free = dofs >= 0
+        return PointRows(
+            dofs=np.where(free, dofs, 0),
+            vals=np.where(free, n, 0.0),
+            slopes=np.where(free, nx, 0.0) if slopes else None,
+        )
 
     def load_vector(self, x: np.ndarray, y: np.ndarray | None, P: np.ndarray) -> np.ndarray:
         """Consistent nodal load vector on the free DOF (sum of the point loads)."""

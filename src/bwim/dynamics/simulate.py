@@ -1,0 +1,336 @@
+"""``simulate``: vehicles crossing a bridge over a road, recorded by sensors.
+
+Contract
+--------
+* Time is integrated with Newmark-β (average acceleration) at the sampling rate.  Time 0
+  is the instant the first axle of the first vehicle reaches x = 0; each vehicle starts
+  ``approach`` metres (its first axle) before the bridge in static equilibrium on the road
+  and the record ends ``tail`` seconds after the last axle leaves.  The record holds
+  t ≥ 0 only (before that the bridge is at rest).
+* The bridge is modal by default: all modes up to ``max_frequency`` (default
+  sampling_rate / 8) or ``n_modes`` of them, damped with the bridge's Rayleigh damping.
+  ``full_system=True`` integrates the full FE system instead.
+* Modal readings carry a static correction by default (mode-acceleration method): the
+  quasi-static response of the truncated modes, ``Σ_c F_c (g_s(x_c) − S Φ Ω⁻² Φᵀ N_c)``
+  with ``g_s`` the sensors' influence surfaces, so strains under the wheels converge
+  like the static solution rather than like the modal series.
+* Several vehicles: pass sequences for ``vehicle``, ``speed``, ``lane`` and ``delay``
+  (record time at which each first axle reaches x = 0).
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Sequence
+from enum import Enum
+
+import numpy as np
+
+from bwim.dynamics.newmark import Newmark
+from bwim.dynamics.vbi import (
+    Crossing,
+    FullBridge,
+    ModalBridge,
+    solve_coupled,
+    solve_iterative,
+)
+from bwim.errors import InputError, require_positive
+from bwim.fe.bridge import Bridge
+from bwim.fe.modal import Modes
+from bwim.records import Record, Truth, VBIConvergence
+from bwim.road import RoadProfile
+from bwim.sensors import Sensor
+from bwim.vehicles.model import VehicleModel
+
+__all__ = ["VBIMethod", "select_modes", "simulate"]
+
+
+class VBIMethod(str, Enum):
+    """How vehicle and bridge are solved together."""
+
+    COUPLED = "coupled"
+    ITERATIVE = "iterative"
+
+
+def select_modes(
+    bridge: Bridge, *, n_modes: int | None = None, max_frequency: float | None = None,
+    sampling_rate: float,
+) -> Modes:
+    """The modes a simulation (or identification) uses.
+
+    All modes up to ``max_frequency`` (default ``sampling_rate / 8``) unless ``n_modes``
+    is given.  Raises :class:`InputError` if the sampling rate is below 2.5 × the highest
+    frequency in use (Nyquist with a margin).
+    """
+    if n_modes is not None:
+        modes = bridge.modes(n_modes)
+    else:
+        f_cut = sampling_rate / 8 if max_frequency is None else require_positive(
+            "max_frequency", max_frequency)
+        k = min(10, bridge.n_free - 1)
+        while True:
+            modes = bridge.modes(k)
+            if modes.frequencies[-1] > f_cut or k >= bridge.n_free - 1:
+                break
+            k = min(2 * k, bridge.n_free - 1)
+        n = max(int(np.searchsorted(modes.frequencies, f_cut, side="right")), 1)
+        modes = bridge.modes(n)
+    f_max = modes.frequencies[-1]
+    if sampling_rate < 2.5 * f_max:
+        raise InputError(
+            f"sampling_rate {sampling_rate:g} Hz is too low for the modes in use (highest "
+            f"{f_max:.1f} Hz); use at least {2.5 * f_max:.0f} Hz or fewer modes"
+        )
+    return modes
+
+
+def _as_list(name, value, n):
+    if isinstance(value, (list, tuple, np.ndarray)):
+        vals = list(value)
+        if len(vals) != n:
+            raise InputError(f"{name} needs one value per vehicle ({n}), got {len(vals)}")
+        return vals
+    return [value] * n
+
+
+def _combine(models: list[VehicleModel]) -> VehicleModel:
+    n_v = sum(m.n_dof for m in models)
+    M = np.zeros((n_v, n_v))
+    C = np.zeros_like(M)
+    K = np.zeros_like(M)
+    E = np.zeros((n_v, sum(m.n_contacts for m in models)))
+    i = j = 0
+    for m in models:
+        a, b = m.n_dof, m.n_contacts
+        M[i:i + a, i:i + a], C[i:i + a, i:i + a], K[i:i + a, i:i + a] = (
+            m.mass, m.damping, m.stiffness)
+        E[i:i + a, j:j + b] = m.contact
+        i, j = i + a, j + b
+    cat = np.concatenate
+    return VehicleModel(
+        mass=M, damping=C, stiffness=K, contact=E,
+        tyre_stiffness=cat([m.tyre_stiffness for m in models]),
+        tyre_damping=cat([m.tyre_damping for m in models]),
+        static_forces=cat([m.static_forces for m in models]),
+        contact_offset=cat([m.contact_offset for m in models]),
+        contact_lateral=cat([m.contact_lateral for m in models]),
+        contact_axle=cat([m.contact_axle for m in models]),
+        axle_offsets=cat([m.axle_offsets for m in models]),
+    )
+
+
+def simulate(
+    bridge: Bridge,
+    vehicle,
+    *,
+    speed,
+    sensors: Sequence[Sensor],
+    lane=None,
+    road: RoadProfile | None = None,
+    sampling_rate: float = 1000.0,
+    method: VBIMethod | str = VBIMethod.COUPLED,
+    approach: float = 100.0,
+    tail: float = 0.0,
+    delay=0.0,
+    n_modes: int | None = None,
+    max_frequency: float | None = None,
+    full_system: bool = False,
+    static_correction: bool = True,
+    tol: float = 1e-6,
+    max_iter: int = 50,
+) -> Record:
+    """Simulate vehicles crossing ``bridge`` and record ``sensors``.
+
+    Parameters
+    ----------
+    bridge : Bridge
+    vehicle : vehicle or sequence of vehicles
+        Any of :mod:`bwim.vehicles` (``MovingForces``, ``SprungMass``, ``HalfCar``,
+        ``Truck3D``, ``TractorSemitrailer``).
+    speed : float or sequence
+        m/s, each > 0.
+    sensors : sequence of Sensor
+    lane : float or sequence, optional
+        Vehicle centre line, m from the right-hand edge (required on a plate; ignored on a
+        beam).
+    road : RoadProfile, optional
+        Default flat.  Must cover every wheel from the start of the approach to the end.
+    sampling_rate : float
+        Hz; also the integration rate.
+    method : "coupled" or "iterative"
+    approach : float
+        Run-up before the bridge, m (0: enter at rest in static equilibrium).
+    tail : float
+        Free vibration recorded after the last axle leaves, s.
+    delay : float or sequence
+        Record time at which each vehicle's first axle reaches x = 0, s.
+    n_modes, max_frequency : optional
+        Modal truncation (see :func:`select_modes`).
+    full_system : bool
+        Integrate the full FE system instead of modes.
+    static_correction : bool
+        Add the truncated modes' quasi-static response to modal readings.
+    tol, max_iter
+        Convergence of the iterative method (relative change of the deck deflection
+        under the wheels).
+
+    Returns
+    -------
+    Record
+        Readings at t ≥ 0, passages, truths (wheel and axle forces) and convergence.
+    """
+    try:
+        method = VBIMethod(method)
+    except ValueError:
+        raise InputError(f"unknown method {method!r}; expected 'coupled' or 'iterative'") from None
+    fs = require_positive("sampling_rate", sampling_rate)
+    if not np.isfinite(approach) or approach < 0:
+        raise InputError(f"approach must be >= 0 m, got {approach!r}")
+    if not np.isfinite(tail) or tail < 0:
+        raise InputError(f"tail must be >= 0 s, got {tail!r}")
+    vehicles = list(vehicle) if isinstance(vehicle, (list, tuple)) else [vehicle]
+    n_veh = len(vehicles)
+    speeds = [require_positive("speed", v) for v in _as_list("speed", speed, n_veh)]
+    if lane is None:
+        if bridge.is_plate:
+            raise InputError("lane (vehicle centre line, m from the right-hand edge) is "
+                             "required on a plate bridge")
+        lane = 0.0
+    lanes = [float(v) for v in _as_list("lane", lane, n_veh)]
+    delays = np.array(_as_list("delay", delay, n_veh), dtype=float)
+    if np.any(delays < 0) or not np.all(np.isfinite(delays)):
+        raise InputError(f"delay must be >= 0 s, got {delays.tolist()}")
+    delays = delays - delays.min()
+    sensors = list(sensors)
+    road = RoadProfile.flat() if road is None else road
+    if not isinstance(road, RoadProfile):
+        raise InputError(f"road must be a bwim.RoadProfile, got {type(road).__name__}")
+    S = bridge.sensor_matrix(sensors)
+
+    models = [v.model() for v in vehicles]
+    passages = [v.passage(speed=s, lane=ln, delay=d)
+                for v, s, ln, d in zip(vehicles, speeds, lanes, delays, strict=True)]
+    veh = _combine(models)
+    c_vehicle = np.repeat(np.arange(n_veh), [m.n_contacts for m in models])
+    c_speed = np.array(speeds)[c_vehicle]
+    c_delay = delays[c_vehicle]
+    c_y = np.array(lanes)[c_vehicle] + veh.contact_lateral
+    if bridge.is_plate:
+        off = (c_y < 0) | (c_y > bridge.width)
+        if np.any(off):
+            c = int(np.flatnonzero(off)[0])
+            raise InputError(
+                f"vehicle {c_vehicle[c]} wheel at y = {c_y[c]:g} m is off the deck (width "
+                f"{bridge.width:g} m) for lane {lanes[c_vehicle[c]]:g} m"
+            )
+
+    # --- time grid ------------------------------------------------------------------
+    dt = 1.0 / fs
+    t_start = min(d - approach / v for d, v in zip(delays, speeds, strict=True))
+    t_end = max(d + (bridge.length + m.axle_offsets[-1]) / v
+                for d, v, m in zip(delays, speeds, models, strict=True)) + tail
+    k0 = int(np.floor(t_start / dt + 1e-9))
+    k1 = int(np.ceil(t_end / dt - 1e-9))
+    t = dt * np.arange(k0, k1 + 1)
+    x = c_speed * (t[:, None] - c_delay) - veh.contact_offset
+    lo, hi = float(x.min()), float(x.max())
+    if not road.covers(lo, hi):
+        raise InputError(
+            f"road profile covers x = {road.extent[0]:g} … {road.extent[1]:g} m but the "
+            f"crossing needs {lo:g} … {hi:g} m (approach + bridge + vehicle length); "
+            "generate a longer profile or a shorter approach"
+        )
+    r = road.at(x, veh.contact_lateral)
+    r_dot = np.gradient(r, dt, axis=0) if r.shape[0] > 1 else np.zeros_like(r)
+    on = (x >= 0.0) & (x <= bridge.length)
+    if not on.any():
+        raise InputError("no wheel reaches the bridge")
+    crossing = Crossing(vehicle=veh, x=x, y=c_y, speed=c_speed, on=on, r=r, r_dot=r_dot)
+
+    # --- bridge representation ------------------------------------------------------
+    scheme = Newmark(dt)
+    rows = _contact_rows(bridge, x, c_y, on)
+    if full_system:
+        rep = FullBridge(M=bridge.mass_matrix(), C=bridge.damping_matrix(),
+                         K=bridge.stiffness_matrix(), dofs=rows.dofs, vals=rows.vals,
+                         slopes=rows.slopes * c_speed[None, :, None])
+        modes = None
+    else:
+        modes = select_modes(bridge, n_modes=n_modes, max_frequency=max_frequency,
+                             sampling_rate=fs)
+        phi = modes.shapes
+        psi = np.einsum("kcj,kcjm->kmc", rows.vals, phi[rows.dofs])
+        psi_x = np.einsum("kcj,kcjm->kmc", rows.slopes, phi[rows.dofs]) * c_speed
+        rep = ModalBridge(omega=modes.omega, zeta=bridge.rayleigh.ratio(modes.omega),
+                          psi=psi, psi_x=psi_x)
+
+    if method is VBIMethod.COUPLED:
+        sol = solve_coupled(crossing, rep, scheme)
+        conv = VBIConvergence(method=method.value)
+    else:
+        sol = solve_iterative(crossing, rep, scheme, tol=tol, max_iter=max_iter)
+        converged = sol.change < tol or veh.n_dof == 0
+        conv = VBIConvergence(method=method.value, iterations=sol.iterations,
+                              change=sol.change, converged=converged)
+        if not converged:
+            warnings.warn(f"iterative VBI did not converge in {max_iter} iterations "
+                          f"(change {sol.change:.2e})", RuntimeWarning, stacklevel=2)
+
+    # --- readings -------------------------------------------------------------------
+    keep = t >= -1e-9 * dt
+    F = sol.forces
+    if full_system:
+        data = sol.state.u @ S.T
+    else:
+        s_modal = S @ modes.shapes  # (n_s, n_m)
+        data = sol.state.u @ s_modal.T
+        if static_correction:
+            data += _static_correction(bridge, sensors, x, c_y, on, F, psi, s_modal, modes)
+    time = t[keep] - t[keep][0] if abs(t[keep][0]) < 1e-9 else t[keep]
+    truths = []
+    j = 0
+    for v_idx, m in enumerate(models):
+        wf = F[keep, j:j + m.n_contacts]
+        j += m.n_contacts
+        axle = np.zeros((wf.shape[0], m.n_axles))
+        for c in range(m.n_contacts):
+            axle[:, m.contact_axle[c]] += wf[:, c]
+        lost = (wf < 0).any(axis=0)
+        if lost.any():
+            warnings.warn(f"vehicle {v_idx}: wheel(s) {np.flatnonzero(lost).tolist()} lost "
+                          "contact with the road (negative contact force)", RuntimeWarning,
+                          stacklevel=2)
+        truths.append(Truth(wheel_forces=wf, axle_forces=axle,
+                            static_wheel_loads=m.static_forces.copy(),
+                            static_axle_loads=m.static_axle_loads, contact_lost=lost))
+    return Record(time=time, data=data[keep], sensors=tuple(sensors),
+                  passages=tuple(passages), truths=tuple(truths), convergence=conv)
+
+
+def _contact_rows(bridge: Bridge, x, y, on):
+    """Shape-function rows of every contact at every step (zeros off the deck)."""
+    from bwim.fe.model import PointRows
+
+    n_t, n_c = x.shape
+    k = 16 if bridge.is_plate else 4
+    dofs = np.zeros((n_t, n_c, k), dtype=np.int64)
+    vals = np.zeros((n_t, n_c, k))
+    slopes = np.zeros((n_t, n_c, k))
+    if on.any():
+        yy = np.broadcast_to(y, x.shape)[on] if bridge.is_plate else None
+        rows = bridge.model.point_rows(x[on], yy, slopes=True)
+        dofs[on], vals[on], slopes[on] = rows.dofs, rows.vals, rows.slopes
+    return PointRows(dofs=dofs, vals=vals, slopes=slopes)
+
+
+def _static_correction(bridge, sensors, x, y, on, F, psi, s_modal, modes):
+    """Quasi-static response of the truncated modes (mode-acceleration correction)."""
+    inf = bridge.influence(sensors)
+    g = np.zeros((*x.shape, len(sensors)))
+    if on.any():
+        yy = np.broadcast_to(y, x.shape)[on] if bridge.is_plate else None
+        g[on] = inf.at(x[on], yy)
+    modal_static = np.einsum("sm,m,kmc->kcs", s_modal, 1.0 / modes.omega**2, psi)
+    return np.einsum("kc,kcs->ks", np.where(on, F, 0.0), g - modal_static)
+
+

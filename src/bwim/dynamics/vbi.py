@@ -1,0 +1,431 @@
+"""Vehicle–bridge interaction: the iterative (paper) and the coupled solvers.
+
+Contract
+--------
+The vehicle follows :mod:`bwim.vehicles.model`: DOF ``y`` (down), contacts ``Eᵀ y``,
+tyres ``K_t``, ``C_t``.  Under contact c the ground moves down by
+``g_c = w_c − r_c`` (deck deflection minus road elevation) at the rate
+``ġ_c = ∂w/∂t + v ∂w/∂x − ṙ_c``, and the contact force on the deck is
+
+    F = F_static + K_t (Eᵀ y − g) + C_t (Eᵀ ẏ − ġ).
+
+The bridge is either modal (``q̈ + 2ζΩ q̇ + Ω² q = Ψ(t) F``, ``Ψ = Φᵀ L(t)``, ζ from the
+bridge's Rayleigh damping) or the full FE system (``M ü + C u̇ + K u = L(t) F``).
+
+* :func:`solve_coupled` advances bridge and vehicles together, one Newmark step of the
+  monolithic system at a time (modal: a small dense solve; full: one banded factor and a
+  rank-n_c Woodbury correction per step).
+* :func:`solve_iterative` is the paper's procedure (THEORY §3): vehicles on a rigid deck,
+  the bridge under their forces, the deck deflection added to the profile, repeated until
+  the deflection under the wheels changes by less than ``tol`` (relative).  Its fixed point
+  is the same discrete system, so the two agree to the tolerance.
+* Both start with the bridge at rest and the vehicles in static equilibrium on the road.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+
+from bwim.dynamics.newmark import Newmark, NewmarkResult, integrate
+from bwim.vehicles.model import VehicleModel
+
+__all__ = ["Crossing", "FullBridge", "ModalBridge", "Solution", "solve_coupled",
+           "solve_iterative"]
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Crossing:
+    """All contacts of all vehicles on the integration time grid.
+
+    Attributes
+    ----------
+    vehicle : VehicleModel
+        The vehicles combined (block-diagonal), contacts concatenated.
+    x : ndarray, shape (n_t, n_c)
+        Contact positions along the bridge, m.
+    y : ndarray, shape (n_c,)
+        Contact positions across, m.
+    speed : ndarray, shape (n_c,)
+    on : ndarray of bool, shape (n_t, n_c)
+        Contact on the deck.
+    r, r_dot : ndarray, shape (n_t, n_c)
+        Road elevation (m, up) under the contacts and its time derivative.
+    """
+
+    vehicle: VehicleModel
+    x: np.ndarray
+    y: np.ndarray
+    speed: np.ndarray
+    on: np.ndarray
+    r: np.ndarray
+    r_dot: np.ndarray
+
+    @property
+    def n_t(self) -> int:
+        return self.x.shape[0]
+
+    def window(self) -> tuple[int, int]:
+        """First and last step with any contact on the deck (inclusive)."""
+        any_on = np.flatnonzero(self.on.any(axis=1))
+        return int(any_on[0]), int(any_on[-1])
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Solution:
+    """Bridge state, contact forces and deck deflection under the contacts."""
+
+    state: NewmarkResult  # bridge (modal q or full u) over the time grid
+    forces: np.ndarray  # (n_t, n_c)
+    iterations: int = 1
+    change: float = 0.0
+
+
+# --- vehicles on a given ground ------------------------------------------------------------
+def _vehicle_on_ground(veh: VehicleModel, g, g_dot, scheme, y0=None, v0=None, a0=None
+                       ) -> NewmarkResult:
+    f = (veh.contact @ (veh.tyre_stiffness * g + veh.tyre_damping * g_dot).T).T
+    return integrate(veh.mass, veh.damping, veh.stiffness, f, scheme, u0=y0, v0=v0, a0=a0)
+
+
+def _static_on_ground(veh: VehicleModel, g0) -> np.ndarray:
+    return np.linalg.solve(veh.stiffness, veh.contact @ (veh.tyre_stiffness * g0))
+
+
+def _forces(veh: VehicleModel, ys: NewmarkResult | None, g, g_dot) -> np.ndarray:
+    F = veh.static_forces - veh.tyre_stiffness * g - veh.tyre_damping * g_dot
+    if veh.n_dof:
+        F = F + veh.tyre_stiffness * (ys.u @ veh.contact) + veh.tyre_damping * (ys.v @ veh.contact)
+    return F
+
+
+# --- bridge representations -------------------------------------------------------------------
+@dataclass(frozen=True, kw_only=True, eq=False)
+class ModalBridge:
+    """The bridge in modal coordinates, with contact mode shapes on the time grid.
+
+    ``psi[k, :, c]`` is ``Φᵀ N`` at contact c at step k (zero off the deck) and
+    ``psi_x`` the same for ``v ∂N/∂x``.
+    """
+
+    omega: np.ndarray
+    zeta: np.ndarray
+    psi: np.ndarray
+    psi_x: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return self.omega.size
+
+    def matrices(self):
+        return np.ones(self.n), 2 * self.zeta * self.omega, self.omega**2
+
+    def forced(self, F: np.ndarray, scheme: Newmark) -> NewmarkResult:
+        M, C, K = self.matrices()
+        return integrate(M, C, K, np.einsum("kmc,kc->km", self.psi, F), scheme)
+
+    def under(self, st: NewmarkResult) -> tuple[np.ndarray, np.ndarray]:
+        w = np.einsum("kmc,km->kc", self.psi, st.u)
+        w_dot = np.einsum("kmc,km->kc", self.psi, st.v) + np.einsum("kmc,km->kc", self.psi_x,
+                                                                       st.u)
+        return w, w_dot
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class FullBridge:
+    """The full FE system with contact rows on the time grid (free DOF).
+
+    ``dofs``, ``vals``, ``slopes`` have shape (n_t, n_c, k); ``slopes`` include the speed.
+    """
+
+    M: object
+    C: object
+    K: object
+    dofs: np.ndarray
+    vals: np.ndarray
+    slopes: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return self.K.shape[0]
+
+    def _factor(self, scheme: Newmark):
+        keff = (self.K + scheme.a1 * self.C + scheme.a0 * self.M).tocsr()
+        return _banded_cholesky(keff)
+
+    def _load(self, k: int, F_k: np.ndarray) -> np.ndarray:
+        f = np.zeros(self.n)
+        np.add.at(f, self.dofs[k], self.vals[k] * F_k[:, None])
+        return f
+
+    def forced(self, F: np.ndarray, scheme: Newmark, start: int = 0,
+               u0=None, v0=None, a0=None) -> NewmarkResult:
+        fac = self._factor(scheme)
+        n_t = F.shape[0]
+        U = np.zeros((n_t, self.n))
+        V = np.zeros_like(U)
+        A = np.zeros_like(U)
+        u = np.zeros(self.n) if u0 is None else u0
+        v = np.zeros(self.n) if v0 is None else v0
+        a = (_solve_mass(self.M, self._load(start, F[start]) - self.C @ v - self.K @ u)
+             if a0 is None else a0)
+        U[start], V[start], A[start] = u, v, a
+        for k in range(start + 1, n_t):
+            rhs = self._load(k, F[k]) + scheme.history(self.M, self.C, u, v, a)
+            u_new = sla.cho_solve_banded(fac, rhs, check_finite=False)
+            v, a = scheme.update(u_new, u, v, a)
+            u = u_new
+            U[k], V[k], A[k] = u, v, a
+        return NewmarkResult(u=U, v=V, a=A)
+
+    def under(self, st: NewmarkResult) -> tuple[np.ndarray, np.ndarray]:
+        k = np.arange(st.u.shape[0])[:, None, None]
+        ud = st.u[k, self.dofs]
+        w = np.einsum("kcj,kcj->kc", self.vals, ud)
+        w_dot = (np.einsum("kcj,kcj->kc", self.vals, st.v[k, self.dofs])
+                 + np.einsum("kcj,kcj->kc", self.slopes, ud))
+        return w, w_dot
+
+
+def _solve_mass(M, rhs):
+    import scipy.sparse.linalg as spla
+
+    return spla.spsolve(M.tocsc(), rhs)
+
+
+def _banded_cholesky(A) -> tuple[np.ndarray, bool]:
+    coo = A.tocoo()
+    low = coo.row >= coo.col
+    bw = int((coo.row[low] - coo.col[low]).max())
+    ab = np.zeros((bw + 1, A.shape[0]))
+    ab[coo.row[low] - coo.col[low], coo.col[low]] = coo.data[low]
+    return sla.cholesky_banded(ab, lower=True), True
+
+
+# --- iterative ------------------------------------------------------------------------------
+def solve_iterative(
+    crossing: Crossing, bridge: ModalBridge | FullBridge, scheme: Newmark,
+    *, tol: float = 1e-6, max_iter: int = 50,
+) -> Solution:
+    """The paper's iterative VBI procedure (see module docstring)."""
+    veh = crossing.vehicle
+    w = np.zeros_like(crossing.r)
+    w_dot = np.zeros_like(crossing.r)
+    change = np.inf
+    it = 0
+    state = None
+    F = None
+    for it in range(1, max_iter + 1):  # noqa: B007 - reported below
+        g, g_dot = w - crossing.r, w_dot - crossing.r_dot
+        ys = None
+        if veh.n_dof:
+            ys = _vehicle_on_ground(veh, g, g_dot, scheme, y0=_static_on_ground(veh, g[0]))
+        F = _forces(veh, ys, g, g_dot)
+        state = bridge.forced(np.where(crossing.on, F, 0.0), scheme)
+        w_new, w_dot_new = bridge.under(state)
+        scale = max(np.abs(w_new).max(), np.finfo(float).tiny)
+        change = float(np.abs(w_new - w).max() / scale)
+        w, w_dot = w_new, w_dot_new
+        if change < tol or veh.n_dof == 0:
+            break
+    # forces consistent with the final deflection
+    g, g_dot = w - crossing.r, w_dot - crossing.r_dot
+    ys = None
+    if veh.n_dof:
+        ys = _vehicle_on_ground(veh, g, g_dot, scheme, y0=_static_on_ground(veh, g[0]))
+    F = _forces(veh, ys, g, g_dot)
+    return Solution(state=state, forces=F, iterations=it, change=0.0 if veh.n_dof == 0
+                    else change)
+
+
+# --- coupled ---------------------------------------------------------------------------------
+def solve_coupled(crossing: Crossing, bridge: ModalBridge | FullBridge, scheme: Newmark
+                  ) -> Solution:
+    """Bridge and vehicles advanced together, step by step (see module docstring)."""
+    veh = crossing.vehicle
+    k_in, k_out = crossing.window()
+    n_t = crossing.n_t
+    # before the first contact reaches the deck: vehicles on the road, bridge at rest
+    start = max(k_in - 1, 0)
+    g0, g0_dot = -crossing.r[: start + 1], -crossing.r_dot[: start + 1]
+    if veh.n_dof:
+        pre = _vehicle_on_ground(veh, g0, g0_dot, scheme, y0=_static_on_ground(veh, g0[0]))
+        y, yv, ya = pre.u[-1], pre.v[-1], pre.a[-1]
+    else:
+        pre = None
+        y = yv = ya = np.zeros(0)
+    Y = np.zeros((n_t, veh.n_dof))
+    YV = np.zeros_like(Y)
+    YA = np.zeros_like(Y)
+    if pre is not None:
+        Y[: start + 1], YV[: start + 1], YA[: start + 1] = pre.u, pre.v, pre.a
+    stepper = _modal_steps if isinstance(bridge, ModalBridge) else _full_steps
+    state, F = stepper(crossing, bridge, scheme, start, k_out, (y, yv, ya), (Y, YV, YA))
+    return Solution(state=state, forces=F)
+
+
+def _finish(crossing, bridge, scheme, k_out, state, vstate, F, veh):
+    """After the last contact leaves: bridge in free vibration, vehicles on the road."""
+    n_t = crossing.n_t
+    if k_out + 1 >= n_t:
+        return
+    Y, YV, YA = vstate
+    sl = slice(k_out, n_t)
+    u0, v0, a0 = state.u[k_out], state.v[k_out], state.a[k_out]
+    if isinstance(bridge, ModalBridge):
+        M, C, K = bridge.matrices()
+        tail = integrate(M, C, K, np.zeros((n_t - k_out, bridge.n)), scheme,
+                         u0=u0, v0=v0, a0=a0)
+        state.u[sl], state.v[sl], state.a[sl] = tail.u, tail.v, tail.a
+    else:
+        tail = bridge.forced(np.zeros((n_t, crossing.r.shape[1])), scheme, start=k_out,
+                             u0=u0, v0=v0, a0=a0)
+        state.u[sl], state.v[sl], state.a[sl] = tail.u[sl], tail.v[sl], tail.a[sl]
+    g, g_dot = -crossing.r[sl], -crossing.r_dot[sl]
+    ys = None
+    if veh.n_dof:
+        ys = _vehicle_on_ground(veh, g, g_dot, scheme, y0=Y[k_out], v0=YV[k_out], a0=YA[k_out])
+        Y[sl], YV[sl], YA[sl] = ys.u, ys.v, ys.a
+    F[sl] = _forces(veh, ys, g, g_dot)
+
+
+def _modal_steps(crossing, bridge: ModalBridge, scheme, start, k_out, y_state, vstate):
+    Y, YV, YA = vstate
+    veh = crossing.vehicle
+    n_t, n_m, n_v = crossing.n_t, bridge.n, veh.n_dof
+    kt, ct, E = veh.tyre_stiffness, veh.tyre_damping, veh.contact
+    Mb, Cb, Kb = bridge.matrices()
+    Mfull = np.diag(np.concatenate([Mb, np.diag(veh.mass)])) if n_v else np.diag(Mb)
+    if n_v:
+        Mfull[n_m:, n_m:] = veh.mass
+    U = np.zeros((n_t, n_m))
+    V = np.zeros_like(U)
+    A = np.zeros_like(U)
+    F = np.zeros((n_t, kt.size))
+    y, yv, ya = y_state
+    z = np.concatenate([np.zeros(n_m), y])
+    zv = np.concatenate([np.zeros(n_m), yv])
+    za = np.concatenate([np.zeros(n_m), ya])
+    Ekt, Ect = E * kt, E * ct
+    g_pre = -crossing.r[: start + 1]
+    F[: start + 1] = _forces(veh, _slice_result(Y, YV, start + 1) if n_v else None, g_pre,
+                             -crossing.r_dot[: start + 1])
+    for k in range(start + 1, k_out + 1):
+        P, Px = bridge.psi[k], bridge.psi_x[k]
+        r, rd = crossing.r[k], crossing.r_dot[k]
+        PCt = P * ct
+        C = np.zeros((n_m + n_v, n_m + n_v))
+        K = np.zeros_like(C)
+        C[:n_m, :n_m] = np.diag(Cb) + PCt @ P.T
+        K[:n_m, :n_m] = np.diag(Kb) + (P * kt) @ P.T + PCt @ Px.T
+        f = np.empty(n_m + n_v)
+        f[:n_m] = P @ (veh.static_forces + kt * r + ct * rd)
+        if n_v:
+            C[:n_m, n_m:] = -PCt @ E.T
+            K[:n_m, n_m:] = -(P * kt) @ E.T
+            C[n_m:, :n_m] = -Ect @ P.T
+            K[n_m:, :n_m] = -(Ekt @ P.T + Ect @ Px.T)
+            C[n_m:, n_m:] = veh.damping
+            K[n_m:, n_m:] = veh.stiffness
+            f[n_m:] = -E @ (kt * r + ct * rd)
+        rhs = f + scheme.history(Mfull, C, z, zv, za)
+        z_new = np.linalg.solve(scheme.effective(Mfull, C, K), rhs)
+        zv, za = scheme.update(z_new, z, zv, za)
+        z = z_new
+        U[k], V[k], A[k] = z[:n_m], zv[:n_m], za[:n_m]
+        Y[k], YV[k], YA[k] = z[n_m:], zv[n_m:], za[n_m:]
+        q, qv = z[:n_m], zv[:n_m]
+        delta = z[n_m:] @ E - P.T @ q + r if n_v else -P.T @ q + r
+        delta_dot = (zv[n_m:] @ E if n_v else 0.0) - P.T @ qv - Px.T @ q + rd
+        F[k] = veh.static_forces + kt * delta + ct * delta_dot
+    state = NewmarkResult(u=U, v=V, a=A)
+    _finish(crossing, bridge, scheme, k_out, state, vstate, F, veh)
+    return state, F
+
+
+def _slice_result(Y, YV, n):
+    return NewmarkResult(u=Y[:n], v=YV[:n], a=np.zeros_like(Y[:n]))
+
+
+def _full_steps(crossing, bridge: FullBridge, scheme, start, k_out, y_state, vstate):
+    Y, YV, YA = vstate
+    veh = crossing.vehicle
+    n_t, n_b, n_v = crossing.n_t, bridge.n, veh.n_dof
+    kt, ct, E = veh.tyre_stiffness, veh.tyre_damping, veh.contact
+    n_c = kt.size
+    fac = bridge._factor(scheme)
+    at = kt + scheme.a1 * ct
+    if n_v:
+        kv_eff = scheme.effective(veh.mass, veh.damping, veh.stiffness)
+        kv_inv_E = np.linalg.solve(kv_eff, E)
+        X = np.eye(n_c) - at[:, None] * (E.T @ kv_inv_E)
+    U = np.zeros((n_t, n_b))
+    V = np.zeros_like(U)
+    A = np.zeros_like(U)
+    F = np.zeros((n_t, n_c))
+    u, uv, ua = np.zeros(n_b), np.zeros(n_b), np.zeros(n_b)
+    y, yv, ya = y_state
+    F[: start + 1] = _forces(veh, _slice_result(Y, YV, start + 1) if n_v else None,
+                             -crossing.r[: start + 1], -crossing.r_dot[: start + 1])
+    b, g, dt = scheme.beta, scheme.gamma, scheme.dt
+    for k in range(start + 1, k_out + 1):
+        dofs, vals, slopes = bridge.dofs[k], bridge.vals[k], bridge.slopes[k]
+        r, rd = crossing.r[k], crossing.r_dot[k]
+        cu_b = scheme.a1 * u + (g / b - 1.0) * uv + dt * (0.5 * g / b - 1.0) * ua
+        Lt_cu = np.einsum("cj,cj->c", vals, cu_b[dofs])
+        hist_b = scheme.history(bridge.M, bridge.C, u, uv, ua)
+        if n_v:
+            cu_y = scheme.a1 * y + (g / b - 1.0) * yv + dt * (0.5 * g / b - 1.0) * ya
+            coupling_b = ct * (Lt_cu - cu_y @ E)
+            rv = (scheme.history(veh.mass, veh.damping, y, yv, ya) - E @ (ct * Lt_cu)
+                  - E @ (kt * r + ct * rd))
+        else:
+            coupling_b = ct * Lt_cu
+        rb = hist_b + _scatter(n_b, dofs, vals, veh.static_forces + kt * r + ct * rd
+                               + coupling_b)
+        if n_v:  # eliminate the vehicles: rb' = rb + L At Eᵀ Kv⁻¹ rv
+            rb = rb + _scatter(n_b, dofs, vals, at * (kv_inv_E.T @ rv))
+        s = sla.cho_solve_banded(fac, rb, check_finite=False)
+        on = crossing.on[k]
+        if n_v and np.any(on):
+            Lmat = np.zeros((n_b, n_c))
+            for c in np.flatnonzero(on):
+                np.add.at(Lmat[:, c], dofs[c], vals[c])
+            Z = sla.cho_solve_banded(fac, Lmat, check_finite=False)  # Kb⁻¹ L
+            LtZ = np.einsum("cj,cjd->cd", vals, Z[dofs])
+            LxtZ = np.einsum("cj,cjd->cd", slopes, Z[dofs])
+            WZ = at[:, None] * LtZ + ct[:, None] * LxtZ
+            Ws = at * np.einsum("cj,cj->c", vals, s[dofs]) + ct * np.einsum(
+                "cj,cj->c", slopes, s[dofs])
+            corr = np.linalg.solve(np.eye(n_c) + WZ @ X, Ws)
+            u_new = s - Z @ (X @ corr)
+        else:
+            u_new = s
+        uv, ua = scheme.update(u_new, u, uv, ua)
+        u = u_new
+        U[k], V[k], A[k] = u, uv, ua
+        w_c = np.einsum("cj,cj->c", vals, u[dofs])
+        w_c_dot = np.einsum("cj,cj->c", vals, uv[dofs]) + np.einsum("cj,cj->c", slopes, u[dofs])
+        if n_v:
+            Wu = at * w_c + ct * np.einsum("cj,cj->c", slopes, u[dofs])
+            y_new = np.linalg.solve(kv_eff, rv + E @ Wu)
+            yv, ya = scheme.update(y_new, y, yv, ya)
+            y = y_new
+            Y[k], YV[k], YA[k] = y, yv, ya
+            delta = y @ E - w_c + r
+            delta_dot = yv @ E - w_c_dot + rd
+        else:
+            delta = -w_c + r
+            delta_dot = -w_c_dot + rd
+        F[k] = veh.static_forces + kt * delta + ct * delta_dot
+    state = NewmarkResult(u=U, v=V, a=A)
+    _finish(crossing, bridge, scheme, k_out, state, vstate, F, veh)
+    return state, F
+
+
+def _scatter(n, dofs, vals, coef):
+    f = np.zeros(n)
+    np.add.at(f, dofs, vals * coef[:, None])
+    return f

@@ -1,0 +1,239 @@
+"""Strain records of vehicle crossings: what a logger recorded, and what was true.
+
+Contract
+--------
+* :class:`Passage` is what a B-WIM system knows (or measures with axle detectors) about a
+  vehicle crossing: speed, lane, axle spacings, track width and the time ``delay`` at which
+  its first axle reached x = 0 (record time).  Wheel ``k`` of axle ``i`` is at
+  ``x = speed (t − delay) − axle_offsets[i]`` and ``y = lane ∓ track_width / 2`` (right
+  wheel first); with ``track_width=None`` each axle is one force on the lane centre line.
+* :class:`Truth` holds a simulated vehicle's true wheel and axle forces (N, downward) on the
+  record's time axis, its static loads, and whether a wheel lost contact.
+* :class:`Record` is a time series of sensor readings (strain dimensionless, deflection m)
+  with its sensors, passages and, for simulated records, truths.  Time 0 is the instant
+  the first axle of the first vehicle reaches x = 0.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from bwim.errors import InputError, require_finite, require_positive
+from bwim.sensors import Sensor
+
+__all__ = ["Passage", "Record", "Truth", "VBIConvergence"]
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Passage:
+    """A vehicle's crossing as a B-WIM system sees it.
+
+    Parameters
+    ----------
+    speed : float
+        Constant speed, m/s (> 0).
+    lane : float
+        Transverse position of the vehicle's centre line, m from the right-hand edge.
+    axle_spacings : sequence of float
+        Distances between consecutive axles, m (length n_axles − 1).
+    track_width : float or None
+        Distance between the wheels of an axle, m; None: one force per axle on the
+        centre line (1-D bridges, quarter cars).
+    delay : float
+        Record time at which the first axle reaches x = 0, s.
+    """
+
+    speed: float
+    lane: float = 0.0
+    axle_spacings: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    track_width: float | None = None
+    delay: float = 0.0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "speed", require_positive("speed", self.speed))
+        object.__setattr__(self, "lane", require_finite("lane", self.lane))
+        sp = np.array(self.axle_spacings, dtype=float, ndmin=1)
+        if sp.ndim != 1 or not np.all(np.isfinite(sp)) or np.any(sp <= 0):
+            raise InputError(f"axle_spacings must be positive distances, got {sp.tolist()}")
+        object.__setattr__(self, "axle_spacings", sp)
+        if self.track_width is not None:
+            object.__setattr__(self, "track_width",
+                               require_positive("track_width", self.track_width))
+        object.__setattr__(self, "delay", require_finite("delay", self.delay))
+
+    @property
+    def n_axles(self) -> int:
+        return self.axle_spacings.size + 1
+
+    @property
+    def axle_offsets(self) -> np.ndarray:
+        """Distance of each axle behind the first, m, shape (n_axles,)."""
+        return np.concatenate([[0.0], np.cumsum(self.axle_spacings)])
+
+    @property
+    def wheels_per_axle(self) -> int:
+        return 1 if self.track_width is None else 2
+
+    @property
+    def wheel_axle(self) -> np.ndarray:
+        """Axle index of each wheel, shape (n_wheels,)."""
+        return np.repeat(np.arange(self.n_axles), self.wheels_per_axle)
+
+    @property
+    def wheel_y(self) -> np.ndarray:
+        """Transverse position of each wheel, m, shape (n_wheels,)."""
+        if self.track_width is None:
+            return np.full(self.n_axles, self.lane)
+        half = self.track_width / 2
+        return np.tile([self.lane - half, self.lane + half], self.n_axles)
+
+    def wheel_x(self, time: np.ndarray) -> np.ndarray:
+        """Longitudinal wheel positions at record times, m, shape (n_t, n_wheels)."""
+        t = np.asarray(time, dtype=float)
+        return self.speed * (t[:, None] - self.delay) - self.axle_offsets[self.wheel_axle]
+
+    def axle_times_on(self, length: float) -> np.ndarray:
+        """Entry and exit time of each axle on a span of ``length``, shape (n_axles, 2)."""
+        t_in = self.delay + self.axle_offsets / self.speed
+        return np.stack([t_in, t_in + length / self.speed], axis=1)
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Truth:
+    """True forces of one simulated vehicle on the record's time axis.
+
+    Attributes
+    ----------
+    wheel_forces : ndarray, shape (n_t, n_wheels)
+        Contact forces, N (downward), in the wheel order of :class:`Passage`.
+    axle_forces : ndarray, shape (n_t, n_axles)
+        Sum of each axle's wheel forces, N.
+    static_wheel_loads : ndarray, shape (n_wheels,)
+    static_axle_loads : ndarray, shape (n_axles,)
+    contact_lost : ndarray of bool, shape (n_wheels,)
+        True where a wheel's contact force fell below zero at some instant (the linear
+        model then pulls on the road: its forces are not physical there).
+    """
+
+    wheel_forces: np.ndarray
+    axle_forces: np.ndarray
+    static_wheel_loads: np.ndarray
+    static_axle_loads: np.ndarray
+    contact_lost: np.ndarray
+
+    @property
+    def gvw(self) -> float:
+        """Gross vehicle weight (static), N."""
+        return float(self.static_axle_loads.sum())
+
+
+@dataclass(frozen=True, kw_only=True)
+class VBIConvergence:
+    """How the vehicle–bridge interaction solution was reached."""
+
+    method: str
+    iterations: int = 1
+    change: float = 0.0
+    """Final relative change of the deck displacement under the wheels (iterative)."""
+    converged: bool = True
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Record:
+    """Sensor readings of one event (one or more vehicles crossing).
+
+    Attributes
+    ----------
+    time : ndarray, shape (n_t,)
+        Sample times, s, uniformly spaced.
+    data : ndarray, shape (n_t, n_sensors)
+        Readings: strain (m/m) or deflection (m).
+    sensors : tuple of Sensor
+    passages : tuple of Passage
+    truths : tuple of Truth
+        Empty for measured records.
+    convergence : VBIConvergence or None
+        For simulated records.
+    """
+
+    time: np.ndarray
+    data: np.ndarray
+    sensors: tuple[Sensor, ...]
+    passages: tuple[Passage, ...] = ()
+    truths: tuple[Truth, ...] = ()
+    convergence: VBIConvergence | None = None
+
+    def __post_init__(self) -> None:
+        t = np.asarray(self.time, dtype=float)
+        d = np.asarray(self.data, dtype=float)
+        if d.ndim == 1:
+            d = d[:, None]
+        if t.ndim != 1 or t.size < 2:
+            raise InputError("time must be a 1-D array of at least two samples")
+        if d.shape != (t.size, len(self.sensors)):
+            raise InputError(
+                f"data must have shape (n_t, n_sensors) = ({t.size}, {len(self.sensors)}), "
+                f"got {d.shape}"
+            )
+        if not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
+            raise InputError("time must be finite and strictly increasing")
+        if not np.all(np.isfinite(d)):
+            bad = np.argwhere(~np.isfinite(d))[0]
+            raise InputError(
+                f"data has a non-finite sample at t = {t[bad[0]]:g} s in channel "
+                f"{self.sensors[bad[1]].name!r}"
+            )
+        object.__setattr__(self, "time", t)
+        object.__setattr__(self, "data", d)
+        object.__setattr__(self, "sensors", tuple(self.sensors))
+        object.__setattr__(self, "passages", tuple(self.passages))
+        object.__setattr__(self, "truths", tuple(self.truths))
+
+    @property
+    def sampling_rate(self) -> float:
+        """Samples per second (from the median time step)."""
+        return float(1.0 / np.median(np.diff(self.time)))
+
+    @property
+    def passage(self) -> Passage:
+        """The passage of a single-vehicle record."""
+        if len(self.passages) != 1:
+            raise InputError(f"this record has {len(self.passages)} vehicles; use .passages")
+        return self.passages[0]
+
+    @property
+    def truth(self) -> Truth:
+        """The truth of a single-vehicle simulated record."""
+        if len(self.truths) != 1:
+            raise InputError(
+                "this record has no simulated truth" if not self.truths
+                else f"this record has {len(self.truths)} vehicles; use .truths"
+            )
+        return self.truths[0]
+
+    def channels(self, sensors: Sequence[str | Sensor]) -> Record:
+        """A record with a subset of the channels (by name or Sensor), in that order."""
+        names = [s.name for s in self.sensors]
+        idx = []
+        for s in sensors:
+            key = s.name if isinstance(s, Sensor) else s
+            if key not in names:
+                raise InputError(f"no channel {key!r} in this record; channels: {names}")
+            idx.append(names.index(key))
+        return dataclasses.replace(
+            self, data=self.data[:, idx], sensors=tuple(self.sensors[i] for i in idx)
+        )
+
+    def with_noise(self, fraction: float, *, seed: int | np.random.Generator | None) -> Record:
+        """A copy with Gaussian noise of standard deviation ``fraction`` × the peak absolute
+        reading of each channel (the paper's §5.2 noise model)."""
+        if not np.isfinite(fraction) or fraction < 0:
+            raise InputError(f"noise fraction must be >= 0, got {fraction!r}")
+        rng = np.random.default_rng(seed)
+        scale = fraction * np.abs(self.data).max(axis=0)
+        return dataclasses.replace(self, data=self.data + rng.standard_normal(self.data.shape)
+                                   * scale)
