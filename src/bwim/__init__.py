@@ -6,11 +6,12 @@ The public API is listed in ``__all__``; units, axes and signs are in
 
 from importlib.metadata import PackageNotFoundError, version
 
-from bwim import conventions, dynamics, errors, fe, paper, vehicles
+from bwim import conventions, dynamics, errors, fe, mfi, paper, vehicles
 from bwim.dynamics import simulate
 from bwim.errors import BwimError, InputError, NumericalError
 from bwim.fe import Bridge, Girder, Modes, Supports, composite_section, grid_lines
 from bwim.loads import PointLoad
+from bwim.mfi import ForceIdentification, force_errors, identify_forces
 from bwim.records import Passage, Record, Truth
 from bwim.road import RoadProfile
 from bwim.sensors import Sensor, SensorKind
@@ -24,6 +25,7 @@ except PackageNotFoundError:  # running from a source tree without installation
 __all__ = [
     "Bridge",
     "BwimError",
+    "ForceIdentification",
     "Girder",
     "HalfCar",
     "InputError",
@@ -47,7 +49,10 @@ __all__ = [
     "dynamics",
     "errors",
     "fe",
+    "force_errors",
     "grid_lines",
+    "identify_forces",
+    "mfi",
     "paper",
     "simulate",
     "vehicles",

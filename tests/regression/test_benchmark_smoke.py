@@ -14,3 +14,10 @@ def test_vbi_benchmark_smoke():
 
     rows, _ = bench_vbi.run(approach=5.0, repeat=1, full=False)
     assert [r[1] for r in rows] == ["coupled", "iterative"]
+
+
+def test_mfi_benchmark_smoke():
+    from benchmarks import bench_mfi
+
+    rows = bench_mfi.run(durations=(0.3,), batch_durations=(0.02,), repeat=1)
+    assert len(rows) == 2 and rows[1][5].endswith("×")

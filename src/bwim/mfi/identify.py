@@ -1,0 +1,234 @@
+"""``identify_forces``: axle force histories and static axle weights from a strain record.
+
+Contract
+--------
+* Input: a bridge model (exact or calibrated), a :class:`~bwim.records.Record` with its
+  sensors and the vehicle passage(s) (speed, lane, axle spacings, track width, delay).
+* The forces are identified by first-order Tikhonov regularisation solved by dynamic
+  programming (González, Rowley & OBrien 2008; THEORY §4) on ``n_modes`` modes with the
+  static correction of the truncated modes, λ by the L-curve (default), GCV, or given
+  (physical units: strain m/m, force rate N/s for first order, force N for zeroth).
+* Unknowns are per wheel or per axle (``unknowns="auto"``: wheels when the strain sensors
+  sit at two or more transverse positions on a plate, else axles).  Axle force = sum of
+  its wheels.  Static axle weight = mean identified axle force over the central
+  ``central`` fraction (default 80 %) of the axle's time on the deck; GVW = their sum.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from bwim.dynamics.simulate import select_modes
+from bwim.errors import InputError
+from bwim.fe.bridge import Bridge
+from bwim.mfi.dp import Solution, solve_dp
+from bwim.mfi.lcurve import LCurve, gcv, lcurve
+from bwim.mfi.statespace import ForceUnknowns, MFIModel, Order, build_model, force_layout
+from bwim.records import Passage, Record
+
+__all__ = ["DEFAULT_MAX_MODES", "ForceIdentification", "identify_forces"]
+
+#: Default cap on the number of modes (with the static correction more add little).
+DEFAULT_MAX_MODES = 20
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class ForceIdentification:
+    """Identified moving forces.
+
+    Attributes
+    ----------
+    time : ndarray (n_t,)
+    wheel_forces : ndarray (n_t, n_wheels)
+        N, in the wheel order of the passages (axle unknowns are shared equally by the
+        axle's wheels).
+    axle_forces : ndarray (n_t, n_axles)
+        N; all vehicles' axles in passage order.
+    axle_weights : ndarray (n_axles,)
+        Static axle weights, N.
+    gvw : ndarray (n_vehicles,)
+        Gross vehicle weights, N.
+    lam, lam_scaled : float
+        The λ used (physical and scaled units).
+    lcurve : LCurve or None
+    fitted : ndarray (n_t, n_sensors)
+        Readings reproduced by the identified forces.
+    passages : tuple of Passage
+    axle_windows : ndarray (n_axles, 2)
+        Time window used for each static weight, s.
+    unknowns : ForceUnknowns
+    order : Order
+    """
+
+    time: np.ndarray
+    wheel_forces: np.ndarray
+    axle_forces: np.ndarray
+    axle_weights: np.ndarray
+    gvw: np.ndarray
+    lam: float
+    lam_scaled: float
+    lcurve: LCurve | None
+    fitted: np.ndarray
+    passages: tuple[Passage, ...]
+    axle_windows: np.ndarray
+    unknowns: ForceUnknowns
+    order: Order
+
+    def plot(self, truth=None, ax=None):
+        """Forces against the truth if known (see :func:`bwim.plots.mfi.plot_forces`)."""
+        from bwim.plots.mfi import plot_forces
+
+        return plot_forces(self, truth=truth, ax=ax)
+
+
+def _auto_unknowns(bridge: Bridge, record: Record) -> ForceUnknowns:
+    if not bridge.is_plate or all(p.track_width is None for p in record.passages):
+        return ForceUnknowns.AXLE
+    ys = {round(s.y, 6) for s in record.sensors if s.kind.is_strain}
+    return ForceUnknowns.WHEEL if len(ys) >= 2 else ForceUnknowns.AXLE
+
+
+def identify_forces(
+    bridge: Bridge,
+    record: Record,
+    *,
+    n_modes: int | None = None,
+    lam: float | str = "lcurve",
+    order: Order | str = Order.FIRST,
+    unknowns: ForceUnknowns | str = ForceUnknowns.AUTO,
+    weights: np.ndarray | None = None,
+    static_correction: bool = True,
+    lam_range: tuple[float, float] = (1e-6, 1e3),
+    n_lam: int = 30,
+    central: float = 0.8,
+) -> ForceIdentification:
+    """Identify the moving forces of a record (see module docstring).
+
+    Parameters
+    ----------
+    bridge : Bridge
+        The bridge model (its modes, damping and sensor rows are used).
+    record : Record
+        Strain (and/or deflection) readings with sensors and passage(s).
+    n_modes : int, optional
+        Modes in the state-space model (default: up to 20 modes below sampling_rate / 4;
+        the truncated ones enter through the static correction).
+    lam : "lcurve", "gcv" or float
+        Regularisation: the L-curve's corner, GCV, or a value in physical units.
+    order : "first" or "zeroth"
+    unknowns : "auto", "wheel" or "axle"
+    weights : array (n_sensors,), optional
+        Sensor weights W (default: all 1 on the common strain scale).
+    static_correction : bool
+        Include the truncated modes' static response in the readings model.
+    lam_range, n_lam
+        Scaled λ grid of the L-curve (and the GCV search interval).
+    central : float
+        Fraction of each axle's time on the deck used for its static weight.
+    """
+    if not isinstance(record, Record):
+        raise InputError(f"record must be a bwim.Record, got {type(record).__name__}")
+    if not record.passages:
+        raise InputError("the record has no passage: speed, lane and axle layout are needed "
+                         "to place the forces")
+    if not np.all(np.isfinite(record.data)):
+        raise InputError("the record contains NaN or infinite samples")
+    try:
+        order = Order(order)
+    except ValueError:
+        raise InputError(f"unknown order {order!r}; expected 'first' or 'zeroth'") from None
+    try:
+        unknowns = ForceUnknowns(unknowns)
+    except ValueError:
+        raise InputError(f"unknown unknowns {unknowns!r}; expected 'auto', 'wheel' or "
+                         "'axle'") from None
+    if unknowns is ForceUnknowns.AUTO:
+        unknowns = _auto_unknowns(bridge, record)
+    if not 0.0 < central <= 1.0:
+        raise InputError(f"central must lie in (0, 1], got {central!r}")
+    fs = record.sampling_rate
+    if n_modes is None:
+        below = select_modes(bridge, max_frequency=fs / 4, sampling_rate=fs)
+        modes = bridge.modes(min(DEFAULT_MAX_MODES, below.n))
+    else:
+        modes = select_modes(bridge, n_modes=n_modes, sampling_rate=fs)
+    d = record.data
+    d_scale = float(np.abs(d).max())
+    if d_scale == 0.0:
+        raise InputError("the record is all zeros")
+    _, offsets, _ = force_layout(record.passages, unknowns)
+    n_f = offsets.size
+    if record.data.shape[1] < n_f and unknowns is ForceUnknowns.WHEEL:
+        raise InputError(
+            f"{record.data.shape[1]} sensor channels cannot identify {n_f} wheel forces; "
+            "use unknowns='axle' or more sensors"
+        )
+    model = build_model(bridge, modes, record.sensors, record.passages, record.time, d_scale,
+                        unknowns=unknowns, order=order, static_correction=static_correction)
+    w = None if weights is None else np.asarray(weights, dtype=float)
+    d_scaled = d / d_scale
+    W = np.ones(model.n_s) if w is None else w
+    curve = None
+    if isinstance(lam, str):
+        grid = np.geomspace(lam_range[0], lam_range[1], n_lam)
+        if lam == "lcurve":
+            curve = lcurve(model, d_scaled, W, grid)
+            lam_s = curve.corner_scaled
+        elif lam == "gcv":
+            lam_s = gcv(model, d_scaled, W, lam_range)
+        else:
+            raise InputError(f"unknown lam {lam!r}; expected 'lcurve', 'gcv' or a number")
+    else:
+        if not np.isfinite(lam) or lam <= 0:
+            raise InputError(f"lam must be positive, got {lam!r}")
+        lam_s = model.lam_scaled(float(lam))
+    sol = solve_dp(model, d_scaled, lam_s, W)
+    return _result(model, sol, record, unknowns, order, lam_s, curve, central, bridge.length)
+
+
+def _result(model: MFIModel, sol: Solution, record: Record, unknowns, order, lam_s, curve,
+            central, length) -> ForceIdentification:
+    forces = sol.forces * model.f_scale  # (n_t, n_f)
+    passages = record.passages
+    wheel_cols = [p.wheels_per_axle * p.n_axles for p in passages]
+    axle_cols = [p.n_axles for p in passages]
+    n_t = forces.shape[0]
+    wheels = np.zeros((n_t, sum(wheel_cols)))
+    axles = np.zeros((n_t, sum(axle_cols)))
+    f = w0 = a0 = 0
+    for p in passages:
+        n_w = p.wheels_per_axle
+        for a in range(p.n_axles):
+            if unknowns is ForceUnknowns.WHEEL:
+                wheels[:, w0 + a * n_w: w0 + (a + 1) * n_w] = forces[:, f: f + n_w]
+                axles[:, a0 + a] = forces[:, f: f + n_w].sum(axis=1)
+                f += n_w
+            else:
+                wheels[:, w0 + a * n_w: w0 + (a + 1) * n_w] = forces[:, [f]] / n_w
+                axles[:, a0 + a] = forces[:, f]
+                f += 1
+        w0 += n_w * p.n_axles
+        a0 += p.n_axles
+    windows = np.concatenate([p.axle_times_on(length) for p in passages])
+    span = windows[:, 1] - windows[:, 0]
+    cut = 0.5 * (1.0 - central) * span
+    windows = np.stack([windows[:, 0] + cut, windows[:, 1] - cut], axis=1)
+    t = record.time
+    weights = np.empty(axles.shape[1])
+    for a in range(axles.shape[1]):
+        inside = (t >= windows[a, 0]) & (t <= windows[a, 1])
+        if not inside.any():
+            raise InputError(f"axle {a} is not on the bridge during the record")
+        weights[a] = axles[inside, a].mean()
+    gvw = np.array([weights[s:s + n].sum() for s, n in zip(np.cumsum([0, *axle_cols[:-1]]),
+                                                             axle_cols, strict=True)])
+    nz = model.n_z
+    fitted = (sol.X[:, :nz] @ model.Qz.T + np.einsum("ksf,kf->ks", model.D, sol.X[:, nz:])
+              ) * model.d_scale
+    return ForceIdentification(
+        time=t.copy(), wheel_forces=wheels, axle_forces=axles, axle_weights=weights, gvw=gvw,
+        lam=model.lam_physical(lam_s), lam_scaled=lam_s, lcurve=curve, fitted=fitted,
+        passages=tuple(passages), axle_windows=windows, unknowns=unknowns, order=order,
+    )

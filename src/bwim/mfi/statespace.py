@@ -1,0 +1,258 @@
+"""The discrete state-space model of a bridge under moving forces (THEORY §4).
+
+Contract
+--------
+* Modal coordinates ``q`` (n_m mass-normalised modes), ``z = [q; q̇]``,
+  ``ż = A z + B(t) f`` with ``A = [[0, I], [−Ω², −2ζΩ]]``, ``B(t) = [[0], [G(t)]]`` and
+  ``G(t) = Φᵀ L(t)`` for the n_f unknown forces at their positions at time t.
+* Exact zero-order-hold discretisation: ``z_{k+1} = P z_k + Γ_k f_k``, ``P = e^{AΔt}``,
+  ``Γ_k = A⁻¹(P − I) B(t_k)``, computed mode by mode from the exponential of a 3 × 3
+  augmented block (no inverse of A needed).
+* The forces join the state, ``X_k = [z_k; f_k]``, and the unknowns are ``r_k``:
+  first order ``f_{k+1} = f_k + Δt r_k`` (González, Rowley & OBrien 2008) or zeroth order
+  ``f_{k+1} = r_k`` (Law & Fang).
+* Readings ``d_k = Q_k X_k`` with ``Q_k = [S Φ, 0, D_k]``; ``D_k`` is the static correction
+  (the truncated modes' quasi-static strain per unit force at the force positions,
+  ``g_s(x) − S Φ Ω⁻² Φᵀ N(x)``, THEORY §1.5), zero when disabled.
+* Everything is held in scaled units (strain / s_d, force / s_f, r Δt / s_f, modal
+  coordinates by their static response to s_f), so that λ is a well-conditioned number;
+  :attr:`MFIModel.lam_physical` converts it back.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from enum import Enum
+from functools import cached_property
+
+import numpy as np
+import scipy.linalg as sla
+
+from bwim.errors import InputError
+from bwim.fe.bridge import Bridge
+from bwim.fe.modal import Modes
+from bwim.records import Passage
+from bwim.sensors import Sensor
+
+__all__ = ["ForceUnknowns", "MFIModel", "Order", "build_model"]
+
+
+class Order(str, Enum):
+    """Tikhonov regularisation order."""
+
+    FIRST = "first"  # penalise the force rate (smooth histories)
+    ZEROTH = "zeroth"  # penalise the force itself
+
+
+class ForceUnknowns(str, Enum):
+    """What the unknown forces are."""
+
+    AUTO = "auto"  # wheels when the sensors resolve the transverse position, else axles
+    WHEEL = "wheel"
+    AXLE = "axle"
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class MFIModel:
+    """The scaled discrete model of one record (see module docstring).
+
+    Attributes
+    ----------
+    P : ndarray (2 n_m, 2 n_m)
+    gamma : ndarray (N, 2 n_m, n_f)
+    Qz : ndarray (n_s, 2 n_m)
+    D : ndarray (N, n_s, n_f)
+    order : Order
+    dt : float
+    d_scale, f_scale : float
+        Strain and force scales.
+    on : ndarray of bool (N, n_f)
+        Whether each force is on the deck at each step.
+    """
+
+    P: np.ndarray
+    gamma: np.ndarray
+    Qz: np.ndarray
+    D: np.ndarray
+    order: Order
+    dt: float
+    d_scale: float
+    f_scale: float
+    on: np.ndarray
+
+    @property
+    def n_steps(self) -> int:
+        return self.gamma.shape[0]
+
+    @property
+    def n_z(self) -> int:
+        return self.P.shape[0]
+
+    @property
+    def n_f(self) -> int:
+        return self.gamma.shape[2]
+
+    @property
+    def n_x(self) -> int:
+        return self.n_z + self.n_f
+
+    @property
+    def n_s(self) -> int:
+        return self.Qz.shape[0]
+
+    @property
+    def t_coef(self) -> float:
+        """T = [[0], [t_coef I]] in scaled units (1 for both orders by the choice of s_r)."""
+        return 1.0
+
+    @property
+    def f_carry(self) -> float:
+        """H's lower-right block: I (first order) or 0 (zeroth order)."""
+        return 1.0 if self.order is Order.FIRST else 0.0
+
+    @cached_property
+    def H_all(self) -> np.ndarray:
+        """All transition matrices ``H_k``, shape (N, n_x, n_x) (built once)."""
+        nz, nf = self.n_z, self.n_f
+        H = np.zeros((self.n_steps, nz + nf, nz + nf))
+        H[:, :nz, :nz] = self.P
+        H[:, :nz, nz:] = self.gamma
+        H[:, nz:, nz:] = self.f_carry * np.eye(nf)
+        return H
+
+    def H(self, k: int) -> np.ndarray:
+        return self.H_all[k]
+
+    def Q(self, k: int) -> np.ndarray:
+        return np.hstack([self.Qz, self.D[k]])
+
+    def qwq(self, weights: np.ndarray) -> np.ndarray:
+        """``Q_kᵀ W Q_k`` for every step, shape (N, n_x, n_x)."""
+        nz = self.n_z
+        out = np.empty((self.n_steps, self.n_x, self.n_x))
+        WQz = weights[:, None] * self.Qz
+        out[:, :nz, :nz] = self.Qz.T @ WQz
+        cross = np.einsum("sz,ksf->kzf", WQz, self.D)
+        out[:, :nz, nz:] = cross
+        out[:, nz:, :nz] = cross.transpose(0, 2, 1)
+        out[:, nz:, nz:] = np.einsum("ksf,s,ksg->kfg", self.D, weights, self.D)
+        return out
+
+    def qwd(self, weights: np.ndarray, d: np.ndarray) -> np.ndarray:
+        """``Q_kᵀ W d_k`` for every step, shape (N, n_x)."""
+        wd = weights * d
+        return np.concatenate([wd @ self.Qz, np.einsum("ksf,ks->kf", self.D, wd)], axis=1)
+
+    def lam_physical(self, lam_scaled: float) -> float:
+        """λ for strains in m/m and force rates in N/s (first order) or forces in N."""
+        unit = self.f_scale / self.dt if self.order is Order.FIRST else self.f_scale
+        return lam_scaled * (self.d_scale / unit) ** 2
+
+    def lam_scaled(self, lam_physical: float) -> float:
+        return lam_physical / self.lam_physical(1.0)
+
+
+def _mode_blocks(omega: np.ndarray, zeta: np.ndarray, dt: float):
+    """Per mode: P_m = e^{A_m Δt} (2 × 2) and h_m = ∫₀^Δt e^{A_m τ} dτ e₂ (2,)."""
+    n = omega.size
+    P = np.zeros((n, 2, 2))
+    h = np.zeros((n, 2))
+    for m in range(n):
+        aug = np.zeros((3, 3))
+        aug[0, 1] = 1.0
+        aug[1, 0] = -omega[m] ** 2
+        aug[1, 1] = -2 * zeta[m] * omega[m]
+        aug[1, 2] = 1.0
+        E = sla.expm(aug * dt)
+        P[m], h[m] = E[:2, :2], E[:2, 2]
+    return P, h
+
+
+def force_layout(passages: Sequence[Passage], unknowns: ForceUnknowns):
+    """Force positions: per force (n_f) its passage index, axle offset and lateral list.
+
+    Returns ``(passage_of, offset_of, ys_of)`` where ``ys_of[f]`` lists the wheel y
+    positions sharing force f equally (one wheel, or both wheels of an axle).
+    """
+    passage_of, offset_of, ys_of = [], [], []
+    for j, p in enumerate(passages):
+        wy = p.wheel_y.reshape(p.n_axles, p.wheels_per_axle)
+        for a in range(p.n_axles):
+            if unknowns is ForceUnknowns.WHEEL:
+                for y in wy[a]:
+                    passage_of.append(j)
+                    offset_of.append(p.axle_offsets[a])
+                    ys_of.append([float(y)])
+            else:
+                passage_of.append(j)
+                offset_of.append(p.axle_offsets[a])
+                ys_of.append([float(y) for y in wy[a]])
+    return np.array(passage_of), np.array(offset_of), ys_of
+
+
+def build_model(
+    bridge: Bridge,
+    modes: Modes,
+    sensors: Sequence[Sensor],
+    passages: Sequence[Passage],
+    time: np.ndarray,
+    d_scale: float,
+    *,
+    unknowns: ForceUnknowns,
+    order: Order,
+    static_correction: bool = True,
+) -> MFIModel:
+    """The scaled discrete model for a record's time axis and passages."""
+    dt = float(np.median(np.diff(time)))
+    n_t = time.size
+    S = bridge.sensor_matrix(sensors)
+    s_phi = S @ modes.shapes  # (n_s, n_m)
+    zeta = bridge.rayleigh.ratio(modes.omega)
+    passage_of, offset_of, ys_of = force_layout(passages, unknowns)
+    n_f = offset_of.size
+    n_m = modes.n
+    # G(t_k): modal force per unit force f (each force shared by its wheels)
+    G = np.zeros((n_t, n_m, n_f))
+    Dphys = np.zeros((n_t, s_phi.shape[0], n_f))
+    on = np.zeros((n_t, n_f), dtype=bool)
+    inf = bridge.influence(sensors) if static_correction else None
+    for f in range(n_f):
+        p = passages[passage_of[f]]
+        x = p.speed * (time - p.delay) - offset_of[f]
+        inside = (x >= 0.0) & (x <= bridge.length)
+        on[:, f] = inside
+        if not inside.any():
+            continue
+        share = 1.0 / len(ys_of[f])
+        for y in ys_of[f]:
+            yy = np.full(inside.sum(), y) if bridge.is_plate else None
+            rows = bridge.model.point_rows(x[inside], yy)
+            g = np.einsum("pk,pkm->pm", rows.vals, modes.shapes[rows.dofs]) * share
+            G[inside, :, f] += g
+            if inf is not None:
+                Dphys[inside, :, f] += share * inf.at(x[inside], yy) - g @ (
+                    s_phi / modes.omega**2).T
+    # scales: the force that gives the peak strain, modal coordinates by their static share
+    static_per_force = np.einsum("sm,m,kmf->ksf", s_phi, 1.0 / modes.omega**2, G) + Dphys
+    peak = np.abs(static_per_force).max()
+    if peak == 0.0:
+        raise InputError("no force crosses the bridge during the record")
+    f_scale = d_scale / peak
+    q_scale = f_scale * np.abs(G).max(axis=(0, 2)) / modes.omega**2
+    q_scale = np.where(q_scale > 0, q_scale, f_scale / modes.omega**2)
+    z_scale = np.concatenate([q_scale, q_scale * modes.omega])  # [q; q̇] ordered per block
+    Pm, h = _mode_blocks(modes.omega, zeta, dt)
+    nz = 2 * n_m
+    P = np.zeros((nz, nz))
+    idx_q, idx_v = np.arange(n_m), n_m + np.arange(n_m)
+    P[idx_q, idx_q], P[idx_q, idx_v] = Pm[:, 0, 0], Pm[:, 0, 1]
+    P[idx_v, idx_q], P[idx_v, idx_v] = Pm[:, 1, 0], Pm[:, 1, 1]
+    gamma = np.concatenate([h[:, 0][None, :, None] * G, h[:, 1][None, :, None] * G], axis=1)
+    # scaling: X = Dx X̃ with Dx = diag(z_scale, f_scale)
+    P_s = P * z_scale[None, :] / z_scale[:, None]
+    gamma_s = gamma * f_scale / z_scale[None, :, None]
+    Qz = np.hstack([s_phi, np.zeros_like(s_phi)]) * z_scale[None, :] / d_scale
+    D = Dphys * f_scale / d_scale
+    return MFIModel(P=P_s, gamma=gamma_s, Qz=Qz, D=D, order=order, dt=dt, d_scale=d_scale,
+                    f_scale=f_scale, on=on)

@@ -1,0 +1,29 @@
+"""Figures: matplotlib functions that take a result (and ``ax=None``) and return the figure.
+
+Contract
+--------
+* Every plotting function has the form ``plot_something(result, ..., ax=None) -> Figure``:
+  it draws on ``ax`` if given, otherwise on a new figure, and never calls ``show()``.
+* Plots show strain in µε and forces in kN (:mod:`bwim.conventions`).
+* Nothing in the core imports this package; it imports matplotlib lazily through
+  :func:`axes`, so ``import bwim`` stays free of matplotlib.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+
+__all__ = ["axes"]
+
+
+def axes(ax: Axes | None = None, **subplot_kw) -> Axes:
+    """``ax`` itself, or the axes of a new figure (Agg-safe, no pyplot state kept)."""
+    if ax is not None:
+        return ax
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=subplot_kw.pop("figsize", (7.0, 4.0)), layout="constrained")
+    return fig.add_subplot(**subplot_kw)

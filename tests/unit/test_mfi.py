@@ -1,0 +1,105 @@
+"""Moving force identification: the DP recursion equals the batch Tikhonov solution, and
+bad input is rejected."""
+
+import numpy as np
+import pytest
+
+import bwim
+from bwim.errors import InputError
+from bwim.mfi import build_model, identify_forces, solve_batch, solve_dp
+from bwim.mfi.statespace import ForceUnknowns, Order
+from bwim.records import Record
+
+
+@pytest.fixture(scope="module")
+def small():
+    """A short, coarse crossing: 53 samples, 4 modes, two axle forces, three sensors."""
+    beam = bwim.Bridge.beam(length=10.0, n_elements=10, E=3e10, I=0.5, mu=5e3, z_bottom=0.5)
+    sensors = [bwim.Sensor(x=x) for x in (2.5, 5.0, 7.5)]
+    rec = bwim.simulate(beam, bwim.MovingForces(axle_loads=[5e4, 8e4], axle_spacings=[3.0]),
+                        speed=25.0, sensors=sensors, sampling_rate=100.0, approach=0.0)
+    return beam, sensors, rec
+
+
+@pytest.fixture(scope="module")
+def crossing():
+    """The same beam sampled at 1 kHz, for the public identify_forces API."""
+    beam = bwim.Bridge.beam(length=10.0, n_elements=10, E=3e10, I=0.5, mu=5e3, z_bottom=0.5)
+    sensors = [bwim.Sensor(x=x) for x in (2.5, 5.0, 7.5)]
+    rec = bwim.simulate(beam, bwim.MovingForces(axle_loads=[5e4, 8e4], axle_spacings=[3.0]),
+                        speed=25.0, sensors=sensors, sampling_rate=1000.0, approach=0.0)
+    return beam, sensors, rec
+
+
+@pytest.mark.parametrize("order", [Order.FIRST, Order.ZEROTH])
+@pytest.mark.parametrize("static_correction", [True, False])
+@pytest.mark.parametrize("lam", [1e-3, 1.0])
+def test_dp_equals_batch_tikhonov(small, order, static_correction, lam):
+    beam, sensors, rec = small
+    scale = np.abs(rec.data).max()
+    model = build_model(beam, beam.modes(4), sensors, rec.passages, rec.time, scale,
+                        unknowns=ForceUnknowns.AXLE, order=order,
+                        static_correction=static_correction)
+    d = rec.data / scale
+    w = np.array([1.0, 2.0, 0.5])
+    dp, batch = solve_dp(model, d, lam, w), solve_batch(model, d, lam, w)
+    # measured: 1e-13 relative (round-off)
+    np.testing.assert_allclose(dp.X, batch.X, atol=1e-10 * np.abs(batch.X).max())
+    assert dp.residual_norm == pytest.approx(batch.residual_norm, rel=1e-9)
+    assert dp.seminorm == pytest.approx(batch.seminorm, rel=1e-9)
+
+
+def test_lambda_units_round_trip(crossing):
+    beam, sensors, rec = crossing
+    scale = np.abs(rec.data).max()
+    model = build_model(beam, beam.modes(2), sensors, rec.passages, rec.time, scale,
+                        unknowns=ForceUnknowns.AXLE, order=Order.FIRST)
+    assert model.lam_scaled(model.lam_physical(0.37)) == pytest.approx(0.37)
+    # physical λ multiplies (N/s)²: scaled λ = λ_phys (f_scale / dt)² / d_scale²
+    assert model.lam_physical(1.0) == pytest.approx((scale * model.dt / model.f_scale) ** 2)
+    ident = identify_forces(beam, rec, lam=model.lam_physical(0.37), n_modes=2)
+    assert ident.lam_scaled == pytest.approx(0.37, rel=1e-9)
+
+
+def test_identified_forces_shapes(crossing):
+    beam, _, rec = crossing
+    ident = identify_forces(beam, rec, n_modes=2, lam=1e-20)
+    assert ident.unknowns is ForceUnknowns.AXLE  # a beam: one force per axle
+    assert ident.axle_forces.shape == (rec.time.size, 2)
+    np.testing.assert_allclose(ident.wheel_forces, ident.axle_forces)
+    assert ident.gvw.shape == (1,) and ident.gvw[0] == pytest.approx(ident.axle_weights.sum())
+    assert np.all(ident.axle_windows[:, 1] > ident.axle_windows[:, 0])
+
+
+def test_bad_identification_input(crossing):
+    beam, _, rec = crossing
+    with pytest.raises(InputError, match="no passage"):
+        identify_forces(beam, Record(time=rec.time, data=rec.data, sensors=rec.sensors))
+    with pytest.raises(InputError, match="unknown order 'second'"):
+        identify_forces(beam, rec, order="second")
+    with pytest.raises(InputError, match="unknown lam 'best'"):
+        identify_forces(beam, rec, lam="best", n_modes=2)
+    with pytest.raises(InputError, match="lam must be positive"):
+        identify_forces(beam, rec, lam=-1.0, n_modes=2)
+    with pytest.raises(InputError, match="too low for the modes in use"):
+        identify_forces(beam, rec, n_modes=9)
+    off = Record(time=rec.time, data=rec.data,
+                 sensors=(bwim.Sensor(x=2.5), bwim.Sensor(x=5.0), bwim.Sensor(x=12.0)),
+                 passages=rec.passages)
+    with pytest.raises(InputError, match="off the deck"):
+        identify_forces(beam, off, n_modes=2)
+    with pytest.raises(InputError, match=r"non-finite"):
+        Record(time=rec.time, data=np.where(rec.data > 0, np.nan, rec.data),
+               sensors=rec.sensors, passages=rec.passages)
+
+
+def test_too_few_channels_for_wheel_unknowns():
+    bridge = bwim.paper.slab_bridge()
+    sensors = [bwim.Sensor(x=6.0, y=2.0), bwim.Sensor(x=6.0, y=6.0), bwim.Sensor(x=3.0, y=4.0)]
+    rec = bwim.simulate(bridge, bwim.MovingForces(axle_loads=[50e3, 80e3], axle_spacings=[4.0],
+                                                  track_width=2.0),
+                        speed=20.0, lane=3.0, sensors=sensors, approach=0.0, sampling_rate=500.0)
+    with pytest.raises(InputError, match="3 sensor channels cannot identify 4 wheel forces"):
+        identify_forces(bridge, rec, unknowns="wheel")
+    ident = identify_forces(bridge, rec, unknowns="axle", lam=1e-22)
+    assert ident.axle_forces.shape[1] == 2
