@@ -10,7 +10,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from benchmarks import bench_fe, bench_mfi, bench_vbi  # noqa: E402
+from benchmarks import bench_fe, bench_mfi, bench_vbi, bench_wim  # noqa: E402
 
 
 def main() -> None:
@@ -18,6 +18,7 @@ def main() -> None:
     bench_fe.main()
     bench_vbi.main()
     bench_mfi.main()
+    bench_wim.main()
 
 
 if __name__ == "__main__":

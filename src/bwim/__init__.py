@@ -6,7 +6,7 @@ The public API is listed in ``__all__``; units, axes and signs are in
 
 from importlib.metadata import PackageNotFoundError, version
 
-from bwim import conventions, dynamics, errors, fe, mfi, paper, vehicles
+from bwim import conventions, dynamics, errors, fe, mfi, paper, vehicles, wim
 from bwim.dynamics import simulate
 from bwim.errors import BwimError, InputError, NumericalError
 from bwim.fe import Bridge, Girder, Modes, Supports, composite_section, grid_lines
@@ -16,6 +16,13 @@ from bwim.records import Passage, Record, Truth
 from bwim.road import RoadProfile
 from bwim.sensors import Sensor, SensorKind
 from bwim.vehicles import HalfCar, MovingForces, SprungMass, TractorSemitrailer, Truck3D
+from bwim.wim import (
+    InfluenceLine,
+    StaticWeights,
+    calibrate_influence_line,
+    model_influence_line,
+    weigh_static,
+)
 
 try:
     __version__ = version("bwim")
@@ -28,6 +35,7 @@ __all__ = [
     "ForceIdentification",
     "Girder",
     "HalfCar",
+    "InfluenceLine",
     "InputError",
     "Modes",
     "MovingForces",
@@ -39,11 +47,13 @@ __all__ = [
     "Sensor",
     "SensorKind",
     "SprungMass",
+    "StaticWeights",
     "Supports",
     "TractorSemitrailer",
     "Truck3D",
     "Truth",
     "__version__",
+    "calibrate_influence_line",
     "composite_section",
     "conventions",
     "dynamics",
@@ -53,7 +63,10 @@ __all__ = [
     "grid_lines",
     "identify_forces",
     "mfi",
+    "model_influence_line",
     "paper",
     "simulate",
     "vehicles",
+    "weigh_static",
+    "wim",
 ]
