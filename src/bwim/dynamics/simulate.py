@@ -22,7 +22,9 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Sequence
+from dataclasses import dataclass
 from enum import Enum
+from functools import cached_property
 
 import numpy as np
 
@@ -31,18 +33,21 @@ from bwim.dynamics.vbi import (
     Crossing,
     FullBridge,
     ModalBridge,
+    approach_phase,
     solve_coupled,
     solve_iterative,
 )
 from bwim.errors import InputError, require_positive
 from bwim.fe.bridge import Bridge
+from bwim.fe.influence import InfluenceSurfaces
 from bwim.fe.modal import Modes
-from bwim.records import Record, Truth, VBIConvergence
+from bwim.records import Passage, Record, Truth, VBIConvergence
 from bwim.road import RoadProfile
 from bwim.sensors import Sensor
 from bwim.vehicles.model import VehicleModel
 
-__all__ = ["VBIMethod", "select_modes", "simulate"]
+__all__ = ["PreparedCrossing", "VBIMethod", "prepare_crossing", "run_crossing",
+           "select_modes", "simulate"]
 
 
 class VBIMethod(str, Enum):
@@ -119,6 +124,205 @@ def _combine(models: list[VehicleModel]) -> VehicleModel:
     )
 
 
+@dataclass(frozen=True, kw_only=True, eq=False)
+class PreparedCrossing:
+    """Everything about a crossing that does not depend on the bridge's parameters.
+
+    Made by :func:`prepare_crossing` for one bridge *structure* (mesh, supports, zones,
+    girders); :func:`run_crossing` then simulates it on any bridge that shares that
+    structure (``bridge.model``), e.g. every trial of a calibration.  The vehicles' run-up
+    on the approach, which no bridge parameter changes, is integrated once and reused.
+    """
+
+    structure: object
+    crossing: Crossing
+    time: np.ndarray
+    keep: np.ndarray
+    rows: object
+    sensors: tuple[Sensor, ...]
+    S: np.ndarray
+    models: tuple[VehicleModel, ...]
+    passages: tuple[Passage, ...]
+    scheme: Newmark
+
+    @cached_property
+    def approach_state(self):
+        """Vehicle states before the first wheel reaches the deck (coupled solver)."""
+        return approach_phase(self.crossing, self.scheme)
+
+
+def prepare_crossing(
+    bridge: Bridge,
+    vehicle,
+    *,
+    speed,
+    sensors: Sequence[Sensor],
+    lane=None,
+    road: RoadProfile | None = None,
+    sampling_rate: float = 1000.0,
+    approach: float = 100.0,
+    tail: float = 0.0,
+    delay=0.0,
+) -> PreparedCrossing:
+    """Validate a crossing and precompute its kinematics (see :func:`simulate`)."""
+    fs = require_positive("sampling_rate", sampling_rate)
+    if not np.isfinite(approach) or approach < 0:
+        raise InputError(f"approach must be >= 0 m, got {approach!r}")
+    if not np.isfinite(tail) or tail < 0:
+        raise InputError(f"tail must be >= 0 s, got {tail!r}")
+    vehicles = list(vehicle) if isinstance(vehicle, (list, tuple)) else [vehicle]
+    n_veh = len(vehicles)
+    speeds = [require_positive("speed", v) for v in _as_list("speed", speed, n_veh)]
+    if lane is None:
+        if bridge.is_plate:
+            raise InputError("lane (vehicle centre line, m from the right-hand edge) is "
+                             "required on a plate bridge")
+        lane = 0.0
+    lanes = [float(v) for v in _as_list("lane", lane, n_veh)]
+    delays = np.array(_as_list("delay", delay, n_veh), dtype=float)
+    if np.any(delays < 0) or not np.all(np.isfinite(delays)):
+        raise InputError(f"delay must be >= 0 s, got {delays.tolist()}")
+    delays = delays - delays.min()
+    sensors = tuple(sensors)
+    road = RoadProfile.flat() if road is None else road
+    if not isinstance(road, RoadProfile):
+        raise InputError(f"road must be a bwim.RoadProfile, got {type(road).__name__}")
+    S = bridge.sensor_matrix(sensors)
+
+    models = [v.model() for v in vehicles]
+    passages = [v.passage(speed=s, lane=ln, delay=d)
+                for v, s, ln, d in zip(vehicles, speeds, lanes, delays, strict=True)]
+    veh = _combine(models)
+    c_vehicle = np.repeat(np.arange(n_veh), [m.n_contacts for m in models])
+    c_speed = np.array(speeds)[c_vehicle]
+    c_delay = delays[c_vehicle]
+    c_y = np.array(lanes)[c_vehicle] + veh.contact_lateral
+    if bridge.is_plate:
+        off = (c_y < 0) | (c_y > bridge.width)
+        if np.any(off):
+            c = int(np.flatnonzero(off)[0])
+            raise InputError(
+                f"vehicle {c_vehicle[c]} wheel at y = {c_y[c]:g} m is off the deck (width "
+                f"{bridge.width:g} m) for lane {lanes[c_vehicle[c]]:g} m"
+            )
+
+    # --- time grid ------------------------------------------------------------------
+    dt = 1.0 / fs
+    t_start = min(d - approach / v for d, v in zip(delays, speeds, strict=True))
+    t_end = max(d + (bridge.length + m.axle_offsets[-1]) / v
+                for d, v, m in zip(delays, speeds, models, strict=True)) + tail
+    k0 = int(np.floor(t_start / dt + 1e-9))
+    k1 = int(np.ceil(t_end / dt - 1e-9))
+    t = dt * np.arange(k0, k1 + 1)
+    x = c_speed * (t[:, None] - c_delay) - veh.contact_offset
+    lo, hi = float(x.min()), float(x.max())
+    if not road.covers(lo, hi):
+        raise InputError(
+            f"road profile covers x = {road.extent[0]:g} … {road.extent[1]:g} m but the "
+            f"crossing needs {lo:g} … {hi:g} m (approach + bridge + vehicle length); "
+            "generate a longer profile or a shorter approach"
+        )
+    r = road.at(x, veh.contact_lateral)
+    r_dot = np.gradient(r, dt, axis=0) if r.shape[0] > 1 else np.zeros_like(r)
+    on = (x >= 0.0) & (x <= bridge.length)
+    if not on.any():
+        raise InputError("no wheel reaches the bridge")
+    crossing = Crossing(vehicle=veh, x=x, y=c_y, speed=c_speed, on=on, r=r, r_dot=r_dot)
+    return PreparedCrossing(
+        structure=bridge.model, crossing=crossing, time=t, keep=t >= -1e-9 * dt,
+        rows=_contact_rows(bridge, x, c_y, on), sensors=sensors, S=S, models=tuple(models),
+        passages=tuple(passages), scheme=Newmark(dt),
+    )
+
+
+def run_crossing(
+    prepared: PreparedCrossing,
+    bridge: Bridge,
+    *,
+    method: VBIMethod | str = VBIMethod.COUPLED,
+    n_modes: int | None = None,
+    max_frequency: float | None = None,
+    full_system: bool = False,
+    static_correction: bool = True,
+    tol: float = 1e-6,
+    max_iter: int = 50,
+    influence: InfluenceSurfaces | None = None,
+    warn: bool = True,
+) -> Record:
+    """Simulate a prepared crossing on ``bridge`` (same structure, any parameters).
+
+    ``influence`` may pass the sensors' influence surfaces of this bridge's stiffness to
+    save their computation (calibration of the mass keeps K fixed).
+    """
+    try:
+        method = VBIMethod(method)
+    except ValueError:
+        raise InputError(f"unknown method {method!r}; expected 'coupled' or 'iterative'") from None
+    if bridge.model is not prepared.structure:
+        raise InputError("this crossing was prepared for a bridge of another structure")
+    crossing, rows, scheme = prepared.crossing, prepared.rows, prepared.scheme
+    c_speed = crossing.speed
+    fs = 1.0 / scheme.dt
+    if full_system:
+        rep = FullBridge(M=bridge.mass_matrix(), C=bridge.damping_matrix(),
+                         K=bridge.stiffness_matrix(), dofs=rows.dofs, vals=rows.vals,
+                         slopes=rows.slopes * c_speed[None, :, None])
+        modes = None
+    else:
+        modes = select_modes(bridge, n_modes=n_modes, max_frequency=max_frequency,
+                             sampling_rate=fs)
+        phi = modes.shapes
+        psi = np.einsum("kcj,kcjm->kmc", rows.vals, phi[rows.dofs])
+        psi_x = np.einsum("kcj,kcjm->kmc", rows.slopes, phi[rows.dofs]) * c_speed
+        rep = ModalBridge(omega=modes.omega, zeta=bridge.rayleigh.ratio(modes.omega),
+                          psi=psi, psi_x=psi_x)
+
+    veh = crossing.vehicle
+    if method is VBIMethod.COUPLED:
+        sol = solve_coupled(crossing, rep, scheme, approach=prepared.approach_state)
+        conv = VBIConvergence(method=method.value)
+    else:
+        sol = solve_iterative(crossing, rep, scheme, tol=tol, max_iter=max_iter)
+        converged = sol.change < tol or veh.n_dof == 0
+        conv = VBIConvergence(method=method.value, iterations=sol.iterations,
+                              change=sol.change, converged=converged)
+        if not converged and warn:
+            warnings.warn(f"iterative VBI did not converge in {max_iter} iterations "
+                          f"(change {sol.change:.2e})", RuntimeWarning, stacklevel=2)
+
+    # --- readings -------------------------------------------------------------------
+    keep, t = prepared.keep, prepared.time
+    F = sol.forces
+    if full_system:
+        data = sol.state.u @ prepared.S.T
+    else:
+        s_modal = prepared.S @ modes.shapes  # (n_s, n_m)
+        data = sol.state.u @ s_modal.T
+        if static_correction:
+            inf = bridge.influence(prepared.sensors) if influence is None else influence
+            data += _static_correction(inf, crossing.x, crossing.y, crossing.on, F, psi,
+                                       s_modal, modes, bridge.is_plate)
+    time = t[keep] - t[keep][0] if abs(t[keep][0]) < 1e-9 else t[keep]
+    truths = []
+    j = 0
+    for v_idx, m in enumerate(prepared.models):
+        wf = F[keep, j:j + m.n_contacts]
+        j += m.n_contacts
+        axle = np.zeros((wf.shape[0], m.n_axles))
+        for c in range(m.n_contacts):
+            axle[:, m.contact_axle[c]] += wf[:, c]
+        lost = (wf < 0).any(axis=0)
+        if lost.any() and warn:
+            warnings.warn(f"vehicle {v_idx}: wheel(s) {np.flatnonzero(lost).tolist()} lost "
+                          "contact with the road (negative contact force)", RuntimeWarning,
+                          stacklevel=2)
+        truths.append(Truth(wheel_forces=wf, axle_forces=axle,
+                            static_wheel_loads=m.static_forces.copy(),
+                            static_axle_loads=m.static_axle_loads, contact_lost=lost))
+    return Record(time=time, data=data[keep], sensors=prepared.sensors,
+                  passages=prepared.passages, truths=tuple(truths), convergence=conv)
+
+
 def simulate(
     bridge: Bridge,
     vehicle,
@@ -183,128 +387,12 @@ def simulate(
         method = VBIMethod(method)
     except ValueError:
         raise InputError(f"unknown method {method!r}; expected 'coupled' or 'iterative'") from None
-    fs = require_positive("sampling_rate", sampling_rate)
-    if not np.isfinite(approach) or approach < 0:
-        raise InputError(f"approach must be >= 0 m, got {approach!r}")
-    if not np.isfinite(tail) or tail < 0:
-        raise InputError(f"tail must be >= 0 s, got {tail!r}")
-    vehicles = list(vehicle) if isinstance(vehicle, (list, tuple)) else [vehicle]
-    n_veh = len(vehicles)
-    speeds = [require_positive("speed", v) for v in _as_list("speed", speed, n_veh)]
-    if lane is None:
-        if bridge.is_plate:
-            raise InputError("lane (vehicle centre line, m from the right-hand edge) is "
-                             "required on a plate bridge")
-        lane = 0.0
-    lanes = [float(v) for v in _as_list("lane", lane, n_veh)]
-    delays = np.array(_as_list("delay", delay, n_veh), dtype=float)
-    if np.any(delays < 0) or not np.all(np.isfinite(delays)):
-        raise InputError(f"delay must be >= 0 s, got {delays.tolist()}")
-    delays = delays - delays.min()
-    sensors = list(sensors)
-    road = RoadProfile.flat() if road is None else road
-    if not isinstance(road, RoadProfile):
-        raise InputError(f"road must be a bwim.RoadProfile, got {type(road).__name__}")
-    S = bridge.sensor_matrix(sensors)
-
-    models = [v.model() for v in vehicles]
-    passages = [v.passage(speed=s, lane=ln, delay=d)
-                for v, s, ln, d in zip(vehicles, speeds, lanes, delays, strict=True)]
-    veh = _combine(models)
-    c_vehicle = np.repeat(np.arange(n_veh), [m.n_contacts for m in models])
-    c_speed = np.array(speeds)[c_vehicle]
-    c_delay = delays[c_vehicle]
-    c_y = np.array(lanes)[c_vehicle] + veh.contact_lateral
-    if bridge.is_plate:
-        off = (c_y < 0) | (c_y > bridge.width)
-        if np.any(off):
-            c = int(np.flatnonzero(off)[0])
-            raise InputError(
-                f"vehicle {c_vehicle[c]} wheel at y = {c_y[c]:g} m is off the deck (width "
-                f"{bridge.width:g} m) for lane {lanes[c_vehicle[c]]:g} m"
-            )
-
-    # --- time grid ------------------------------------------------------------------
-    dt = 1.0 / fs
-    t_start = min(d - approach / v for d, v in zip(delays, speeds, strict=True))
-    t_end = max(d + (bridge.length + m.axle_offsets[-1]) / v
-                for d, v, m in zip(delays, speeds, models, strict=True)) + tail
-    k0 = int(np.floor(t_start / dt + 1e-9))
-    k1 = int(np.ceil(t_end / dt - 1e-9))
-    t = dt * np.arange(k0, k1 + 1)
-    x = c_speed * (t[:, None] - c_delay) - veh.contact_offset
-    lo, hi = float(x.min()), float(x.max())
-    if not road.covers(lo, hi):
-        raise InputError(
-            f"road profile covers x = {road.extent[0]:g} … {road.extent[1]:g} m but the "
-            f"crossing needs {lo:g} … {hi:g} m (approach + bridge + vehicle length); "
-            "generate a longer profile or a shorter approach"
-        )
-    r = road.at(x, veh.contact_lateral)
-    r_dot = np.gradient(r, dt, axis=0) if r.shape[0] > 1 else np.zeros_like(r)
-    on = (x >= 0.0) & (x <= bridge.length)
-    if not on.any():
-        raise InputError("no wheel reaches the bridge")
-    crossing = Crossing(vehicle=veh, x=x, y=c_y, speed=c_speed, on=on, r=r, r_dot=r_dot)
-
-    # --- bridge representation ------------------------------------------------------
-    scheme = Newmark(dt)
-    rows = _contact_rows(bridge, x, c_y, on)
-    if full_system:
-        rep = FullBridge(M=bridge.mass_matrix(), C=bridge.damping_matrix(),
-                         K=bridge.stiffness_matrix(), dofs=rows.dofs, vals=rows.vals,
-                         slopes=rows.slopes * c_speed[None, :, None])
-        modes = None
-    else:
-        modes = select_modes(bridge, n_modes=n_modes, max_frequency=max_frequency,
-                             sampling_rate=fs)
-        phi = modes.shapes
-        psi = np.einsum("kcj,kcjm->kmc", rows.vals, phi[rows.dofs])
-        psi_x = np.einsum("kcj,kcjm->kmc", rows.slopes, phi[rows.dofs]) * c_speed
-        rep = ModalBridge(omega=modes.omega, zeta=bridge.rayleigh.ratio(modes.omega),
-                          psi=psi, psi_x=psi_x)
-
-    if method is VBIMethod.COUPLED:
-        sol = solve_coupled(crossing, rep, scheme)
-        conv = VBIConvergence(method=method.value)
-    else:
-        sol = solve_iterative(crossing, rep, scheme, tol=tol, max_iter=max_iter)
-        converged = sol.change < tol or veh.n_dof == 0
-        conv = VBIConvergence(method=method.value, iterations=sol.iterations,
-                              change=sol.change, converged=converged)
-        if not converged:
-            warnings.warn(f"iterative VBI did not converge in {max_iter} iterations "
-                          f"(change {sol.change:.2e})", RuntimeWarning, stacklevel=2)
-
-    # --- readings -------------------------------------------------------------------
-    keep = t >= -1e-9 * dt
-    F = sol.forces
-    if full_system:
-        data = sol.state.u @ S.T
-    else:
-        s_modal = S @ modes.shapes  # (n_s, n_m)
-        data = sol.state.u @ s_modal.T
-        if static_correction:
-            data += _static_correction(bridge, sensors, x, c_y, on, F, psi, s_modal, modes)
-    time = t[keep] - t[keep][0] if abs(t[keep][0]) < 1e-9 else t[keep]
-    truths = []
-    j = 0
-    for v_idx, m in enumerate(models):
-        wf = F[keep, j:j + m.n_contacts]
-        j += m.n_contacts
-        axle = np.zeros((wf.shape[0], m.n_axles))
-        for c in range(m.n_contacts):
-            axle[:, m.contact_axle[c]] += wf[:, c]
-        lost = (wf < 0).any(axis=0)
-        if lost.any():
-            warnings.warn(f"vehicle {v_idx}: wheel(s) {np.flatnonzero(lost).tolist()} lost "
-                          "contact with the road (negative contact force)", RuntimeWarning,
-                          stacklevel=2)
-        truths.append(Truth(wheel_forces=wf, axle_forces=axle,
-                            static_wheel_loads=m.static_forces.copy(),
-                            static_axle_loads=m.static_axle_loads, contact_lost=lost))
-    return Record(time=time, data=data[keep], sensors=tuple(sensors),
-                  passages=tuple(passages), truths=tuple(truths), convergence=conv)
+    prepared = prepare_crossing(bridge, vehicle, speed=speed, sensors=sensors, lane=lane,
+                                road=road, sampling_rate=sampling_rate, approach=approach,
+                                tail=tail, delay=delay)
+    return run_crossing(prepared, bridge, method=method, n_modes=n_modes,
+                        max_frequency=max_frequency, full_system=full_system,
+                        static_correction=static_correction, tol=tol, max_iter=max_iter)
 
 
 def _contact_rows(bridge: Bridge, x, y, on):
@@ -323,12 +411,11 @@ def _contact_rows(bridge: Bridge, x, y, on):
     return PointRows(dofs=dofs, vals=vals, slopes=slopes)
 
 
-def _static_correction(bridge, sensors, x, y, on, F, psi, s_modal, modes):
+def _static_correction(inf, x, y, on, F, psi, s_modal, modes, is_plate):
     """Quasi-static response of the truncated modes (mode-acceleration correction)."""
-    inf = bridge.influence(sensors)
-    g = np.zeros((*x.shape, len(sensors)))
+    g = np.zeros((*x.shape, len(inf.sensors)))
     if on.any():
-        yy = np.broadcast_to(y, x.shape)[on] if bridge.is_plate else None
+        yy = np.broadcast_to(y, x.shape)[on] if is_plate else None
         g[on] = inf.at(x[on], yy)
     modal_static = np.einsum("sm,m,kmc->kcs", s_modal, 1.0 / modes.omega**2, psi)
     return np.einsum("kc,kcs->ks", np.where(on, F, 0.0), g - modal_static)

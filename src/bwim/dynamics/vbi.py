@@ -32,8 +32,16 @@ import scipy.linalg as sla
 from bwim.dynamics.newmark import Newmark, NewmarkResult, integrate
 from bwim.vehicles.model import VehicleModel
 
-__all__ = ["Crossing", "FullBridge", "ModalBridge", "Solution", "solve_coupled",
-           "solve_iterative"]
+__all__ = [
+    "ApproachState",
+    "Crossing",
+    "FullBridge",
+    "ModalBridge",
+    "Solution",
+    "approach_phase",
+    "solve_coupled",
+    "solve_iterative",
+]
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -241,28 +249,50 @@ def solve_iterative(
 
 
 # --- coupled ---------------------------------------------------------------------------------
-def solve_coupled(crossing: Crossing, bridge: ModalBridge | FullBridge, scheme: Newmark
-                  ) -> Solution:
-    """Bridge and vehicles advanced together, step by step (see module docstring)."""
+@dataclass(frozen=True, kw_only=True, eq=False)
+class ApproachState:
+    """Vehicle states on the road before the first wheel reaches the deck."""
+
+    start: int  # last step before any contact is on the deck
+    Y: np.ndarray  # (start + 1, n_v) displacements
+    YV: np.ndarray
+    YA: np.ndarray
+
+
+def approach_phase(crossing: Crossing, scheme: Newmark) -> ApproachState:
+    """Integrate the vehicles on the road up to the step before the deck is reached.
+
+    Independent of the bridge, so a calibration computes it once for all trials.
+    """
     veh = crossing.vehicle
-    k_in, k_out = crossing.window()
-    n_t = crossing.n_t
-    # before the first contact reaches the deck: vehicles on the road, bridge at rest
+    k_in, _ = crossing.window()
     start = max(k_in - 1, 0)
     g0, g0_dot = -crossing.r[: start + 1], -crossing.r_dot[: start + 1]
     if veh.n_dof:
         pre = _vehicle_on_ground(veh, g0, g0_dot, scheme, y0=_static_on_ground(veh, g0[0]))
-        y, yv, ya = pre.u[-1], pre.v[-1], pre.a[-1]
-    else:
-        pre = None
-        y = yv = ya = np.zeros(0)
+        return ApproachState(start=start, Y=pre.u, YV=pre.v, YA=pre.a)
+    z = np.zeros((start + 1, 0))
+    return ApproachState(start=start, Y=z, YV=z, YA=z)
+
+
+def solve_coupled(crossing: Crossing, bridge: ModalBridge | FullBridge, scheme: Newmark,
+                  *, approach: ApproachState | None = None) -> Solution:
+    """Bridge and vehicles advanced together, step by step (see module docstring).
+
+    ``approach`` may pass the precomputed :func:`approach_phase` of this crossing.
+    """
+    veh = crossing.vehicle
+    _, k_out = crossing.window()
+    n_t = crossing.n_t
+    pre = approach_phase(crossing, scheme) if approach is None else approach
+    start = pre.start
     Y = np.zeros((n_t, veh.n_dof))
     YV = np.zeros_like(Y)
     YA = np.zeros_like(Y)
-    if pre is not None:
-        Y[: start + 1], YV[: start + 1], YA[: start + 1] = pre.u, pre.v, pre.a
+    Y[: start + 1], YV[: start + 1], YA[: start + 1] = pre.Y, pre.YV, pre.YA
+    y_state = (Y[start].copy(), YV[start].copy(), YA[start].copy())
     stepper = _modal_steps if isinstance(bridge, ModalBridge) else _full_steps
-    state, F = stepper(crossing, bridge, scheme, start, k_out, (y, yv, ya), (Y, YV, YA))
+    state, F = stepper(crossing, bridge, scheme, start, k_out, y_state, (Y, YV, YA))
     return Solution(state=state, forces=F)
 
 
@@ -295,11 +325,12 @@ def _modal_steps(crossing, bridge: ModalBridge, scheme, start, k_out, y_state, v
     Y, YV, YA = vstate
     veh = crossing.vehicle
     n_t, n_m, n_v = crossing.n_t, bridge.n, veh.n_dof
+    n = n_m + n_v
     kt, ct, E = veh.tyre_stiffness, veh.tyre_damping, veh.contact
     Mb, Cb, Kb = bridge.matrices()
-    Mfull = np.diag(np.concatenate([Mb, np.diag(veh.mass)])) if n_v else np.diag(Mb)
-    if n_v:
-        Mfull[n_m:, n_m:] = veh.mass
+    Mfull = np.zeros((n, n))
+    Mfull[:n_m, :n_m] = np.diag(Mb)
+    Mfull[n_m:, n_m:] = veh.mass
     U = np.zeros((n_t, n_m))
     V = np.zeros_like(U)
     A = np.zeros_like(U)
@@ -308,38 +339,55 @@ def _modal_steps(crossing, bridge: ModalBridge, scheme, start, k_out, y_state, v
     z = np.concatenate([np.zeros(n_m), y])
     zv = np.concatenate([np.zeros(n_m), yv])
     za = np.concatenate([np.zeros(n_m), ya])
-    Ekt, Ect = E * kt, E * ct
-    g_pre = -crossing.r[: start + 1]
-    F[: start + 1] = _forces(veh, _slice_result(Y, YV, start + 1) if n_v else None, g_pre,
-                             -crossing.r_dot[: start + 1])
-    for k in range(start + 1, k_out + 1):
-        P, Px = bridge.psi[k], bridge.psi_x[k]
-        r, rd = crossing.r[k], crossing.r_dot[k]
-        PCt = P * ct
-        C = np.zeros((n_m + n_v, n_m + n_v))
-        K = np.zeros_like(C)
-        C[:n_m, :n_m] = np.diag(Cb) + PCt @ P.T
-        K[:n_m, :n_m] = np.diag(Kb) + (P * kt) @ P.T + PCt @ Px.T
-        f = np.empty(n_m + n_v)
-        f[:n_m] = P @ (veh.static_forces + kt * r + ct * rd)
-        if n_v:
-            C[:n_m, n_m:] = -PCt @ E.T
-            K[:n_m, n_m:] = -(P * kt) @ E.T
-            C[n_m:, :n_m] = -Ect @ P.T
-            K[n_m:, :n_m] = -(Ekt @ P.T + Ect @ Px.T)
-            C[n_m:, n_m:] = veh.damping
-            K[n_m:, n_m:] = veh.stiffness
-            f[n_m:] = -E @ (kt * r + ct * rd)
-        rhs = f + scheme.history(Mfull, C, z, zv, za)
-        z_new = np.linalg.solve(scheme.effective(Mfull, C, K), rhs)
+    F[: start + 1] = _forces(veh, _slice_result(Y, YV, start + 1) if n_v else None,
+                             -crossing.r[: start + 1], -crossing.r_dot[: start + 1])
+    # the coupled matrices of every step of the window, built at once
+    win = slice(start + 1, k_out + 1)
+    P, Px = bridge.psi[win], bridge.psi_x[win]  # (n_w, n_m, n_c)
+    r, rd = crossing.r[win], crossing.r_dot[win]
+    n_w = P.shape[0]
+    C = np.zeros((n_w, n, n))
+    K = np.zeros((n_w, n, n))
+    PCt, PKt = P * ct, P * kt
+    C[:, :n_m, :n_m] = np.einsum("wmc,wlc->wml", PCt, P)
+    K[:, :n_m, :n_m] = np.einsum("wmc,wlc->wml", PKt, P) + np.einsum("wmc,wlc->wml", PCt, Px)
+    idx = np.arange(n_m)
+    C[:, idx, idx] += Cb
+    K[:, idx, idx] += Kb
+    f = np.zeros((n_w, n))
+    f[:, :n_m] = np.einsum("wmc,wc->wm", P, veh.static_forces + kt * r + ct * rd)
+    if n_v:
+        C[:, :n_m, n_m:] = -np.einsum("wmc,vc->wmv", PCt, E)
+        K[:, :n_m, n_m:] = -np.einsum("wmc,vc->wmv", PKt, E)
+        C[:, n_m:, :n_m] = np.transpose(C[:, :n_m, n_m:], (0, 2, 1))
+        K[:, n_m:, :n_m] = -(np.einsum("vc,wmc->wvm", E * kt, P)
+                             + np.einsum("vc,wmc->wvm", E * ct, Px))
+        C[:, n_m:, n_m:] = veh.damping
+        K[:, n_m:, n_m:] = veh.stiffness
+        f[:, n_m:] = -(kt * r + ct * rd) @ E.T
+    Keff = K + scheme.a1 * C + scheme.a0 * Mfull
+    b, g, dt = scheme.beta, scheme.gamma, scheme.dt
+    c_u, c_v, c_a = scheme.a1, g / b - 1.0, dt * (0.5 * g / b - 1.0)
+    m_u, m_v, m_a = scheme.a0, 1.0 / (b * dt), 0.5 / b - 1.0
+    Z = np.empty((n_w, n))
+    ZV = np.empty((n_w, n))
+    ZA = np.empty((n_w, n))
+    for i in range(n_w):
+        rhs = f[i] + Mfull @ (m_u * z + m_v * zv + m_a * za) + C[i] @ (c_u * z + c_v * zv
+                                                                      + c_a * za)
+        z_new = np.linalg.solve(Keff[i], rhs)
         zv, za = scheme.update(z_new, z, zv, za)
         z = z_new
-        U[k], V[k], A[k] = z[:n_m], zv[:n_m], za[:n_m]
-        Y[k], YV[k], YA[k] = z[n_m:], zv[n_m:], za[n_m:]
-        q, qv = z[:n_m], zv[:n_m]
-        delta = z[n_m:] @ E - P.T @ q + r if n_v else -P.T @ q + r
-        delta_dot = (zv[n_m:] @ E if n_v else 0.0) - P.T @ qv - Px.T @ q + rd
-        F[k] = veh.static_forces + kt * delta + ct * delta_dot
+        Z[i], ZV[i], ZA[i] = z, zv, za
+    U[win], V[win], A[win] = Z[:, :n_m], ZV[:, :n_m], ZA[:, :n_m]
+    q, qv = Z[:, :n_m], ZV[:, :n_m]
+    delta = -np.einsum("wmc,wm->wc", P, q) + r
+    delta_dot = (-np.einsum("wmc,wm->wc", P, qv) - np.einsum("wmc,wm->wc", Px, q) + rd)
+    if n_v:
+        Y[win], YV[win], YA[win] = Z[:, n_m:], ZV[:, n_m:], ZA[:, n_m:]
+        delta += Z[:, n_m:] @ E
+        delta_dot += ZV[:, n_m:] @ E
+    F[win] = veh.static_forces + kt * delta + ct * delta_dot
     state = NewmarkResult(u=U, v=V, a=A)
     _finish(crossing, bridge, scheme, k_out, state, vstate, F, veh)
     return state, F
