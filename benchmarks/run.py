@@ -10,7 +10,13 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from benchmarks import bench_fe, bench_mfi, bench_vbi, bench_wim  # noqa: E402
+from benchmarks import (  # noqa: E402
+    bench_fe,
+    bench_mfi,
+    bench_optimize,
+    bench_vbi,
+    bench_wim,
+)
 
 
 def main() -> None:
@@ -19,6 +25,7 @@ def main() -> None:
     bench_vbi.main()
     bench_mfi.main()
     bench_wim.main()
+    bench_optimize.main()
 
 
 if __name__ == "__main__":

@@ -6,7 +6,7 @@ The public API is listed in ``__all__``; units, axes and signs are in
 
 from importlib.metadata import PackageNotFoundError, version
 
-from bwim import conventions, dynamics, errors, fe, mfi, paper, vehicles, wim
+from bwim import conventions, dynamics, errors, fe, mfi, optimize, paper, vehicles, wim
 from bwim.dynamics import simulate
 from bwim.errors import BwimError, InputError, NumericalError
 from bwim.fe import Bridge, Girder, Modes, Supports, composite_section, grid_lines
@@ -64,6 +64,7 @@ __all__ = [
     "identify_forces",
     "mfi",
     "model_influence_line",
+    "optimize",
     "paper",
     "simulate",
     "vehicles",

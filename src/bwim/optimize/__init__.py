@@ -1,0 +1,35 @@
+"""General-purpose optimisation: Cross-Entropy with variance injection and sub-structuring.
+
+This package knows nothing about bridges; :mod:`bwim.calibration` drives it.
+
+* :class:`CrossEntropy` — ask/tell minimiser over whole populations (plain or
+  sub-structured); :attr:`CrossEntropy.result` is a :class:`CEResult`.
+* :func:`minimize_ce` — the loop for a function, serial or parallel, with checkpoints.
+* :func:`evaluate` — a population's objective values, serial, joblib or dask.
+"""
+
+from bwim.optimize.ce import (
+    DEFAULT_INJECTION,
+    CEHistory,
+    CEResult,
+    CrossEntropy,
+    StopReason,
+    load_checkpoint,
+    minimize_ce,
+    save_checkpoint,
+)
+from bwim.optimize.parallel import evaluate
+from bwim.optimize.substructure import parameter_elite_masks
+
+__all__ = [
+    "DEFAULT_INJECTION",
+    "CEHistory",
+    "CEResult",
+    "CrossEntropy",
+    "StopReason",
+    "evaluate",
+    "load_checkpoint",
+    "minimize_ce",
+    "parameter_elite_masks",
+    "save_checkpoint",
+]
