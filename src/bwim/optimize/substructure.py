@@ -3,8 +3,9 @@
 Contract
 --------
 * A trial's objective (or part) value that is NaN or ±inf is a failed evaluation: it
-  ranks after every finite value and never enters that objective's (or part's) elite set.  Ties keep the order of the trials
-  (stable sort), so the elite set is a deterministic function of the values.
+  ranks after every finite value and never enters that objective's (or part's) elite
+  set.  Ties keep the order of the trials (stable sort), so the elite set is a
+  deterministic function of the values.
 * :func:`elite_mask` marks the ⌈ρk⌉ best of k trials by one objective (fewer when fewer
   values are finite).
 * :func:`parameter_elite_masks` is the sub-structured rule of Dowling, OBrien & González
