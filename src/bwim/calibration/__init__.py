@@ -1,0 +1,24 @@
+"""Calibration of the bridge FE model from strains under a truck of known weight."""
+
+from bwim.calibration.calibrate import Calibration, Method, Refine, StageResult, calibrate
+from bwim.calibration.identifiability import Identifiability, identifiability
+from bwim.calibration.problem import (
+    DynamicObjective,
+    ParameterSpace,
+    StaticObjective,
+    neighbour_map,
+)
+
+__all__ = [
+    "Calibration",
+    "DynamicObjective",
+    "Identifiability",
+    "Method",
+    "ParameterSpace",
+    "Refine",
+    "StageResult",
+    "StaticObjective",
+    "calibrate",
+    "identifiability",
+    "neighbour_map",
+]

@@ -1,0 +1,287 @@
+"""Calibration objectives: parameter vectors, the static and dynamic misfits, neighbours.
+
+Contract
+--------
+* A :class:`ParameterSpace` maps a flat vector ``θ`` to bridge parameters: the families
+  being calibrated (e.g. ``("E_x", "E_y")`` then ``("mu",)``) times their zones (or
+  girders), in that order.  :meth:`ParameterSpace.bridge` builds the trial bridge.
+* :class:`StaticObjective` (THEORY §7 step 1) is the pseudo-static misfit: for a trial
+  stiffness, the static strains of the calibration truck's static wheel loads at their
+  positions, through influence surfaces (one banded factorisation and one solve per
+  sensor, §1.5), against the measured (dynamic) strains.
+* :class:`DynamicObjective` (step 2) simulates the calibration crossing on the trial
+  bridge (vehicle–bridge interaction over the given road) and compares total strains.
+* Both return, per trial, the squared misfit of each **part**: the channels of one
+  measurement point (the sub-objectives of sub-structured CE, paper §4.1).  Their sum is
+  the objective.  :func:`neighbour_map` says which parameters neighbour which part: the
+  zones of the elements that touch the point, and girders within one element of it.
+* Objectives are picklable, so populations can be evaluated in worker processes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+
+from bwim.dynamics.simulate import prepare_crossing, run_crossing
+from bwim.errors import InputError, NumericalError
+from bwim.fe.bridge import Bridge
+from bwim.records import Record
+from bwim.road import RoadProfile
+
+__all__ = [
+    "DynamicObjective",
+    "ParameterSpace",
+    "StaticObjective",
+    "measurement_points",
+    "neighbour_map",
+]
+
+
+@dataclass(frozen=True, eq=False)
+class ParameterSpace:
+    """The calibrated parameters of a bridge as a flat vector.
+
+    Attributes
+    ----------
+    start : Bridge
+        The starting model; parameters not calibrated keep its values.
+    names : tuple of str
+        Parameter families, in vector order.
+    shared : frozenset of str
+        Families calibrated as one value for all their zones or girders (e.g. identical
+        girders); the vector holds their mean.
+    """
+
+    start: Bridge
+    names: tuple[str, ...]
+    shared: frozenset = frozenset()
+    sizes: tuple[int, ...] = field(init=False)
+
+    def __post_init__(self) -> None:
+        present = self.start.params
+        for n in self.names:
+            if n not in present:
+                raise InputError(f"unknown parameter {n!r}; this bridge has {sorted(present)}")
+        object.__setattr__(self, "shared", frozenset(self.shared) & set(self.names))
+        object.__setattr__(self, "sizes", tuple(
+            1 if n in self.shared else present[n].size for n in self.names))
+
+    @property
+    def n(self) -> int:
+        return sum(self.sizes)
+
+    def labels(self) -> list[str]:
+        return [f"{n}[{i}]" for n, k in zip(self.names, self.sizes, strict=True)
+                for i in range(k)]
+
+    def vector(self, bridge: Bridge | None = None) -> np.ndarray:
+        params = (self.start if bridge is None else bridge).params
+        return np.concatenate([params[n].mean(keepdims=True) if n in self.shared
+                               else params[n] for n in self.names])
+
+    def split(self, theta: np.ndarray) -> dict[str, np.ndarray]:
+        """Families' values for a vector (shared families broadcast to all entries)."""
+        theta = np.asarray(theta, dtype=float)
+        full = self.start.params
+        out, i = {}, 0
+        for n, k in zip(self.names, self.sizes, strict=True):
+            part = theta[i:i + k]
+            out[n] = np.full(full[n].size, part[0]) if n in self.shared else part
+            i += k
+        return out
+
+    def bridge(self, theta: np.ndarray, base: Bridge | None = None) -> Bridge:
+        return (self.start if base is None else base).with_params(**self.split(theta))
+
+    def family_index(self) -> list[tuple[str, int | None]]:
+        """(family, zone/girder index) of every vector entry (None: all, shared)."""
+        return [(n, None if n in self.shared else i)
+                for n, k in zip(self.names, self.sizes, strict=True) for i in range(k)]
+
+
+def measurement_points(sensors) -> tuple[np.ndarray, list[tuple[float, float]]]:
+    """Group channels by measurement point: (part index of each channel, the points)."""
+    points: list[tuple[float, float]] = []
+    part = np.empty(len(sensors), dtype=int)
+    for c, s in enumerate(sensors):
+        key = (round(s.x, 9), round(s.y, 9))
+        if key not in points:
+            points.append(key)
+        part[c] = points.index(key)
+    return part, points
+
+
+def neighbour_map(space: ParameterSpace, sensors) -> np.ndarray:
+    """Which parameters neighbour which measurement point, bool (n_parts, n_params)."""
+    model = space.start.model
+    grid = model.grid
+    _, points = measurement_points(sensors)
+    nb = np.zeros((len(points), space.n), dtype=bool)
+    fam = space.family_index()
+    for j, (x, y) in enumerate(points):
+        zones = {int(model.zone_of_element[e]) for e, _, _ in grid.elements_at(x, y)}
+        near_girders = set()
+        if grid.is_plate:
+            iy = np.searchsorted(grid.y_lines, y)
+            for g, line in enumerate(model.girder_lines):
+                if abs(line - iy) <= 1:
+                    near_girders.add(g)
+        for p, (name, idx) in enumerate(fam):
+            if idx is None:  # shared by all zones or girders
+                nb[j, p] = True
+            elif name in ("E_girder", "mu_girder"):
+                nb[j, p] = idx in near_girders
+            else:
+                nb[j, p] = idx in zones
+    return nb
+
+
+def _check_records(records: Sequence[Record], vehicle) -> list[Record]:
+    records = list(records) if isinstance(records, (list, tuple)) else [records]
+    if not records:
+        raise InputError("calibration needs at least one record of the calibration truck")
+    for k, r in enumerate(records):
+        if not isinstance(r, Record):
+            raise InputError(f"records[{k}] must be a bwim.Record, got {type(r).__name__}")
+        if len(r.passages) != 1:
+            raise InputError(f"records[{k}] must hold exactly one passage (the calibration "
+                             f"truck), got {len(r.passages)}")
+        if r.passage.n_axles != vehicle.n_axles:
+            raise InputError(f"records[{k}] has {r.passage.n_axles} axles but the calibration "
+                             f"vehicle has {vehicle.n_axles}")
+    return records
+
+
+class StaticObjective:
+    """Pseudo-static misfit of trial stiffness parameters (see module docstring)."""
+
+    def __init__(self, space: ParameterSpace, records: Sequence[Record], vehicle,
+                 base: Bridge | None = None):
+        self.space = space
+        self.base = space.start if base is None else base
+        self.records = _check_records(records, vehicle)
+        model = self.base.model
+        self._sensor_rows = []
+        self._loads = []
+        self._data = []
+        self._parts = []
+        static_wheels = vehicle.model().static_forces
+        self.static_wheels = static_wheels
+        for rec in self.records:
+            p = rec.passage
+            if p.wheels_per_axle * p.n_axles != static_wheels.size:
+                raise InputError("the record's wheel layout does not match the vehicle")
+            S = self.base.sensor_matrix(rec.sensors)
+            x = p.wheel_x(rec.time)
+            y = np.broadcast_to(p.wheel_y, x.shape) if self.base.is_plate else None
+            on = model.grid.contains(x.ravel(), None if y is None else y.ravel())
+            t_idx = np.repeat(np.arange(x.shape[0]), x.shape[1])[on]
+            P = np.tile(static_wheels, x.shape[0])[on]
+            rows = model.point_rows(x.ravel()[on], None if y is None else y.ravel()[on])
+            L = sp.csr_matrix(
+                ((rows.vals * P[:, None]).ravel(),
+                 (np.repeat(t_idx, rows.dofs.shape[1]), rows.dofs.ravel())),
+                shape=(x.shape[0], self.base.n_free),
+            )
+            self._sensor_rows.append(S)
+            self._loads.append(L)
+            self._data.append(rec.data)
+            self._parts.append(measurement_points(rec.sensors)[0])
+        self.n_parts = max(int(p.max()) for p in self._parts) + 1
+
+    def predicted(self, theta: np.ndarray) -> list[np.ndarray]:
+        """Static readings of the trial model for each record, each (n_t, n_s)."""
+        bridge = self.space.bridge(theta, self.base)
+        model = bridge.model
+        ab = model.assembler.stiffness_banded(model.stiffness_coefficients(bridge.params))
+        try:
+            c = sla.cholesky_banded(ab, lower=True, check_finite=False)
+        except np.linalg.LinAlgError:
+            raise NumericalError("trial stiffness is not positive definite") from None
+        out = []
+        for S, L in zip(self._sensor_rows, self._loads, strict=True):
+            g = sla.cho_solve_banded((c, True), S.T, check_finite=False)
+            out.append(np.asarray(L @ g))
+        return out
+
+    def parts(self, theta: np.ndarray) -> np.ndarray:
+        """Squared misfit of each measurement point, shape (n_parts,)."""
+        out = np.zeros(self.n_parts)
+        for pred, d, part in zip(self.predicted(theta), self._data, self._parts, strict=True):
+            np.add.at(out, part, ((pred - d) ** 2).sum(axis=0))
+        return out
+
+    def residuals(self, theta: np.ndarray) -> np.ndarray:
+        return np.concatenate([(p - d).ravel() for p, d in
+                               zip(self.predicted(theta), self._data, strict=True)])
+
+    def __call__(self, theta: np.ndarray) -> np.ndarray:
+        return self.parts(theta)
+
+
+class DynamicObjective:
+    """Dynamic misfit of trial parameters: the calibration crossings re-simulated."""
+
+    def __init__(self, space: ParameterSpace, records: Sequence[Record], vehicle,
+                 road: RoadProfile | None, base: Bridge, *, approach: float,
+                 n_modes: int | None = None):
+        self.space = space
+        self.base = base
+        self.records = _check_records(records, vehicle)
+        self._prepared = []
+        self._parts = []
+        for rec in self.records:
+            p = rec.passage
+            prep = prepare_crossing(base, vehicle, speed=p.speed, sensors=rec.sensors,
+                                    lane=p.lane if base.is_plate else None, road=road,
+                                    sampling_rate=rec.sampling_rate, approach=approach,
+                                    tail=max(0.0, rec.time[-1] - (base.length + p.axle_offsets[
+                                        -1]) / p.speed))
+            self._prepared.append(prep)
+            self._parts.append(measurement_points(rec.sensors)[0])
+        self.n_parts = max(int(p.max()) for p in self._parts) + 1
+        if n_modes is None:
+            from bwim.dynamics.simulate import select_modes
+
+            n_modes = select_modes(base, sampling_rate=self.records[0].sampling_rate).n
+        self.n_modes = n_modes
+        stiff = set(self.space.names) & {"E_x", "E_y", "E_girder"}
+        # K fixed (mass stage): the influence surfaces are computed once
+        self._influence = (None if stiff else
+                           [base.influence(rec.sensors) for rec in self.records])
+
+    def predicted(self, theta: np.ndarray) -> list[np.ndarray]:
+        bridge = self.space.bridge(theta, self.base)
+        out = []
+        for k, (prep, rec) in enumerate(zip(self._prepared, self.records, strict=True)):
+            inf = None if self._influence is None else self._influence[k]
+            sim = run_crossing(prep, bridge, n_modes=self.n_modes, influence=inf, warn=False)
+            out.append(_on_times(sim, rec.time))
+        return out
+
+    def parts(self, theta: np.ndarray) -> np.ndarray:
+        out = np.zeros(self.n_parts)
+        for pred, rec, part in zip(self.predicted(theta), self.records, self._parts,
+                                   strict=True):
+            np.add.at(out, part, ((pred - rec.data) ** 2).sum(axis=0))
+        return out
+
+    def residuals(self, theta: np.ndarray) -> np.ndarray:
+        return np.concatenate([(p - r.data).ravel() for p, r in
+                               zip(self.predicted(theta), self.records, strict=True)])
+
+    def __call__(self, theta: np.ndarray) -> np.ndarray:
+        return self.parts(theta)
+
+
+def _on_times(sim: Record, times: np.ndarray) -> np.ndarray:
+    """Simulated readings at the measured record's times (linear interpolation)."""
+    if sim.time.size == times.size and np.allclose(sim.time, times):
+        return sim.data
+    return np.stack([np.interp(times, sim.time, sim.data[:, c], left=0.0, right=0.0)
+                     for c in range(sim.data.shape[1])], axis=1)
