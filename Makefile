@@ -34,8 +34,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py
 
 reproduce: $(STAMP)
-	@echo "make reproduce: the paper's experiments are not implemented yet (issue 7)." >&2
-	@exit 1
+	$(BIN)/bwim reproduce all --jobs 2
 
 clean:
 	rm -rf $(VENV) build dist src/*.egg-info .pytest_cache .ruff_cache

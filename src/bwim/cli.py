@@ -12,6 +12,9 @@ Subcommands available now:
     The paper's 12 m × 8 m slab bridge: its lowest modes and the static strains under the
     calibration truck's axle loads.  (Simulation, calibration and force identification
     join the demo as those layers land; it never pretends to calibrate.)
+``reproduce {5.1,5.2,5.3,5.4,compare,all}``
+    The paper's experiments: tables with the paper's numbers beside ours, figures in
+    ``--out`` (default ``bwim-out/reproduce``).
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 
@@ -66,6 +70,37 @@ def _demo(args: argparse.Namespace) -> int:
     return 0
 
 
+def _reproduce(args: argparse.Namespace) -> int:
+    import time
+
+    from bwim import reproduce
+    from bwim.io.atomic import atomic_output, check_writable
+
+    names = list(reproduce.CASES) if args.case == "all" else [args.case]
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    check_writable(out / ".probe")
+    t0 = time.perf_counter()
+    for name in names:
+        print(f"== reproducing {name}{' (quick)' if args.quick else ''} ==", flush=True)
+        kwargs = {"quick": args.quick}
+        if name != "compare":
+            kwargs["n_jobs"] = args.jobs
+        report = reproduce.CASES[name](**kwargs)
+        print(report.render(), flush=True)
+        if not args.no_figures:
+            from bwim.plots.reproduce import report_figures
+
+            for fig_name, fig in report_figures(report).items():
+                target = out / f"{name.replace('.', '_')}_{fig_name}.png"
+                with atomic_output(target) as tmp:
+                    fig.savefig(tmp, format="png", dpi=110)
+                print(f"  figure: {target}")
+        print()
+    print(f"total {time.perf_counter() - t0:.1f} s")
+    return 0
+
+
 def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="bwim",
@@ -75,6 +110,20 @@ def _parser() -> argparse.ArgumentParser:
     d = sub.add_parser("demo", help="the paper's slab bridge: modes and static strains")
     d.add_argument("--modes", type=int, default=6, help="number of modes to print (default 6)")
     d.set_defaults(run=_demo)
+    r = sub.add_parser(
+        "reproduce",
+        help="the paper's experiments with its numbers side by side",
+        description="Reproduce Dowling, OBrien & González (2012) §5: 5.1 identical "
+        "elements, 5.2 noise, 5.3 sixteen zones, 5.4 beam-and-slab bridge, and a comparison "
+        "of optimisers ('compare').  Full runs take minutes (5.3 the longest); --quick runs "
+        "small versions.",
+    )
+    r.add_argument("case", choices=["5.1", "5.2", "5.3", "5.4", "compare", "all"])
+    r.add_argument("--quick", action="store_true", help="small, fast versions")
+    r.add_argument("--out", default="bwim-out/reproduce", help="folder for the figures")
+    r.add_argument("--jobs", type=int, default=1, help="worker processes for populations")
+    r.add_argument("--no-figures", action="store_true", help="tables only")
+    r.set_defaults(run=_reproduce)
     return p
 
 

@@ -33,6 +33,7 @@ __all__ = [
     "truck",
     "vransko_bridge",
     "vransko_sensors",
+    "zoned_bridges",
 ]
 
 # --- the 12 m × 8 m slab bridge (paper §5.1–5.3) ----------------------------------------
@@ -166,3 +167,25 @@ def vransko_sensors() -> list[Sensor]:
     ys = np.sort(np.concatenate([gy, 0.5 * (gy[:-1] + gy[1:])]))
     return [Sensor(x=x, y=float(y), kind="strain_x", name=f"x{x:g}_{float(y):g}")
             for x in VRANSKO_SENSOR_X for y in ys]
+
+
+#: §5.3: standard deviations of the zone moduli of bridges #1–#6, as fractions of the mean.
+ZONE_SPREADS = (0.0, 0.05, 0.10, 0.15, 0.20, 0.25)
+ZONES = (4, 4)  #: §5.3: 3 m × 2 m zones
+
+
+def zoned_bridges(seed: int = 0) -> list[Bridge]:
+    """The six bridges of §5.3: 4 × 4 zones whose E_x and E_y are drawn independently from
+    normal distributions with mean 35 GPa and standard deviation 0, 5, …, 25 % (bridges
+    #1–#6), μ = 1560 kg/m² everywhere; 1 m elements, so the nine sensors sit on the
+    interior zone corners.  Draws are clipped to ≥ 30 % of the mean (a modulus must stay
+    positive; at 25 % spread this is 2.8 standard deviations).
+    """
+    rng = np.random.default_rng(seed)
+    base = slab_bridge(zones=ZONES)
+    out = []
+    for spread in ZONE_SPREADS:
+        ex = SLAB_E * np.maximum(1.0 + spread * rng.standard_normal(base.n_zones), 0.3)
+        ey = SLAB_E * np.maximum(1.0 + spread * rng.standard_normal(base.n_zones), 0.3)
+        out.append(base.with_params(E_x=ex, E_y=ey))
+    return out

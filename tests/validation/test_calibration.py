@@ -74,7 +74,7 @@ def test_vransko_5_4_lm():
 
 
 def test_bad_calibration_input(slab_case):
-    bridge, truck, road, rec = slab_case
+    bridge, truck, _, rec = slab_case
     with pytest.raises(InputError, match="unknown 'E_girder' is not a parameter"):
         calibrate(bridge, [rec], truck, unknowns=("E_girder",))
     with pytest.raises(InputError, match="unknown method 'genetic'"):
