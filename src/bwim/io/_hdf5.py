@@ -1,0 +1,154 @@
+"""Shared HDF5 layout of bwim's own files: format tag, sensors, passages, channels.
+
+Contract
+--------
+* Every bwim HDF5 file carries the root attributes ``bwim_format`` (``"record"``,
+  ``"records"``, ``"identification"``, ``"static_weights"``, ``"influence_line"``) and
+  ``bwim_format_version`` (an integer, :data:`VERSION`).  :func:`h5_reader` refuses a
+  missing file, a file that is not HDF5, a file of another format and a newer version,
+  each with an :class:`~bwim.errors.InputError` naming the file; a missing dataset inside
+  is reported as a damaged file.
+* :func:`h5_writer` writes atomically (:func:`bwim.io.atomic.atomic_output`).
+* Arrays are stored as float64 / int64 / bool datasets and scalars as attributes, so
+  every number reads back bit for bit; strings are UTF-8.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from bwim.errors import InputError
+from bwim.io.atomic import atomic_output
+from bwim.records import Passage
+from bwim.sensors import Sensor
+from bwim.wim.influence_line import Channel
+
+__all__ = ["VERSION", "h5_reader", "h5_writer"]
+
+VERSION = 1  #: file format version written; readers accept this and older
+_STR = h5py.string_dtype(encoding="utf-8")
+
+
+@contextlib.contextmanager
+def h5_writer(path: str | os.PathLike, fmt: str) -> Iterator[h5py.File]:
+    """An HDF5 file opened for writing, tagged ``fmt``, that appears only when complete."""
+    with atomic_output(path) as tmp, h5py.File(tmp, "w") as f:
+        f.attrs["bwim_format"] = fmt
+        f.attrs["bwim_format_version"] = VERSION
+        yield f
+
+
+@contextlib.contextmanager
+def h5_reader(path: str | os.PathLike, *fmts: str) -> Iterator[h5py.File]:
+    """An HDF5 file of one of the formats ``fmts``, opened for reading."""
+    p = Path(path)
+    if not p.exists():
+        raise InputError(f"{p}: no such file")
+    if p.is_dir():
+        raise InputError(f"{p}: is a folder, not a file")
+    try:
+        f = h5py.File(p, "r")
+    except OSError:
+        raise InputError(f"{p}: not an HDF5 file (or it cannot be read)") from None
+    with f:
+        fmt = f.attrs.get("bwim_format")
+        if fmt is None:
+            raise InputError(f"{p}: not a bwim file (no bwim_format attribute)")
+        if fmt not in fmts:
+            raise InputError(f"{p}: holds a bwim {fmt}, not a {' or '.join(fmts)}")
+        version = int(f.attrs.get("bwim_format_version", 0))
+        if version > VERSION:
+            raise InputError(f"{p}: format version {version} is newer than this bwim reads "
+                             f"({VERSION}); update bwim")
+        try:
+            yield f
+        except InputError as exc:
+            raise InputError(f"{p}: {exc}") from None
+        except KeyError as exc:
+            raise InputError(f"{p}: damaged bwim {fmt} file: {exc.args[0] if exc.args else exc}"
+                             ) from None
+
+
+def need(group: h5py.Group, name: str):
+    """``group[name]`` or a KeyError naming the missing object."""
+    if name not in group:
+        raise KeyError(f"{group.name.rstrip('/')}/{name} is missing")
+    return group[name]
+
+
+def attr(group: h5py.Group, name: str):
+    if name not in group.attrs:
+        raise KeyError(f"attribute {name!r} of {group.name} is missing")
+    return group.attrs[name]
+
+
+def array(group: h5py.Group, name: str) -> np.ndarray:
+    return np.asarray(need(group, name)[()])
+
+
+def strings(group: h5py.Group, name: str) -> list[str]:
+    return [str(s) for s in need(group, name).asstr()[()]]
+
+
+def put_strings(group: h5py.Group, name: str, values: Sequence[str]) -> None:
+    group.create_dataset(name, data=np.array(list(values), dtype=object), dtype=_STR)
+
+
+def put_sensors(group: h5py.Group, sensors: Sequence[Sensor]) -> None:
+    g = group.create_group("sensors")
+    g.create_dataset("x", data=np.array([s.x for s in sensors], dtype=float))
+    g.create_dataset("y", data=np.array([s.y for s in sensors], dtype=float))
+    put_strings(g, "kind", [s.kind.value for s in sensors])
+    put_strings(g, "name", [s.name for s in sensors])
+
+
+def get_sensors(group: h5py.Group) -> tuple[Sensor, ...]:
+    g = need(group, "sensors")
+    x, y = array(g, "x"), array(g, "y")
+    kinds, names = strings(g, "kind"), strings(g, "name")
+    return tuple(Sensor(x=float(a), y=float(b), kind=k, name=n)
+                 for a, b, k, n in zip(x, y, kinds, names, strict=True))
+
+
+def put_passage(group: h5py.Group, passage: Passage) -> None:
+    group.attrs["speed"] = passage.speed
+    group.attrs["lane"] = passage.lane
+    group.attrs["delay"] = passage.delay
+    if passage.track_width is not None:
+        group.attrs["track_width"] = passage.track_width
+    group.create_dataset("axle_spacings", data=passage.axle_spacings)
+
+
+def get_passage(group: h5py.Group) -> Passage:
+    tw = group.attrs.get("track_width")
+    return Passage(speed=float(attr(group, "speed")), lane=float(attr(group, "lane")),
+                   delay=float(attr(group, "delay")), axle_spacings=array(group, "axle_spacings"),
+                   track_width=None if tw is None else float(tw))
+
+
+def put_list(group: h5py.Group, name: str, items: Sequence, put) -> None:
+    """Items as sub-groups ``name/0``, ``name/1``, … written by ``put(subgroup, item)``."""
+    g = group.create_group(name)
+    g.attrs["count"] = len(items)
+    for k, item in enumerate(items):
+        put(g.create_group(str(k)), item)
+
+
+def get_list(group: h5py.Group, name: str, get) -> tuple:
+    g = need(group, name)
+    return tuple(get(need(g, str(k))) for k in range(int(attr(g, "count"))))
+
+
+def put_channel(group: h5py.Group, channel: Channel) -> None:
+    group.attrs["name"] = channel.name
+    put_sensors(group, channel.sensors)
+
+
+def get_channel(group: h5py.Group) -> Channel:
+    return Channel(name=str(attr(group, "name")), sensors=get_sensors(group))

@@ -1,0 +1,389 @@
+"""Builders: bwim objects from a :class:`~bwim.io.scenario.Scenario`.
+
+Contract
+--------
+* :func:`build_bridge`, :func:`build_sensors`, :func:`build_vehicle`, :func:`build_road`
+  and :func:`build_passage` turn the scenario's section specs into a
+  :class:`~bwim.Bridge`, a list of :class:`~bwim.Sensor`, a vehicle, a
+  :class:`~bwim.RoadProfile` and a :class:`~bwim.Passage`;
+  :func:`simulate_scenario` runs the scenario's crossing (with its noise, if any).
+* The bridge is built by :meth:`bwim.Bridge.plate` / :meth:`bwim.Bridge.beam` with the
+  same arguments a Python user would pass, so a scenario that states the paper's slab gives
+  a bridge equal to :func:`bwim.paper.slab_bridge` (same parameters, same matrices).
+* Errors the library raises keep their message, prefixed by the file and the section:
+  ``"scenario.toml: [bridge]: E_x must be positive, got -3.5e+10"``.  A sensor off the
+  deck, a sensor name used twice and a bad name template are reported here with the
+  ``[[sensors]]`` entry they come from.
+* :func:`load_record` reads a record by its extension: a logger's CSV with the
+  scenario's sensors (and passage, when the scenario has ``[run]`` and ``[vehicle]``), or
+  bwim's HDF5.
+* A missing section that a builder needs is an :class:`~bwim.errors.InputError`
+  (``"scenario.toml: no [vehicle] section"``); a missing ``[road]`` means a flat road.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import os
+from collections.abc import Iterator
+from pathlib import Path
+
+import numpy as np
+
+from bwim.dynamics import simulate
+from bwim.errors import InputError, require_positive
+from bwim.fe.bridge import Bridge
+from bwim.fe.girder import Girder, composite_section
+from bwim.fe.mesh import grid_lines
+from bwim.io._csv import read_numeric_csv
+from bwim.io.records import read_csv_record, read_record
+from bwim.io.scenario import VEHICLE_TYPES, BridgeSpec, GirderSpec, Scenario
+from bwim.records import Passage, Record
+from bwim.road import RoadProfile
+from bwim.sensors import Sensor
+from bwim.vehicles import named
+from bwim.vehicles.types import Truck3D
+
+__all__ = [
+    "build_bridge",
+    "build_passage",
+    "build_road",
+    "build_sensors",
+    "build_vehicle",
+    "load_record",
+    "simulate_scenario",
+]
+
+
+@contextlib.contextmanager
+def _context(prefix: str) -> Iterator[None]:
+    """Prefix the message of any InputError raised inside the block."""
+    try:
+        yield
+    except InputError as exc:
+        raise InputError(f"{prefix}: {exc}") from None
+
+
+def _values(v):
+    return list(v) if isinstance(v, tuple) else v
+
+
+def _lines(lines, through, size, n, axis: str, n_name: str):
+    if through is None:
+        return None if lines is None else list(lines)
+    if lines is not None:
+        raise InputError(f"give {axis}_lines or {axis}_through, not both")
+    if n is None:
+        raise InputError(f"{axis}_through needs {n_name}")
+    return grid_lines(size, n, through=list(through), name=n_name)
+
+
+def _girder(g: GirderSpec, spec: BridgeSpec, src: str, k: int) -> Girder:
+    with _context(f"{src}: [[bridge.girders]] entry {k + 1}"):
+        if g.section is None:
+            if g.I is None or g.z_bottom is None:
+                raise InputError("give I and z_bottom, or a [bridge.girders.section] table")
+            return Girder(y=g.y, I=g.I, z_bottom=g.z_bottom, E=g.E, mu=g.mu, J=g.J,
+                          poisson=g.poisson)
+        if g.I is not None or g.z_bottom is not None:
+            raise InputError("give I and z_bottom or a section table, not both")
+        s = g.section
+        ratio = s.modular_ratio
+        if ratio is None:
+            slab_e = spec.E if spec.E is not None else (
+                spec.E_x if spec.E_x == spec.E_y else None)
+            if not isinstance(slab_e, float):
+                raise InputError("the section needs modular_ratio: the deck has no single "
+                                 "modulus E")
+            ratio = slab_e / require_positive("Girder.E", g.E)
+        sec = composite_section(
+            girder_area=s.girder_area, girder_inertia=s.girder_inertia,
+            girder_depth=s.girder_depth, girder_centroid_height=s.girder_centroid_height,
+            slab_width=s.slab_width,
+            slab_thickness=spec.thickness if s.slab_thickness is None else s.slab_thickness,
+            modular_ratio=ratio, exclude_slab_bending=s.exclude_slab_bending,
+        )
+        return Girder(y=g.y, I=sec.I, z_bottom=sec.z_bottom, E=g.E, mu=g.mu, J=g.J,
+                      poisson=g.poisson)
+
+
+def _with_zone_map(base: Bridge, spec: BridgeSpec, E_x, E_y) -> Bridge:
+    """``base`` with the explicit zone labels of ``spec.zone_map`` and its parameters."""
+    grid = base.model.grid
+    zmap = np.array(spec.zone_map, dtype=int)
+    shape = (grid.nx, grid.ny) if base.is_plate else (grid.nx,)
+    if zmap.shape != shape:
+        what = "(nx, ny)" if base.is_plate else "(n_elements,)"
+        raise InputError(f"zone_map must have shape {what} = {shape}, got {zmap.shape}")
+    n_zones = int(zmap.max()) + 1 if spec.n_zones is None else spec.n_zones
+    if zmap.min() < 0 or zmap.max() >= n_zones:
+        raise InputError(f"zone_map labels must lie in [0, {n_zones - 1}], got "
+                         f"{int(zmap.min())} … {int(zmap.max())}")
+    model = dataclasses.replace(base.model, zone_of_element=zmap.ravel(), n_zones=n_zones)
+    return Bridge(model=model, E_x=E_x, E_y=E_y, mu=_values(spec.mu),
+                  E_girder=base.E_girder, mu_girder=base.mu_girder,
+                  damping_ratio=spec.damping_ratio)
+
+
+def _plate(spec: BridgeSpec, src: str) -> Bridge:
+    girders = tuple(_girder(g, spec, src, k) for k, g in enumerate(spec.girders))
+    with _context(f"{src}: [bridge]"):
+        length = require_positive("length", spec.length)
+        width = require_positive("width", spec.width)
+        geometry = dict(
+            length=length, width=width, nx=spec.nx, ny=spec.ny, thickness=spec.thickness,
+            x_lines=_lines(spec.x_lines, spec.x_through, length, spec.nx, "x", "nx"),
+            y_lines=_lines(spec.y_lines, spec.y_through, width, spec.ny, "y", "ny"),
+            poisson=spec.poisson, damping_ratio=spec.damping_ratio,
+            supports=spec.supports if spec.supports is not None else "ss-free",
+            girders=girders,
+        )
+        if spec.zone_map is None:
+            return Bridge.plate(
+                **geometry, E=_values(spec.E), E_x=_values(spec.E_x), E_y=_values(spec.E_y),
+                mu=_values(spec.mu), zones=(1, 1) if spec.zones is None else spec.zones,
+            )
+        if spec.E is not None and (spec.E_x is not None or spec.E_y is not None):
+            raise InputError("give either E or E_x/E_y, not both")
+        E_x, E_y = (spec.E, spec.E) if spec.E is not None else (spec.E_x, spec.E_y)
+        if E_x is None or E_y is None:
+            raise InputError("a plate needs E, or both E_x and E_y")
+        base = Bridge.plate(**geometry, E=1.0, mu=1.0)
+        return _with_zone_map(base, spec, _values(E_x), _values(E_y))
+
+
+def _beam(spec: BridgeSpec, src: str) -> Bridge:
+    with _context(f"{src}: [bridge]"):
+        length = require_positive("length", spec.length)
+        geometry = dict(
+            length=length, n_elements=spec.n_elements, I=spec.I, z_bottom=spec.z_bottom,
+            x_lines=_lines(spec.x_lines, spec.x_through, length, spec.n_elements, "x",
+                           "n_elements"),
+            damping_ratio=spec.damping_ratio,
+            supports=spec.supports if spec.supports is not None else "ss",
+        )
+        if spec.zone_map is None:
+            return Bridge.beam(**geometry, E=_values(spec.E), mu=_values(spec.mu),
+                               zones=1 if spec.zones is None else spec.zones)
+        base = Bridge.beam(**geometry, E=1.0, mu=1.0)
+        return _with_zone_map(base, spec, _values(spec.E), None)
+
+
+def build_bridge(scenario: Scenario) -> Bridge:
+    """The scenario's bridge (:meth:`bwim.Bridge.plate` or :meth:`bwim.Bridge.beam`).
+
+    Raises
+    ------
+    InputError
+        The library's message prefixed by the file and ``[bridge]`` (or the girder entry).
+    """
+    spec = scenario.bridge
+    if spec.kind == "plate":
+        return _plate(spec, scenario.source)
+    return _beam(spec, scenario.source)
+
+
+_SHORT = {"strain_x": "x", "strain_y": "y", "deflection": "w"}
+
+
+def _as_tuple(v) -> tuple:
+    return v if isinstance(v, tuple) else (v,)
+
+
+def build_sensors(scenario: Scenario) -> list[Sensor]:
+    """The scenario's sensors in file order (grids expanded kind, then x, then y).
+
+    Raises
+    ------
+    InputError
+        A sensor off the deck, ``strain_y`` on a beam, a bad name template, or two sensors
+        with the same name (they would share a CSV column).
+    """
+    src = scenario.source
+    b = scenario.bridge
+    plate = b.kind == "plate"
+    tol = 1e-9 * max(b.length, b.width or 0.0)
+    out: list[Sensor] = []
+    seen: dict[str, int] = {}
+    for k, entry in enumerate(scenario.sensors):
+        at = f"{src}: [[sensors]] entry {k + 1}"
+        i = 0
+        for kind in _as_tuple(entry.kind):
+            for x in _as_tuple(entry.x):
+                for y in _as_tuple(entry.y):
+                    try:
+                        name = entry.name.format(kind=kind, short=_SHORT[kind], x=x, y=y, i=i)
+                    except (KeyError, IndexError, ValueError, AttributeError) as exc:
+                        raise InputError(
+                            f"{at} name: bad template {entry.name!r} ({exc}); fields are "
+                            "kind, short, x, y, i") from None
+                    with _context(at):
+                        sensor = Sensor(x=x, y=y, kind=kind, name=name)
+                    if not plate and kind == "strain_y":
+                        raise InputError(f"{at}: sensor {sensor.name!r}: strain_y is not "
+                                         "available on a beam")
+                    off_x = not -tol <= x <= b.length + tol
+                    off_y = plate and not -tol <= y <= b.width + tol
+                    if off_x or off_y:
+                        size = f"{b.length:g} m" + (f" × {b.width:g} m" if plate else "")
+                        where = f"x = {x:g} m" + (f", y = {y:g} m" if plate else "")
+                        raise InputError(f"{at}: sensor {sensor.name!r} at {where} is off "
+                                         f"the deck ({size})")
+                    if sensor.name in seen:
+                        raise InputError(f"{at}: sensor name {sensor.name!r} is already used "
+                                         f"by entry {seen[sensor.name]}")
+                    seen[sensor.name] = k + 1
+                    out.append(sensor)
+                    i += 1
+    return out
+
+
+def build_vehicle(scenario: Scenario):
+    """The scenario's vehicle: a named one or a :mod:`bwim.vehicles` class instance."""
+    spec = scenario.require("vehicle")
+    with _context(f"{scenario.source}: [vehicle]"):
+        if spec.name is not None:
+            return named(spec.name)
+        cls = VEHICLE_TYPES[spec.type]
+        params = {k: _values(v) for k, v in spec.params.items()}
+        if cls is Truck3D and "axle_loads" in params:
+            return Truck3D.from_axle_loads(**params)
+        return cls(**params)
+
+
+def _road_extent(scenario: Scenario) -> tuple[float, float]:
+    """Default (start, end) of a random road: the whole run with a 5 m margin."""
+    run = scenario.run
+    approach = 100.0 if run is None else run.approach
+    run_out = 0.0 if run is None else run.speed * run.tail
+    vehicle = 0.0 if scenario.vehicle is None else build_vehicle(scenario).length
+    margin = 5.0 + (scenario.road.smoothing or 0.0)
+    return (-(approach + vehicle + margin),
+            scenario.bridge.length + vehicle + run_out + margin)
+
+
+def _read_profile(path: Path) -> RoadProfile:
+    names, values, _ = read_numeric_csv(path)
+    if names == ["x", "elevation"]:
+        elevation = values[:, 1]
+    elif names == ["x", "right", "left"]:
+        elevation = values[:, 1:]
+    else:
+        raise InputError(f"{path}: a road profile has the columns x, elevation or x, right, "
+                         f"left; got {', '.join(names)}")
+    with _context(f"{path}"):
+        return RoadProfile(x=values[:, 0], elevation=elevation)
+
+
+def build_road(scenario: Scenario) -> RoadProfile:
+    """The scenario's road profile (flat without a ``[road]`` section).
+
+    A random road without ``start``/``length`` covers the whole run: from the approach
+    behind the vehicle's last axle to its exit plus ``tail`` seconds, with 5 m to spare.
+    """
+    spec = scenario.road
+    if spec is None or spec.flat:
+        return RoadProfile.flat()
+    src = scenario.source
+    if spec.profile is not None:
+        path = Path(spec.profile)
+        if not path.is_absolute():
+            path = (scenario.folder or Path()) / path
+        road = _read_profile(path)
+    else:
+        start, length = spec.start, spec.length
+        if start is None or length is None:
+            lo, hi = _road_extent(scenario)
+            start = lo if start is None else start
+            length = hi - start if length is None else length
+        options = {k: getattr(spec, k) for k in ("dx", "track_correlation", "waviness", "band")
+                   if getattr(spec, k) is not None}
+        with _context(f"{src}: [road]"):
+            road = RoadProfile.iso8608(spec.roughness, length=length, start=start,
+                                       seed=spec.seed, **options)
+    if spec.smoothing is not None:
+        with _context(f"{src}: [road] smoothing"):
+            road = road.smoothed(spec.smoothing)
+    return road
+
+
+def build_passage(scenario: Scenario, vehicle=None) -> Passage:
+    """The passage a B-WIM system sees: the ``[run]`` speed, lane and delay and the
+    vehicle's axle layout (of ``vehicle``, default the scenario's)."""
+    run = scenario.require("run")
+    vehicle = build_vehicle(scenario) if vehicle is None else vehicle
+    lane = run.lane
+    if lane is None:
+        if scenario.bridge.kind == "plate":
+            raise InputError(f"{scenario.source}: [run] needs lane on a plate bridge")
+        lane = 0.0
+    with _context(f"{scenario.source}: [run]"):
+        return vehicle.passage(run.speed, lane, run.delay)
+
+
+def simulate_scenario(scenario: Scenario, *, bridge: Bridge | None = None) -> Record:
+    """Simulate the scenario's crossing (:func:`bwim.simulate`), with its ``[run]`` noise.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    bridge : Bridge, optional
+        Use this bridge (for example a calibrated one) instead of the scenario's.
+
+    Returns
+    -------
+    Record
+    """
+    run = scenario.require("run")
+    scenario.require("sensors")
+    bridge = build_bridge(scenario) if bridge is None else bridge
+    sensors = build_sensors(scenario)
+    vehicle = build_vehicle(scenario)
+    road = build_road(scenario)
+    with _context(scenario.source):
+        record = simulate(bridge, vehicle, sensors=sensors, road=road, **run.simulate_kwargs())
+        if run.noise:
+            record = record.with_noise(run.noise, seed=run.seed)
+    return record
+
+
+_CSV_SUFFIXES = (".csv", ".txt")
+_HDF5_SUFFIXES = (".h5", ".hdf5", ".hdf")
+
+
+def load_record(
+    path: str | os.PathLike,
+    scenario: Scenario | None = None,
+    *,
+    time_column: str = "time",
+    allow_extra: bool = False,
+    scale: float = 1.0,
+) -> Record:
+    """A record from a CSV file (sensors from ``scenario``) or a bwim HDF5 file.
+
+    Parameters
+    ----------
+    path : str or path
+        ``.csv``/``.txt``: a logger's file, read with :func:`bwim.io.read_csv_record`;
+        ``.h5``/``.hdf5``/``.hdf``: a record written by :func:`bwim.io.write_record`.
+    scenario : Scenario, optional
+        Needed for CSV: its ``[[sensors]]`` name the columns, and its ``[run]`` and
+        ``[vehicle]`` (when present) give the passage.
+    time_column, allow_extra, scale
+        As for :func:`bwim.io.read_csv_record` (CSV only).
+    """
+    p = Path(path)
+    suffix = p.suffix.lower()
+    if suffix in _HDF5_SUFFIXES:
+        return read_record(p)
+    if suffix not in _CSV_SUFFIXES:
+        raise InputError(f"{p}: unknown record format {p.suffix!r}; use .csv or .h5")
+    if scenario is None:
+        raise InputError(f"{p}: a CSV record needs a scenario for its sensor positions")
+    scenario.require("sensors")
+    sensors = build_sensors(scenario)
+    passage = (build_passage(scenario) if scenario.run is not None
+               and scenario.vehicle is not None else None)
+    return read_csv_record(p, sensors, passage, time_column=time_column,
+                           allow_extra=allow_extra, scale=scale)
