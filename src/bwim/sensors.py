@@ -15,14 +15,14 @@ Contract
 from __future__ import annotations
 
 from dataclasses import dataclass
-from enum import Enum
+from enum import StrEnum
 
 from bwim.errors import InputError, require_finite
 
 __all__ = ["Sensor", "SensorKind"]
 
 
-class SensorKind(str, Enum):
+class SensorKind(StrEnum):
     """What a sensor measures."""
 
     STRAIN_X = "strain_x"

@@ -32,7 +32,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from enum import Enum
+from enum import StrEnum
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -58,7 +58,7 @@ STIFFNESS = ("E_x", "E_y", "E_girder")
 MASS = ("mu", "mu_girder")
 
 
-class Method(str, Enum):
+class Method(StrEnum):
     """Optimiser of the paper's two stages."""
 
     CE = "ce"
@@ -66,7 +66,7 @@ class Method(str, Enum):
     CMA = "cma"
 
 
-class Refine(str, Enum):
+class Refine(StrEnum):
     """Optional joint dynamic refinement after the two stages."""
 
     NONE = "none"

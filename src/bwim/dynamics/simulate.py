@@ -23,7 +23,7 @@ from __future__ import annotations
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
-from enum import Enum
+from enum import StrEnum
 from functools import cached_property
 
 import numpy as np
@@ -50,7 +50,7 @@ __all__ = ["PreparedCrossing", "VBIMethod", "prepare_crossing", "run_crossing",
            "select_modes", "simulate"]
 
 
-class VBIMethod(str, Enum):
+class VBIMethod(StrEnum):
     """How vehicle and bridge are solved together."""
 
     COUPLED = "coupled"

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from enum import Enum
+from enum import StrEnum
 
 import numpy as np
 
@@ -33,7 +33,7 @@ from bwim.sensors import Sensor, SensorKind
 __all__ = ["EdgeSupport", "FEModel", "PointRows", "Supports"]
 
 
-class EdgeSupport(str, Enum):
+class EdgeSupport(StrEnum):
     """Boundary condition of one edge."""
 
     FREE = "free"

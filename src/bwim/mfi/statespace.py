@@ -23,7 +23,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from enum import Enum
+from enum import StrEnum
 from functools import cached_property
 
 import numpy as np
@@ -38,14 +38,14 @@ from bwim.sensors import Sensor
 __all__ = ["ForceUnknowns", "MFIModel", "Order", "build_model"]
 
 
-class Order(str, Enum):
+class Order(StrEnum):
     """Tikhonov regularisation order."""
 
     FIRST = "first"  # penalise the force rate (smooth histories)
     ZEROTH = "zeroth"  # penalise the force itself
 
 
-class ForceUnknowns(str, Enum):
+class ForceUnknowns(StrEnum):
     """What the unknown forces are."""
 
     AUTO = "auto"  # wheels when the sensors resolve the transverse position, else axles

@@ -46,7 +46,7 @@ import pickle
 import tempfile
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from enum import Enum
+from enum import StrEnum
 from pathlib import Path
 from typing import Any
 
@@ -78,7 +78,7 @@ __all__ = [
 DEFAULT_INJECTION = (0.3, 0.1, 0.03, 0.01, 0.003, 0.001)
 
 
-class StopReason(str, Enum):
+class StopReason(StrEnum):
     """Why a Cross-Entropy run stopped (several may hold at once)."""
 
     CONVERGED = "converged"
