@@ -7,6 +7,7 @@ The public API is listed in ``__all__``; units, axes and signs are in
 from importlib.metadata import PackageNotFoundError, version
 
 from bwim import conventions, dynamics, errors, fe, mfi, optimize, paper, vehicles, wim
+from bwim.calibration import Calibration, calibrate
 from bwim.dynamics import simulate
 from bwim.errors import BwimError, InputError, NumericalError
 from bwim.fe import Bridge, Girder, Modes, Supports, composite_section, grid_lines
@@ -32,6 +33,7 @@ except PackageNotFoundError:  # running from a source tree without installation
 __all__ = [
     "Bridge",
     "BwimError",
+    "Calibration",
     "ForceIdentification",
     "Girder",
     "HalfCar",
@@ -53,6 +55,7 @@ __all__ = [
     "Truck3D",
     "Truth",
     "__version__",
+    "calibrate",
     "calibrate_influence_line",
     "composite_section",
     "conventions",

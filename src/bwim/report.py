@@ -1,0 +1,353 @@
+"""A single-file HTML report of bwim results: tables and embedded figures.
+
+Contract
+--------
+* :func:`section` turns one result object into a :class:`Section` (a title, tables and
+  matplotlib figures from :mod:`bwim.plots`): a :class:`~bwim.ForceIdentification`
+  (forces, L-curve), :class:`~bwim.StaticWeights` (Moses' fit), an
+  :class:`~bwim.InfluenceLine`, a :class:`~bwim.Record` (its channels), a
+  :class:`~bwim.calibration.Calibration` (parameters, CE convergence) or a
+  :class:`~bwim.Bridge` (its parameters).  A simulated record's truth, when given, is
+  drawn and tabulated beside identified forces and weights.
+* :func:`read_results` reads result files: any bwim HDF5 (identification, static weights,
+  influence line, record), a bridge model TOML (:func:`bwim.io.save_bridge`) and CSV
+  summaries (shown as tables); folders are expanded to the files they hold.
+* :func:`render_html` makes the page (figures as base64 PNG, nothing linked);
+  :func:`write_report` writes it atomically.
+* Bad input is an :class:`~bwim.errors.InputError` naming the file.  This module is above
+  the core and may import matplotlib; the core never imports it.
+"""
+
+from __future__ import annotations
+
+import base64
+import csv
+import html
+import io
+import os
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from bwim.conventions import KILONEWTON
+from bwim.errors import InputError
+
+__all__ = ["Section", "Table", "read_results", "render_html", "section", "write_report"]
+
+#: File suffixes :func:`read_results` picks up in a folder.
+RESULT_SUFFIXES = (".h5", ".hdf5", ".hdf", ".toml", ".csv")
+
+
+@dataclass(frozen=True)
+class Table:
+    """A table: a caption, a header and rows of already formatted cells."""
+
+    caption: str
+    header: tuple[str, ...]
+    rows: tuple[tuple[str, ...], ...]
+
+
+@dataclass(frozen=True, eq=False)
+class Section:
+    """One part of the report: a title, a note, tables and (caption, Figure) pairs."""
+
+    title: str
+    tables: tuple[Table, ...] = ()
+    figures: tuple[tuple[str, Any], ...] = ()
+    note: str = ""
+
+
+def _kn(values) -> list[str]:
+    return [f"{v / KILONEWTON:.1f}" for v in np.atleast_1d(values)]
+
+
+def _identification(name: str, ident, truth) -> Section:
+    from bwim.plots.mfi import plot_forces, plot_lcurve
+
+    rows = [("axle weights (kN)", *_kn(ident.axle_weights))]
+    n = ident.axle_weights.size
+    if truth is not None and truth.static_axle_loads.size == n:
+        rows.append(("true static (kN)", *_kn(truth.static_axle_loads)))
+        err = ident.axle_weights / truth.static_axle_loads - 1.0
+        rows.append(("error (%)", *(f"{100 * e:+.1f}" for e in err)))
+    table = Table("Identified static axle weights", ("", *(f"axle {i + 1}" for i in range(n))),
+                  tuple(rows))
+    gvw = Table("Gross vehicle weight and regularisation",
+                ("vehicle", "GVW (kN)", "true GVW (kN)", "λ"),
+                tuple((str(i + 1), f"{g / KILONEWTON:.1f}",
+                       f"{truth.gvw / KILONEWTON:.1f}" if truth is not None and i == 0 else "–",
+                       f"{ident.lam:.3g}") for i, g in enumerate(ident.gvw)))
+    figures = [("Identified axle forces (dashed: truth)" if truth is not None
+                else "Identified axle forces", plot_forces(ident, truth=truth))]
+    if ident.lcurve is not None:
+        figures.append(("L-curve and the λ chosen at its corner", plot_lcurve(ident)))
+    return Section(f"Moving force identification: {name}", (table, gvw), tuple(figures))
+
+
+def _static(name: str, weights, truth) -> Section:
+    from bwim.plots.wim import plot_static_fit
+
+    n = weights.n_axles
+    rows = [("axle weights (kN)", *_kn(weights.axle_weights))]
+    if truth is not None and truth.static_axle_loads.size == n:
+        rows.append(("true static (kN)", *_kn(truth.static_axle_loads)))
+        err = weights.axle_weights / truth.static_axle_loads - 1.0
+        rows.append(("error (%)", *(f"{100 * e:+.1f}" for e in err)))
+    table = Table("Moses static axle weights", ("", *(f"axle {i + 1}" for i in range(n))),
+                  tuple(rows))
+    summary = Table("Fit", ("GVW (kN)", "relative residual", "condition number"),
+                    ((f"{weights.gvw / KILONEWTON:.1f}", f"{weights.residual:.3g}",
+                      f"{weights.condition:.3g}"),))
+    return Section(f"Static weighing (Moses): {name}", (table, summary),
+                   (("Measured readings and Moses' static fit", plot_static_fit(weights)),))
+
+
+def _influence(name: str, il) -> Section:
+    from bwim.plots.wim import plot_influence_line
+
+    lo, hi = il.support
+    table = Table("Influence line", ("source", "channels", "lane (m)", "support (m)",
+                                     "spacing (m)", "residual"),
+                  ((il.source or "–", ", ".join(il.channel_names), f"{il.lane:g}",
+                    f"{lo:g} … {hi:g}", f"{il.spacing:.3g}",
+                    "–" if il.residual is None else f"{il.residual:.3g}"),))
+    return Section(f"Influence line: {name}", (table,),
+                   (("Influence line per kN of axle load", plot_influence_line(il)),))
+
+
+def _record(name: str, record, length) -> Section:
+    from bwim.plots.records import plot_record
+
+    rows = tuple((str(i + 1), f"{p.speed:g}", f"{p.lane:g}", str(p.n_axles))
+                 for i, p in enumerate(record.passages))
+    table = Table(f"{len(record.sensors)} channels, {record.time.size} samples at "
+                  f"{record.sampling_rate:g} Hz", ("vehicle", "speed (m/s)", "lane (m)", "axles"),
+                  rows)
+    return Section(f"Record: {name}", (table,) if rows else (),
+                   (("Readings", plot_record(record, length=length)),))
+
+
+def _param_rows(params: dict, start: dict | None = None, uncertainty: dict | None = None,
+                truth: dict | None = None) -> tuple[tuple[str, ...], ...]:
+    rows = []
+    for key, values in params.items():
+        for z, v in enumerate(np.atleast_1d(values)):
+            row = [key if np.size(values) == 1 else f"{key}[{z}]"]
+            if start is not None:
+                row.append(f"{np.atleast_1d(start[key])[z]:.5g}")
+            row.append(f"{v:.5g}")
+            if uncertainty is not None:
+                row.append(f"{np.atleast_1d(uncertainty[key])[z]:.3g}")
+            if truth is not None and key in truth:
+                t = np.atleast_1d(truth[key])[z]
+                row += [f"{t:.5g}", f"{100 * (v / t - 1):+.3f}"]
+            rows.append(tuple(row))
+    return tuple(rows)
+
+
+def _calibration(name: str, cal, start, true_bridge) -> Section:
+    from bwim.plots.calibration import plot_ce_convergence
+
+    header = ["parameter"] + (["start"] if start is not None else []) + ["calibrated",
+                                                                          "uncertainty"]
+    truth = None if true_bridge is None else true_bridge.params
+    if truth is not None:
+        header += ["true", "error (%)"]
+    table = Table("Calibrated parameters (SI units: Pa, kg/m²)", tuple(header),
+                  _param_rows(cal.params, None if start is None else start.params,
+                              cal.uncertainty, truth))
+    from bwim.optimize.ce import CEHistory
+
+    stages = Table("Stages", ("stage", "unknowns", "evaluations", "iterations", "time (s)"),
+                   tuple((s.name, ", ".join(s.labels), str(s.nfev), str(s.nit),
+                          f"{s.wall_time:.1f}") for s in cal.stages))
+    figures = []
+    for s in cal.stages:
+        if isinstance(s.history, CEHistory):
+            for k, label in enumerate(s.labels):
+                figures.append((f"Cross-Entropy convergence, {s.name}: {label}",
+                                plot_ce_convergence(s, parameter=k)))
+    note = (f"{cal.nfev} objective evaluations in {cal.wall_time:.1f} s. "
+            + cal.identifiability.summary().replace("\n", "; ") + ".")
+    return Section(f"Calibration: {name}", (table, stages), tuple(figures), note)
+
+
+def _bridge(name: str, bridge) -> Section:
+    return Section(f"Bridge model: {name}",
+                   (Table("Parameters (SI units: Pa, kg/m²)", ("parameter", "value"),
+                          _param_rows(bridge.params)),))
+
+
+def section(obj: Any, name: str = "", *, truth=None, length: float | None = None,
+            start=None, true_bridge=None) -> Section:
+    """The report section of one result object (see module docstring).
+
+    Parameters
+    ----------
+    obj
+        A result: ForceIdentification, StaticWeights, InfluenceLine, Record, Calibration,
+        Bridge, a :class:`Table` or a ready :class:`Section`.
+    name : str
+        What the result is (a file name, a vehicle), shown in the title.
+    truth : Truth, optional
+        The simulated truth of the weighed vehicle.
+    length : float, optional
+        Span, m, to shade when a vehicle is on the deck in record plots.
+    start, true_bridge : Bridge, optional
+        For a calibration: the starting model and the true one (simulations).
+    """
+    from bwim.calibration import Calibration
+    from bwim.fe.bridge import Bridge
+    from bwim.mfi import ForceIdentification
+    from bwim.records import Record
+    from bwim.wim import InfluenceLine, StaticWeights
+
+    if isinstance(obj, Section):
+        return obj
+    if isinstance(obj, Table):
+        return Section(name or obj.caption, (obj,))
+    if isinstance(obj, ForceIdentification):
+        return _identification(name, obj, truth)
+    if isinstance(obj, StaticWeights):
+        return _static(name, obj, truth)
+    if isinstance(obj, InfluenceLine):
+        return _influence(name, obj)
+    if isinstance(obj, Record):
+        return _record(name, obj, length)
+    if isinstance(obj, Calibration):
+        return _calibration(name, obj, start, true_bridge)
+    if isinstance(obj, Bridge):
+        return _bridge(name, obj)
+    raise InputError(f"cannot report a {type(obj).__name__}")
+
+
+def _read_csv_table(path: Path) -> Table:
+    try:
+        with open(path, newline="", encoding="utf-8") as f:
+            rows = [r for r in csv.reader(f) if r]
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path}: cannot read: {exc}") from None
+    if not rows:
+        raise InputError(f"{path}: empty CSV file")
+    return Table(path.name, tuple(rows[0]), tuple(tuple(r) for r in rows[1:]))
+
+
+def _read_h5(path: Path):
+    from bwim.io import (
+        read_identification,
+        read_influence_line,
+        read_record,
+        read_static_weights,
+    )
+
+    last = None
+    for reader in (read_identification, read_static_weights, read_influence_line,
+                   read_record):
+        try:
+            return reader(path)
+        except InputError as exc:
+            if "holds a bwim" not in str(exc):
+                raise
+            last = exc
+    raise last
+
+
+def _expand(paths: Iterable[str | os.PathLike]) -> list[Path]:
+    out = []
+    for p in map(Path, paths):
+        if p.is_dir():
+            found = sorted(q for q in p.iterdir()
+                           if q.is_file() and q.suffix.lower() in RESULT_SUFFIXES
+                           and not q.name.startswith("."))
+            if not found:
+                raise InputError(f"{p}: no result files (.h5, .toml, .csv) in this folder")
+            out += found
+        elif not p.exists():
+            raise InputError(f"{p}: no such file")
+        else:
+            out.append(p)
+    return out
+
+
+def read_results(paths: Sequence[str | os.PathLike]) -> list[tuple[str, Any]]:
+    """(name, object) of each result file (folders expanded), in order."""
+    from bwim.io import load_bridge
+
+    out = []
+    for p in _expand(paths):
+        suffix = p.suffix.lower()
+        if suffix in (".h5", ".hdf5", ".hdf"):
+            out.append((p.name, _read_h5(p)))
+        elif suffix == ".toml":
+            out.append((p.name, load_bridge(p)))
+        elif suffix == ".csv":
+            out.append((p.name, _read_csv_table(p)))
+        else:
+            raise InputError(f"{p}: unknown result format {p.suffix!r}; use .h5, .toml or .csv")
+    return out
+
+
+def _png(fig) -> str:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=100)
+    return base64.b64encode(buf.getvalue()).decode("ascii")
+
+
+def _table_html(t: Table) -> str:
+    e = html.escape
+    head = "".join(f"<th>{e(h)}</th>" for h in t.header)
+    body = "".join("<tr>" + "".join(f"<td>{e(str(c))}</td>" for c in r) + "</tr>"
+                   for r in t.rows)
+    return (f"<table><caption>{e(t.caption)}</caption><thead><tr>{head}</tr></thead>"
+            f"<tbody>{body}</tbody></table>")
+
+
+_STYLE = """
+body{font-family:system-ui,sans-serif;max-width:1000px;margin:2em auto;padding:0 1em;
+color:#222}
+h1{font-size:1.6em}h2{font-size:1.25em;border-bottom:1px solid #ccc;padding-bottom:.2em;
+margin-top:2em}
+table{border-collapse:collapse;margin:1em 0;font-size:.9em}
+caption{text-align:left;font-weight:600;padding-bottom:.3em}
+th,td{border:1px solid #ccc;padding:.25em .6em;text-align:right}
+th{background:#f2f2f2}figure{margin:1em 0}img{max-width:100%}
+figcaption{font-size:.85em;color:#555}.note{color:#444}
+"""
+
+
+def render_html(title: str, sections: Sequence[Section], *, intro: str = "") -> str:
+    """The report as one self-contained HTML page."""
+    e = html.escape
+    stamp = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
+    parts = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
+             f"<title>{e(title)}</title><style>{_STYLE}</style></head><body>",
+             f"<h1>{e(title)}</h1>", f'<p class="note">bwim report, {stamp}.</p>']
+    if intro:
+        parts.append(f"<p>{e(intro)}</p>")
+    for s in sections:
+        parts.append(f"<section><h2>{e(s.title)}</h2>")
+        if s.note:
+            parts.append(f'<p class="note">{e(s.note)}</p>')
+        parts += [_table_html(t) for t in s.tables]
+        for caption, fig in s.figures:
+            parts.append(f'<figure><img alt="{e(caption)}" src="data:image/png;base64,'
+                         f'{_png(fig)}"><figcaption>{e(caption)}</figcaption></figure>')
+        parts.append("</section>")
+    parts.append("</body></html>")
+    return "\n".join(parts) + "\n"
+
+
+def write_report(path: str | os.PathLike, sections: Sequence[Section], *,
+                 title: str = "bwim report", intro: str = "") -> Path:
+    """Render ``sections`` and write the page atomically to ``path``; returns the path."""
+    from bwim.io import atomic_open, check_writable
+
+    target = check_writable(path)
+    page = render_html(title, sections, intro=intro)
+    with atomic_open(target) as f:
+        f.write(page)
+    return target
