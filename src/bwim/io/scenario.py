@@ -78,25 +78,18 @@ from __future__ import annotations
 import dataclasses
 import os
 import re
+import tomllib
 from collections.abc import Callable, Mapping
 from dataclasses import MISSING, dataclass, field, fields
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
-from bwim.errors import BwimError, InputError
+from bwim.errors import InputError
 from bwim.io.atomic import atomic_open
 from bwim.io.toml_writer import to_toml
 from bwim.vehicles import NAMED_VEHICLES
 from bwim.vehicles.types import HalfCar, MovingForces, SprungMass, TractorSemitrailer, Truck3D
-
-try:
-    import tomllib
-except ModuleNotFoundError:  # pragma: no cover - Python 3.10
-    try:
-        import tomli as tomllib
-    except ModuleNotFoundError:
-        tomllib = None
 
 __all__ = [
     "VEHICLE_TYPES",
@@ -739,8 +732,6 @@ def read_toml(path: str | os.PathLike) -> dict[str, Any]:
         unreadable file.
     """
     p = Path(path)
-    if tomllib is None:  # pragma: no cover - Python 3.10 without tomli
-        raise BwimError("reading TOML needs Python 3.11 or the tomli package")
     try:
         data = p.read_bytes()
     except FileNotFoundError:

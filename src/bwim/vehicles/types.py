@@ -11,6 +11,7 @@ are values **per wheel** (each axle has two wheels).  Units: kg, kg m², N/m, N 
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -46,7 +47,7 @@ def _spacings(value) -> np.ndarray:
     return sp
 
 
-class _Vehicle:
+class _Vehicle(ABC):
     """Shared conveniences (the subclasses are frozen dataclasses)."""
 
     axle_spacings: np.ndarray
@@ -73,8 +74,9 @@ class _Vehicle:
         return Passage(speed=speed, lane=lane, axle_spacings=self.axle_spacings,
                        track_width=self.track_width, delay=delay)
 
-    def model(self) -> VehicleModel:  # pragma: no cover - overridden
-        raise NotImplementedError
+    @abstractmethod
+    def model(self) -> VehicleModel:
+        """The vehicle in the common linear form."""
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
