@@ -7,6 +7,7 @@ from bwim.calibration.problem import (
     ParameterSpace,
     StaticObjective,
     neighbour_map,
+    peak_weights,
 )
 
 __all__ = [
@@ -21,4 +22,5 @@ __all__ = [
     "calibrate",
     "identifiability",
     "neighbour_map",
+    "peak_weights",
 ]

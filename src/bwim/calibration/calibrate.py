@@ -232,6 +232,7 @@ def calibrate(
     bounds: tuple[float, float] = (0.2, 5.0),
     substructure: bool | None = None,
     shared_girders: bool = True,
+    weights=None,
     n_modes: int | None = None,
     n_jobs: int = 1,
     client=None,
@@ -277,6 +278,10 @@ def calibrate(
     shared_girders : bool
         Calibrate one ``E_girder`` and one ``mu_girder`` for all girders (the paper's
         §5.4; identical girders), rather than one per girder.
+    weights : sequence of arrays, optional
+        Per-record, per-channel weights of the squared residuals (default 1, the paper's
+        plain sum); :func:`~bwim.calibration.problem.peak_weights` gives the
+        maximum-likelihood weights for noise proportional to each channel's peak.
     n_modes : int, optional
         Modes of the dynamic simulations (default: up to sampling_rate / 8).
     n_jobs, client
@@ -352,21 +357,21 @@ def calibrate(
     mass = tuple(u for u in unknowns if u in MASS)
     if stiff:
         space = ParameterSpace(current, stiff, shared)
-        obj = StaticObjective(space, records, vehicle, base=current)
+        obj = StaticObjective(space, records, vehicle, base=current, weights=weights)
         n = space.n
         run("stiffness (static)", space, obj, obj.residuals,
             lambda th, o=obj: _static_jacobian(o, th), pop_s or 200, ev_s, True)
     if mass:
         space = ParameterSpace(current, mass, shared)
         obj = DynamicObjective(space, records, vehicle, road, current, approach=approach,
-                               n_modes=n_modes)
+                               n_modes=n_modes, weights=weights)
         n = space.n
         run("mass (dynamic)", space, obj, obj.residuals, None,
             pop_d or int(np.clip(10 * n, 40, 100)), ev_d, True)
     if refine is Refine.LM:
         space = ParameterSpace(current, unknowns, shared)
         obj = DynamicObjective(space, records, vehicle, road, current, approach=approach,
-                               n_modes=n_modes)
+                               n_modes=n_modes, weights=weights)
         x0 = space.vector()
         t = time.perf_counter()
         out = _lm_stage("joint refinement (dynamic)", obj.residuals, None, space,
@@ -397,13 +402,14 @@ def _static_jacobian(obj: StaticObjective, theta: np.ndarray) -> np.ndarray:
     space = obj.space
     bridge = space.bridge(theta, obj.base)
     blocks = []
-    for rec in obj.records:
+    for rec, w in zip(obj.records, obj.weights, strict=True):
         p = rec.passage
         x = p.wheel_x(rec.time)
         y = np.broadcast_to(p.wheel_y, x.shape) if bridge.is_plate else None
         sens = static_sensitivities(bridge, rec.sensors, x, y, obj.static_wheels[None, :],
                                     wrt=space.names)
-        vals = sens.values.reshape(-1, sens.values.shape[2])
+        weighted = sens.values * np.sqrt(w)[None, :, None]  # rows as in residuals()
+        vals = weighted.reshape(-1, sens.values.shape[2])
         names = np.asarray(sens.names)
         cols = [vals[:, names == n].sum(axis=1, keepdims=True) if n in space.shared
                 else vals[:, names == n] for n in space.names]

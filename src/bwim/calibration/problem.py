@@ -39,6 +39,7 @@ __all__ = [
     "StaticObjective",
     "measurement_points",
     "neighbour_map",
+    "peak_weights",
 ]
 
 
@@ -157,14 +158,46 @@ def _check_records(records: Sequence[Record], vehicle) -> list[Record]:
     return records
 
 
+def peak_weights(records: Sequence[Record]) -> list[np.ndarray]:
+    """Channel weights ``1 / peak²`` of each record: the maximum-likelihood weighting when
+    each channel's noise is proportional to its peak reading (the paper's §5.2 model)."""
+    out = []
+    for rec in records:
+        peak = np.abs(rec.data).max(axis=0)
+        out.append(1.0 / np.where(peak > 0, peak, 1.0) ** 2)
+    return out
+
+
+def _channel_weights(weights, records) -> list[np.ndarray]:
+    if weights is None:
+        return [np.ones(r.data.shape[1]) for r in records]
+    weights = list(weights)
+    if len(weights) != len(records):
+        raise InputError(f"channel weights needed for {len(records)} record(s), got "
+                         f"{len(weights)}")
+    out = []
+    for k, (w, r) in enumerate(zip(weights, records, strict=True)):
+        w = np.asarray(w, dtype=float)
+        if w.shape != (r.data.shape[1],) or np.any(w < 0) or not np.all(np.isfinite(w)):
+            raise InputError(f"channel weights of record {k} must be {r.data.shape[1]} "
+                             "non-negative numbers")
+        out.append(w)
+    return out
+
+
 class StaticObjective:
-    """Pseudo-static misfit of trial stiffness parameters (see module docstring)."""
+    """Pseudo-static misfit of trial stiffness parameters (see module docstring).
+
+    ``weights`` (one array per record, one weight per channel) weight the squared
+    residuals; default 1 (the paper's plain sum).
+    """
 
     def __init__(self, space: ParameterSpace, records: Sequence[Record], vehicle,
-                 base: Bridge | None = None):
+                 base: Bridge | None = None, weights=None):
         self.space = space
         self.base = space.start if base is None else base
         self.records = _check_records(records, vehicle)
+        self.weights = _channel_weights(weights, self.records)
         model = self.base.model
         self._sensor_rows = []
         self._loads = []
@@ -210,29 +243,33 @@ class StaticObjective:
         return out
 
     def parts(self, theta: np.ndarray) -> np.ndarray:
-        """Squared misfit of each measurement point, shape (n_parts,)."""
+        """Weighted squared misfit of each measurement point, shape (n_parts,)."""
         out = np.zeros(self.n_parts)
-        for pred, d, part in zip(self.predicted(theta), self._data, self._parts, strict=True):
-            np.add.at(out, part, ((pred - d) ** 2).sum(axis=0))
+        for pred, d, part, w in zip(self.predicted(theta), self._data, self._parts,
+                                    self.weights, strict=True):
+            np.add.at(out, part, w * ((pred - d) ** 2).sum(axis=0))
         return out
 
     def residuals(self, theta: np.ndarray) -> np.ndarray:
-        return np.concatenate([(p - d).ravel() for p, d in
-                               zip(self.predicted(theta), self._data, strict=True)])
+        return np.concatenate([((p - d) * np.sqrt(w)).ravel() for p, d, w in
+                               zip(self.predicted(theta), self._data, self.weights,
+                                   strict=True)])
 
     def __call__(self, theta: np.ndarray) -> np.ndarray:
         return self.parts(theta)
 
 
 class DynamicObjective:
-    """Dynamic misfit of trial parameters: the calibration crossings re-simulated."""
+    """Dynamic misfit of trial parameters: the calibration crossings re-simulated
+    (channel ``weights`` as in :class:`StaticObjective`)."""
 
     def __init__(self, space: ParameterSpace, records: Sequence[Record], vehicle,
                  road: RoadProfile | None, base: Bridge, *, approach: float,
-                 n_modes: int | None = None):
+                 n_modes: int | None = None, weights=None):
         self.space = space
         self.base = base
         self.records = _check_records(records, vehicle)
+        self.weights = _channel_weights(weights, self.records)
         self._prepared = []
         self._parts = []
         for rec in self.records:
@@ -266,14 +303,15 @@ class DynamicObjective:
 
     def parts(self, theta: np.ndarray) -> np.ndarray:
         out = np.zeros(self.n_parts)
-        for pred, rec, part in zip(self.predicted(theta), self.records, self._parts,
-                                   strict=True):
-            np.add.at(out, part, ((pred - rec.data) ** 2).sum(axis=0))
+        for pred, rec, part, w in zip(self.predicted(theta), self.records, self._parts,
+                                      self.weights, strict=True):
+            np.add.at(out, part, w * ((pred - rec.data) ** 2).sum(axis=0))
         return out
 
     def residuals(self, theta: np.ndarray) -> np.ndarray:
-        return np.concatenate([(p - r.data).ravel() for p, r in
-                               zip(self.predicted(theta), self.records, strict=True)])
+        return np.concatenate([((p - r.data) * np.sqrt(w)).ravel() for p, r, w in
+                               zip(self.predicted(theta), self.records, self.weights,
+                                   strict=True)])
 
     def __call__(self, theta: np.ndarray) -> np.ndarray:
         return self.parts(theta)
