@@ -93,20 +93,9 @@ def _out_folder(path: str | Path) -> Path:
 
 def _record_paths(items: Sequence[str]) -> list[Path]:
     """Record files, folders expanded to the records they hold (sorted)."""
-    out: list[Path] = []
-    for item in items:
-        p = Path(item)
-        if p.is_dir():
-            found = sorted(q for q in p.iterdir() if q.is_file() and not q.name.startswith(".")
-                           and q.suffix.lower() in _RECORD_SUFFIXES)
-            if not found:
-                raise InputError(f"{p}: no records (.h5 or .csv files) in this folder")
-            out += found
-        elif not p.exists():
-            raise InputError(f"{p}: no such file")
-        else:
-            out.append(p)
-    return out
+    from bwim.io.paths import expand_paths
+
+    return expand_paths(items, _RECORD_SUFFIXES, what="records")
 
 
 def _load_records(paths: Sequence[Path], scenario) -> list:

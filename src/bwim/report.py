@@ -35,6 +35,7 @@ import numpy as np
 
 from bwim.conventions import KILONEWTON
 from bwim.errors import InputError
+from bwim.io.paths import expand_paths
 
 __all__ = ["Section", "Table", "read_results", "render_html", "section", "write_report"]
 
@@ -257,20 +258,7 @@ def _read_h5(path: Path):
 
 
 def _expand(paths: Iterable[str | os.PathLike]) -> list[Path]:
-    out = []
-    for p in map(Path, paths):
-        if p.is_dir():
-            found = sorted(q for q in p.iterdir()
-                           if q.is_file() and q.suffix.lower() in RESULT_SUFFIXES
-                           and not q.name.startswith("."))
-            if not found:
-                raise InputError(f"{p}: no result files (.h5, .toml, .csv) in this folder")
-            out += found
-        elif not p.exists():
-            raise InputError(f"{p}: no such file")
-        else:
-            out.append(p)
-    return out
+    return expand_paths(paths, RESULT_SUFFIXES, what="result files")
 
 
 def read_results(paths: Sequence[str | os.PathLike]) -> list[tuple[str, Any]]:
