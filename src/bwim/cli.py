@@ -428,15 +428,12 @@ def _bridge_summary(modes_n: int) -> None:
 
 
 #: Demo settings: (approach m, CE populations, convergences); --quick for tests.
-_DEMO = {False: (30.0, (100, 24), 2), True: (10.0, (60, 16), 1)}
 #: The second (weighed) vehicle: a 3-axle rigid truck at another speed, on another road.
-_DEMO_SPEED, _DEMO_ROAD_SEED = 15.0, 2
 
 
 def _demo(args: argparse.Namespace) -> int:
     from bwim import report
-    from bwim.calibration import calibrate
-    from bwim.dynamics.simulate import simulate
+    from bwim.demo import DEMO_ROAD_SEED, DEMO_SPEED, SETTINGS, run_demo
     from bwim.io import (
         atomic_output,
         save_bridge,
@@ -445,38 +442,40 @@ def _demo(args: argparse.Namespace) -> int:
         write_record,
         write_static_weights,
     )
-    from bwim.mfi import force_errors, identify_forces
-    from bwim.reproduce import START
-    from bwim.vehicles import three_axle_truck
-    from bwim.wim import calibrate_influence_line, weigh_static
+    from bwim.mfi import force_errors
 
     if not 1 <= args.modes <= 50:
         raise InputError(f"--modes must be between 1 and 50, got {args.modes}")
     out = _out_folder(args.out)
     t0 = time.perf_counter()
     _bridge_summary(args.modes)
+    settings = SETTINGS[args.quick]
+    approach, population = settings.approach, settings.population
+    steps = {
+        1: f"\n1. Calibration crossing: the paper's {paper.truck().n_axles}-axle truck at "
+           f"{paper.SPEED:g} m/s, lane {paper.LANE:g} m, road class C, {approach:g} m "
+           "approach (vehicle-bridge interaction simulated on the true bridge)",
+        2: "2. Calibrating E_x, E_y, μ by Cross-Entropy from E_x×0.8, E_y×1.2, μ×1.25 "
+           f"(populations {population[0]}/{population[1]}) …",
+        3: None,
+    }
 
-    approach, population, convergences = _DEMO[args.quick]
-    truth = paper.slab_bridge()
-    sensors = paper.sensors()
-    unknowns = ("E_x", "E_y", "mu")
-    start = truth.with_params(**{u: truth.params[u] * START[u] for u in unknowns})
-    road = paper.road(1, approach=approach)
-    print(f"\n1. Calibration crossing: the paper's {paper.truck().n_axles}-axle truck at "
-          f"{paper.SPEED:g} m/s, lane {paper.LANE:g} m, road class C, {approach:g} m "
-          "approach (vehicle-bridge interaction simulated on the true bridge)", flush=True)
-    cal_rec = simulate(truth, paper.truck(), speed=paper.SPEED, lane=paper.LANE,
-                       sensors=sensors, road=road, approach=approach)
-    print("2. Calibrating E_x, E_y, μ by Cross-Entropy from E_x×0.8, E_y×1.2, μ×1.25 "
-          f"(populations {population[0]}/{population[1]}) …", flush=True)
+    def on_step(n, _text):
+        if steps[n]:
+            print(steps[n], flush=True)
+
     progress = _CalibrationProgress()
     try:
-        cal = calibrate(start, [cal_rec], paper.truck(), road=road, approach=approach,
-                        unknowns=unknowns, seed=args.seed, method="ce",
-                        population=population, convergences=convergences, n_jobs=args.jobs,
-                        callback=progress)
+        result = run_demo(quick=args.quick, seed=args.seed, n_jobs=args.jobs,
+                          callback=progress, on_step=on_step)
     finally:
         progress.close()
+    truth, start, cal = result.truth, result.start, result.calibration
+    cal_rec, rec = result.calibration_record, result.second_record
+    ident, ident_start = result.identified, result.identified_start
+    il, moses = result.influence_line, result.moses
+    unknowns = tuple(cal.params)
+    vehicle = rec.passage
     rows = []
     for u in unknowns:
         s0, c, t = start.params[u][0], cal.params[u][0], truth.params[u][0]
@@ -486,18 +485,10 @@ def _demo(args: argparse.Namespace) -> int:
                   "uncertainty"), rows,
                  f"   {cal.nfev} evaluations, {cal.wall_time:.1f} s:"))
 
-    vehicle = three_axle_truck()
-    print(f"\n3. A second vehicle: {vehicle.n_axles}-axle rigid truck at {_DEMO_SPEED:g} m/s "
-          f"over another stretch of road (seed {_DEMO_ROAD_SEED}); forces identified with "
+    print(f"\n3. A second vehicle: {vehicle.n_axles}-axle rigid truck at {DEMO_SPEED:g} m/s "
+          f"over another stretch of road (seed {DEMO_ROAD_SEED}); forces identified with "
           "the calibrated and the starting model (longitudinal strains, L-curve λ), and "
           "Moses with the influence line calibrated from crossing 1", flush=True)
-    rec = simulate(truth, vehicle, speed=_DEMO_SPEED, lane=paper.LANE, sensors=sensors,
-                   road=paper.road(_DEMO_ROAD_SEED, approach=approach), approach=approach)
-    strain_x = [s for s in sensors if s.kind.value == "strain_x"]
-    ident = identify_forces(cal.bridge, rec.channels(strain_x))
-    ident_start = identify_forces(start, rec.channels(strain_x))
-    il = calibrate_influence_line([cal_rec], paper.truck())
-    moses = weigh_static(rec, il)
     true = rec.truth
     header = ("method", *(f"axle {i + 1} (kN)" for i in range(vehicle.n_axles)), "GVW (kN)",
               *(f"axle {i + 1} err %" for i in range(vehicle.n_axles)), "GVW err %")
