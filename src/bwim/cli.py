@@ -521,7 +521,7 @@ def _demo(args: argparse.Namespace) -> int:
         report.section(ident, "second vehicle, calibrated model", truth=true),
         report.section(ident_start, "second vehicle, starting (uncalibrated) model",
                        truth=true),
-        report.section(il, "calibrated from crossing 1"),
+        report.section(il, "calibrated from crossing 1", true_bridge=truth),
         report.section(moses, "second vehicle", truth=true),
     ]
     for s in sections:

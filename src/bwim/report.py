@@ -107,8 +107,9 @@ def _static(name: str, weights, truth) -> Section:
                    (("Measured readings and Moses' static fit", plot_static_fit(weights)),))
 
 
-def _influence(name: str, il) -> Section:
+def _influence(name: str, il, bridge=None) -> Section:
     from bwim.plots.wim import plot_influence_line
+    from bwim.wim import model_influence_line
 
     lo, hi = il.support
     table = Table("Influence line", ("source", "channels", "lane (m)", "support (m)",
@@ -116,8 +117,10 @@ def _influence(name: str, il) -> Section:
                   ((il.source or "–", ", ".join(il.channel_names), f"{il.lane:g}",
                     f"{lo:g} … {hi:g}", f"{il.spacing:.3g}",
                     "–" if il.residual is None else f"{il.residual:.3g}"),))
+    ref = None if bridge is None else model_influence_line(bridge, like=il)
+    figure = plot_influence_line(il, reference=ref)
     return Section(f"Influence line: {name}", (table,),
-                   (("Influence line per kN of axle load", plot_influence_line(il)),))
+                   (("Influence line per kN of axle load", figure),))
 
 
 def _record(name: str, record, length) -> Section:
@@ -199,7 +202,8 @@ def section(obj: Any, name: str = "", *, truth=None, length: float | None = None
     length : float, optional
         Span, m, to shade when a vehicle is on the deck in record plots.
     start, true_bridge : Bridge, optional
-        For a calibration: the starting model and the true one (simulations).
+        For a calibration: the starting model and the true one (simulations); for an
+        influence line, ``true_bridge`` adds its FE static line as the reference.
     """
     from bwim.calibration import Calibration
     from bwim.fe.bridge import Bridge
@@ -216,7 +220,7 @@ def section(obj: Any, name: str = "", *, truth=None, length: float | None = None
     if isinstance(obj, StaticWeights):
         return _static(name, obj, truth)
     if isinstance(obj, InfluenceLine):
-        return _influence(name, obj)
+        return _influence(name, obj, true_bridge)
     if isinstance(obj, Record):
         return _record(name, obj, length)
     if isinstance(obj, Calibration):
