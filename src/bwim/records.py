@@ -25,7 +25,12 @@ import numpy as np
 from bwim.errors import InputError, require_finite, require_positive
 from bwim.sensors import Sensor
 
-__all__ = ["Passage", "Record", "Truth", "VBIConvergence"]
+__all__ = ["Passage", "Record", "Truth", "VBIConvergence", "axle_offsets"]
+
+
+def axle_offsets(spacings: np.ndarray) -> np.ndarray:
+    """Distance of each axle behind the first, m, from the axle spacings."""
+    return np.concatenate([[0.0], np.cumsum(spacings)])
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -72,7 +77,7 @@ class Passage:
     @property
     def axle_offsets(self) -> np.ndarray:
         """Distance of each axle behind the first, m, shape (n_axles,)."""
-        return np.concatenate([[0.0], np.cumsum(self.axle_spacings)])
+        return axle_offsets(self.axle_spacings)
 
     @property
     def wheels_per_axle(self) -> int:

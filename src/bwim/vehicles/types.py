@@ -18,7 +18,7 @@ import numpy as np
 
 from bwim.conventions import GRAVITY
 from bwim.errors import InputError, require_finite, require_positive
-from bwim.records import Passage
+from bwim.records import Passage, axle_offsets
 from bwim.vehicles.model import BodySpec, VehicleModel, WheelSpec, assemble
 
 __all__ = ["HalfCar", "MovingForces", "SprungMass", "TractorSemitrailer", "Truck3D"]
@@ -59,7 +59,7 @@ class _Vehicle(ABC):
 
     @property
     def axle_offsets(self) -> np.ndarray:
-        return np.concatenate([[0.0], np.cumsum(self.axle_spacings)])
+        return axle_offsets(self.axle_spacings)
 
     @property
     def length(self) -> float:
@@ -73,6 +73,13 @@ class _Vehicle(ABC):
     def passage(self, speed: float, lane: float = 0.0, delay: float = 0.0) -> Passage:
         return Passage(speed=speed, lane=lane, axle_spacings=self.axle_spacings,
                        track_width=self.track_width, delay=delay)
+
+    def _wheels(self, body: int, *, two_d: bool) -> list[WheelSpec]:
+        """The wheels of every axle, hung from ``body`` (per-axle parameter arrays)."""
+        return _axle_wheels(self.n_axles, self.axle_offsets, self.track_width, body,
+                            self.wheel_mass, self.suspension_stiffness,
+                            self.suspension_damping, self.tyre_stiffness, self.tyre_damping,
+                            two_d=two_d)
 
     @abstractmethod
     def model(self) -> VehicleModel:
@@ -207,11 +214,7 @@ class HalfCar(_Vehicle):
     def model(self) -> VehicleModel:
         body = BodySpec(mass=self.body_mass, cg_offset=self.cg_offset,
                         pitch_inertia=self.pitch_inertia)
-        wheels = _axle_wheels(self.n_axles, self.axle_offsets, self.track_width, 0,
-                              self.wheel_mass, self.suspension_stiffness,
-                              self.suspension_damping, self.tyre_stiffness, self.tyre_damping,
-                              two_d=True)
-        return assemble([body], wheels)
+        return assemble([body], self._wheels(0, two_d=True))
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -261,11 +264,7 @@ class Truck3D(_Vehicle):
     def model(self) -> VehicleModel:
         body = BodySpec(mass=self.body_mass, cg_offset=self.cg_offset,
                         pitch_inertia=self.pitch_inertia, roll_inertia=self.roll_inertia)
-        wheels = _axle_wheels(self.n_axles, self.axle_offsets, self.track_width, 0,
-                              self.wheel_mass, self.suspension_stiffness,
-                              self.suspension_damping, self.tyre_stiffness, self.tyre_damping,
-                              two_d=False)
-        return assemble([body], wheels)
+        return assemble([body], self._wheels(0, two_d=False))
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -318,12 +317,7 @@ class TractorSemitrailer(_Vehicle):
         wheels = []
         for body, axles in ((0, range(self.n_tractor_axles)),
                             (1, range(self.n_tractor_axles, self.n_axles))):
-            for w in _axle_wheels(self.n_axles, self.axle_offsets, self.track_width, body,
-                                  self.wheel_mass, self.suspension_stiffness,
-                                  self.suspension_damping, self.tyre_stiffness,
-                                  self.tyre_damping, two_d=False):
-                if w.axle in axles:
-                    wheels.append(w)
+            wheels += [w for w in self._wheels(body, two_d=False) if w.axle in axles]
         hitch = ((0, self.hitch_offset, 0.0), (1, self.hitch_offset, 0.0))
         return assemble([tractor, trailer], wheels, constraints=[hitch], roll_links=[(0, 1)])
 
