@@ -325,6 +325,26 @@ def test_assess_reports_what_it_leaves_out():
         assert needle in text
 
 
+def test_overall_class_is_the_worst_criterion():
+    """Weight moved between the axles of the tridem (sum kept): gross weight and group
+    errors stay small, axles of the group are poor; the overall class is theirs."""
+    rng = np.random.default_rng(11)
+    ref, wim = [], []
+    w = np.array(TRUCK5["axle_weights"])
+    for k in range(40):
+        f = 1 + 0.01 * rng.standard_normal(5)
+        shift = 0.15 * rng.standard_normal() * w[2]
+        weights = w * f + np.array([0.0, 0.0, shift, -shift, 0.0])
+        ref.append(_ref(f"v{k}", TRUCK5))
+        wim.append(SummaryRow(record=f"v{k}", gvw=weights.sum(), axle_weights=weights,
+                              n_axles=5))
+    r = assess(wim, ref)
+    gross, of_group = r.criterion("gross_weight"), r.criterion("axle_of_group")
+    assert gross.class_value < of_group.class_value
+    assert r.overall_class == of_group.class_name
+    assert r.overall_value == of_group.class_value == max(c.class_value for c in r.criteria)
+
+
 def test_assess_without_axle_groups_skips_them():
     ref = [ReferenceRow(record=f"r{k}", gvw=200e3, axle_weights=(80e3, 120e3),
                         axle_spacings=(5.0,)) for k in range(5)]
