@@ -80,6 +80,8 @@ class Sensor:
                 object.__setattr__(self, "y", 0.0)
         if self.y is not None:
             object.__setattr__(self, "y", require_finite("Sensor.y", self.y))
+        if self.name is None:
+            object.__setattr__(self, "name", "")
         if not isinstance(self.name, str):
             raise InputError(f"Sensor.name must be a string, got {self.name!r}")
         try:
