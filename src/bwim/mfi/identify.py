@@ -86,7 +86,7 @@ class ForceIdentification:
 def _auto_unknowns(bridge: Bridge, record: Record) -> ForceUnknowns:
     if not bridge.is_plate or all(p.track_width is None for p in record.passages):
         return ForceUnknowns.AXLE
-    ys = {round(s.y, 6) for s in record.sensors if s.kind.is_strain}
+    ys = {round(s.y, 6) for s in record.sensors if s.kind.is_strain and s.y is not None}
     return ForceUnknowns.WHEEL if len(ys) >= 2 else ForceUnknowns.AXLE
 
 
