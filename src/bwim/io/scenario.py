@@ -28,6 +28,7 @@ Contract
   ``title``
       optional free text.
   ``[bridge]``
+      (optional: weighing with influence lines needs no FE model)
       ``kind = "plate" | "beam"``, ``length``.  Plate: ``width``, ``thickness``, mesh
       ``nx``/``ny`` or explicit ``x_lines``/``y_lines`` (optionally ``x_through``/
       ``y_through``: coordinates the grid must pass through, such as girder lines),
@@ -51,7 +52,23 @@ Contract
       then y.  ``name`` is a template with the fields ``{kind}``, ``{short}`` (``x``,
       ``y`` or ``w``), ``{x}``, ``{y}`` and ``{i}`` (index in the entry), for example
       ``"{short}{x:g}_{y:g}"``; without a name, bwim's default names are used.
+      Without ``x`` (logger channels weighed with influence lines, no FE model):
+      ``name`` is a list of channel names, one sensor each, with an optional list ``y``
+      of transverse positions (m) used to give the lateral position in metres.
+  ``[logger]``
+      a logger's text export: ``columns`` names every column in order (``"-"`` skips
+      one, ``"time"`` is the time in s); [``delimiter`` = auto: ``","``, ``";"``,
+      ``"tab"``, ``"whitespace"``], [``header`` = auto], [``sampling_rate``: Hz, when there
+      is no time column], [``scale`` = 1: logger units to strain, one number or one per
+      channel], [``decimal`` = "."], [``skip_lines`` = 0].  Record files are then read
+      with :func:`bwim.io.read_logger` whatever their extension.
+  ``[axle_detectors]``
+      ``channels`` = [first, second] (logger channels, in the order traffic meets them),
+      ``distance`` (m), [``position`` = 0: the first detector's x in the influence-line
+      frame], [``max_spacing``: the largest axle spacing within one vehicle, m].
   ``[vehicle]``
+      ``axle_loads`` (static, N) with ``axle_spacings`` (m): a calibration truck known by
+      its weights only (a :class:`bwim.MovingForces`); or
       ``name`` = a named vehicle (:data:`bwim.vehicles.NAMED_VEHICLES`), or ``type`` =
       ``"moving_forces" | "sprung_mass" | "half_car" | "truck3d" |
       "tractor_semitrailer"`` with that class's parameters (``truck3d`` also takes
