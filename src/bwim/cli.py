@@ -45,9 +45,10 @@ from pathlib import Path
 import numpy as np
 
 from bwim import paper
-from bwim.conventions import KILONEWTON, MICROSTRAIN
+from bwim.conventions import MICROSTRAIN
 from bwim.errors import BwimError, InputError
 from bwim.loads import PointLoad
+from bwim.tables import Table, format_kn, format_kn_each, format_pct, param_values
 
 __all__ = ["main"]
 
@@ -125,23 +126,6 @@ def _bridge(args: argparse.Namespace, scenario):
     return load_bridge(args.bridge) if args.bridge else build_bridge(scenario)
 
 
-def _table(header: Sequence[str], rows: Sequence[Sequence[str]], title: str = "") -> str:
-    cells = [list(header), *[list(map(str, r)) for r in rows]]
-    widths = [max(len(r[i]) for r in cells) for i in range(len(header))]
-    line = "  ".join(h.rjust(w) for h, w in zip(header, widths, strict=True))
-    out = ([title] if title else []) + [line, "-" * len(line)]
-    out += ["  ".join(c.rjust(w) for c, w in zip(r, widths, strict=True)) for r in cells[1:]]
-    return "\n".join(out)
-
-
-def _kn(values) -> list[str]:
-    return [f"{v / KILONEWTON:.1f}" for v in np.atleast_1d(values)]
-
-
-def _pct(value: float, ref: float) -> str:
-    return f"{100.0 * (value / ref - 1.0):+.2f}"
-
-
 def _write_csv(path: Path, header: Sequence[str], rows: Sequence[Sequence]) -> None:
     from bwim.io import atomic_open
 
@@ -188,24 +172,14 @@ def _simulate(args: argparse.Namespace) -> int:
           f"{record.time.size} samples at {record.sampling_rate:g} Hz "
           f"({time.perf_counter() - t0:.1f} s)")
     if record.truths:
-        print(f"true static axle loads (kN): {', '.join(_kn(record.truth.static_axle_loads))}; "
-              f"GVW {record.truth.gvw / KILONEWTON:.1f} kN")
+        print("true static axle loads (kN): "
+              f"{', '.join(format_kn_each(record.truth.static_axle_loads))}; "
+              f"GVW {format_kn(record.truth.gvw)} kN")
     print(f"record: {out}")
     return 0
 
 
 # --- calibrate -------------------------------------------------------------------------------
-def _param_rows(start: dict, cal) -> list[tuple[str, ...]]:
-    rows = []
-    for key, values in cal.params.items():
-        for z, v in enumerate(np.atleast_1d(values)):
-            s0 = np.atleast_1d(start[key])[z]
-            u = np.atleast_1d(cal.uncertainty[key])[z]
-            name = key if np.size(values) == 1 else f"{key}[{z}]"
-            rows.append((name, f"{s0:.5g}", f"{v:.5g}", f"± {u:.3g}", _pct(v, s0)))
-    return rows
-
-
 def _calibrate(args: argparse.Namespace) -> int:
     from bwim.calibration import calibrate
     from bwim.io import build_bridge, build_road, build_vehicle, load_scenario, save_bridge
@@ -231,13 +205,15 @@ def _calibrate(args: argparse.Namespace) -> int:
         progress.close()
     save_bridge(cal.bridge, out, title=f"calibrated from {len(records)} record(s) of "
                 f"{scenario.title or scenario.source}")
-    print(_table(("parameter", "start", "calibrated", "uncertainty", "change %"),
-                 _param_rows(start.params, cal),
-                 f"Calibrated parameters (SI: Pa, kg/m²), {len(records)} record(s):"))
+    rows = [(name, f"{s0:.5g}", f"{v:.5g}", f"± {u:.3g}", format_pct(v, s0))
+            for name, v, s0, u in param_values(cal.params, start.params, cal.uncertainty)]
+    print(Table(f"Calibrated parameters (SI: Pa, kg/m²), {len(records)} record(s):",
+                ("parameter", "start", "calibrated", "uncertainty", "change %"),
+                rows).render())
     print()
-    print(_table(("stage", "unknowns", "evaluations", "time (s)"),
-                 [(s.name, ", ".join(s.labels), str(s.nfev), f"{s.wall_time:.1f}")
-                  for s in cal.stages]))
+    print(Table("", ("stage", "unknowns", "evaluations", "time (s)"),
+                [(s.name, ", ".join(s.labels), s.nfev, f"{s.wall_time:.1f}")
+                 for s in cal.stages]).render())
     print(f"\nidentifiability: {cal.identifiability.summary().replace(chr(10), '; ')}")
     print(f"{cal.nfev} evaluations, wall time {cal.wall_time:.1f} s")
     print(f"calibrated model: {out}")
@@ -317,15 +293,15 @@ def _identify(args: argparse.Namespace) -> int:
         for v, p in enumerate(ident.passages):
             w = ident.axle_weights[a0:a0 + p.n_axles]
             a0 += p.n_axles
-            cells = _kn(w)
+            cells = format_kn_each(w)
             rows.append([path.name, v + 1, p.n_axles, *cells, *[""] * (n_max - len(cells)),
-                         f"{ident.gvw[v] / KILONEWTON:.2f}", f"{ident.lam:.4g}"])
-            shown.append((path.name, str(v + 1), ", ".join(cells),
-                           f"{ident.gvw[v] / KILONEWTON:.1f}", f"{ident.lam:.3g}"))
+                         format_kn(ident.gvw[v], 2), f"{ident.lam:.4g}"])
+            shown.append((path.name, v + 1, ", ".join(cells), format_kn(ident.gvw[v]),
+                          f"{ident.lam:.3g}"))
     _write_csv(summary, header, rows)
-    print(_table(("record", "vehicle", "axle weights (kN)", "GVW (kN)", "λ"), shown,
-                 f"Moving force identification, {len(records)} record(s), "
-                 f"{time.perf_counter() - t0:.1f} s:"))
+    print(Table(f"Moving force identification, {len(records)} record(s), "
+                f"{time.perf_counter() - t0:.1f} s:",
+                ("record", "vehicle", "axle weights (kN)", "GVW (kN)", "λ"), shown).render())
     print(f"summary: {summary}\nforces: {folder}/<record>_forces.h5")
     return 0
 
@@ -370,14 +346,13 @@ def _weigh(args: argparse.Namespace) -> int:
     rows, shown = [], []
     for path, stem, w in zip(paths, _unique_stems(paths), results, strict=True):
         write_static_weights(w, folder / f"{stem}_static.h5")
-        cells = _kn(w.axle_weights)
+        cells = format_kn_each(w.axle_weights)
         rows.append([path.name, w.n_axles, *cells, *[""] * (n_max - len(cells)),
-                     f"{w.gvw / KILONEWTON:.2f}", f"{w.residual:.4g}"])
-        shown.append((path.name, ", ".join(cells), f"{w.gvw / KILONEWTON:.1f}",
-                      f"{w.residual:.3g}"))
+                     format_kn(w.gvw, 2), f"{w.residual:.4g}"])
+        shown.append((path.name, ", ".join(cells), format_kn(w.gvw), f"{w.residual:.3g}"))
     _write_csv(folder / "summary.csv", header, rows)
-    print(_table(("record", "axle weights (kN)", "GVW (kN)", "residual"), shown,
-                 "Static weights (Moses):"))
+    print(Table("Static weights (Moses):",
+                ("record", "axle weights (kN)", "GVW (kN)", "residual"), shown).render())
     print(f"summary: {folder / 'summary.csv'}\nweights: {folder}/<record>_static.h5")
     return 0
 
@@ -474,16 +449,13 @@ def _demo(args: argparse.Namespace) -> int:
     cal_rec, rec = result.calibration_record, result.second_record
     ident, ident_start = result.identified, result.identified_start
     il, moses = result.influence_line, result.moses
-    unknowns = tuple(cal.params)
     vehicle = rec.passage
-    rows = []
-    for u in unknowns:
-        s0, c, t = start.params[u][0], cal.params[u][0], truth.params[u][0]
-        rows.append((u, f"{t:.5g}", f"{s0:.5g}", _pct(s0, t), f"{c:.5g}", _pct(c, t),
-                     f"{cal.uncertainty[u][0]:.3g}"))
-    print(_table(("parameter", "true", "start", "error %", "calibrated", "error %",
-                  "uncertainty"), rows,
-                 f"   {cal.nfev} evaluations, {cal.wall_time:.1f} s:"))
+    rows = [(u, f"{t:.5g}", f"{s0:.5g}", format_pct(s0, t), f"{c:.5g}", format_pct(c, t),
+             f"{sd:.3g}") for u, c, s0, t, sd in
+            param_values(cal.params, start.params, truth.params, cal.uncertainty)]
+    print(Table(f"   {cal.nfev} evaluations, {cal.wall_time:.1f} s:",
+                ("parameter", "true", "start", "error %", "calibrated", "error %",
+                 "uncertainty"), rows).render())
 
     print(f"\n3. A second vehicle: {vehicle.n_axles}-axle rigid truck at {DEMO_SPEED:g} m/s "
           f"over another stretch of road (seed {DEMO_ROAD_SEED}); forces identified with "
@@ -494,16 +466,16 @@ def _demo(args: argparse.Namespace) -> int:
               *(f"axle {i + 1} err %" for i in range(vehicle.n_axles)), "GVW err %")
 
     def row(name, w):
-        return (name, *_kn(w), f"{np.sum(w) / KILONEWTON:.1f}",
-                *(_pct(a, b) for a, b in zip(w, true.static_axle_loads, strict=True)),
-                _pct(np.sum(w), true.gvw))
+        return (name, *format_kn_each(w), format_kn(np.sum(w)),
+                *(format_pct(a, b) for a, b in zip(w, true.static_axle_loads, strict=True)),
+                format_pct(np.sum(w), true.gvw))
 
-    print(_table(header, [
+    print(Table("", header, [
         row("truth (static)", true.static_axle_loads),
         row("MFI, calibrated model", ident.axle_weights),
         row("MFI, starting model", ident_start.axle_weights),
         row("Moses, calibrated IL", moses.axle_weights),
-    ]))
+    ]).render())
     err = force_errors(ident, true)
     print("   MFI (calibrated) force RMS error, % of static axle load: "
           + ", ".join(f"{100 * e:.1f}" for e in err.rms_error) + f"; λ = {ident.lam:.3g}")
