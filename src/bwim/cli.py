@@ -408,7 +408,6 @@ def _bridge_summary(modes_n: int) -> None:
 
 def _demo(args: argparse.Namespace) -> int:
     from bwim import report
-    from bwim.demo import DEMO_ROAD_SEED, DEMO_SPEED, SETTINGS, run_demo
     from bwim.io import (
         atomic_output,
         save_bridge,
@@ -418,6 +417,7 @@ def _demo(args: argparse.Namespace) -> int:
         write_static_weights,
     )
     from bwim.mfi import force_errors
+    from bwim.paper.demo import DEMO_ROAD_SEED, DEMO_SPEED, SETTINGS, run_demo
 
     if not 1 <= args.modes <= 50:
         raise InputError(f"--modes must be between 1 and 50, got {args.modes}")
@@ -514,8 +514,8 @@ def _demo(args: argparse.Namespace) -> int:
 
 
 def _reproduce(args: argparse.Namespace) -> int:
-    from bwim import reproduce
     from bwim.io.atomic import atomic_output, check_writable
+    from bwim.paper import reproduce
 
     names = list(reproduce.CASES) if args.case == "all" else [args.case]
     out = Path(args.out)

@@ -8,7 +8,7 @@ the command line prints it and writes its files.  Every number is computed by th
 1. the paper's truck crosses the paper's slab (vehicle–bridge interaction on the true
    bridge) — the calibration record;
 2. E_x, E_y and μ are calibrated by Cross-Entropy from E_x × 0.8, E_y × 1.2, μ × 1.25
-   (:data:`bwim.reproduce.START`);
+   (:data:`bwim.paper.reproduce.START`);
 3. a second vehicle (the 3-axle rigid truck) crosses at another speed over another
    stretch of road; its forces are identified by MFI with the calibrated and with the
    starting model, and it is weighed by Moses with the influence line calibrated from the
@@ -24,8 +24,8 @@ from bwim.calibration import Calibration, calibrate
 from bwim.dynamics.simulate import simulate
 from bwim.fe.bridge import Bridge
 from bwim.mfi import ForceIdentification, identify_forces
+from bwim.paper.reproduce import START
 from bwim.records import Record
-from bwim.reproduce import START
 from bwim.vehicles import three_axle_truck
 from bwim.wim import InfluenceLine, StaticWeights, calibrate_influence_line, weigh_static
 
