@@ -14,6 +14,7 @@ Contract
   summaries (shown as tables); folders are expanded to the files they hold.
 * Tables are :class:`bwim.tables.Table` (re-exported here as :class:`Table`), rendered
   with :meth:`~bwim.tables.Table.to_html`.
+* :func:`figure_files` names the sections' figures for writing them as image files.
 * :func:`render_html` makes the page (figures as base64 PNG, nothing linked);
   :func:`write_report` writes it atomically.
 * Bad input is an :class:`~bwim.errors.InputError` naming the file.  This module is above
@@ -39,7 +40,8 @@ from bwim.errors import InputError
 from bwim.io.paths import expand_paths
 from bwim.tables import Table, format_kn, format_kn_each, format_pct, param_values
 
-__all__ = ["Section", "Table", "read_results", "render_html", "section", "write_report"]
+__all__ = ["Section", "Table", "figure_files", "read_results", "render_html", "section",
+           "write_report"]
 
 #: File suffixes :func:`read_results` picks up in a folder.
 RESULT_SUFFIXES = (".h5", ".hdf5", ".hdf", ".toml", ".csv")
@@ -254,6 +256,18 @@ def read_results(paths: Sequence[str | os.PathLike]) -> list[tuple[str, Any]]:
             out.append((p.name, _read_csv_table(p)))
         else:
             raise InputError(f"{p}: unknown result format {p.suffix!r}; use .h5, .toml or .csv")
+    return out
+
+
+def figure_files(sections: Sequence[Section]) -> dict[str, Any]:
+    """The sections' figures by file-name stem: the section title in lower case with every
+    character but letters and digits as ``_``, cut at 48 characters and stripped of
+    ``_`` at both ends, then the figure's number in its section (``record__x_1``)."""
+    out = {}
+    for s in sections:
+        name = "".join(c if c.isalnum() else "_" for c in s.title.lower())[:48].strip("_")
+        for k, (_, fig) in enumerate(s.figures):
+            out[f"{name}_{k + 1}"] = fig
     return out
 
 

@@ -4,7 +4,8 @@ Contract
 --------
 Each ``case_*`` function runs one experiment of PAPER_CASES.md and returns a
 :class:`CaseReport`: printable tables with the paper's numbers beside ours, the measured
-numbers (for tests and the note), the objects figures are drawn from, and the wall time.
+numbers (for tests and the note), the objects figures are drawn from
+(:meth:`CaseReport.figures`), and the wall time.
 ``quick=True`` runs a smaller version (shorter approach, smaller populations, fewer
 seeds) for the test suite; the full runs are ``bwim reproduce`` / ``make reproduce``.
 
@@ -54,8 +55,16 @@ class CaseReport:
     artefacts: dict = field(default_factory=dict)
 
     def render(self) -> str:
+        """The tables as text, then the wall time."""
         body = "\n\n".join(t.render() for t in self.tables)
         return f"{body}\n\n(case {self.case}: {self.wall_time:.1f} s)"
+
+    def figures(self) -> dict:
+        """Named figures of the case (:func:`bwim.plots.reproduce.report_figures`); imports
+        matplotlib."""
+        from bwim.plots.reproduce import report_figures
+
+        return report_figures(self)
 
 
 def _start(bridge: Bridge, unknowns: Sequence[str]) -> Bridge:
