@@ -185,6 +185,14 @@ class CEResult:
     convergences: int
     convergence_iterations: tuple[int, ...]
 
+    def plot(self, ax=None, **kw):
+        """Mean ± std of one parameter's sampling distribution per iteration
+        (:func:`bwim.plots.calibration.plot_ce_convergence`; ``kw``: parameter, scale,
+        label); returns the figure."""
+        from bwim.plots.calibration import plot_ce_convergence
+
+        return plot_ce_convergence(self, ax=ax, **kw)
+
 
 def _vector(name: str, value: object, n: int) -> np.ndarray:
     """A float (n,) array from a scalar or an (n,) array_like."""
