@@ -3,10 +3,13 @@
 Contract
 --------
 ``main(argv=None) -> int`` parses arguments, calls the library and prints; it holds no
-numerics.  Bad input (a scenario, record or model file, an option, an output path) ends
-with a one-line message ``bwim: error: ...`` on stderr and exit code 2, never a traceback,
-and leaves no partial output file (every writer is atomic, outputs are checked before the
-work starts).  Progress bars (tqdm, on stderr) show only when stdout is a terminal.
+numerics.  The subcommands are one declarative table, :data:`COMMANDS` (name, handler,
+help, description, arguments), from which the parser is built; tables are printed with
+:class:`bwim.tables.Table`.  Bad input (a scenario, record or model file, an option, an
+output path) ends with a one-line message ``bwim: error: ...`` on stderr and exit code 2,
+never a traceback, and leaves no partial output file (every writer is atomic, outputs are
+checked before the work starts).  Progress bars (tqdm, on stderr) show only when stdout is
+a terminal.
 
 Subcommands:
 

@@ -8,6 +8,7 @@ import numpy as np
 from bwim.conventions import KILONEWTON
 from bwim.optimize import CEHistory
 from bwim.plots import axes
+from bwim.tables import pct_change
 
 __all__ = ["plot_ce_convergence", "plot_mfi_comparison", "plot_zone_errors"]
 
@@ -66,7 +67,7 @@ def plot_zone_errors(true_bridge, calibrated_bridge, *, family: str = "E_x", ax=
     ax = axes(ax)
     model = true_bridge.model
     g = model.grid
-    err = 100 * (calibrated_bridge.params[family] / true_bridge.params[family] - 1)
+    err = pct_change(calibrated_bridge.params[family], true_bridge.params[family])
     per_element = err[model.zone_of_element].reshape(g.nx, g.ny).T
     lim = max(float(np.abs(err).max()), 1e-9)
     mesh = ax.pcolormesh(g.x_lines, g.y_lines, per_element, cmap="RdBu_r", vmin=-lim,
