@@ -95,6 +95,14 @@ class StageResult:
     history: object
     wall_time: float
 
+    def plot(self, ax=None, **kw):
+        """CE convergence of one parameter (a CE stage only;
+        :func:`bwim.plots.calibration.plot_ce_convergence`; ``kw``: parameter, scale,
+        label); returns the figure."""
+        from bwim.plots.calibration import plot_ce_convergence
+
+        return plot_ce_convergence(self, ax=ax, **kw)
+
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class Calibration:
@@ -127,6 +135,11 @@ class Calibration:
     @property
     def history(self) -> tuple[object, ...]:
         return tuple(s.history for s in self.stages)
+
+    def plot(self, stage: int = 0, ax=None, **kw):
+        """CE convergence of one parameter of ``stages[stage]`` (see
+        :meth:`StageResult.plot`); returns the figure."""
+        return self.stages[stage].plot(ax=ax, **kw)
 
 
 #: (mean, std) smoothing of sub-structured CE: without it the paper's settings stopped

@@ -76,11 +76,12 @@ class ForceIdentification:
     unknowns: ForceUnknowns
     order: Order
 
-    def plot(self, truth=None, ax=None):
-        """Forces against the truth if known (see :func:`bwim.plots.mfi.plot_forces`)."""
+    def plot(self, truth=None, ax=None, **kw):
+        """Forces against the truth if known (see :func:`bwim.plots.mfi.plot_forces`;
+        ``kw``: by, label); returns the figure."""
         from bwim.plots.mfi import plot_forces
 
-        return plot_forces(self, truth=truth, ax=ax)
+        return plot_forces(self, truth=truth, ax=ax, **kw)
 
 
 def _auto_unknowns(bridge: Bridge, record: Record) -> ForceUnknowns:

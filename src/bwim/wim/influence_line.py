@@ -175,6 +175,13 @@ class InfluenceLine:
         )
         return out.reshape(*xa.shape, len(self.channels))
 
+    def plot(self, ax=None, **kw):
+        """Each channel's line per kN against position, with a ``reference`` line if given
+        (:func:`bwim.plots.wim.plot_influence_line`); returns the figure."""
+        from bwim.plots.wim import plot_influence_line
+
+        return plot_influence_line(self, ax=ax, **kw)
+
     def response(self, passage: Passage, axle_loads: np.ndarray, time: np.ndarray) -> np.ndarray:
         """Static readings of a vehicle of ``axle_loads`` (N) on ``passage`` at ``time``,
         shape (n_t, n_channels): ``Σ_i A_i I(v (t − delay) − a_i)``."""
