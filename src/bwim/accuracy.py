@@ -65,6 +65,7 @@ import numpy as np
 from scipy import optimize, stats
 
 from bwim.errors import InputError, require_choice, require_positive
+from bwim.tables import Table
 from bwim.wim.moses import group_axles
 
 __all__ = [
@@ -74,8 +75,7 @@ __all__ = [
     "REPEATABILITIES",
     "TOLERANCES",
     "AccuracyResult",
-    "AccuracyTable",
-    "CriterionResult",
+        "CriterionResult",
     "ReferenceRow",
     "SummaryRow",
     "assess",
@@ -498,25 +498,6 @@ class ReferenceRow:
 
 
 @dataclass(frozen=True, kw_only=True)
-class AccuracyTable:
-    """A printable table: a header, rows of text and notes."""
-
-    header: tuple[str, ...]
-    rows: tuple[tuple[str, ...], ...]
-    notes: tuple[str, ...] = ()
-
-    def text(self) -> str:
-        """The table as aligned plain text, notes below."""
-        cells = [self.header, *self.rows]
-        widths = [max(len(r[j]) for r in cells) for j in range(len(self.header))]
-        lines = ["  ".join(c.ljust(w) if j == 0 else c.rjust(w)
-                           for j, (c, w) in enumerate(zip(r, widths, strict=True))).rstrip()
-                 for r in cells]
-        lines.insert(1, "  ".join("-" * w for w in widths))
-        return "\n".join([*lines, *self.notes])
-
-
-@dataclass(frozen=True, kw_only=True)
 class AccuracyResult:
     """COST 323 accuracy assessment of a WIM test.
 
@@ -582,8 +563,8 @@ class AccuracyResult:
         raise InputError(f"criterion {name!r} was not assessed; assessed: "
                          f"{', '.join(c.name for c in self.criteria) or 'none'}")
 
-    def table(self) -> AccuracyTable:
-        """One row per criterion (skipped ones too) and notes on the records left out."""
+    def table(self) -> Table:
+        """One row per criterion (skipped ones too); :meth:`notes` tells what was left out."""
         header = ("criterion", "n", "mean %", "std %", "pi0 %", "delta_min %", "class",
                   "delta %", "pi %")
         rows = []
@@ -595,9 +576,13 @@ class AccuracyResult:
                 rows.append((label, str(c.n), f"{c.mean:.2f}", f"{c.std:.2f}",
                              f"{100 * c.pi0:.1f}", f"{c.delta_min:.2f}", c.class_name,
                              f"{c.delta:g}", f"{100 * c.pi:.1f}"))
-        notes = [f"overall class: {self.overall_class or 'none'} "
-                 f"(test {self.repeatability}, environment {self.environment}; "
-                 f"{self.n_vehicles} of {self.n_reference} reference vehicles weighed)"]
+        title = (f"COST 323 accuracy: overall class {self.overall_class or 'none'} "
+                 f"(test {self.repeatability}, environment {self.environment})")
+        return Table(title=title, header=header, rows=tuple(rows))
+
+    def notes(self) -> tuple[str, ...]:
+        """Lines on the vehicles weighed and the records left out of the criteria."""
+        notes = [f"{self.n_vehicles} of {self.n_reference} reference vehicles weighed"]
         for what, names in (("not weighed", self.missing),
                             ("absent from the summary", self.unmatched),
                             ("axle count differs (axle criteria exclude them)",
@@ -607,7 +592,11 @@ class AccuracyResult:
                 notes.append(f"{len(names)} {what}: {shown}")
         if self.n_unreferenced:
             notes.append(f"{self.n_unreferenced} summary records without a reference ignored")
-        return AccuracyTable(header=header, rows=tuple(rows), notes=tuple(notes))
+        return tuple(notes)
+
+    def render(self) -> str:
+        """The table and its notes as text."""
+        return "\n".join([self.table().render(), *self.notes()])
 
 
 def _unique(rows, kind: str, cls) -> dict:

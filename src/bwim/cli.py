@@ -25,6 +25,8 @@ Subcommands:
 ``weigh SCENARIO RECORD... (--calibration-records REC... | --influence IL.h5) [-o FOLDER]``
     Static weights by Moses' algorithm, the influence line calibrated from crossings of
     the scenario's vehicle (and written) or read from a file.
+``accuracy SUMMARY.csv --reference REF.csv [--repeatability] [--environment]``
+    The COST 323 accuracy class per criterion and overall.
 ``report RESULTS... -o REPORT.html``
     A single-file HTML report (tables, embedded figures) of result files and folders.
 ``demo [--out FOLDER] [--quick]``
@@ -356,6 +358,24 @@ def _weigh(args: argparse.Namespace) -> int:
     return 0
 
 
+# --- accuracy --------------------------------------------------------------------------------
+def _accuracy(args: argparse.Namespace) -> int:
+    from bwim.accuracy import assess
+    from bwim.io.accuracy_csv import read_reference, read_summary
+
+    summary = read_summary(args.summary)
+    reference = read_reference(args.reference)
+    result = assess(summary, reference, repeatability=args.repeatability,
+                    environment=args.environment, strict=args.strict)
+    print(result.render())
+    if args.output:
+        target = _out_file(args.output, (".csv",))
+        table = result.table()
+        _write_csv(target, table.header, table.rows)
+        print(f"table: {target}")
+    return 0
+
+
 # --- report ----------------------------------------------------------------------------------
 def _report(args: argparse.Namespace) -> int:
     from bwim import report
@@ -556,6 +576,27 @@ COMMANDS: tuple[Command, ...] = (
                required=True),
          arg("-o", "--output", default="bwim-out/weigh", metavar="FOLDER",
              help="results folder (default bwim-out/weigh)"))),
+    Command(
+        "accuracy", _accuracy,
+        "COST 323 accuracy classes of weights against statically weighed references",
+        "The COST 323 European WIM specification's accuracy class per criterion (gross "
+        "weight, group of axles, single axle, axle of a group) and overall, from a weigh "
+        "summary and a reference of the same vehicles' static weights (CSV with the columns "
+        "record, n_axles, axle_spacings_m, axle_weights_kN, gvw_kN; lists ';'-separated).\n\n"
+        "  bwim accuracy out/summary.csv --reference static_weights.csv",
+        (arg("summary", metavar="SUMMARY.csv", help="a summary written by bwim weigh"),
+         arg("--reference", required=True, metavar="REF.csv",
+             help="static weights of the same vehicles (by record name)"),
+         arg("--repeatability", choices=["r1", "r2", "RR1", "RR2"], default="RR2",
+             help="test conditions: r1/r2 repeatability (one or a few vehicles passing many "
+             "times), RR1/RR2 reproducibility (a few vehicles / a sample of traffic); "
+             "default RR2"),
+         arg("--environment", choices=["I", "II", "III"], default="I",
+             help="environmental conditions: I repeatable (a day or so), II limited "
+             "reproducibility, III full (seasons); default I"),
+         arg("--strict", action="store_true",
+             help="a reference record absent from the summary is an error"),
+         arg("-o", "--output", metavar="TABLE.csv", help="also write the table as CSV"))),
     Command(
         "report", _report,
         "a single-file HTML report of result files",
