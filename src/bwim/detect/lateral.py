@@ -9,7 +9,7 @@ Contract
   weights less ``threshold`` × the largest weight (negative parts dropped; 0: plain
   centroid).  On a slab the transverse spread is wide: a plain centroid is pulled toward
   the deck's centre, and subtracting the common part removes most of that pull while
-  staying continuous in the readings (measured in tests/validation/test_detect.py).
+  staying continuous in the readings (measured in tests/validation/test_vehicle_detection.py).
   Readings symmetric about the load on gauges symmetric about it give the load's
   position exactly.
 * In metres from the right-hand edge when every gauge has a ``y`` and they do not all
