@@ -7,7 +7,8 @@ Contract
   sign, any offset or slow drift; the pulse shape need not be known).  Time in s.
 * Each channel loses its baseline (running median over ``baseline_window`` s) and its
   axles are the peaks (:func:`scipy.signal.find_peaks`) higher than ``snr_threshold``
-  robust noise standard deviations (1.4826 MAD of the high-passed channel) and
+  robust noise standard deviations (1.4826 MAD of the high-passed channel; step / √12
+  for a quantised channel sitting mostly on one level) and
   ``min_height`` × the channel's largest peak, rising at least half that above their
   neighbourhood (prominence), at least ``min_axle_spacing / max speed`` apart.  Each peak
   is timed to a fraction of a sample by the parabola through its top three samples.
@@ -89,6 +90,17 @@ def check_speed_range(speed_range: Any) -> tuple[float, float]:
     if hi <= lo:
         raise InputError(f"speed_range must have v_min < v_max, got ({lo:g}, {hi:g})")
     return lo, hi
+
+
+def _noise(y: np.ndarray) -> float:
+    """Robust noise standard deviation; for a quantised channel whose samples mostly sit
+    on one level (MAD 0), the quantisation noise step / √12."""
+    sig = robust_sigma(y)
+    if sig > 0:
+        return sig
+    steps = np.abs(np.diff(y))
+    steps = steps[steps > 0]
+    return float(steps.min() / np.sqrt(12.0)) if steps.size else np.finfo(float).tiny
 
 
 def _channel_peaks(y: np.ndarray, sigma: float, snr_threshold: float, min_height: float,
@@ -267,8 +279,7 @@ def detect_axles(
         both = y.sum(axis=1)
         polarity = 1 if both.max() >= -both.min() else -1
     y = polarity * y
-    sig = np.array([robust_sigma(y[:, c]) for c in range(2)])
-    sig = np.where(sig > 0, sig, np.finfo(float).tiny)
+    sig = np.array([_noise(y[:, c]) for c in range(2)])
     min_sep = max(1, int(np.floor(min_sp / v_hi * fs)))
     pk = [_channel_peaks(y[:, c], sig[c], snr_thr, rel, min_sep) for c in range(2)]
     times = [np.interp(p["frac"], samples, t) for p in pk]

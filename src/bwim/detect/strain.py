@@ -232,6 +232,22 @@ def _vibration_basis(t: np.ndarray, t_start: float, f: float) -> np.ndarray:
     return np.hstack([hats * np.sin(w), hats * np.cos(w)])
 
 
+def _merge_close(times: np.ndarray, loads: np.ndarray, gap: float
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Axles closer than ``gap`` s merged into one (load-weighted time, summed load)."""
+    t_out, w_out = [float(times[0])], [float(loads[0])]
+    for t, w in zip(times[1:], loads[1:], strict=True):
+        if t - t_out[-1] < gap and w_out[-1] + w > 0:
+            total = w_out[-1] + w
+            t_out[-1] = (t_out[-1] * max(w_out[-1], 0.0) + t * max(w, 0.0)) / max(
+                max(w_out[-1], 0.0) + max(w, 0.0), np.finfo(float).tiny)
+            w_out[-1] = total
+        else:
+            t_out.append(float(t))
+            w_out.append(float(w))
+    return np.array(t_out), np.array(w_out)
+
+
 def _decimate(t: np.ndarray, readings: np.ndarray, q: int) -> tuple[np.ndarray, np.ndarray]:
     nd = t.size // q
     return (t[:nd * q].reshape(nd, q).mean(axis=1),
@@ -398,7 +414,12 @@ def detect_from_strain(
                                    nuisance=_vibration_basis(t, t[0], f)), **search)
             fit = fit if again is None else again
     tt, loads, v = fit.times, fit.loads, fit.speed
+    if loads.max() <= 0:
+        return Detection(flags=(FLAG_NO_AXLES,), message="no positive axle load fits the "
+                         "strain readings (is the influence line's sign right?)",
+                         method=method)
     if offsets is None:
+        tt, loads = _merge_close(tt, loads, min_sp / v)
         keep = loads >= frac * loads.max()
         tt, loads = tt[keep], loads[keep]
     groups = np.split(np.arange(tt.size), np.flatnonzero(np.diff(tt) * v > max_sp) + 1)
