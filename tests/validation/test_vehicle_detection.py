@@ -234,7 +234,7 @@ def test_strain_only_with_known_spacings(plate, lines, line, max_speed, max_dela
 
 def test_strain_only_free_search(plate, lines):
     """No layout: speed within 5.0 % (measured, coarse and calibrated lines, 15–25 m/s;
-    median 0.9 %), 5 axles in 9 of the 10 events (7 in one: a 1.3 m tridem on a 9 m span
+    median 0.8 %), 5 axles in 9 of the 10 events (4 in one: a 1.3 m tridem on a 9 m span
     is at the edge of what the summed gauges resolve), far below the detectors' accuracy:
     the strain-only path is a fallback, flagged and at most half confident."""
     errors, counts = [], []
@@ -249,4 +249,4 @@ def test_strain_only_free_search(plate, lines):
                        for x in det.vehicles)
     assert np.abs(errors).max() < 0.08
     assert np.median(np.abs(errors)) < 0.02
-    assert all(4 <= n <= 7 for n in counts) and counts.count(5) >= 7
+    assert all(4 <= n <= 6 for n in counts) and counts.count(5) >= 8
