@@ -290,3 +290,23 @@ def test_quantised_detector_channels():
     veh = detect_axles(q).single
     assert veh.n_axles == 5
     assert veh.speed == pytest.approx(20.0, rel=1e-3)  # measured ≤ 0.03 % over 5 seeds
+
+
+def test_sensors_without_positions():
+    """Logger channels without x/y: detectors found by name, the lateral position is the
+    gauge index (1 = first gauge); gauges with y only give metres."""
+    ys = np.linspace(0.5, 9.5, 14)
+    gauges = _gauge_record(ys, 3.0)
+    t = T0 + gauges.time
+    ad = detector_record([(20.0, CAL_SPACINGS, CAL_LOADS, T0 + 0.2)], duration=1.5)
+    n = min(t.size, ad.time.size)
+    for with_y, unit in ((False, "gauge index"), (True, "m")):
+        sens = ([Sensor(name="ad1", kind="axle_detector"), Sensor(name="ad2",
+                                                                 kind="axle_detector")]
+                + [Sensor(name=f"s{k + 1:02d}", y=y if with_y else None)
+                   for k, y in enumerate(ys)])
+        rec = bwim.Record(time=t[:n], data=np.hstack([ad.data[:n], gauges.data[:n]]),
+                          sensors=sens)
+        veh = detect_axles(rec).single
+        assert veh.n_axles == 5 and veh.lateral_unit == unit
+        assert np.isfinite(veh.lateral) and veh.passage.lane == veh.lateral

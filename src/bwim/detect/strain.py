@@ -37,8 +37,9 @@ Contract
   shape.  Measured on a simulated 9 m slab (tests/validation/test_vehicle_detection.py),
   calibration truck at 15–25 m/s: with known spacings speed within 0.4–2.2 %, arrival
   within 11 ms; free search speed within 5 % (median 0.8 %), 5 axles found in 9 of 10
-  events (the 1.3 m tridem merged once).  The detectors do 0.1 % and resolve every axle.  Time: 0.15–0.25 s per 1.5 s
-  event (free), ~0.5 s (known spacings), against ~1 ms with detectors.
+  events (the 1.3 m tridem merged once).  The detectors do 0.1 % and resolve every
+  axle.  Time: 0.15–0.25 s per 1.5 s event (free), ~0.5 s (known spacings), against
+  ~1 ms with detectors.
 """
 
 from __future__ import annotations
