@@ -1,0 +1,154 @@
+"""From per-vehicle axle estimates to a :class:`~bwim.detect.result.Detection`.
+
+Contract
+--------
+* A :class:`VehicleEstimate` is what a detecting method measured for one vehicle: the
+  record time at which each axle passes the reference point ``x = position`` of the
+  influence-line frame (s), the speed (m/s) and its diagnostics.
+* :func:`assemble_detection` makes the passages (``delay = t_0 − position / speed``,
+  spacings = time differences × speed), their time on the span and the flags that depend
+  on it (``multiple_presence``, ``truncated``, ``unexplained_strain``), and each vehicle's
+  lateral position (:func:`~bwim.detect.lateral.lateral_position`; ``Passage.lane`` is
+  the lateral position, 0.0 when no gauge responded).
+* The quiet level of the gauges is taken outside every vehicle's time on the span (more
+  than 50 ms from it) when the span is known and that leaves ≥ 10 % of the record, else
+  from the first and last 10 % of the record.  Without a span, the lateral window of each
+  vehicle runs between the midpoints of consecutive vehicles' axle times.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from bwim.records import Passage, Record
+from bwim.sensors import Sensor
+
+from .lateral import lateral_position
+from .presence import overlapping, span_windows, unexplained_activity
+from .result import (
+    FLAG_MULTIPLE_PRESENCE,
+    FLAG_TRUNCATED,
+    FLAG_UNEXPLAINED_STRAIN,
+    Detection,
+    VehicleDetection,
+)
+
+__all__ = ["VehicleEstimate", "assemble_detection"]
+
+#: Margin around a vehicle's time on the span, s, before samples count as quiet.
+QUIET_MARGIN = 0.05
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class VehicleEstimate:
+    """One vehicle as a detecting method measured it (see the module contract)."""
+
+    times: np.ndarray
+    speed: float
+    confidence: float
+    flags: tuple[str, ...] = ()
+    amplitudes: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    snr: float = float("nan")
+    speed_spread: float = 0.0
+    spacing_disagreement: float = float("nan")
+    residual: float = float("nan")
+    detector_times: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+
+
+def _segments(extents: list[tuple[float, float]], t0: float, t1: float
+              ) -> list[tuple[float, float]]:
+    cuts = [0.5 * (extents[k][1] + extents[k + 1][0]) for k in range(len(extents) - 1)]
+    edges = [t0, *cuts, t1]
+    return [(edges[k], edges[k + 1]) for k in range(len(extents))]
+
+
+def assemble_detection(
+    record: Record,
+    estimates: Sequence[VehicleEstimate],
+    *,
+    method: str,
+    position: float = 0.0,
+    span: tuple[float, float] | None = None,
+    gauges: Sequence[Sensor] = (),
+    lateral_threshold: float = 0.5,
+    unexplained_fraction: float = 0.2,
+    flags: Sequence[str] = (),
+    notes: Sequence[str] = (),
+) -> Detection:
+    """The Detection of ``estimates`` (in order of arrival) in ``record``."""
+    t = record.time
+    est = sorted(estimates, key=lambda e: float(e.times[0]))
+    passages = []
+    for e in est:
+        times = np.asarray(e.times, dtype=float)
+        spacings = np.maximum(np.diff(times) * e.speed, 1e-6)
+        passages.append(Passage(speed=e.speed, axle_spacings=spacings,
+                                delay=float(times[0] - position / e.speed)))
+    rec_flags = set(flags)
+    notes = list(notes)
+    veh_flags = [list(e.flags) for e in est]
+    windows = None if span is None else span_windows(passages, span)
+    if windows is not None:
+        together = overlapping(windows)
+        for k in np.flatnonzero(together):
+            veh_flags[k].append(FLAG_MULTIPLE_PRESENCE)
+        if together.any():
+            ids = ", ".join(str(k + 1) for k in np.flatnonzero(together))
+            notes.append(f"vehicles {ids} on the span at the same time")
+        for k, (a, b) in enumerate(windows):
+            if a < t[0] or b > t[-1]:
+                veh_flags[k].append(FLAG_TRUNCATED)
+                notes.append(f"vehicle {k + 1} is on the span {a:.3f}–{b:.3f} s, beyond "
+                             f"the record ({t[0]:.3f}–{t[-1]:.3f} s)")
+    quiet = None
+    if windows is not None:
+        inside = np.zeros(t.size, dtype=bool)
+        for a, b in windows:
+            inside |= (t >= a - QUIET_MARGIN) & (t <= b + QUIET_MARGIN)
+        if (~inside).sum() >= 0.1 * t.size:
+            quiet = ~inside
+    if quiet is None:
+        edge = max(1, t.size // 10)
+        quiet = np.zeros(t.size, dtype=bool)
+        quiet[:edge] = quiet[-edge:] = True
+    if windows is not None:
+        lat_windows = [tuple(w) for w in windows]
+    else:
+        lat_windows = _segments([(float(e.times[0]), float(e.times[-1])) for e in est],
+                                float(t[0]), float(t[-1]))
+    names = [s.name for s in gauges]
+    if windows is not None and names and len(est):
+        total = record.channels(names).data.sum(axis=1)
+        extra = unexplained_activity(t, total, windows, margin=QUIET_MARGIN,
+                                     fraction=unexplained_fraction)
+        if extra.size:
+            rec_flags.add(FLAG_UNEXPLAINED_STRAIN)
+            spans = ", ".join(f"{a:.3f}–{b:.3f} s" for a, b in extra)
+            notes.append(f"strain activity at {spans} outside every detected vehicle's time "
+                         "on the span (a vehicle the detection did not see?)")
+    vehicles = []
+    for k, (e, p) in enumerate(zip(est, passages, strict=True)):
+        if names:
+            lat = lateral_position(record, window=lat_windows[k], quiet=quiet, gauges=names,
+                                   threshold=lateral_threshold)
+            lateral, unit = lat.value, lat.unit
+        else:
+            lateral, unit = float("nan"), "gauge index"
+        if np.isfinite(lateral):
+            p = Passage(speed=p.speed, lane=lateral, axle_spacings=p.axle_spacings,
+                        delay=p.delay)
+        vflags = tuple(dict.fromkeys(veh_flags[k]))
+        rec_flags.update(vflags)
+        vehicles.append(VehicleDetection(
+            passage=p, confidence=e.confidence, flags=vflags,
+            axle_times=p.delay + p.axle_offsets / p.speed, axle_amplitudes=e.amplitudes,
+            lateral=lateral, lateral_unit=unit,
+            window=None if windows is None else (float(windows[k, 0]), float(windows[k, 1])),
+            snr=e.snr, speed_spread=e.speed_spread,
+            spacing_disagreement=e.spacing_disagreement, residual=e.residual,
+            detector_times=e.detector_times))
+    return Detection(vehicles=tuple(vehicles), flags=tuple(sorted(rec_flags)),
+                     message="; ".join(notes), method=method)

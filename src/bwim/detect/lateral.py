@@ -1,0 +1,158 @@
+"""A vehicle's lateral position from the transverse spread of the strain gauges.
+
+Contract
+--------
+* The gauges of one section across the deck each see a vehicle most strongly near its
+  wheel paths.  Each gauge gets a weight, its largest reading above its quiet level in
+  the vehicle's time window (``weight="peak"``) or the area of its positive part
+  (``"area"``, sensitive to drift), and the lateral position is the centroid of the
+  weights less ``threshold`` × the largest weight (negative parts dropped; 0: plain
+  centroid).  On a slab the transverse spread is wide: a plain centroid is pulled toward
+  the deck's centre, and subtracting the common part removes most of that pull while
+  staying continuous in the readings (measured in tests/validation/test_vehicle_detection.py).
+  Readings symmetric about the load on gauges symmetric about it give the load's
+  position exactly.
+* In metres from the right-hand edge when every gauge has a ``y`` and they do not all
+  share one; otherwise a dimensionless *lateral index*: the centroid in gauge-order units,
+  1 = the first gauge as listed, n = the last (gauges evenly spread give
+  ``y ≈ y_1 + (index − 1) × gauge pitch``).
+* The quiet level of each gauge is its median over the ``quiet`` samples.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from bwim.errors import InputError, require_range
+from bwim.records import Record
+from bwim.sensors import Sensor, SensorKind
+
+__all__ = ["LateralPosition", "lateral_position", "section_gauges"]
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class LateralPosition:
+    """Load centroid across the deck.
+
+    Attributes
+    ----------
+    value : float
+        Metres from the right-hand edge (``unit == "m"``) or gauge index (1-based); NaN
+        when no gauge responded.
+    unit : str
+        ``"m"`` or ``"gauge index"``.
+    weights : ndarray, shape (n_gauges,)
+        Each gauge's weight after the threshold was subtracted.
+    gauges : tuple of str
+        Gauge names, in the order of the index.
+    """
+
+    value: float
+    unit: str
+    weights: np.ndarray
+    gauges: tuple[str, ...]
+
+
+def section_gauges(record: Record, gauges: Sequence[str] | None = None,
+                   exclude: Sequence[str] = ()) -> tuple[Sensor, ...]:
+    """The gauges used for lateral position and strain activity: the named ones, or every
+    longitudinal strain gauge (``strain_x``) of the record not in ``exclude``; when their
+    ``x`` positions are known and differ, those of the section with most gauges (ties:
+    nearest the middle of the instrumented sections)."""
+    by_name = {s.name: s for s in record.sensors}
+    if gauges is not None:
+        out = []
+        for g in gauges:
+            if g not in by_name:
+                raise InputError(f"gauges: no channel {g!r} in this record; channels: "
+                                 f"{list(by_name)}")
+            out.append(by_name[g])
+        return tuple(out)
+    chosen = [s for s in record.sensors
+              if s.kind is SensorKind.STRAIN_X and s.name not in exclude]
+    xs = [getattr(s, "x", None) for s in chosen]
+    if not chosen or any(x is None for x in xs):
+        return tuple(chosen)
+    rounded = np.round(np.asarray(xs, dtype=float), 6)
+    sections, counts = np.unique(rounded, return_counts=True)
+    if sections.size == 1:
+        return tuple(chosen)
+    mid = 0.5 * (sections[0] + sections[-1])
+    best = min(range(sections.size), key=lambda k: (-counts[k], abs(sections[k] - mid)))
+    return tuple(s for s, x in zip(chosen, rounded, strict=True) if x == sections[best])
+
+
+def lateral_position(
+    record: Record,
+    *,
+    window: tuple[float, float] | None = None,
+    quiet: np.ndarray | None = None,
+    gauges: Sequence[str] | None = None,
+    weight: str = "peak",
+    threshold: float = 0.5,
+) -> LateralPosition:
+    """Load centroid across the deck of the vehicle on the span during ``window``.
+
+    Parameters
+    ----------
+    record : Record
+    window : (t_start, t_end), optional
+        Record times of the vehicle's presence, s (default the whole record).
+    quiet : bool array, shape (n_t,), optional
+        Samples without traffic, for each gauge's quiet level (default: the samples
+        outside ``window`` if they are at least 10 % of the record, else the first and
+        last 10 % of it).
+    gauges : sequence of str, optional
+        Gauge names across one section, default :func:`section_gauges`.
+    weight : "peak" or "area"
+    threshold : float
+        This fraction of the largest weight is subtracted from every weight (negative
+        results count as zero), in [0, 1).
+
+    Returns
+    -------
+    LateralPosition
+    """
+    if weight not in ("peak", "area"):
+        raise InputError(f"unknown weight {weight!r}; expected 'peak' or 'area'")
+    thr = require_range("threshold", threshold, 0.0, 1.0, closed=False) if threshold else 0.0
+    sens = section_gauges(record, gauges)
+    names = tuple(s.name for s in sens)
+    ys = [getattr(s, "y", None) for s in sens]
+    metres = (len(sens) > 1 and all(y is not None for y in ys)
+              and np.ptp(np.asarray(ys, dtype=float)) > 0)
+    unit = "m" if metres else "gauge index"
+    if not sens:
+        return LateralPosition(value=float("nan"), unit=unit, weights=np.zeros(0), gauges=())
+    t = record.time
+    data = record.channels(list(names)).data
+    inside = np.ones(t.size, dtype=bool) if window is None else (
+        (t >= window[0]) & (t <= window[1]))
+    if not inside.any():
+        return LateralPosition(value=float("nan"), unit=unit, weights=np.zeros(len(sens)),
+                               gauges=names)
+    if quiet is None:
+        quiet = ~inside
+        if quiet.sum() < 0.1 * t.size:
+            edge = max(1, t.size // 10)
+            quiet = np.zeros(t.size, dtype=bool)
+            quiet[:edge] = quiet[-edge:] = True
+    quiet = np.asarray(quiet, dtype=bool)
+    if quiet.shape != t.shape or not quiet.any():
+        raise InputError("quiet must be a boolean mask of the record's samples with at "
+                         "least one True")
+    dev = data[inside] - np.median(data[quiet], axis=0)
+    if weight == "peak":
+        w = np.clip(dev.max(axis=0), 0.0, None)
+    else:
+        w = np.clip(dev, 0.0, None).sum(axis=0) * float(np.median(np.diff(t)))
+    if not np.any(w > 0):
+        return LateralPosition(value=float("nan"), unit=unit, weights=np.zeros(len(sens)),
+                               gauges=names)
+    w = np.clip(w - thr * w.max(), 0.0, None)
+    coord = np.asarray(ys, dtype=float) if metres else np.arange(1.0, len(sens) + 1.0)
+    return LateralPosition(value=float(w @ coord / w.sum()), unit=unit, weights=w,
+                           gauges=names)

@@ -1,0 +1,109 @@
+"""When each vehicle is on the span, whether two are on it at once, and strain that no
+detected vehicle explains.
+
+Contract
+--------
+* The span is an interval ``(x_start, x_end)`` (m) of the influence-line frame, the frame
+  of :class:`~bwim.records.Passage` (axle i at ``x = speed (t − delay) − a_i``): given as a
+  length ``L`` (meaning ``(0, L)``), a pair, or an :class:`~bwim.wim.InfluenceLine` (its
+  support).  A vehicle's window is ``[delay + x_start / v, delay + (x_end + a_last) / v]``:
+  from its first axle entering to its last axle leaving.
+* Two vehicles are *present together* when their windows overlap.
+* :func:`unexplained_activity` returns the time intervals (s, shape (k, 2)) in which a
+  signal (e.g. the sum of the gauges of one section) departs from its quiet level by more
+  than ``fraction`` of its largest departure inside the windows and more than ``snr``
+  noise standard deviations, outside every window widened by ``margin`` s.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from bwim.errors import InputError, require_finite, require_positive
+from bwim.records import Passage
+from bwim.wim import InfluenceLine
+
+from .signals import robust_sigma
+
+__all__ = ["overlapping", "resolve_span", "span_windows", "unexplained_activity"]
+
+
+def resolve_span(span: float | Sequence[float] | InfluenceLine | None
+                 ) -> tuple[float, float] | None:
+    """``(x_start, x_end)`` of the span in the influence-line frame, m (None: unknown)."""
+    if span is None:
+        return None
+    if isinstance(span, InfluenceLine):
+        return span.support
+    if np.ndim(span) == 0:
+        return 0.0, require_positive("span", span)
+    vals = np.asarray(span, dtype=float).ravel()
+    if vals.size != 2:
+        raise InputError(f"span must be a length, a pair (x_start, x_end) or an "
+                         f"InfluenceLine, got {span!r}")
+    lo, hi = require_finite("span[0]", vals[0]), require_finite("span[1]", vals[1])
+    if hi <= lo:
+        raise InputError(f"span must have x_start < x_end, got ({lo:g}, {hi:g})")
+    return lo, hi
+
+
+def span_windows(passages: Sequence[Passage], span: tuple[float, float]) -> np.ndarray:
+    """Record time at which each vehicle's first axle enters and its last axle leaves the
+    span, s, shape (n_vehicles, 2)."""
+    lo, hi = span
+    out = np.zeros((len(passages), 2))
+    for k, p in enumerate(passages):
+        out[k] = p.delay + lo / p.speed, p.delay + (hi + p.axle_offsets[-1]) / p.speed
+    return out
+
+
+def overlapping(windows: np.ndarray) -> np.ndarray:
+    """Whether each window overlaps another one, bool, shape (n,)."""
+    w = np.asarray(windows, dtype=float).reshape(-1, 2)
+    hit = np.zeros(len(w), dtype=bool)
+    for i in range(len(w)):
+        for j in range(i + 1, len(w)):
+            if w[i, 0] < w[j, 1] and w[j, 0] < w[i, 1]:
+                hit[i] = hit[j] = True
+    return hit
+
+
+def unexplained_activity(
+    time: np.ndarray,
+    signal: np.ndarray,
+    windows: np.ndarray,
+    *,
+    margin: float = 0.05,
+    fraction: float = 0.2,
+    snr: float = 8.0,
+    min_duration: float = 0.03,
+) -> np.ndarray:
+    """Intervals of activity outside every window, s, shape (k, 2) (k = 0: none).
+
+    The quiet level is the median of the samples outside the windows (at least 10 % of
+    the record, else nothing is reported); the noise is the robust standard deviation of
+    the first difference over √2.  Activity must last ``min_duration`` s.
+    """
+    t = np.asarray(time, dtype=float)
+    s = np.asarray(signal, dtype=float)
+    w = np.asarray(windows, dtype=float).reshape(-1, 2)
+    inside = np.zeros(t.size, dtype=bool)
+    for a, b in w:
+        inside |= (t >= a - margin) & (t <= b + margin)
+    outside = ~inside
+    if outside.sum() < 0.1 * t.size or not inside.any():
+        return np.zeros((0, 2))
+    dev = s - np.median(s[outside])
+    noise = robust_sigma(np.diff(s)) / np.sqrt(2.0)
+    limit = max(fraction * np.abs(dev[inside]).max(), snr * noise)
+    active = outside & (np.abs(dev) > limit)
+    if not active.any():
+        return np.zeros((0, 2))
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], active.astype(int), [0]])))
+    runs = edges.reshape(-1, 2)  # [start, stop) sample indices
+    dt = float(np.median(np.diff(t)))
+    keep = (runs[:, 1] - runs[:, 0]) * dt >= min_duration
+    runs = runs[keep]
+    return np.column_stack([t[runs[:, 0]], t[runs[:, 1] - 1]]) if runs.size else np.zeros((0, 2))
