@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 from bwim import paper
 from bwim.calibration import Calibration, calibrate
-from bwim.dynamics.simulate import simulate
+from bwim.dynamics.crossing import simulate
 from bwim.fe.bridge import Bridge
 from bwim.mfi import ForceIdentification, identify_forces
 from bwim.records import Record

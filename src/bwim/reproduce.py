@@ -22,7 +22,7 @@ import numpy as np
 
 from bwim import paper
 from bwim.calibration import Calibration, calibrate, peak_weights
-from bwim.dynamics.simulate import simulate
+from bwim.dynamics.crossing import simulate
 from bwim.fe.bridge import Bridge
 from bwim.mfi import ForceIdentification, force_errors, identify_forces
 from bwim.records import Record
@@ -336,7 +336,7 @@ def compare_methods(*, quick: bool = False, seed: int = 0) -> CaseReport:
       the truth (the dynamics' bias grows along the objective's weak directions: measured
       −77 … +537 %), so a race to it would compare methods on reaching a wrong point.
     """
-    from bwim.calibration.calibrate import SUBSTRUCTURED_SMOOTHING, _static_jacobian
+    from bwim.calibration.driver import SUBSTRUCTURED_SMOOTHING, _static_jacobian
     from bwim.calibration.problem import ParameterSpace, StaticObjective, neighbour_map
 
     t0 = time.perf_counter()
@@ -405,7 +405,7 @@ def _stage_optimum(obj, x0):
     """The stiffness stage's optimum to full precision (bounded least squares)."""
     from scipy.optimize import least_squares
 
-    from bwim.calibration.calibrate import _static_jacobian
+    from bwim.calibration.driver import _static_jacobian
 
     res = least_squares(lambda u: obj.residuals(u * x0) / 1e-6, np.ones_like(x0),
                         jac=lambda u: _static_jacobian(obj, u * x0) * x0 / 1e-6,

@@ -6,7 +6,7 @@ import pytest
 
 import bwim
 from bwim import paper
-from bwim.calibration.calibrate import _static_jacobian
+from bwim.calibration.driver import _static_jacobian
 from bwim.calibration.problem import (
     ParameterSpace,
     StaticObjective,

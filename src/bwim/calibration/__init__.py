@@ -1,7 +1,6 @@
 """Calibration of the bridge FE model from strains under a truck of known weight."""
 
-from bwim.calibration.calibrate import Calibration, Method, Refine, StageResult, calibrate
-from bwim.calibration.identifiability import Identifiability, identifiability
+from bwim.calibration.driver import Calibration, Method, Refine, StageResult, calibrate
 from bwim.calibration.problem import (
     DynamicObjective,
     ParameterSpace,
@@ -9,6 +8,7 @@ from bwim.calibration.problem import (
     neighbour_map,
     peak_weights,
 )
+from bwim.calibration.sensitivity import Identifiability, identifiability
 
 __all__ = [
     "Calibration",

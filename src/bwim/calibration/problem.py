@@ -27,7 +27,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from bwim.dynamics.simulate import prepare_crossing, run_crossing
+from bwim.dynamics.crossing import prepare_crossing, run_crossing
 from bwim.errors import InputError, NumericalError
 from bwim.fe.bridge import Bridge
 from bwim.records import Record
@@ -283,7 +283,7 @@ class DynamicObjective:
             self._parts.append(measurement_points(rec.sensors)[0])
         self.n_parts = max(int(p.max()) for p in self._parts) + 1
         if n_modes is None:
-            from bwim.dynamics.simulate import select_modes
+            from bwim.dynamics.crossing import select_modes
 
             n_modes = select_modes(base, sampling_rate=self.records[0].sampling_rate).n
         self.n_modes = n_modes

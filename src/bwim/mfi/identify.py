@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bwim.dynamics.simulate import select_modes
+from bwim.dynamics.crossing import select_modes
 from bwim.errors import InputError
 from bwim.fe.bridge import Bridge
 from bwim.mfi.dp import Solution, solve_dp

@@ -37,13 +37,13 @@ from enum import StrEnum
 import numpy as np
 from scipy.optimize import least_squares
 
-from bwim.calibration.identifiability import Identifiability, identifiability
 from bwim.calibration.problem import (
     DynamicObjective,
     ParameterSpace,
     StaticObjective,
     neighbour_map,
 )
+from bwim.calibration.sensitivity import Identifiability, identifiability
 from bwim.errors import InputError
 from bwim.fe.bridge import Bridge
 from bwim.fe.influence import static_sensitivities
