@@ -45,6 +45,7 @@ from pathlib import Path
 import numpy as np
 
 from bwim import paper
+from bwim.calibration import Method
 from bwim.conventions import KILONEWTON, MICROSTRAIN
 from bwim.errors import BwimError, InputError
 from bwim.loads import PointLoad
@@ -611,7 +612,7 @@ def _parser() -> argparse.ArgumentParser:
                    help="records of the calibration truck (.h5 or .csv; folders expanded)")
     c.add_argument("-o", "--output", default="calibrated.toml", metavar="MODEL.toml",
                    help="the calibrated bridge model (default calibrated.toml)")
-    c.add_argument("--method", choices=["ce", "lm", "cma"],
+    c.add_argument("--method", choices=[m.value for m in Method],
                    help="optimiser: ce = Cross-Entropy (the paper's), lm = "
                    "Levenberg-Marquardt, cma = CMA-ES (default: the scenario's, else ce)")
     c.add_argument("--jobs", type=int, help="worker processes for the populations")

@@ -17,7 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from enum import StrEnum
 
-from bwim.errors import InputError, require_finite
+from bwim.errors import parse_enum, require_finite
 
 __all__ = ["Sensor", "SensorKind"]
 
@@ -62,13 +62,7 @@ class Sensor:
     def __post_init__(self) -> None:
         object.__setattr__(self, "x", require_finite("Sensor.x", self.x))
         object.__setattr__(self, "y", require_finite("Sensor.y", self.y))
-        try:
-            kind = SensorKind(self.kind)
-        except ValueError:
-            options = ", ".join(k.value for k in SensorKind)
-            raise InputError(
-                f"unknown sensor kind {self.kind!r}; expected one of {options}"
-            ) from None
+        kind = parse_enum(SensorKind, self.kind, "sensor kind")
         object.__setattr__(self, "kind", kind)
         if not self.name:
             object.__setattr__(self, "name", f"{kind.value}@{self.x:g},{self.y:g}")

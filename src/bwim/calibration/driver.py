@@ -44,7 +44,7 @@ from bwim.calibration.problem import (
     neighbour_map,
 )
 from bwim.calibration.sensitivity import Identifiability, identifiability
-from bwim.errors import InputError
+from bwim.errors import InputError, parse_enum
 from bwim.fe.bridge import Bridge
 from bwim.fe.influence import static_sensitivities
 from bwim.optimize import CrossEntropy
@@ -292,14 +292,8 @@ def calibrate(
         Further :class:`~bwim.optimize.CrossEntropy` options (smoothing, tol, injection…).
     """
     t0 = time.perf_counter()
-    try:
-        method = Method(method)
-    except ValueError:
-        raise InputError(f"unknown method {method!r}; expected 'ce', 'lm' or 'cma'") from None
-    try:
-        refine = Refine(refine)
-    except ValueError:
-        raise InputError(f"unknown refine {refine!r}; expected 'lm' or 'none'") from None
+    method = parse_enum(Method, method, "method")
+    refine = parse_enum(Refine, refine, "refine")
     if not isinstance(start_bridge, Bridge):
         raise InputError(f"start_bridge must be a bwim.Bridge, got {type(start_bridge).__name__}")
     records = [records] if isinstance(records, Record) else list(records)

@@ -37,7 +37,7 @@ from bwim.dynamics.vbi import (
     solve_coupled,
     solve_iterative,
 )
-from bwim.errors import InputError, require_positive
+from bwim.errors import InputError, parse_enum, require_positive
 from bwim.fe.bridge import Bridge
 from bwim.fe.influence import InfluenceSurfaces
 from bwim.fe.modal import Modes
@@ -46,8 +46,14 @@ from bwim.road import RoadProfile
 from bwim.sensors import Sensor
 from bwim.vehicles.model import VehicleModel
 
-__all__ = ["PreparedCrossing", "VBIMethod", "prepare_crossing", "run_crossing",
-           "select_modes", "simulate"]
+__all__ = ["DEFAULT_APPROACH", "DEFAULT_SAMPLING_RATE", "PreparedCrossing", "VBIMethod",
+           "prepare_crossing", "run_crossing", "select_modes", "simulate"]
+
+#: Default run-up before the bridge, m (the vehicle's dynamic state on entry).
+DEFAULT_APPROACH = 100.0
+
+#: Default sampling rate, Hz (also the integration rate).
+DEFAULT_SAMPLING_RATE = 1000.0
 
 
 class VBIMethod(StrEnum):
@@ -159,8 +165,8 @@ def prepare_crossing(
     sensors: Sequence[Sensor],
     lane=None,
     road: RoadProfile | None = None,
-    sampling_rate: float = 1000.0,
-    approach: float = 100.0,
+    sampling_rate: float = DEFAULT_SAMPLING_RATE,
+    approach: float = DEFAULT_APPROACH,
     tail: float = 0.0,
     delay=0.0,
 ) -> PreparedCrossing:
@@ -254,10 +260,7 @@ def run_crossing(
     ``influence`` may pass the sensors' influence surfaces of this bridge's stiffness to
     save their computation (calibration of the mass keeps K fixed).
     """
-    try:
-        method = VBIMethod(method)
-    except ValueError:
-        raise InputError(f"unknown method {method!r}; expected 'coupled' or 'iterative'") from None
+    method = parse_enum(VBIMethod, method, "method")
     if bridge.model is not prepared.structure:
         raise InputError("this crossing was prepared for a bridge of another structure")
     crossing, rows, scheme = prepared.crossing, prepared.rows, prepared.scheme
@@ -331,9 +334,9 @@ def simulate(
     sensors: Sequence[Sensor],
     lane=None,
     road: RoadProfile | None = None,
-    sampling_rate: float = 1000.0,
+    sampling_rate: float = DEFAULT_SAMPLING_RATE,
     method: VBIMethod | str = VBIMethod.COUPLED,
-    approach: float = 100.0,
+    approach: float = DEFAULT_APPROACH,
     tail: float = 0.0,
     delay=0.0,
     n_modes: int | None = None,
@@ -383,10 +386,7 @@ def simulate(
     Record
         Readings at t ≥ 0, passages, truths (wheel and axle forces) and convergence.
     """
-    try:
-        method = VBIMethod(method)
-    except ValueError:
-        raise InputError(f"unknown method {method!r}; expected 'coupled' or 'iterative'") from None
+    method = parse_enum(VBIMethod, method, "method")
     prepared = prepare_crossing(bridge, vehicle, speed=speed, sensors=sensors, lane=lane,
                                 road=road, sampling_rate=sampling_rate, approach=approach,
                                 tail=tail, delay=delay)

@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bwim.dynamics import simulate
+from bwim.dynamics import DEFAULT_APPROACH, simulate
 from bwim.errors import InputError, require_positive
 from bwim.fe.bridge import Bridge
 from bwim.fe.girder import Girder, composite_section
@@ -255,7 +255,7 @@ def build_vehicle(scenario: Scenario):
 def _road_extent(scenario: Scenario) -> tuple[float, float]:
     """Default (start, end) of a random road: the whole run with a 5 m margin."""
     run = scenario.run
-    approach = 100.0 if run is None else run.approach
+    approach = DEFAULT_APPROACH if run is None else run.approach
     run_out = 0.0 if run is None else run.speed * run.tail
     vehicle = 0.0 if scenario.vehicle is None else build_vehicle(scenario).length
     margin = 5.0 + (scenario.road.smoothing or 0.0)

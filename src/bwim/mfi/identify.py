@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from bwim.dynamics.crossing import select_modes
-from bwim.errors import InputError
+from bwim.errors import InputError, parse_enum
 from bwim.fe.bridge import Bridge
 from bwim.mfi.dp import Solution, solve_dp
 from bwim.mfi.lcurve import LCurve, gcv, lcurve
@@ -135,15 +135,8 @@ def identify_forces(
                          "to place the forces")
     if not np.all(np.isfinite(record.data)):
         raise InputError("the record contains NaN or infinite samples")
-    try:
-        order = Order(order)
-    except ValueError:
-        raise InputError(f"unknown order {order!r}; expected 'first' or 'zeroth'") from None
-    try:
-        unknowns = ForceUnknowns(unknowns)
-    except ValueError:
-        raise InputError(f"unknown unknowns {unknowns!r}; expected 'auto', 'wheel' or "
-                         "'axle'") from None
+    order = parse_enum(Order, order, "order")
+    unknowns = parse_enum(ForceUnknowns, unknowns, "unknowns")
     if unknowns is ForceUnknowns.AUTO:
         unknowns = _auto_unknowns(bridge, record)
     if not 0.0 < central <= 1.0:
