@@ -30,6 +30,7 @@ import scipy.sparse as sp
 from bwim.dynamics.crossing import prepare_crossing, run_crossing
 from bwim.errors import InputError, NumericalError
 from bwim.fe.bridge import Bridge
+from bwim.fe.modal import select_modes
 from bwim.records import Record
 from bwim.road import RoadProfile
 
@@ -135,7 +136,7 @@ def neighbour_map(space: ParameterSpace, sensors) -> np.ndarray:
         for p, (name, idx) in enumerate(fam):
             if idx is None:  # shared by all zones or girders
                 nb[j, p] = True
-            elif name in ("E_girder", "mu_girder"):
+            elif name in Bridge.GIRDER_FAMILIES:
                 nb[j, p] = idx in near_girders
             else:
                 nb[j, p] = idx in zones
@@ -283,11 +284,9 @@ class DynamicObjective:
             self._parts.append(measurement_points(rec.sensors)[0])
         self.n_parts = max(int(p.max()) for p in self._parts) + 1
         if n_modes is None:
-            from bwim.dynamics.crossing import select_modes
-
             n_modes = select_modes(base, sampling_rate=self.records[0].sampling_rate).n
         self.n_modes = n_modes
-        stiff = set(self.space.names) & {"E_x", "E_y", "E_girder"}
+        stiff = set(self.space.names) & set(Bridge.STIFFNESS_FAMILIES)
         # K fixed (mass stage): the influence surfaces are computed once
         self._influence = (None if stiff else
                            [base.influence(rec.sensors) for rec in self.records])

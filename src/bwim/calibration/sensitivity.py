@@ -49,7 +49,7 @@ def identifiability(
     threshold: float = 1e-3,
 ) -> Identifiability:
     """The identifiability report (see module docstring)."""
-    present = [n for n in ("E_x", "E_y", "E_girder") if n in bridge.params]
+    present = [n for n in bridge.STIFFNESS_FAMILIES if n in bridge.params]
     names = tuple(present if names is None else [n for n in names if n in present])
     static = vehicle.model().static_forces
     blocks, norm2 = [], 0.0

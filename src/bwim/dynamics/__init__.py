@@ -4,10 +4,10 @@ from bwim.dynamics.crossing import (
     DEFAULT_APPROACH,
     DEFAULT_SAMPLING_RATE,
     VBIMethod,
-    select_modes,
     simulate,
 )
 from bwim.dynamics.newmark import Newmark, NewmarkResult, integrate
+from bwim.fe.modal import select_modes
 
 __all__ = [
     "DEFAULT_APPROACH",

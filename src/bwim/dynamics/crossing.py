@@ -40,14 +40,14 @@ from bwim.dynamics.vbi import (
 from bwim.errors import InputError, parse_enum, require_positive
 from bwim.fe.bridge import Bridge
 from bwim.fe.influence import InfluenceSurfaces
-from bwim.fe.modal import Modes
+from bwim.fe.modal import select_modes
 from bwim.records import Passage, Record, Truth, VBIConvergence
 from bwim.road import RoadProfile
 from bwim.sensors import Sensor
 from bwim.vehicles.model import VehicleModel
 
 __all__ = ["DEFAULT_APPROACH", "DEFAULT_SAMPLING_RATE", "PreparedCrossing", "VBIMethod",
-           "prepare_crossing", "run_crossing", "select_modes", "simulate"]
+           "prepare_crossing", "run_crossing", "simulate"]
 
 #: Default run-up before the bridge, m (the vehicle's dynamic state on entry).
 DEFAULT_APPROACH = 100.0
@@ -61,38 +61,6 @@ class VBIMethod(StrEnum):
 
     COUPLED = "coupled"
     ITERATIVE = "iterative"
-
-
-def select_modes(
-    bridge: Bridge, *, n_modes: int | None = None, max_frequency: float | None = None,
-    sampling_rate: float,
-) -> Modes:
-    """The modes a simulation (or identification) uses.
-
-    All modes up to ``max_frequency`` (default ``sampling_rate / 8``) unless ``n_modes``
-    is given.  Raises :class:`InputError` if the sampling rate is below 2.5 × the highest
-    frequency in use (Nyquist with a margin).
-    """
-    if n_modes is not None:
-        modes = bridge.modes(n_modes)
-    else:
-        f_cut = sampling_rate / 8 if max_frequency is None else require_positive(
-            "max_frequency", max_frequency)
-        k = min(10, bridge.n_free - 1)
-        while True:
-            modes = bridge.modes(k)
-            if modes.frequencies[-1] > f_cut or k >= bridge.n_free - 1:
-                break
-            k = min(2 * k, bridge.n_free - 1)
-        n = max(int(np.searchsorted(modes.frequencies, f_cut, side="right")), 1)
-        modes = bridge.modes(n)
-    f_max = modes.frequencies[-1]
-    if sampling_rate < 2.5 * f_max:
-        raise InputError(
-            f"sampling_rate {sampling_rate:g} Hz is too low for the modes in use (highest "
-            f"{f_max:.1f} Hz); use at least {2.5 * f_max:.0f} Hz or fewer modes"
-        )
-    return modes
 
 
 def _as_list(name, value, n):

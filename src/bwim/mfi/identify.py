@@ -20,9 +20,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bwim.dynamics.crossing import select_modes
 from bwim.errors import InputError, parse_enum
 from bwim.fe.bridge import Bridge
+from bwim.fe.modal import select_modes
 from bwim.mfi.dp import Solution, solve_dp
 from bwim.mfi.lcurve import LCurve, gcv, lcurve
 from bwim.mfi.statespace import ForceUnknowns, MFIModel, Order, build_model, force_layout
