@@ -96,10 +96,15 @@ class Passage:
         half = self.track_width / 2
         return np.tile([self.lane - half, self.lane + half], self.n_axles)
 
+    def axle_x(self, time: np.ndarray) -> np.ndarray:
+        """Longitudinal axle positions at record times, m, shape (n_t, n_axles):
+        ``speed (t − delay) − axle_offsets``."""
+        t = np.asarray(time, dtype=float).reshape(-1)
+        return self.speed * (t[:, None] - self.delay) - self.axle_offsets[None, :]
+
     def wheel_x(self, time: np.ndarray) -> np.ndarray:
         """Longitudinal wheel positions at record times, m, shape (n_t, n_wheels)."""
-        t = np.asarray(time, dtype=float)
-        return self.speed * (t[:, None] - self.delay) - self.axle_offsets[self.wheel_axle]
+        return self.axle_x(time)[:, self.wheel_axle]
 
     def axle_times_on(self, length: float) -> np.ndarray:
         """Entry and exit time of each axle on a span of ``length``, shape (n_axles, 2)."""

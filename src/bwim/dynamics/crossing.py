@@ -169,7 +169,6 @@ def prepare_crossing(
     veh = _combine(models)
     c_vehicle = np.repeat(np.arange(n_veh), [m.n_contacts for m in models])
     c_speed = np.array(speeds)[c_vehicle]
-    c_delay = delays[c_vehicle]
     c_y = np.array(lanes)[c_vehicle] + veh.contact_lateral
     if bridge.is_plate:
         off = (c_y < 0) | (c_y > bridge.width)
@@ -183,12 +182,12 @@ def prepare_crossing(
     # --- time grid ------------------------------------------------------------------
     dt = 1.0 / fs
     t_start = min(d - approach / v for d, v in zip(delays, speeds, strict=True))
-    t_end = max(d + (bridge.length + m.axle_offsets[-1]) / v
-                for d, v, m in zip(delays, speeds, models, strict=True)) + tail
+    t_end = max(p.axle_times_on(bridge.length)[-1, 1] for p in passages) + tail
     k0 = int(np.floor(t_start / dt + 1e-9))
     k1 = int(np.ceil(t_end / dt - 1e-9))
     t = dt * np.arange(k0, k1 + 1)
-    x = c_speed * (t[:, None] - c_delay) - veh.contact_offset
+    x = np.hstack([p.axle_x(t)[:, m.contact_axle] for p, m in zip(passages, models,
+                                                                  strict=True)])
     lo, hi = float(x.min()), float(x.max())
     if not road.covers(lo, hi):
         raise InputError(

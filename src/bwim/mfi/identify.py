@@ -151,15 +151,15 @@ def identify_forces(
     d_scale = float(np.abs(d).max())
     if d_scale == 0.0:
         raise InputError("the record is all zeros")
-    _, offsets, _ = force_layout(record.passages, unknowns)
-    n_f = offsets.size
+    _, axles, _ = force_layout(record.passages, unknowns)
+    n_f = axles.size
     if record.data.shape[1] < n_f and unknowns is ForceUnknowns.WHEEL:
         raise InputError(
             f"{record.data.shape[1]} sensor channels cannot identify {n_f} wheel forces; "
             "use unknowns='axle' or more sensors"
         )
-    model = build_model(bridge, modes, record.sensors, record.passages, record.time, d_scale,
-                        unknowns=unknowns, order=order, static_correction=static_correction)
+    model = build_model(bridge, modes, record, d_scale, unknowns=unknowns, order=order,
+                        static_correction=static_correction)
     w = None if weights is None else np.asarray(weights, dtype=float)
     d_scaled = d / d_scale
     W = np.ones(model.n_s) if w is None else w
