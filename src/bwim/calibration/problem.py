@@ -11,6 +11,8 @@ Contract
   sensor, §1.5), against the measured (dynamic) strains.
 * :class:`DynamicObjective` (step 2) simulates the calibration crossing on the trial
   bridge (vehicle–bridge interaction over the given road) and compares total strains.
+* :meth:`StaticObjective.jacobian` is the residuals' Jacobian by the adjoint method
+  (THEORY §1.5).
 * Both return, per trial, the squared misfit of each **part**: the channels of one
   measurement point (the sub-objectives of sub-structured CE, paper §4.1).  Their sum is
   the objective.  :func:`neighbour_map` says which parameters neighbour which part: the
@@ -30,9 +32,11 @@ import scipy.sparse as sp
 from bwim.dynamics.crossing import prepare_crossing, run_crossing
 from bwim.errors import InputError, NumericalError
 from bwim.fe.bridge import Bridge
+from bwim.fe.influence import static_sensitivities
 from bwim.fe.modal import select_modes
 from bwim.records import Record
 from bwim.road import RoadProfile
+from bwim.vehicles import Vehicle
 
 __all__ = [
     "DynamicObjective",
@@ -143,7 +147,7 @@ def neighbour_map(space: ParameterSpace, sensors) -> np.ndarray:
     return nb
 
 
-def _check_records(records: Sequence[Record], vehicle) -> list[Record]:
+def _check_records(records: Sequence[Record], vehicle: Vehicle) -> list[Record]:
     records = list(records) if isinstance(records, (list, tuple)) else [records]
     if not records:
         raise InputError("calibration needs at least one record of the calibration truck")
@@ -193,7 +197,7 @@ class StaticObjective:
     residuals; default 1 (the paper's plain sum).
     """
 
-    def __init__(self, space: ParameterSpace, records: Sequence[Record], vehicle,
+    def __init__(self, space: ParameterSpace, records: Sequence[Record], vehicle: Vehicle,
                  base: Bridge | None = None, weights=None):
         self.space = space
         self.base = space.start if base is None else base
@@ -256,6 +260,29 @@ class StaticObjective:
                                zip(self.predicted(theta), self._data, self.weights,
                                    strict=True)])
 
+    def jacobian(self, theta: np.ndarray) -> np.ndarray:
+        """∂(residuals)/∂θ by the adjoint method, shape (n_residuals, n_params).
+
+        A shared family's value drives all its zones or girders: its column is the sum of
+        theirs (chain rule through the broadcast).
+        """
+        space = self.space
+        bridge = space.bridge(theta, self.base)
+        blocks = []
+        for rec, w in zip(self.records, self.weights, strict=True):
+            p = rec.passage
+            x = p.wheel_x(rec.time)
+            y = np.broadcast_to(p.wheel_y, x.shape) if bridge.is_plate else None
+            sens = static_sensitivities(bridge, rec.sensors, x, y,
+                                        self.static_wheels[None, :], wrt=space.names)
+            weighted = sens.values * np.sqrt(w)[None, :, None]  # rows as in residuals()
+            vals = weighted.reshape(-1, sens.values.shape[2])
+            names = np.asarray(sens.names)
+            cols = [vals[:, names == n].sum(axis=1, keepdims=True) if n in space.shared
+                    else vals[:, names == n] for n in space.names]
+            blocks.append(np.hstack(cols))
+        return np.vstack(blocks)
+
     def __call__(self, theta: np.ndarray) -> np.ndarray:
         return self.parts(theta)
 
@@ -264,7 +291,7 @@ class DynamicObjective:
     """Dynamic misfit of trial parameters: the calibration crossings re-simulated
     (channel ``weights`` as in :class:`StaticObjective`)."""
 
-    def __init__(self, space: ParameterSpace, records: Sequence[Record], vehicle,
+    def __init__(self, space: ParameterSpace, records: Sequence[Record], vehicle: Vehicle,
                  road: RoadProfile | None, base: Bridge, *, approach: float,
                  n_modes: int | None = None, weights=None):
         self.space = space

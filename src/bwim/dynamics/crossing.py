@@ -45,6 +45,7 @@ from bwim.records import Passage, Record, Truth, VBIConvergence
 from bwim.road import RoadProfile
 from bwim.sensors import Sensor
 from bwim.vehicles.model import VehicleModel
+from bwim.vehicles.types import Vehicle
 
 __all__ = ["DEFAULT_APPROACH", "DEFAULT_SAMPLING_RATE", "PreparedCrossing", "VBIMethod",
            "prepare_crossing", "run_crossing", "simulate"]
@@ -127,7 +128,7 @@ class PreparedCrossing:
 
 def prepare_crossing(
     bridge: Bridge,
-    vehicle,
+    vehicle: Vehicle | Sequence[Vehicle],
     *,
     speed,
     sensors: Sequence[Sensor],
@@ -295,7 +296,7 @@ def run_crossing(
 
 def simulate(
     bridge: Bridge,
-    vehicle,
+    vehicle: Vehicle | Sequence[Vehicle],
     *,
     speed,
     sensors: Sequence[Sensor],

@@ -39,6 +39,7 @@ from bwim.sensors import Sensor, SensorKind
 
 if TYPE_CHECKING:
     from bwim.fe.bridge import Bridge
+    from bwim.vehicles import Vehicle
 
 __all__ = [
     "DEFAULT_SMOOTHING",
@@ -266,7 +267,7 @@ def _hat_design(positions: np.ndarray, loads: np.ndarray, x0: float, h: float,
     return sp.csr_matrix((v[keep], (r[keep], c[keep] - 1)), shape=(n_t, n - 1))
 
 
-def _static_axle_loads(vehicle: Any) -> np.ndarray:
+def _static_axle_loads(vehicle: Vehicle | Sequence[float]) -> np.ndarray:
     loads = getattr(vehicle, "static_axle_loads", vehicle)
     try:
         arr = np.array(loads, dtype=float, ndmin=1)
@@ -306,7 +307,7 @@ def _check_records(records: Any, n_axles: int | None) -> list[Record]:
 
 def calibrate_influence_line(
     records: Sequence[Record] | Record,
-    vehicle: Any,
+    vehicle: Vehicle | Sequence[float],
     *,
     channels: Any = "sum",
     regularization: float = DEFAULT_SMOOTHING,
