@@ -223,8 +223,6 @@ def _calibrate(args: argparse.Namespace) -> int:
             kwargs[key] = getattr(args, key)
     if args.jobs is not None:
         kwargs["n_jobs"] = args.jobs
-    if scenario.run is not None:
-        kwargs.setdefault("approach", scenario.run.approach)
     progress = _CalibrationProgress()
     try:
         cal = calibrate(start, records, vehicle, road=road, callback=progress, **kwargs)

@@ -118,7 +118,7 @@ def calibrate(
     seed: int | np.random.Generator | None = None,
     method: Method | str = Method.CE,
     refine: Refine | str = Refine.LM,
-    approach: float = 100.0,
+    approach: float | None = None,
     population: int | tuple[int, int] | None = None,
     elite_fraction: float = 0.05,
     convergences: int = 3,
@@ -156,8 +156,10 @@ def calibrate(
     method : "ce", "lm" or "cma"
     refine : "lm" or "none"
         The joint dynamic refinement after the two stages (see module docstring).
-    approach : float
-        Run-up length of the crossings, m (the vehicle's dynamic state on entry).
+    approach : float, optional
+        Run-up length of the crossings, m (the vehicle's dynamic state on entry); default
+        each record's own (:attr:`~bwim.Record.settings`, set by :func:`bwim.simulate`),
+        else :data:`~bwim.dynamics.DEFAULT_APPROACH`.
     population : int or (int, int), optional
         CE/CMA population of the static and dynamic stages (default 200 and
         ``clip(10 × n_unknowns, 40, 100)``).

@@ -29,12 +29,12 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from bwim.dynamics.crossing import prepare_crossing, run_crossing
+from bwim.dynamics.crossing import DEFAULT_APPROACH, prepare_crossing, run_crossing
 from bwim.errors import InputError, NumericalError
 from bwim.fe.bridge import Bridge
 from bwim.fe.influence import static_sensitivities
 from bwim.fe.modal import select_modes
-from bwim.records import Record
+from bwim.records import Record, SimulationSettings
 from bwim.road import RoadProfile
 from bwim.vehicles import Vehicle
 
@@ -289,10 +289,16 @@ class StaticObjective:
 
 class DynamicObjective:
     """Dynamic misfit of trial parameters: the calibration crossings re-simulated
-    (channel ``weights`` as in :class:`StaticObjective`)."""
+    (channel ``weights`` as in :class:`StaticObjective`).
+
+    Each crossing is re-simulated with its record's :class:`~bwim.records.
+    SimulationSettings` (run-up and tail); ``approach`` (m), when given, overrides the
+    run-up of every record.  A record without settings runs up
+    :data:`~bwim.dynamics.DEFAULT_APPROACH` and is simulated to its end.
+    """
 
     def __init__(self, space: ParameterSpace, records: Sequence[Record], vehicle: Vehicle,
-                 road: RoadProfile | None, base: Bridge, *, approach: float,
+                 road: RoadProfile | None, base: Bridge, *, approach: float | None = None,
                  n_modes: int | None = None, weights=None):
         self.space = space
         self.base = base
@@ -302,11 +308,15 @@ class DynamicObjective:
         self._parts = []
         for rec in self.records:
             p = rec.passage
+            settings = rec.settings
+            if settings is None:
+                settings = SimulationSettings(approach=DEFAULT_APPROACH,
+                                              tail=rec.time_after_exit(base.length))
             prep = prepare_crossing(base, vehicle, speed=p.speed, sensors=rec.sensors,
                                     lane=p.lane if base.is_plate else None, road=road,
-                                    sampling_rate=rec.sampling_rate, approach=approach,
-                                    tail=max(0.0, rec.time[-1] - (base.length + p.axle_offsets[
-                                        -1]) / p.speed))
+                                    sampling_rate=rec.sampling_rate,
+                                    approach=settings.approach if approach is None else approach,
+                                    tail=settings.tail)
             self._prepared.append(prep)
             self._parts.append(measurement_points(rec.sensors)[0])
         self.n_parts = max(int(p.max()) for p in self._parts) + 1

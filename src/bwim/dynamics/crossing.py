@@ -41,7 +41,7 @@ from bwim.errors import InputError, parse_enum, require_positive
 from bwim.fe.bridge import Bridge
 from bwim.fe.influence import InfluenceSurfaces
 from bwim.fe.modal import select_modes
-from bwim.records import Passage, Record, Truth, VBIConvergence
+from bwim.records import Passage, Record, SimulationSettings, Truth, VBIConvergence
 from bwim.road import RoadProfile
 from bwim.sensors import Sensor
 from bwim.vehicles.model import VehicleModel
@@ -119,6 +119,7 @@ class PreparedCrossing:
     models: tuple[VehicleModel, ...]
     passages: tuple[Passage, ...]
     scheme: Newmark
+    settings: SimulationSettings
 
     @cached_property
     def approach_state(self):
@@ -141,10 +142,8 @@ def prepare_crossing(
 ) -> PreparedCrossing:
     """Validate a crossing and precompute its kinematics (see :func:`simulate`)."""
     fs = require_positive("sampling_rate", sampling_rate)
-    if not np.isfinite(approach) or approach < 0:
-        raise InputError(f"approach must be >= 0 m, got {approach!r}")
-    if not np.isfinite(tail) or tail < 0:
-        raise InputError(f"tail must be >= 0 s, got {tail!r}")
+    settings = SimulationSettings(approach=approach, tail=tail)  # validates both
+    approach, tail = settings.approach, settings.tail
     vehicles = list(vehicle) if isinstance(vehicle, (list, tuple)) else [vehicle]
     n_veh = len(vehicles)
     speeds = [require_positive("speed", v) for v in _as_list("speed", speed, n_veh)]
@@ -206,6 +205,7 @@ def prepare_crossing(
         structure=bridge.model, crossing=crossing, time=t, keep=t >= -1e-9 * dt,
         rows=_contact_rows(bridge, x, c_y, on), sensors=sensors, S=S, models=tuple(models),
         passages=tuple(passages), scheme=Newmark(dt),
+        settings=settings,
     )
 
 
@@ -291,7 +291,8 @@ def run_crossing(
                             static_wheel_loads=m.static_forces.copy(),
                             static_axle_loads=m.static_axle_loads, contact_lost=lost))
     return Record(time=time, data=data[keep], sensors=prepared.sensors,
-                  passages=prepared.passages, truths=tuple(truths), convergence=conv)
+                  passages=prepared.passages, truths=tuple(truths), convergence=conv,
+                  settings=prepared.settings)
 
 
 def simulate(
@@ -352,7 +353,8 @@ def simulate(
     Returns
     -------
     Record
-        Readings at t ≥ 0, passages, truths (wheel and axle forces) and convergence.
+        Readings at t ≥ 0, passages, truths (wheel and axle forces), convergence and the
+        simulation settings (approach, tail).
     """
     method = parse_enum(VBIMethod, method, "method")
     prepared = prepare_crossing(bridge, vehicle, speed=speed, sensors=sensors, lane=lane,

@@ -39,7 +39,7 @@ from bwim.fe.mesh import grid_lines
 from bwim.io._csv import read_numeric_csv
 from bwim.io.records import read_csv_record, read_record
 from bwim.io.scenario import VEHICLE_TYPES, BridgeSpec, GirderSpec, Scenario
-from bwim.records import Passage, Record
+from bwim.records import Passage, Record, SimulationSettings
 from bwim.road import RoadProfile
 from bwim.sensors import Sensor
 from bwim.vehicles import named
@@ -369,14 +369,16 @@ def load_record(
         ``.h5``/``.hdf5``/``.hdf``: a record written by :func:`bwim.io.write_record`.
     scenario : Scenario, optional
         Needed for CSV: its ``[[sensors]]`` name the columns, and its ``[run]`` and
-        ``[vehicle]`` (when present) give the passage.
+        ``[vehicle]`` (when present) give the passage.  A record without simulation
+        settings (every CSV, and HDF5 records of measurements) takes the ``[run]``'s
+        approach, with the tail the record has after the last axle leaves the bridge.
     time_column, allow_extra, scale
         As for :func:`bwim.io.read_csv_record` (CSV only).
     """
     p = Path(path)
     suffix = p.suffix.lower()
     if suffix in _HDF5_SUFFIXES:
-        return read_record(p)
+        return _with_run_settings(read_record(p), scenario)
     if suffix not in _CSV_SUFFIXES:
         raise InputError(f"{p}: unknown record format {p.suffix!r}; use .csv or .h5")
     if scenario is None:
@@ -385,5 +387,17 @@ def load_record(
     sensors = build_sensors(scenario)
     passage = (build_passage(scenario) if scenario.run is not None
                and scenario.vehicle is not None else None)
-    return read_csv_record(p, sensors, passage, time_column=time_column,
-                           allow_extra=allow_extra, scale=scale)
+    record = read_csv_record(p, sensors, passage, time_column=time_column,
+                             allow_extra=allow_extra, scale=scale)
+    return _with_run_settings(record, scenario)
+
+
+def _with_run_settings(record: Record, scenario: Scenario | None) -> Record:
+    """The record with the scenario's ``[run]`` approach as its simulation settings, if it
+    has none (see :func:`load_record`)."""
+    if (record.settings is not None or scenario is None or scenario.run is None
+            or not record.passages):
+        return record
+    settings = SimulationSettings(approach=scenario.run.approach,
+                                  tail=record.time_after_exit(scenario.bridge.length))
+    return dataclasses.replace(record, settings=settings)
