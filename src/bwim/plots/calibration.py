@@ -39,7 +39,7 @@ def plot_mfi_comparison(exact, calibrated, truth, *, ax=None):
     the first axle's distance along the bridge (paper Fig. 8 and 19)."""
     ax = axes(ax)
     p = exact.passages[0]
-    dist = p.speed * (exact.time - p.delay)
+    dist = p.axle_x(exact.time)[:, 0]
     for a in range(truth.axle_forces.shape[1]):
         c = f"C{a}"
         ax.plot(dist, truth.axle_forces[:, a] / KILONEWTON, color=c, lw=2, alpha=0.4,
