@@ -16,6 +16,11 @@ Contract
   like the static solution rather than like the modal series.
 * Several vehicles: pass sequences for ``vehicle``, ``speed``, ``lane`` and ``delay``
   (record time at which each first axle reaches x = 0).
+* Defaults: :data:`DEFAULT_APPROACH` (100 m) of run-up and :data:`DEFAULT_SAMPLING_RATE`
+  (1 kHz), kept here only.  The record carries the crossing's
+  :class:`~bwim.records.SimulationSettings` (approach, tail) for later re-simulation.
+* Positions follow :meth:`bwim.records.Passage.axle_x`; the modal truncation is
+  :func:`bwim.fe.select_modes`.
 """
 
 from __future__ import annotations
