@@ -5,6 +5,8 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Sequence
 
+from bwim.tables import Table
+
 
 def median_time(fn: Callable[[], object], *, repeat: int = 7, min_time: float = 0.05) -> float:
     """Median wall time of ``fn()`` in seconds, each sample looping until ``min_time``."""
@@ -25,12 +27,5 @@ def median_time(fn: Callable[[], object], *, repeat: int = 7, min_time: float = 
 
 
 def print_table(title: str, header: Sequence[str], rows: Sequence[Sequence[object]]) -> None:
-    """Print a plain-text table with right-aligned columns."""
-    cells = [[str(c) for c in header]] + [[str(c) for c in r] for r in rows]
-    widths = [max(len(r[i]) for r in cells) for i in range(len(header))]
-    print(f"\n{title}")
-    line = "  ".join(h.rjust(w) for h, w in zip(cells[0], widths, strict=True))
-    print(line)
-    print("-" * len(line))
-    for r in cells[1:]:
-        print("  ".join(c.rjust(w) for c, w in zip(r, widths, strict=True)))
+    """Print a plain-text table with right-aligned columns (:class:`bwim.tables.Table`)."""
+    print("\n" + Table(title, header, rows).render())

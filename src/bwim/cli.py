@@ -3,10 +3,13 @@
 Contract
 --------
 ``main(argv=None) -> int`` parses arguments, calls the library and prints; it holds no
-numerics.  Bad input (a scenario, record or model file, an option, an output path) ends
-with a one-line message ``bwim: error: ...`` on stderr and exit code 2, never a traceback,
-and leaves no partial output file (every writer is atomic, outputs are checked before the
-work starts).  Progress bars (tqdm, on stderr) show only when stdout is a terminal.
+numerics.  The subcommands are one declarative table, :data:`COMMANDS` (name, handler,
+help, description, arguments), from which the parser is built; tables are printed with
+:class:`bwim.tables.Table`.  Bad input (a scenario, record or model file, an option, an
+output path) ends with a one-line message ``bwim: error: ...`` on stderr and exit code 2,
+never a traceback, and leaves no partial output file (every writer is atomic, outputs are
+checked before the work starts).  Progress bars (tqdm, on stderr) show only when stdout is
+a terminal.
 
 Subcommands:
 
@@ -22,6 +25,8 @@ Subcommands:
 ``weigh SCENARIO RECORD... (--calibration-records REC... | --influence IL.h5) [-o FOLDER]``
     Static weights by Moses' algorithm, the influence line calibrated from crossings of
     the scenario's vehicle (and written) or read from a file.
+``accuracy SUMMARY.csv --reference REF.csv [--repeatability] [--environment]``
+    The COST 323 accuracy class per criterion and overall.
 ``report RESULTS... -o REPORT.html``
     A single-file HTML report (tables, embedded figures) of result files and folders.
 ``demo [--out FOLDER] [--quick]``
@@ -39,16 +44,13 @@ import argparse
 import csv
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
-
-from bwim import paper
 from bwim.calibration import Method
-from bwim.conventions import KILONEWTON, MICROSTRAIN
 from bwim.errors import BwimError, InputError
-from bwim.loads import PointLoad
+from bwim.tables import Table, format_kn, format_kn_each, format_pct, param_values
 
 __all__ = ["main"]
 
@@ -126,23 +128,6 @@ def _bridge(args: argparse.Namespace, scenario):
     return load_bridge(args.bridge) if args.bridge else build_bridge(scenario)
 
 
-def _table(header: Sequence[str], rows: Sequence[Sequence[str]], title: str = "") -> str:
-    cells = [list(header), *[list(map(str, r)) for r in rows]]
-    widths = [max(len(r[i]) for r in cells) for i in range(len(header))]
-    line = "  ".join(h.rjust(w) for h, w in zip(header, widths, strict=True))
-    out = ([title] if title else []) + [line, "-" * len(line)]
-    out += ["  ".join(c.rjust(w) for c, w in zip(r, widths, strict=True)) for r in cells[1:]]
-    return "\n".join(out)
-
-
-def _kn(values) -> list[str]:
-    return [f"{v / KILONEWTON:.1f}" for v in np.atleast_1d(values)]
-
-
-def _pct(value: float, ref: float) -> str:
-    return f"{100.0 * (value / ref - 1.0):+.2f}"
-
-
 def _write_csv(path: Path, header: Sequence[str], rows: Sequence[Sequence]) -> None:
     from bwim.io import atomic_open
 
@@ -189,24 +174,14 @@ def _simulate(args: argparse.Namespace) -> int:
           f"{record.time.size} samples at {record.sampling_rate:g} Hz "
           f"({time.perf_counter() - t0:.1f} s)")
     if record.truths:
-        print(f"true static axle loads (kN): {', '.join(_kn(record.truth.static_axle_loads))}; "
-              f"GVW {record.truth.gvw / KILONEWTON:.1f} kN")
+        print("true static axle loads (kN): "
+              f"{', '.join(format_kn_each(record.truth.static_axle_loads))}; "
+              f"GVW {format_kn(record.truth.gvw)} kN")
     print(f"record: {out}")
     return 0
 
 
 # --- calibrate -------------------------------------------------------------------------------
-def _param_rows(start: dict, cal) -> list[tuple[str, ...]]:
-    rows = []
-    for key, values in cal.params.items():
-        for z, v in enumerate(np.atleast_1d(values)):
-            s0 = np.atleast_1d(start[key])[z]
-            u = np.atleast_1d(cal.uncertainty[key])[z]
-            name = key if np.size(values) == 1 else f"{key}[{z}]"
-            rows.append((name, f"{s0:.5g}", f"{v:.5g}", f"± {u:.3g}", _pct(v, s0)))
-    return rows
-
-
 def _calibrate(args: argparse.Namespace) -> int:
     from bwim.calibration import calibrate
     from bwim.io import build_bridge, build_road, build_vehicle, load_scenario, save_bridge
@@ -230,13 +205,15 @@ def _calibrate(args: argparse.Namespace) -> int:
         progress.close()
     save_bridge(cal.bridge, out, title=f"calibrated from {len(records)} record(s) of "
                 f"{scenario.title or scenario.source}")
-    print(_table(("parameter", "start", "calibrated", "uncertainty", "change %"),
-                 _param_rows(start.params, cal),
-                 f"Calibrated parameters (SI: Pa, kg/m²), {len(records)} record(s):"))
+    rows = [(name, f"{s0:.5g}", f"{v:.5g}", f"± {u:.3g}", format_pct(v, s0))
+            for name, v, s0, u in param_values(cal.params, start.params, cal.uncertainty)]
+    print(Table(f"Calibrated parameters (SI: Pa, kg/m²), {len(records)} record(s):",
+                ("parameter", "start", "calibrated", "uncertainty", "change %"),
+                rows).render())
     print()
-    print(_table(("stage", "unknowns", "evaluations", "time (s)"),
-                 [(s.name, ", ".join(s.labels), str(s.nfev), f"{s.wall_time:.1f}")
-                  for s in cal.stages]))
+    print(Table("", ("stage", "unknowns", "evaluations", "time (s)"),
+                [(s.name, ", ".join(s.labels), s.nfev, f"{s.wall_time:.1f}")
+                 for s in cal.stages]).render())
     print(f"\nidentifiability: {cal.identifiability.summary().replace(chr(10), '; ')}")
     print(f"{cal.nfev} evaluations, wall time {cal.wall_time:.1f} s")
     print(f"calibrated model: {out}")
@@ -316,15 +293,15 @@ def _identify(args: argparse.Namespace) -> int:
         for v, p in enumerate(ident.passages):
             w = ident.axle_weights[a0:a0 + p.n_axles]
             a0 += p.n_axles
-            cells = _kn(w)
+            cells = format_kn_each(w)
             rows.append([path.name, v + 1, p.n_axles, *cells, *[""] * (n_max - len(cells)),
-                         f"{ident.gvw[v] / KILONEWTON:.2f}", f"{ident.lam:.4g}"])
-            shown.append((path.name, str(v + 1), ", ".join(cells),
-                           f"{ident.gvw[v] / KILONEWTON:.1f}", f"{ident.lam:.3g}"))
+                         format_kn(ident.gvw[v], 2), f"{ident.lam:.4g}"])
+            shown.append((path.name, v + 1, ", ".join(cells), format_kn(ident.gvw[v]),
+                          f"{ident.lam:.3g}"))
     _write_csv(summary, header, rows)
-    print(_table(("record", "vehicle", "axle weights (kN)", "GVW (kN)", "λ"), shown,
-                 f"Moving force identification, {len(records)} record(s), "
-                 f"{time.perf_counter() - t0:.1f} s:"))
+    print(Table(f"Moving force identification, {len(records)} record(s), "
+                f"{time.perf_counter() - t0:.1f} s:",
+                ("record", "vehicle", "axle weights (kN)", "GVW (kN)", "λ"), shown).render())
     print(f"summary: {summary}\nforces: {folder}/<record>_forces.h5")
     return 0
 
@@ -369,15 +346,32 @@ def _weigh(args: argparse.Namespace) -> int:
     rows, shown = [], []
     for path, stem, w in zip(paths, _unique_stems(paths), results, strict=True):
         write_static_weights(w, folder / f"{stem}_static.h5")
-        cells = _kn(w.axle_weights)
+        cells = format_kn_each(w.axle_weights)
         rows.append([path.name, w.n_axles, *cells, *[""] * (n_max - len(cells)),
-                     f"{w.gvw / KILONEWTON:.2f}", f"{w.residual:.4g}"])
-        shown.append((path.name, ", ".join(cells), f"{w.gvw / KILONEWTON:.1f}",
-                      f"{w.residual:.3g}"))
+                     format_kn(w.gvw, 2), f"{w.residual:.4g}"])
+        shown.append((path.name, ", ".join(cells), format_kn(w.gvw), f"{w.residual:.3g}"))
     _write_csv(folder / "summary.csv", header, rows)
-    print(_table(("record", "axle weights (kN)", "GVW (kN)", "residual"), shown,
-                 "Static weights (Moses):"))
+    print(Table("Static weights (Moses):",
+                ("record", "axle weights (kN)", "GVW (kN)", "residual"), shown).render())
     print(f"summary: {folder / 'summary.csv'}\nweights: {folder}/<record>_static.h5")
+    return 0
+
+
+# --- accuracy --------------------------------------------------------------------------------
+def _accuracy(args: argparse.Namespace) -> int:
+    from bwim.accuracy import assess
+    from bwim.io.accuracy_csv import read_reference, read_summary
+
+    summary = read_summary(args.summary)
+    reference = read_reference(args.reference)
+    result = assess(summary, reference, repeatability=args.repeatability,
+                    environment=args.environment, strict=args.strict)
+    print(result.render())
+    if args.output:
+        target = _out_file(args.output, (".csv",))
+        table = result.table()
+        _write_csv(target, table.header, table.rows)
+        print(f"table: {target}")
     return 0
 
 
@@ -394,155 +388,60 @@ def _report(args: argparse.Namespace) -> int:
 
 
 # --- demo ------------------------------------------------------------------------------------
-def _bridge_summary(modes_n: int) -> None:
-    bridge = paper.slab_bridge()
-    grid = bridge.model.grid
-    print("bwim demo: the paper's slab bridge (Dowling, OBrien & González 2012, §5.1)")
-    print(f"  {grid.length:g} m × {grid.width:g} m slab, {grid.nx} × {grid.ny} BFS elements, "
-          f"{bridge.n_free} free DOF, E = {paper.SLAB_E / 1e9:g} GPa, "
-          f"μ = {paper.SLAB_MU:g} kg/m², h = {paper.SLAB_THICKNESS:g} m (assumed)")
-    modes = bridge.modes(modes_n)
-    print(f"\nLowest {modes_n} natural frequencies (Hz):")
-    print("  " + "  ".join(f"{f:7.2f}" for f in modes.frequencies))
+def _write_figures(figures: dict, folder: Path, *, prefix: str = "", dpi: int) -> list[Path]:
+    """Each named figure as ``folder/<prefix><name>.png`` (atomically); the paths."""
+    from bwim.io import atomic_output
 
-    x2 = grid.length / 2  # rear (heavier) axle at mid-span
-    x1 = x2 + paper.AXLE_SPACING
-    half = paper.TRACK_WIDTH / 2
-    loads = [
-        PointLoad(x=x, y=paper.LANE + dy, P=p / 2)
-        for x, p in ((x1, paper.AXLE_LOADS[0]), (x2, paper.AXLE_LOADS[1]))
-        if x <= grid.length
-        for dy in (-half, half)
-    ]
-    sensors = [s for s in paper.sensors() if s.kind.value == "strain_x"]
-    strains = bridge.static(loads, sensors) / MICROSTRAIN
-    print(f"\nStatic longitudinal soffit strain (µε), rear axle "
-          f"({paper.AXLE_LOADS[1] / 1e3:g} kN) at mid-span, lane centre y = {paper.LANE:g} m:")
-    xs = sorted({s.x for s in sensors})
-    ys = sorted({s.y for s in sensors})
-    table = np.array(strains).reshape(len(xs), len(ys))
-    print("   y (m) " + "".join(f"{'x = ' + format(x, 'g') + ' m':>12}" for x in xs))
-    for j, y in enumerate(ys):
-        print(f"  {y:6.1f} " + "".join(f"{table[i, j]:12.2f}" for i in range(len(xs))))
-
-
-#: Demo settings: (approach m, CE populations, convergences); --quick for tests.
-#: The second (weighed) vehicle: a 3-axle rigid truck at another speed, on another road.
+    paths = []
+    for name, fig in figures.items():
+        target = folder / f"{prefix}{name}.png"
+        with atomic_output(target) as tmp:
+            fig.savefig(tmp, format="png", dpi=dpi)
+        paths.append(target)
+    return paths
 
 
 def _demo(args: argparse.Namespace) -> int:
-    from bwim import report
-    from bwim.demo import DEMO_ROAD_SEED, DEMO_SPEED, SETTINGS, run_demo
     from bwim.io import (
-        atomic_output,
         save_bridge,
         write_identification,
         write_influence_line,
         write_record,
         write_static_weights,
     )
-    from bwim.mfi import force_errors
+    from bwim.paper.demo import MAX_MODES, REPORT_INTRO, REPORT_TITLE, run_demo
+    from bwim.report import figure_files, write_report
 
-    if not 1 <= args.modes <= 50:
-        raise InputError(f"--modes must be between 1 and 50, got {args.modes}")
+    if not 1 <= args.modes <= MAX_MODES:
+        raise InputError(f"--modes must be between 1 and {MAX_MODES}, got {args.modes}")
     out = _out_folder(args.out)
     t0 = time.perf_counter()
-    _bridge_summary(args.modes)
-    settings = SETTINGS[args.quick]
-    approach, population = settings.approach, settings.population
-    steps = {
-        1: f"\n1. Calibration crossing: the paper's {paper.truck().n_axles}-axle truck at "
-           f"{paper.SPEED:g} m/s, lane {paper.LANE:g} m, road class C, {approach:g} m "
-           "approach (vehicle-bridge interaction simulated on the true bridge)",
-        2: "2. Calibrating E_x, E_y, μ by Cross-Entropy from E_x×0.8, E_y×1.2, μ×1.25 "
-           f"(populations {population[0]}/{population[1]}) …",
-        3: None,
-    }
-
-    def on_step(n, _text):
-        if steps[n]:
-            print(steps[n], flush=True)
-
     progress = _CalibrationProgress()
     try:
-        result = run_demo(quick=args.quick, seed=args.seed, n_jobs=args.jobs,
-                          callback=progress, on_step=on_step)
+        demo = run_demo(quick=args.quick, seed=args.seed, n_jobs=args.jobs, n_modes=args.modes,
+                        callback=progress, echo=lambda text: print(text, flush=True))
     finally:
         progress.close()
-    truth, start, cal = result.truth, result.start, result.calibration
-    cal_rec, rec = result.calibration_record, result.second_record
-    ident, ident_start = result.identified, result.identified_start
-    il, moses = result.influence_line, result.moses
-    unknowns = tuple(cal.params)
-    vehicle = rec.passage
-    rows = []
-    for u in unknowns:
-        s0, c, t = start.params[u][0], cal.params[u][0], truth.params[u][0]
-        rows.append((u, f"{t:.5g}", f"{s0:.5g}", _pct(s0, t), f"{c:.5g}", _pct(c, t),
-                     f"{cal.uncertainty[u][0]:.3g}"))
-    print(_table(("parameter", "true", "start", "error %", "calibrated", "error %",
-                  "uncertainty"), rows,
-                 f"   {cal.nfev} evaluations, {cal.wall_time:.1f} s:"))
-
-    print(f"\n3. A second vehicle: {vehicle.n_axles}-axle rigid truck at {DEMO_SPEED:g} m/s "
-          f"over another stretch of road (seed {DEMO_ROAD_SEED}); forces identified with "
-          "the calibrated and the starting model (longitudinal strains, L-curve λ), and "
-          "Moses with the influence line calibrated from crossing 1", flush=True)
-    true = rec.truth
-    header = ("method", *(f"axle {i + 1} (kN)" for i in range(vehicle.n_axles)), "GVW (kN)",
-              *(f"axle {i + 1} err %" for i in range(vehicle.n_axles)), "GVW err %")
-
-    def row(name, w):
-        return (name, *_kn(w), f"{np.sum(w) / KILONEWTON:.1f}",
-                *(_pct(a, b) for a, b in zip(w, true.static_axle_loads, strict=True)),
-                _pct(np.sum(w), true.gvw))
-
-    print(_table(header, [
-        row("truth (static)", true.static_axle_loads),
-        row("MFI, calibrated model", ident.axle_weights),
-        row("MFI, starting model", ident_start.axle_weights),
-        row("Moses, calibrated IL", moses.axle_weights),
-    ]))
-    err = force_errors(ident, true)
-    print("   MFI (calibrated) force RMS error, % of static axle load: "
-          + ", ".join(f"{100 * e:.1f}" for e in err.rms_error) + f"; λ = {ident.lam:.3g}")
-
-    save_bridge(cal.bridge, out / "calibrated_bridge.toml", title="bwim demo: calibrated")
-    write_record(cal_rec, out / "calibration_crossing.h5")
-    write_record(rec, out / "second_vehicle.h5")
-    write_identification(ident, out / "second_vehicle_forces.h5")
-    write_static_weights(moses, out / "second_vehicle_static.h5")
-    write_influence_line(il, out / "influence_line.h5")
-    sections = [
-        report.section(cal, "E_x, E_y, μ of the paper's slab", start=start, true_bridge=truth),
-        report.section(cal_rec, "calibration crossing (2-axle truck)", length=truth.length),
-        report.section(rec, "second vehicle (3-axle truck)", length=truth.length),
-        report.section(ident, "second vehicle, calibrated model", truth=true),
-        report.section(ident_start, "second vehicle, starting (uncalibrated) model",
-                       truth=true),
-        report.section(il, "calibrated from crossing 1", true_bridge=truth),
-        report.section(moses, "second vehicle", truth=true),
-    ]
-    for s in sections:
-        for k, (_, fig) in enumerate(s.figures):
-            name = "".join(c if c.isalnum() else "_" for c in s.title.lower())[:48]
-            with atomic_output(out / f"{name.strip('_')}_{k + 1}.png") as tmp:
-                fig.savefig(tmp, format="png", dpi=100)
-    page = report.write_report(
-        out / "report.html", sections, title="bwim demo: the paper's slab bridge",
-        intro="Everything below was computed by this run: a simulated calibration crossing "
-              "of the paper's truck, a Cross-Entropy calibration from a wrong starting "
-              "model, and the weighing of a second vehicle by moving force identification "
-              "(calibrated and starting model) and by Moses' static algorithm.")
+    save_bridge(demo.calibration.bridge, out / "calibrated_bridge.toml",
+                title="bwim demo: calibrated")
+    write_record(demo.calibration_record, out / "calibration_crossing.h5")
+    write_record(demo.second_record, out / "second_vehicle.h5")
+    write_identification(demo.identified, out / "second_vehicle_forces.h5")
+    write_static_weights(demo.moses, out / "second_vehicle_static.h5")
+    write_influence_line(demo.influence_line, out / "influence_line.h5")
+    sections = demo.sections()
+    _write_figures(figure_files(sections), out, dpi=100)
+    page = write_report(out / "report.html", sections, title=REPORT_TITLE, intro=REPORT_INTRO)
     print(f"\nfiles in {out}: calibrated_bridge.toml, records, results (.h5), figures (.png)")
     print(f"report: {page}")
     print(f"demo took {time.perf_counter() - t0:.1f} s")
     return 0
 
 
+# --- reproduce -------------------------------------------------------------------------------
 def _reproduce(args: argparse.Namespace) -> int:
-    from bwim import reproduce
-    from bwim.io.atomic import atomic_output, check_writable
+    from bwim.io import check_writable
+    from bwim.paper import reproduce
 
     names = list(reproduce.CASES) if args.case == "all" else [args.case]
     out = Path(args.out)
@@ -557,20 +456,196 @@ def _reproduce(args: argparse.Namespace) -> int:
         report = reproduce.CASES[name](**kwargs)
         print(report.render(), flush=True)
         if not args.no_figures:
-            from bwim.plots.reproduce import report_figures
-
-            for fig_name, fig in report_figures(report).items():
-                target = out / f"{name.replace('.', '_')}_{fig_name}.png"
-                with atomic_output(target) as tmp:
-                    fig.savefig(tmp, format="png", dpi=110)
+            for target in _write_figures(report.figures(), out,
+                                         prefix=f"{name.replace('.', '_')}_", dpi=110):
                 print(f"  figure: {target}")
         print()
     print(f"total {time.perf_counter() - t0:.1f} s")
     return 0
 
 
+# --- the parser: one declarative entry per command -------------------------------------------
+@dataclass(frozen=True)
+class Arg:
+    """One argument: its names (flags or a positional name) and its add_argument options."""
+
+    names: tuple[str, ...]
+    options: dict = field(default_factory=dict)
+
+
+def arg(*names: str, **options) -> Arg:
+    """An :class:`Arg`: ``arg("-o", "--output", default="x", help="...")``."""
+    return Arg(names, options)
+
+
+@dataclass(frozen=True)
+class OneOf:
+    """Mutually exclusive arguments (exactly one if ``required``)."""
+
+    args: tuple[Arg, ...]
+    required: bool = False
+
+
+@dataclass(frozen=True)
+class Command:
+    """A subcommand: name, handler, one-line help, description and arguments.
+
+    ``raw`` keeps the description's line breaks (its example line) in ``--help``.
+    """
+
+    name: str
+    run: Callable[[argparse.Namespace], int]
+    help: str
+    description: str
+    args: tuple[Arg | OneOf, ...]
+    raw: bool = True
+
+
+_SCENARIO = arg("scenario", metavar="SCENARIO.toml")
+
+COMMANDS: tuple[Command, ...] = (
+    Command(
+        "simulate", _simulate,
+        "simulate a scenario's vehicle crossing and write the strain record",
+        "Simulate the scenario's vehicle crossing its bridge (vehicle-bridge interaction over "
+        "the road profile) and write what the sensors read.\n\n"
+        "  bwim simulate examples/paper_slab.toml -o crossing.h5",
+        (arg("scenario", metavar="SCENARIO.toml", help="the scenario file"),
+         arg("-o", "--output", default="record.h5", metavar="RECORD",
+             help="output record: .h5 (with positions, passage and true forces) or .csv "
+             "(time and readings only); default record.h5"),
+         arg("--bridge", metavar="MODEL.toml",
+             help="use this bridge model (e.g. a calibrated one) instead of the scenario's "
+             "[bridge]"))),
+    Command(
+        "calibrate", _calibrate,
+        "calibrate the bridge model from crossings of a truck of known weight",
+        "Calibrate the stiffness (E_x, E_y, …) and mass (mu) of the scenario's bridge from "
+        "strain records of the scenario's vehicle, the calibration truck of known static axle "
+        "loads.  The scenario's [bridge] is the starting model and its [calibrate] section "
+        "gives the defaults; the records must be crossings at the scenario's [run] speed, "
+        "lane and approach, over its [road].\n\n"
+        "  bwim calibrate examples/paper_slab.toml crossing.h5 -o calibrated.toml",
+        (_SCENARIO,
+         arg("records", nargs="+", metavar="RECORD",
+             help="records of the calibration truck (.h5 or .csv; folders expanded)"),
+         arg("-o", "--output", default="calibrated.toml", metavar="MODEL.toml",
+             help="the calibrated bridge model (default calibrated.toml)"),
+         arg("--method", choices=[m.value for m in Method],
+             help="optimiser: ce = Cross-Entropy (the paper's), lm = Levenberg-Marquardt, "
+             "cma = CMA-ES (default: the scenario's, else ce)"),
+         arg("--jobs", type=int, help="worker processes for the populations"),
+         arg("--seed", type=int, help="random seed of the optimiser"))),
+    Command(
+        "identify", _identify,
+        "identify the moving axle forces and weights of vehicles (MFI)",
+        "Moving force identification: the time history of each axle's force, its static "
+        "weight and the gross vehicle weight, from each record and the bridge model (ideally "
+        "a calibrated one).  Many records run in parallel on this machine (--jobs) or on a "
+        "dask.distributed cluster (--scheduler).  Writes a CSV summary, one row per vehicle, "
+        "and <record>_forces.h5 per record.\n\n"
+        "  bwim identify examples/paper_slab.toml records/ --bridge calibrated.toml -o out/",
+        (arg("scenario", metavar="SCENARIO.toml",
+             help="the scenario (sensor positions; passage of CSV records)"),
+         arg("records", nargs="+", metavar="RECORD",
+             help="records (.h5 or .csv) or folders of them"),
+         arg("--bridge", metavar="MODEL.toml",
+             help="bridge model (default: the scenario's [bridge])"),
+         arg("-o", "--output", default="bwim-out/identify", metavar="OUT",
+             help="a results folder, or summary.csv (results beside it); default "
+             "bwim-out/identify"),
+         OneOf((arg("--jobs", type=int, default=1,
+                    help="worker processes on this machine (-1: all cores); default 1"),
+                arg("--scheduler", metavar="ADDRESS",
+                    help="address of a dask.distributed scheduler, e.g. tcp://host:8786"))))),
+    Command(
+        "weigh", _weigh,
+        "static weights by Moses' algorithm from an influence line",
+        "Static axle weights and GVW by Moses' algorithm.  The influence line is either "
+        "calibrated from crossings of the scenario's vehicle (the calibration truck) and "
+        "written to the output folder, or read from a file.\n\n"
+        "  bwim weigh examples/paper_slab.toml truck.h5 --calibration-records crossing.h5",
+        (_SCENARIO,
+         arg("records", nargs="+", metavar="RECORD",
+             help="records of the vehicles to weigh (.h5 or .csv; folders expanded)"),
+         OneOf((arg("--calibration-records", nargs="+", metavar="REC",
+                    help="crossings of the scenario's vehicle to calibrate the influence "
+                    "line from"),
+                arg("--influence", metavar="IL.h5", help="a saved influence line")),
+               required=True),
+         arg("-o", "--output", default="bwim-out/weigh", metavar="FOLDER",
+             help="results folder (default bwim-out/weigh)"))),
+    Command(
+        "accuracy", _accuracy,
+        "COST 323 accuracy classes of weights against statically weighed references",
+        "The COST 323 European WIM specification's accuracy class per criterion (gross "
+        "weight, group of axles, single axle, axle of a group) and overall, from a weigh "
+        "summary and a reference of the same vehicles' static weights (CSV with the columns "
+        "record, n_axles, axle_spacings_m, axle_weights_kN, gvw_kN; lists ';'-separated).\n\n"
+        "  bwim accuracy out/summary.csv --reference static_weights.csv",
+        (arg("summary", metavar="SUMMARY.csv", help="a summary written by bwim weigh"),
+         arg("--reference", required=True, metavar="REF.csv",
+             help="static weights of the same vehicles (by record name)"),
+         arg("--repeatability", choices=["r1", "r2", "RR1", "RR2"], default="RR2",
+             help="test conditions: r1/r2 repeatability (one or a few vehicles passing many "
+             "times), RR1/RR2 reproducibility (a few vehicles / a sample of traffic); "
+             "default RR2"),
+         arg("--environment", choices=["I", "II", "III"], default="I",
+             help="environmental conditions: I repeatable (a day or so), II limited "
+             "reproducibility, III full (seasons); default I"),
+         arg("--strict", action="store_true",
+             help="a reference record absent from the summary is an error"),
+         arg("-o", "--output", metavar="TABLE.csv", help="also write the table as CSV"))),
+    Command(
+        "report", _report,
+        "a single-file HTML report of result files",
+        "A self-contained HTML page (figures embedded) of result files: force "
+        "identifications, static weights, influence lines, records (.h5), bridge models "
+        "(.toml) and summaries (.csv); folders are expanded.\n\n"
+        "  bwim report out/ -o report.html",
+        (arg("results", nargs="+", metavar="RESULTS"),
+         arg("-o", "--output", default="report.html", metavar="REPORT.html",
+             help="default report.html"),
+         arg("--title", default="bwim report", help="the page title"))),
+    Command(
+        "demo", _demo,
+        "the whole chain on the paper's slab bridge, in under a minute",
+        "On the paper's 12 m × 8 m slab: simulate a calibration crossing, calibrate E_x, E_y "
+        "and mu from a wrong start by Cross-Entropy, identify a second vehicle's axle forces "
+        "with the calibrated model and weigh it by Moses; print the results against the truth "
+        "and write figures and report.html to --out.",
+        (arg("--modes", type=int, default=6, help="natural frequencies to print (default 6)"),
+         arg("--out", default="bwim-out", help="output folder (default bwim-out)"),
+         arg("--seed", type=int, default=0, help="seed of the calibration"),
+         arg("--jobs", type=int, default=1, help="worker processes for calibration"),
+         arg("--quick", action="store_true",
+             help="a smaller, faster calibration (for tests)"))),
+    Command(
+        "reproduce", _reproduce,
+        "the paper's experiments with its numbers side by side",
+        "Reproduce Dowling, OBrien & González (2012) §5: 5.1 identical elements, 5.2 noise, "
+        "5.3 sixteen zones, 5.4 beam-and-slab bridge, and a comparison of optimisers "
+        "('compare').  Full runs take minutes (5.3 the longest); --quick runs small versions.",
+        (arg("case", choices=["5.1", "5.2", "5.3", "5.4", "compare", "all"]),
+         arg("--quick", action="store_true", help="small, fast versions"),
+         arg("--out", default="bwim-out/reproduce", help="folder for the figures"),
+         arg("--jobs", type=int, default=1, help="worker processes for populations"),
+         arg("--no-figures", action="store_true", help="tables only")),
+        raw=False),
+)
+
+
+def _add(parser, item: Arg | OneOf) -> None:
+    """Add ``item`` to ``parser`` (an ArgumentParser or a mutually exclusive group)."""
+    if isinstance(item, OneOf):
+        group = parser.add_mutually_exclusive_group(required=item.required)
+        for a in item.args:
+            _add(group, a)
+    else:
+        parser.add_argument(*item.names, **item.options)
+
+
 def _parser() -> argparse.ArgumentParser:
-    fmt = argparse.RawDescriptionHelpFormatter
     p = argparse.ArgumentParser(
         prog="bwim",
         description="Calibrated, dynamic Bridge Weigh-in-Motion: simulate crossings, "
@@ -580,130 +655,12 @@ def _parser() -> argparse.ArgumentParser:
         "road and the run; see examples/paper_slab.toml.  Units are SI.",
     )
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
-
-    s = sub.add_parser(
-        "simulate", formatter_class=fmt,
-        help="simulate a scenario's vehicle crossing and write the strain record",
-        description="Simulate the scenario's vehicle crossing its bridge (vehicle-bridge "
-        "interaction over the road profile) and write what the sensors read.\n\n"
-        "  bwim simulate examples/paper_slab.toml -o crossing.h5")
-    s.add_argument("scenario", metavar="SCENARIO.toml", help="the scenario file")
-    s.add_argument("-o", "--output", default="record.h5", metavar="RECORD",
-                   help="output record: .h5 (with positions, passage and true forces) or "
-                   ".csv (time and readings only); default record.h5")
-    s.add_argument("--bridge", metavar="MODEL.toml",
-                   help="use this bridge model (e.g. a calibrated one) instead of the "
-                   "scenario's [bridge]")
-    s.set_defaults(run=_simulate)
-
-    c = sub.add_parser(
-        "calibrate", formatter_class=fmt,
-        help="calibrate the bridge model from crossings of a truck of known weight",
-        description="Calibrate the stiffness (E_x, E_y, …) and mass (mu) of the scenario's "
-        "bridge from strain records of the scenario's vehicle, the calibration truck of "
-        "known static axle loads.  The scenario's [bridge] is the starting model and its "
-        "[calibrate] section gives the defaults; the records must be crossings at the "
-        "scenario's [run] speed, lane and approach, over its [road].\n\n"
-        "  bwim calibrate examples/paper_slab.toml crossing.h5 -o calibrated.toml")
-    c.add_argument("scenario", metavar="SCENARIO.toml")
-    c.add_argument("records", nargs="+", metavar="RECORD",
-                   help="records of the calibration truck (.h5 or .csv; folders expanded)")
-    c.add_argument("-o", "--output", default="calibrated.toml", metavar="MODEL.toml",
-                   help="the calibrated bridge model (default calibrated.toml)")
-    c.add_argument("--method", choices=[m.value for m in Method],
-                   help="optimiser: ce = Cross-Entropy (the paper's), lm = "
-                   "Levenberg-Marquardt, cma = CMA-ES (default: the scenario's, else ce)")
-    c.add_argument("--jobs", type=int, help="worker processes for the populations")
-    c.add_argument("--seed", type=int, help="random seed of the optimiser")
-    c.set_defaults(run=_calibrate)
-
-    i = sub.add_parser(
-        "identify", formatter_class=fmt,
-        help="identify the moving axle forces and weights of vehicles (MFI)",
-        description="Moving force identification: the time history of each axle's force, "
-        "its static weight and the gross vehicle weight, from each record and the bridge "
-        "model (ideally a calibrated one).  Many records run in parallel on this machine "
-        "(--jobs) or on a dask.distributed cluster (--scheduler).  Writes a CSV summary, "
-        "one row per vehicle, and <record>_forces.h5 per record.\n\n"
-        "  bwim identify examples/paper_slab.toml records/ --bridge calibrated.toml -o out/")
-    i.add_argument("scenario", metavar="SCENARIO.toml",
-                   help="the scenario (sensor positions; passage of CSV records)")
-    i.add_argument("records", nargs="+", metavar="RECORD",
-                   help="records (.h5 or .csv) or folders of them")
-    i.add_argument("--bridge", metavar="MODEL.toml",
-                   help="bridge model (default: the scenario's [bridge])")
-    i.add_argument("-o", "--output", default="bwim-out/identify", metavar="OUT",
-                   help="a results folder, or summary.csv (results beside it); default "
-                   "bwim-out/identify")
-    par = i.add_mutually_exclusive_group()
-    par.add_argument("--jobs", type=int, default=1,
-                     help="worker processes on this machine (-1: all cores); default 1")
-    par.add_argument("--scheduler", metavar="ADDRESS",
-                     help="address of a dask.distributed scheduler, e.g. tcp://host:8786")
-    i.set_defaults(run=_identify)
-
-    w = sub.add_parser(
-        "weigh", formatter_class=fmt,
-        help="static weights by Moses' algorithm from an influence line",
-        description="Static axle weights and GVW by Moses' algorithm.  The influence line "
-        "is either calibrated from crossings of the scenario's vehicle (the calibration "
-        "truck) and written to the output folder, or read from a file.\n\n"
-        "  bwim weigh examples/paper_slab.toml truck.h5 --calibration-records crossing.h5")
-    w.add_argument("scenario", metavar="SCENARIO.toml")
-    w.add_argument("records", nargs="+", metavar="RECORD",
-                   help="records of the vehicles to weigh (.h5 or .csv; folders expanded)")
-    il = w.add_mutually_exclusive_group(required=True)
-    il.add_argument("--calibration-records", nargs="+", metavar="REC",
-                    help="crossings of the scenario's vehicle to calibrate the influence "
-                    "line from")
-    il.add_argument("--influence", metavar="IL.h5", help="a saved influence line")
-    w.add_argument("-o", "--output", default="bwim-out/weigh", metavar="FOLDER",
-                   help="results folder (default bwim-out/weigh)")
-    w.set_defaults(run=_weigh)
-
-    r = sub.add_parser(
-        "report", formatter_class=fmt,
-        help="a single-file HTML report of result files",
-        description="A self-contained HTML page (figures embedded) of result files: force "
-        "identifications, static weights, influence lines, records (.h5), bridge models "
-        "(.toml) and summaries (.csv); folders are expanded.\n\n"
-        "  bwim report out/ -o report.html")
-    r.add_argument("results", nargs="+", metavar="RESULTS")
-    r.add_argument("-o", "--output", default="report.html", metavar="REPORT.html",
-                   help="default report.html")
-    r.add_argument("--title", default="bwim report", help="the page title")
-    r.set_defaults(run=_report)
-
-    d = sub.add_parser(
-        "demo", formatter_class=fmt,
-        help="the whole chain on the paper's slab bridge, in under a minute",
-        description="On the paper's 12 m × 8 m slab: simulate a calibration crossing, "
-        "calibrate E_x, E_y and mu from a wrong start by Cross-Entropy, identify a second "
-        "vehicle's axle forces with the calibrated model and weigh it by Moses; print the "
-        "results against the truth and write figures and report.html to --out.")
-    d.add_argument("--modes", type=int, default=6, help="natural frequencies to print "
-                   "(default 6)")
-    d.add_argument("--out", default="bwim-out", help="output folder (default bwim-out)")
-    d.add_argument("--seed", type=int, default=0, help="seed of the calibration")
-    d.add_argument("--jobs", type=int, default=1, help="worker processes for calibration")
-    d.add_argument("--quick", action="store_true",
-                   help="a smaller, faster calibration (for tests)")
-    d.set_defaults(run=_demo)
-
-    rp = sub.add_parser(
-        "reproduce",
-        help="the paper's experiments with its numbers side by side",
-        description="Reproduce Dowling, OBrien & González (2012) §5: 5.1 identical "
-        "elements, 5.2 noise, 5.3 sixteen zones, 5.4 beam-and-slab bridge, and a comparison "
-        "of optimisers ('compare').  Full runs take minutes (5.3 the longest); --quick runs "
-        "small versions.",
-    )
-    rp.add_argument("case", choices=["5.1", "5.2", "5.3", "5.4", "compare", "all"])
-    rp.add_argument("--quick", action="store_true", help="small, fast versions")
-    rp.add_argument("--out", default="bwim-out/reproduce", help="folder for the figures")
-    rp.add_argument("--jobs", type=int, default=1, help="worker processes for populations")
-    rp.add_argument("--no-figures", action="store_true", help="tables only")
-    rp.set_defaults(run=_reproduce)
+    for c in COMMANDS:
+        fmt = {"formatter_class": argparse.RawDescriptionHelpFormatter} if c.raw else {}
+        s = sub.add_parser(c.name, help=c.help, description=c.description, **fmt)
+        for item in c.args:
+            _add(s, item)
+        s.set_defaults(run=c.run)
     return p
 
 

@@ -15,6 +15,7 @@ Input is validated at the edges with these exceptions, never with ``assert``.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from enum import Enum
 from typing import TypeVar
 
@@ -23,6 +24,7 @@ __all__ = [
     "InputError",
     "NumericalError",
     "parse_enum",
+    "require_choice",
     "require_finite",
     "require_positive",
     "require_range",
@@ -78,6 +80,15 @@ def require_range(
             f"{name} must lie in {br[0]}{_fmt(low)}, {_fmt(high)}{br[1]}, got {_fmt(value)}"
         )
     return v
+
+
+def require_choice(name: str, value: object, choices: Iterable[str]) -> str:
+    """Return ``value`` if it is one of ``choices`` or raise :class:`InputError` (plain
+    string options; an enum's are :func:`parse_enum`'s)."""
+    options = list(choices)
+    if not isinstance(value, str) or value not in options:
+        raise InputError(f"unknown {name} {_fmt(value)}; expected one of {', '.join(options)}")
+    return value
 
 
 E = TypeVar("E", bound=Enum)

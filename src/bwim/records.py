@@ -282,6 +282,13 @@ class Record:
             self, data=self.data[:, idx], sensors=tuple(self.sensors[i] for i in idx)
         )
 
+    def plot(self, ax=None, **kw):
+        """Each channel against time (:func:`bwim.plots.records.plot_record`; ``kw``:
+        channels, length, title); returns the figure."""
+        from bwim.plots.records import plot_record
+
+        return plot_record(self, ax, **kw)
+
     def with_noise(self, fraction: float, *, seed: int | np.random.Generator | None) -> Record:
         """A copy with Gaussian noise of standard deviation ``fraction`` × the peak absolute
         reading of each channel (the paper's §5.2 noise model)."""

@@ -12,6 +12,9 @@ Contract
 * :func:`read_results` reads result files: any bwim HDF5 (identification, static weights,
   influence line, record), a bridge model TOML (:func:`bwim.io.save_bridge`) and CSV
   summaries (shown as tables); folders are expanded to the files they hold.
+* Tables are :class:`bwim.tables.Table` (re-exported here as :class:`Table`), rendered
+  with :meth:`~bwim.tables.Table.to_html`.
+* :func:`figure_files` names the sections' figures for writing them as image files.
 * :func:`render_html` makes the page (figures as base64 PNG, nothing linked);
   :func:`write_report` writes it atomically.
 * Bad input is an :class:`~bwim.errors.InputError` naming the file.  This module is above
@@ -33,23 +36,15 @@ from typing import Any
 
 import numpy as np
 
-from bwim.conventions import KILONEWTON
 from bwim.errors import InputError
 from bwim.io.paths import expand_paths
+from bwim.tables import Table, format_kn, format_kn_each, format_pct, param_values
 
-__all__ = ["Section", "Table", "read_results", "render_html", "section", "write_report"]
+__all__ = ["Section", "Table", "figure_files", "read_results", "render_html", "section",
+           "write_report"]
 
 #: File suffixes :func:`read_results` picks up in a folder.
 RESULT_SUFFIXES = (".h5", ".hdf5", ".hdf", ".toml", ".csv")
-
-
-@dataclass(frozen=True)
-class Table:
-    """A table: a caption, a header and rows of already formatted cells."""
-
-    caption: str
-    header: tuple[str, ...]
-    rows: tuple[tuple[str, ...], ...]
 
 
 @dataclass(frozen=True, eq=False)
@@ -62,25 +57,26 @@ class Section:
     note: str = ""
 
 
-def _kn(values) -> list[str]:
-    return [f"{v / KILONEWTON:.1f}" for v in np.atleast_1d(values)]
+def _weight_table(title: str, weights: np.ndarray, truth) -> Table:
+    """Static axle weights in kN, with the truth and the error % beside them if known."""
+    n = weights.size
+    rows = [("axle weights (kN)", *format_kn_each(weights))]
+    if truth is not None and truth.static_axle_loads.size == n:
+        true = truth.static_axle_loads
+        rows.append(("true static (kN)", *format_kn_each(true)))
+        rows.append(("error (%)", *(format_pct(w, t, 1) for w, t in zip(weights, true,
+                                                                         strict=True))))
+    return Table(title, ("", *(f"axle {i + 1}" for i in range(n))), tuple(rows))
 
 
 def _identification(name: str, ident, truth) -> Section:
     from bwim.plots.mfi import plot_forces, plot_lcurve
 
-    rows = [("axle weights (kN)", *_kn(ident.axle_weights))]
-    n = ident.axle_weights.size
-    if truth is not None and truth.static_axle_loads.size == n:
-        rows.append(("true static (kN)", *_kn(truth.static_axle_loads)))
-        err = ident.axle_weights / truth.static_axle_loads - 1.0
-        rows.append(("error (%)", *(f"{100 * e:+.1f}" for e in err)))
-    table = Table("Identified static axle weights", ("", *(f"axle {i + 1}" for i in range(n))),
-                  tuple(rows))
+    table = _weight_table("Identified static axle weights", ident.axle_weights, truth)
     gvw = Table("Gross vehicle weight and regularisation",
                 ("vehicle", "GVW (kN)", "true GVW (kN)", "λ"),
-                tuple((str(i + 1), f"{g / KILONEWTON:.1f}",
-                       f"{truth.gvw / KILONEWTON:.1f}" if truth is not None and i == 0 else "–",
+                tuple((i + 1, format_kn(g),
+                       format_kn(truth.gvw) if truth is not None and i == 0 else "–",
                        f"{ident.lam:.3g}") for i, g in enumerate(ident.gvw)))
     figures = [("Identified axle forces (dashed: truth)" if truth is not None
                 else "Identified axle forces", plot_forces(ident, truth=truth))]
@@ -92,16 +88,9 @@ def _identification(name: str, ident, truth) -> Section:
 def _static(name: str, weights, truth) -> Section:
     from bwim.plots.wim import plot_static_fit
 
-    n = weights.n_axles
-    rows = [("axle weights (kN)", *_kn(weights.axle_weights))]
-    if truth is not None and truth.static_axle_loads.size == n:
-        rows.append(("true static (kN)", *_kn(truth.static_axle_loads)))
-        err = weights.axle_weights / truth.static_axle_loads - 1.0
-        rows.append(("error (%)", *(f"{100 * e:+.1f}" for e in err)))
-    table = Table("Moses static axle weights", ("", *(f"axle {i + 1}" for i in range(n))),
-                  tuple(rows))
+    table = _weight_table("Moses static axle weights", weights.axle_weights, truth)
     summary = Table("Fit", ("GVW (kN)", "relative residual", "condition number"),
-                    ((f"{weights.gvw / KILONEWTON:.1f}", f"{weights.residual:.3g}",
+                    ((format_kn(weights.gvw), f"{weights.residual:.3g}",
                       f"{weights.condition:.3g}"),))
     return Section(f"Static weighing (Moses): {name}", (table, summary),
                    (("Measured readings and Moses' static fit", plot_static_fit(weights)),))
@@ -135,35 +124,22 @@ def _record(name: str, record, length) -> Section:
                    (("Readings", plot_record(record, length=length)),))
 
 
-def _param_rows(params: dict, start: dict | None = None, uncertainty: dict | None = None,
-                truth: dict | None = None) -> tuple[tuple[str, ...], ...]:
-    rows = []
-    for key, values in params.items():
-        for z, v in enumerate(np.atleast_1d(values)):
-            row = [key if np.size(values) == 1 else f"{key}[{z}]"]
-            if start is not None:
-                row.append(f"{np.atleast_1d(start[key])[z]:.5g}")
-            row.append(f"{v:.5g}")
-            if uncertainty is not None:
-                row.append(f"{np.atleast_1d(uncertainty[key])[z]:.3g}")
-            if truth is not None and key in truth:
-                t = np.atleast_1d(truth[key])[z]
-                row += [f"{t:.5g}", f"{100 * (v / t - 1):+.3f}"]
-            rows.append(tuple(row))
-    return tuple(rows)
-
-
 def _calibration(name: str, cal, start, true_bridge) -> Section:
     from bwim.plots.calibration import plot_ce_convergence
 
     header = ["parameter"] + (["start"] if start is not None else []) + ["calibrated",
                                                                           "uncertainty"]
-    truth = None if true_bridge is None else true_bridge.params
-    if truth is not None:
+    if true_bridge is not None:
         header += ["true", "error (%)"]
-    table = Table("Calibrated parameters (SI units: Pa, kg/m²)", tuple(header),
-                  _param_rows(cal.params, None if start is None else start.params,
-                              cal.uncertainty, truth))
+    rows = []
+    for label, v, s0, u, t in param_values(cal.params, None if start is None else start.params,
+                                          cal.uncertainty, None if true_bridge is None
+                                          else true_bridge.params):
+        row = [label] + ([] if start is None else [f"{s0:.5g}"]) + [f"{v:.5g}", f"{u:.3g}"]
+        if true_bridge is not None:
+            row += ["–", "–"] if t is None else [f"{t:.5g}", format_pct(v, t, 3)]
+        rows.append(row)
+    table = Table("Calibrated parameters (SI units: Pa, kg/m²)", header, rows)
     from bwim.optimize.ce import CEHistory
 
     stages = Table("Stages", ("stage", "unknowns", "evaluations", "iterations", "time (s)"),
@@ -183,7 +159,7 @@ def _calibration(name: str, cal, start, true_bridge) -> Section:
 def _bridge(name: str, bridge) -> Section:
     return Section(f"Bridge model: {name}",
                    (Table("Parameters (SI units: Pa, kg/m²)", ("parameter", "value"),
-                          _param_rows(bridge.params)),))
+                          [(label, f"{v:.5g}") for label, v in param_values(bridge.params)]),))
 
 
 def section(obj: Any, name: str = "", *, truth=None, length: float | None = None,
@@ -214,7 +190,7 @@ def section(obj: Any, name: str = "", *, truth=None, length: float | None = None
     if isinstance(obj, Section):
         return obj
     if isinstance(obj, Table):
-        return Section(name or obj.caption, (obj,))
+        return Section(name or obj.title, (obj,))
     if isinstance(obj, ForceIdentification):
         return _identification(name, obj, truth)
     if isinstance(obj, StaticWeights):
@@ -283,19 +259,22 @@ def read_results(paths: Sequence[str | os.PathLike]) -> list[tuple[str, Any]]:
     return out
 
 
+def figure_files(sections: Sequence[Section]) -> dict[str, Any]:
+    """The sections' figures by file-name stem: the section title in lower case with every
+    character but letters and digits as ``_``, cut at 48 characters and stripped of
+    ``_`` at both ends, then the figure's number in its section (``record__x_1``)."""
+    out = {}
+    for s in sections:
+        name = "".join(c if c.isalnum() else "_" for c in s.title.lower())[:48].strip("_")
+        for k, (_, fig) in enumerate(s.figures):
+            out[f"{name}_{k + 1}"] = fig
+    return out
+
+
 def _png(fig) -> str:
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=100)
     return base64.b64encode(buf.getvalue()).decode("ascii")
-
-
-def _table_html(t: Table) -> str:
-    e = html.escape
-    head = "".join(f"<th>{e(h)}</th>" for h in t.header)
-    body = "".join("<tr>" + "".join(f"<td>{e(str(c))}</td>" for c in r) + "</tr>"
-                   for r in t.rows)
-    return (f"<table><caption>{e(t.caption)}</caption><thead><tr>{head}</tr></thead>"
-            f"<tbody>{body}</tbody></table>")
 
 
 _STYLE = """
@@ -324,7 +303,7 @@ def render_html(title: str, sections: Sequence[Section], *, intro: str = "") -> 
         parts.append(f"<section><h2>{e(s.title)}</h2>")
         if s.note:
             parts.append(f'<p class="note">{e(s.note)}</p>')
-        parts += [_table_html(t) for t in s.tables]
+        parts += [t.to_html() for t in s.tables]
         for caption, fig in s.figures:
             parts.append(f'<figure><img alt="{e(caption)}" src="data:image/png;base64,'
                          f'{_png(fig)}"><figcaption>{e(caption)}</figcaption></figure>')

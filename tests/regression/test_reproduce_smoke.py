@@ -4,7 +4,7 @@
 import numpy as np
 
 from bwim.cli import main
-from bwim.reproduce import case_5_1
+from bwim.paper.reproduce import case_5_1
 
 
 def test_reproduce_5_1_quick():

@@ -252,9 +252,30 @@ def test_bad_record_and_model_files(files, tmp_path, capsys):
                             tmp_path / "gone.toml", "-o", tmp_path / "s.csv"], "gone.toml")
 
 
-def test_demo_quick_runs_the_whole_chain(tmp_path, capsys):
-    code, out, err = _run(["demo", "--quick", "--out", tmp_path / "demo"], capsys)
+def test_demo_quick_runs_the_whole_chain(tmp_path, capsys, monkeypatch):
+    """The command prints the demo report's transcript as the report echoes it; the slab's
+    first frequency lies between the Euler-Bernoulli strip bounds f = π/(2L²) √(D/μ) with
+    D = E h³/12 (free edges) and E h³/(12 (1 − ν²)) (plate strip)."""
+    from bwim import paper
+    from bwim.paper import demo
+
+    reports, run_demo = [], demo.run_demo
+
+    def spy(**kw):
+        reports.append(run_demo(**kw))
+        return reports[-1]
+
+    monkeypatch.setattr(demo, "run_demo", spy)
+    code, out, err = _run(["demo", "--quick", "--out", tmp_path / "demo", "--modes", "2"],
+                          capsys)
     assert code == 0, err
+    [report] = reports
+    assert out.startswith(report.render() + "\n\nfiles in ")
+    assert [t.header[0] for t in report.tables] == ["parameter", "method"]
+    h, e, mu = paper.SLAB_THICKNESS, paper.SLAB_E, paper.SLAB_MU
+    beam = np.pi / (2 * 12.0**2) * np.sqrt(e * h**3 / 12 / mu)
+    assert report.frequencies.size == 2
+    assert beam <= report.frequencies[0] <= beam / np.sqrt(1 - paper.SLAB_POISSON**2)
     for needle in ("natural frequencies", "calibrated", "MFI, calibrated model",
                    "Moses, calibrated IL", "truth (static)"):
         assert needle in out

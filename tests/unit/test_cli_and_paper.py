@@ -1,6 +1,7 @@
 """The command line (called as a function) and the paper's model definitions."""
 
 import numpy as np
+import pytest
 
 import bwim
 from bwim import paper
@@ -42,3 +43,12 @@ def test_vransko_bridge_layout():
     assert 3.0 < f[0] < 7.0  # a 24.8 m composite span
     strains = bridge.static([bwim.PointLoad(x=12.4, y=3.0, P=1e5)], s)
     assert strains.max() > 0
+
+
+
+def test_run_demo_checks_n_modes():
+    from bwim.errors import InputError
+    from bwim.paper.demo import run_demo
+
+    with pytest.raises(InputError, match="n_modes"):
+        run_demo(n_modes=0)

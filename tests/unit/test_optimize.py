@@ -364,6 +364,11 @@ def test_checkpoint_resumes_an_interrupted_run(tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == ["ce.pkl"]  # no temporary files left
 
 
+class _Unpicklable(CrossEntropy):
+    def __reduce__(self):
+        raise pickle.PicklingError("no")
+
+
 def test_checkpoint_bad_files(tmp_path):
     other = tmp_path / "other.pkl"
     other.write_bytes(pickle.dumps({"not": "an optimiser"}))
@@ -375,6 +380,14 @@ def test_checkpoint_bad_files(tmp_path):
         minimize_ce(_sphere, [1.0, 2.0, 3.0], checkpoint=path)
     with pytest.raises(InputError, match="save_checkpoint needs a CrossEntropy"):
         save_checkpoint("x", path)
+    # the one atomic writer (bwim.atomic): an unwritable path names its folder, and a
+    # failed write leaves neither a temporary file nor a damaged checkpoint
+    with pytest.raises(InputError, match="does not exist"):
+        save_checkpoint(CrossEntropy([1.0, 2.0]), tmp_path / "no" / "ce.pkl")
+    before = path.read_bytes()
+    with pytest.raises(pickle.PicklingError):
+        save_checkpoint(_Unpicklable([1.0, 2.0]), path)
+    assert path.read_bytes() == before and sorted(tmp_path.iterdir()) == [path, other]
 
 
 # -- minimize_ce modes ------------------------------------------------------------------

@@ -93,6 +93,11 @@ class Calibration:
     def history(self) -> tuple[object, ...]:
         return tuple(s.history for s in self.stages)
 
+    def plot(self, stage: int = 0, ax=None, **kw):
+        """CE convergence of one parameter of ``stages[stage]`` (see
+        :meth:`StageResult.plot`); returns the figure."""
+        return self.stages[stage].plot(ax=ax, **kw)
+
 
 @dataclass(frozen=True, kw_only=True)
 class _Stage:

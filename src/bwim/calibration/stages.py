@@ -91,6 +91,14 @@ class StageResult:
     history: object
     wall_time: float
 
+    def plot(self, ax=None, **kw):
+        """CE convergence of one parameter (a CE stage only;
+        :func:`bwim.plots.calibration.plot_ce_convergence`; ``kw``: parameter, scale,
+        label); returns the figure."""
+        from bwim.plots.calibration import plot_ce_convergence
+
+        return plot_ce_convergence(self, ax=ax, **kw)
+
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class _Outcome:

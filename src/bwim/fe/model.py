@@ -13,6 +13,9 @@ Contract
   ``E_x, μ``; each girder carries ``E_girder, μ_girder``.
 * Rows that map free-DOF displacements to sensor readings and point loads to consistent
   nodal loads live here (:meth:`FEModel.sensor_matrix`, :meth:`FEModel.point_rows`).
+  ``sensor_matrix`` is the one entry through which every FE computation (static,
+  influence, simulate, calibration, MFI) meets sensors: it refuses a sensor without a
+  position ``(x, y)`` and an axle detector with :class:`~bwim.errors.InputError`.
 """
 
 from __future__ import annotations
@@ -31,6 +34,16 @@ from bwim.fe.plate import bfs_shape, bfs_unit_matrices, flexural_rigidity, hermi
 from bwim.sensors import Sensor, SensorKind
 
 __all__ = ["EdgeSupport", "FEModel", "PointRows", "Supports"]
+
+
+def _require_fe_sensor(sensor: Sensor) -> None:
+    """Refuse a sensor the model cannot observe: no position, or an axle detector."""
+    if sensor.kind is SensorKind.AXLE_DETECTOR:
+        raise InputError(f"sensor {sensor.name!r} is an axle detector; an FE model has no "
+                         "reading for it")
+    if not sensor.has_position:
+        raise InputError(f"sensor {sensor.name!r} has no position (x, y); an FE model "
+                         "needs one")
 
 
 class EdgeSupport(StrEnum):
@@ -307,6 +320,7 @@ class FEModel:
 
     def sensor_row(self, sensor: Sensor) -> np.ndarray:
         """Row ``s`` with ``reading = s @ u`` (u on the free DOF), shape (n_free,)."""
+        _require_fe_sensor(sensor)
         g = self.grid
         kind = SensorKind(sensor.kind)
         if not g.is_plate:
@@ -355,6 +369,7 @@ class FEModel:
         for k, s in enumerate(sensors):
             if not isinstance(s, Sensor):
                 raise InputError(f"sensors[{k}] must be a bwim.Sensor, got {type(s).__name__}")
+            _require_fe_sensor(s)
             self.check_on_deck(f"sensor {s.name!r}", np.array([s.x]), np.array([s.y]))
         return np.stack([self.sensor_row(s) for s in sensors])
 

@@ -12,6 +12,9 @@ Contract
 * Records (:mod:`bwim.io.records`): a logger's CSV (:func:`read_csv_record`,
   :func:`write_csv_record`) and bwim's HDF5 (:func:`write_record`, :func:`read_record`,
   :func:`write_records`, :func:`read_records`), exact round trips.
+* Logger files (:mod:`bwim.io.logger`): a real installation's text files, one event each,
+  read by :func:`read_logger` in a :class:`LoggerFormat` (columns, delimiter, header,
+  sampling rate, scale, sensor kinds) into a Record with strict, line-naming checks.
 * Results (:mod:`bwim.io.results`): HDF5 for :class:`~bwim.ForceIdentification`,
   :class:`~bwim.StaticWeights` and :class:`~bwim.InfluenceLine`, exact round trips.
 * Every writer is atomic (:mod:`bwim.io.atomic`): the output appears complete or not at
@@ -31,6 +34,7 @@ from bwim.io.build import (
     load_record,
     simulate_scenario,
 )
+from bwim.io.logger import LoggerFormat, read_logger
 from bwim.io.records import (
     read_csv_record,
     read_record,
@@ -73,6 +77,7 @@ __all__ = [
     "CalibrateSpec",
     "GirderSpec",
     "IdentifySpec",
+    "LoggerFormat",
     "RoadSpec",
     "RunSpec",
     "Scenario",
@@ -95,6 +100,7 @@ __all__ = [
     "read_csv_record",
     "read_identification",
     "read_influence_line",
+    "read_logger",
     "read_record",
     "read_records",
     "read_static_weights",

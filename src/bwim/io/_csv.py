@@ -9,6 +9,8 @@ Contract
   one, the line (counted in the file, from 1) and the column: an empty file, a duplicate
   or empty column name, a row with the wrong number of fields, an empty cell, text that is
   not a number, a NaN or infinite sample, and no data rows.
+* :func:`check_time` validates a time column (s) read from a file: strictly increasing
+  always; with a ``tolerance``, also uniformly sampled (no dropped sample, no jitter).
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ import numpy as np
 
 from bwim.errors import InputError
 
-__all__ = ["read_numeric_csv"]
+__all__ = ["check_time", "read_numeric_csv"]
 
 
 def _read_lines(path: Path) -> list[str]:
@@ -114,3 +116,60 @@ def read_numeric_csv(
     if not rows:
         raise InputError(f"{p}: no data rows after the header")
     return names, np.array(rows, dtype=float), np.array(line_numbers, dtype=int)
+
+
+def check_time(
+    time: np.ndarray,
+    lines: np.ndarray,
+    *,
+    where: object,
+    tolerance: float | None = None,
+    resolution: float = 0.0,
+) -> float:
+    """Check a file's time column; return its median step, s.
+
+    Parameters
+    ----------
+    time : ndarray, shape (n_t,)
+        Sample times, s, finite, n_t >= 2.
+    lines : ndarray of int, shape (n_t,)
+        File line number of each sample (for the messages).
+    where : str or path
+        The file, first word of every message.
+    tolerance : float, optional
+        Uniform sampling: every step must lie within ``tolerance`` × median step (plus
+        ``resolution``) of the median step, and a step longer than 1.5 × the median is a
+        dropped sample.  None: only the increase is checked.
+    resolution : float
+        How finely the file writes time, s (one unit in its last written decimal): steps
+        of rounded times differ by up to this much on a perfectly uniform clock.
+
+    Raises
+    ------
+    InputError
+        A time that does not increase (backwards or repeated), a dropped sample, or a
+        step off the median; the message names the file and the line.
+    """
+    t = np.asarray(time, dtype=float)
+    dt = np.diff(t)
+    bad = np.flatnonzero(~(dt > 0))
+    if bad.size:
+        k = int(bad[0]) + 1
+        raise InputError(f"{where}: line {lines[k]}: time {t[k]:g} s does not increase "
+                         f"(previous sample {t[k - 1]:g} s)")
+    h = float(np.median(dt))
+    if tolerance is None:
+        return h
+    gap = np.flatnonzero(dt > 1.5 * h + resolution)
+    if gap.size:
+        k = int(gap[0]) + 1
+        raise InputError(f"{where}: line {lines[k]}: time step {dt[k - 1]:g} s after "
+                         f"{t[k - 1]:g} s is {dt[k - 1] / h:.3g} x the median step {h:g} s "
+                         "(a dropped sample)")
+    off = np.flatnonzero(np.abs(dt - h) > tolerance * h + resolution)
+    if off.size:
+        k = int(off[0]) + 1
+        raise InputError(f"{where}: line {lines[k]}: time step {dt[k - 1]:g} s differs from "
+                         f"the median step {h:g} s by more than {tolerance:.3g} of it "
+                         "(non-uniform sampling)")
+    return h

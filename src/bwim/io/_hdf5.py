@@ -102,8 +102,10 @@ def put_strings(group: h5py.Group, name: str, values: Sequence[str]) -> None:
 
 def put_sensors(group: h5py.Group, sensors: Sequence[Sensor]) -> None:
     g = group.create_group("sensors")
-    g.create_dataset("x", data=np.array([s.x for s in sensors], dtype=float))
-    g.create_dataset("y", data=np.array([s.y for s in sensors], dtype=float))
+    g.create_dataset("x", data=np.array([np.nan if s.x is None else s.x for s in sensors],
+                                        dtype=float))
+    g.create_dataset("y", data=np.array([np.nan if s.y is None else s.y for s in sensors],
+                                        dtype=float))
     put_strings(g, "kind", [s.kind.value for s in sensors])
     put_strings(g, "name", [s.name for s in sensors])
 
@@ -112,7 +114,9 @@ def get_sensors(group: h5py.Group) -> tuple[Sensor, ...]:
     g = need(group, "sensors")
     x, y = array(g, "x"), array(g, "y")
     kinds, names = strings(g, "kind"), strings(g, "name")
-    return tuple(Sensor(x=float(a), y=float(b), kind=k, name=n)
+    # an unknown position (None) is stored as NaN
+    return tuple(Sensor(x=None if np.isnan(a) else float(a),
+                        y=None if np.isnan(b) else float(b), kind=k, name=n)
                  for a, b, k, n in zip(x, y, kinds, names, strict=True))
 
 

@@ -37,16 +37,18 @@ from bwim.fe.bridge import Bridge
 from bwim.fe.girder import Girder, composite_section
 from bwim.fe.mesh import grid_lines
 from bwim.io._csv import read_numeric_csv
+from bwim.io.logger import LoggerFormat, read_logger
 from bwim.io.records import read_csv_record, read_record
 from bwim.io.scenario import VEHICLE_TYPES, BridgeSpec, GirderSpec, Scenario
 from bwim.records import Passage, Record, SimulationSettings
 from bwim.road import RoadProfile
-from bwim.sensors import Sensor
-from bwim.vehicles import named
+from bwim.sensors import Sensor, SensorKind
+from bwim.vehicles import Vehicle, named
 from bwim.vehicles.types import Truck3D
 
 __all__ = [
     "build_bridge",
+    "build_logger_format",
     "build_passage",
     "build_road",
     "build_sensors",
@@ -178,7 +180,7 @@ def build_bridge(scenario: Scenario) -> Bridge:
     InputError
         The library's message prefixed by the file and ``[bridge]`` (or the girder entry).
     """
-    spec = scenario.bridge
+    spec = scenario.require("bridge")
     if spec.kind == "plate":
         return _plate(spec, scenario.source)
     return _beam(spec, scenario.source)
@@ -191,55 +193,119 @@ def _as_tuple(v) -> tuple:
     return v if isinstance(v, tuple) else (v,)
 
 
+def _sensor_grid(entry) -> list[tuple]:
+    """(kind, x, y) of an entry's sensors, expanded kind by kind, then x, then y."""
+    return [(kind, x, y) for kind in _as_tuple(entry.kind) for x in _as_tuple(entry.x)
+            for y in _as_tuple(entry.y)]
+
+
+def _entry_names(entry, grid: list[tuple], at: str) -> list[str]:
+    if isinstance(entry.name, tuple):
+        if entry.x is None and entry.y is None:
+            return list(entry.name)
+        if len(entry.name) != len(grid):
+            raise InputError(f"{at}: {len(entry.name)} names for {len(grid)} sensors")
+        return list(entry.name)
+    names = []
+    for i, (kind, x, y) in enumerate(grid):
+        try:
+            names.append(entry.name.format(kind=kind, short=_SHORT[kind], x=x, y=y, i=i))
+        except (KeyError, IndexError, ValueError, AttributeError, TypeError) as exc:
+            raise InputError(f"{at} name: bad template {entry.name!r} ({exc}); fields are "
+                             "kind, short, x, y, i") from None
+    return names
+
+
 def build_sensors(scenario: Scenario) -> list[Sensor]:
     """The scenario's sensors in file order (grids expanded kind, then x, then y).
+
+    An entry without ``x`` (a logger channel weighed with influence lines) gives sensors
+    without a position, one per name of its ``name`` list.  Positions are checked against
+    the deck when the scenario has a ``[bridge]``.
 
     Raises
     ------
     InputError
-        A sensor off the deck, ``strain_y`` on a beam, a bad name template, or two sensors
-        with the same name (they would share a CSV column).
+        A sensor off the deck, ``strain_y`` on a beam, a bad name template, a sensor
+        without a position or a name, or two sensors with the same name (they would
+        share a CSV column).
     """
     src = scenario.source
     b = scenario.bridge
-    plate = b.kind == "plate"
-    tol = 1e-9 * max(b.length, b.width or 0.0)
+    plate = b is None or b.kind == "plate"
+    tol = 0.0 if b is None else 1e-9 * max(b.length, b.width or 0.0)
     out: list[Sensor] = []
     seen: dict[str, int] = {}
     for k, entry in enumerate(scenario.sensors):
         at = f"{src}: [[sensors]] entry {k + 1}"
-        i = 0
-        for kind in _as_tuple(entry.kind):
-            for x in _as_tuple(entry.x):
-                for y in _as_tuple(entry.y):
-                    try:
-                        name = entry.name.format(kind=kind, short=_SHORT[kind], x=x, y=y, i=i)
-                    except (KeyError, IndexError, ValueError, AttributeError) as exc:
-                        raise InputError(
-                            f"{at} name: bad template {entry.name!r} ({exc}); fields are "
-                            "kind, short, x, y, i") from None
-                    with _context(at):
-                        sensor = Sensor(x=x, y=y, kind=kind, name=name)
-                    if not plate and kind == "strain_y":
-                        raise InputError(f"{at}: sensor {sensor.name!r}: strain_y is not "
-                                         "available on a beam")
-                    off_x = not -tol <= x <= b.length + tol
-                    off_y = plate and not -tol <= y <= b.width + tol
-                    if off_x or off_y:
-                        size = f"{b.length:g} m" + (f" × {b.width:g} m" if plate else "")
-                        where = f"x = {x:g} m" + (f", y = {y:g} m" if plate else "")
-                        raise InputError(f"{at}: sensor {sensor.name!r} at {where} is off "
-                                         f"the deck ({size})")
-                    if sensor.name in seen:
-                        raise InputError(f"{at}: sensor name {sensor.name!r} is already used "
-                                         f"by entry {seen[sensor.name]}")
-                    seen[sensor.name] = k + 1
-                    out.append(sensor)
-                    i += 1
+        if entry.x is None and entry.y is not None and isinstance(entry.name, tuple) \
+                and isinstance(entry.y, tuple) and len(entry.y) != len(entry.name):
+            raise InputError(f"{at}: {len(entry.name)} names for {len(entry.y)} y positions")
+        if entry.x is None and isinstance(entry.name, tuple):
+            ys = entry.y if isinstance(entry.y, tuple) else (entry.y,) * len(entry.name)
+            kinds = _as_tuple(entry.kind)
+            if len(kinds) != 1:
+                raise InputError(f"{at}: sensors without a position take one kind")
+            grid = [(kinds[0], None, y) for y in ys]
+        else:
+            grid = _sensor_grid(entry)
+        names = _entry_names(entry, grid, at)
+        for (kind, x, y), name in zip(grid, names, strict=True):
+            with _context(at):
+                sensor = Sensor(x=x, y=y, kind=kind, name=name)
+            if b is not None and b.kind != "plate" and kind == "strain_y":
+                raise InputError(f"{at}: sensor {sensor.name!r}: strain_y is not "
+                                 "available on a beam")
+            if b is not None and sensor.x is not None:
+                off_x = not -tol <= sensor.x <= b.length + tol
+                off_y = plate and not -tol <= sensor.y <= b.width + tol
+                if off_x or off_y:
+                    size = f"{b.length:g} m" + (f" × {b.width:g} m" if plate else "")
+                    where = f"x = {sensor.x:g} m" + (f", y = {sensor.y:g} m" if plate else "")
+                    raise InputError(f"{at}: sensor {sensor.name!r} at {where} is off "
+                                     f"the deck ({size})")
+            if sensor.name in seen:
+                raise InputError(f"{at}: sensor name {sensor.name!r} is already used "
+                                 f"by entry {seen[sensor.name]}")
+            seen[sensor.name] = k + 1
+            out.append(sensor)
     return out
 
 
-def build_vehicle(scenario: Scenario):
+def build_logger_format(scenario: Scenario) -> LoggerFormat:
+    """The :class:`~bwim.io.LoggerFormat` of the scenario's ``[logger]`` section.
+
+    Gauges take their kinds from ``[[sensors]]``; the ``[axle_detectors]`` channels are
+    axle detectors.  Every named column must be a sensor or a detector.
+    """
+    spec = scenario.require("logger")
+    src = f"{scenario.source}: [logger]"
+    kinds: dict[str, SensorKind] = {s.name: s.kind for s in build_sensors(scenario)}
+    if scenario.axle_detectors is not None:
+        for name in scenario.axle_detectors.channels:
+            if name in kinds:
+                raise InputError(f"{scenario.source}: [axle_detectors] channel {name!r} is "
+                                 "also a [[sensors]] gauge")
+            kinds[name] = SensorKind.AXLE_DETECTOR
+    channels = [c for c in spec.columns if c not in ("-", "time")]
+    for name in channels:
+        if name not in kinds:
+            raise InputError(f"{src} columns: {name!r} is neither a [[sensors]] name nor an "
+                             "[axle_detectors] channel (use \"-\" to skip a column)")
+    for name in kinds:
+        if name not in channels:
+            what = ("[axle_detectors] channel" if kinds[name] is SensorKind.AXLE_DETECTOR
+                    else "sensor")
+            raise InputError(f"{src} columns: no column for the {what} {name!r}")
+    delimiter = {"tab": "\t", "\\t": "\t", "whitespace": " "}.get(spec.delimiter or "",
+                                                                  spec.delimiter)
+    with _context(src):
+        return LoggerFormat(columns=spec.columns, delimiter=delimiter, header=spec.header,
+                            sampling_rate=spec.sampling_rate, scale=spec.scale,
+                            decimal=spec.decimal, kinds=kinds, skip_lines=spec.skip_lines)
+
+
+def build_vehicle(scenario: Scenario) -> Vehicle:
     """The scenario's vehicle: a named one or a :mod:`bwim.vehicles` class instance."""
     spec = scenario.require("vehicle")
     with _context(f"{scenario.source}: [vehicle]"):
@@ -260,7 +326,7 @@ def _road_extent(scenario: Scenario) -> tuple[float, float]:
     vehicle = 0.0 if scenario.vehicle is None else build_vehicle(scenario).length
     margin = 5.0 + (scenario.road.smoothing or 0.0)
     return (-(approach + vehicle + margin),
-            scenario.bridge.length + vehicle + run_out + margin)
+            scenario.require("bridge").length + vehicle + run_out + margin)
 
 
 def _read_profile(path: Path) -> RoadProfile:
@@ -308,14 +374,14 @@ def build_road(scenario: Scenario) -> RoadProfile:
     return road
 
 
-def build_passage(scenario: Scenario, vehicle=None) -> Passage:
+def build_passage(scenario: Scenario, vehicle: Vehicle | None = None) -> Passage:
     """The passage a B-WIM system sees: the ``[run]`` speed, lane and delay and the
     vehicle's axle layout (of ``vehicle``, default the scenario's)."""
     run = scenario.require("run")
     vehicle = build_vehicle(scenario) if vehicle is None else vehicle
     lane = run.lane
     if lane is None:
-        if scenario.bridge.kind == "plate":
+        if scenario.bridge is None or scenario.bridge.kind == "plate":
             raise InputError(f"{scenario.source}: [run] needs lane on a plate bridge")
         lane = 0.0
     with _context(f"{scenario.source}: [run]"):
@@ -365,8 +431,10 @@ def load_record(
     Parameters
     ----------
     path : str or path
-        ``.csv``/``.txt``: a logger's file, read with :func:`bwim.io.read_csv_record`;
-        ``.h5``/``.hdf5``/``.hdf``: a record written by :func:`bwim.io.write_record`.
+        ``.h5``/``.hdf5``/``.hdf``: a record written by :func:`bwim.io.write_record`; with
+        a scenario that has a ``[logger]`` section, any other file is a logger export read
+        by :func:`bwim.io.read_logger`; otherwise ``.csv``/``.txt`` is bwim's CSV layout,
+        read with :func:`bwim.io.read_csv_record`.
     scenario : Scenario, optional
         Needed for CSV: its ``[[sensors]]`` name the columns, and its ``[run]`` and
         ``[vehicle]`` (when present) give the passage.  A record without simulation
@@ -379,6 +447,11 @@ def load_record(
     suffix = p.suffix.lower()
     if suffix in _HDF5_SUFFIXES:
         return _with_run_settings(read_record(p), scenario)
+    if scenario is not None and scenario.logger is not None:
+        # a logger's export, any extension: the [logger] section says how it is laid out
+        sensors = [s for s in build_sensors(scenario) if s.x is not None]
+        return _with_run_settings(
+            read_logger(p, build_logger_format(scenario), sensors=sensors or None), scenario)
     if suffix not in _CSV_SUFFIXES:
         raise InputError(f"{p}: unknown record format {p.suffix!r}; use .csv or .h5")
     if scenario is None:
@@ -396,7 +469,7 @@ def _with_run_settings(record: Record, scenario: Scenario | None) -> Record:
     """The record with the scenario's ``[run]`` approach as its simulation settings, if it
     has none (see :func:`load_record`)."""
     if (record.settings is not None or scenario is None or scenario.run is None
-            or not record.passages):
+            or scenario.bridge is None or not record.passages):
         return record
     settings = SimulationSettings(approach=scenario.run.approach,
                                   tail=record.time_after_exit(scenario.bridge.length))

@@ -43,7 +43,7 @@ import numpy as np
 
 from bwim.errors import InputError
 from bwim.io import _hdf5 as h5
-from bwim.io._csv import read_numeric_csv
+from bwim.io._csv import check_time, read_numeric_csv
 from bwim.io.atomic import atomic_open
 from bwim.records import Passage, Record, SimulationSettings, Truth, VBIConvergence
 from bwim.sensors import Sensor
@@ -119,11 +119,7 @@ def read_csv_record(
     t = values[:, names.index(time_column)]
     if t.size < 2:
         raise InputError(f"{p}: a record needs at least two samples, got {t.size}")
-    bad = np.flatnonzero(np.diff(t) <= 0)
-    if bad.size:
-        k = int(bad[0]) + 1
-        raise InputError(f"{p}: line {lines[k]}: time {t[k]:g} s does not increase (previous "
-                         f"sample {t[k - 1]:g} s)")
+    check_time(t, lines, where=p)
     data = values[:, [names.index(n) for n in wanted]] * scale
     if passage is None:
         passages: tuple[Passage, ...] = ()

@@ -28,6 +28,7 @@ Contract
   ``title``
       optional free text.
   ``[bridge]``
+      (optional: weighing with influence lines needs no FE model)
       ``kind = "plate" | "beam"``, ``length``.  Plate: ``width``, ``thickness``, mesh
       ``nx``/``ny`` or explicit ``x_lines``/``y_lines`` (optionally ``x_through``/
       ``y_through``: coordinates the grid must pass through, such as girder lines),
@@ -51,7 +52,23 @@ Contract
       then y.  ``name`` is a template with the fields ``{kind}``, ``{short}`` (``x``,
       ``y`` or ``w``), ``{x}``, ``{y}`` and ``{i}`` (index in the entry), for example
       ``"{short}{x:g}_{y:g}"``; without a name, bwim's default names are used.
+      Without ``x`` (logger channels weighed with influence lines, no FE model):
+      ``name`` is a list of channel names, one sensor each, with an optional list ``y``
+      of transverse positions (m) used to give the lateral position in metres.
+  ``[logger]``
+      a logger's text export: ``columns`` names every column in order (``"-"`` skips
+      one, ``"time"`` is the time in s); [``delimiter`` = auto: ``","``, ``";"``,
+      ``"tab"``, ``"whitespace"``], [``header`` = auto], [``sampling_rate``: Hz, when there
+      is no time column], [``scale`` = 1: logger units to strain, one number or one per
+      channel], [``decimal`` = "."], [``skip_lines`` = 0].  Record files are then read
+      with :func:`bwim.io.read_logger` whatever their extension.
+  ``[axle_detectors]``
+      ``channels`` = [first, second] (logger channels, in the order traffic meets them),
+      ``distance`` (m), [``position`` = 0: the first detector's x in the influence-line
+      frame], [``max_spacing``: the largest axle spacing within one vehicle, m].
   ``[vehicle]``
+      ``axle_loads`` (static, N) with ``axle_spacings`` (m): a calibration truck known by
+      its weights only (a :class:`bwim.MovingForces`); or
       ``name`` = a named vehicle (:data:`bwim.vehicles.NAMED_VEHICLES`), or ``type`` =
       ``"moving_forces" | "sprung_mass" | "half_car" | "truck3d" |
       "tractor_semitrailer"`` with that class's parameters (``truck3d`` also takes
@@ -429,15 +446,62 @@ class BridgeSpec:
 
 
 
+def _name_or_names(v: Any, at: _At) -> str | tuple[str, ...]:
+    if isinstance(v, list):
+        names = _strings(v, at)
+        if any(not n.strip() for n in names):
+            raise at.error("sensor names must not be empty")
+        return names
+    return _string(v, at)
+
+
+#: Kinds of a ``[[sensors]]`` entry (axle detectors are declared in ``[axle_detectors]``).
+_SENSOR_KINDS = tuple(k for k in SensorKind if k is not SensorKind.AXLE_DETECTOR)
+
+
 @dataclass(frozen=True, kw_only=True)
 class SensorSpec:
     """One ``[[sensors]]`` entry: a sensor, or a grid when ``x``, ``y`` or ``kind`` is a
-    tuple (expanded kind by kind, then x, then y).  Positions in m."""
+    tuple (expanded kind by kind, then x, then y).  Positions in m; ``x`` (and ``y``) may
+    be left out when no FE model is used (logger channels weighed with influence lines),
+    and ``name`` may then be a list: one sensor per name."""
 
-    x: float | tuple[float, ...] = _req(_number_or_numbers)
-    y: float | tuple[float, ...] = _opt(_number_or_numbers, 0.0)
-    kind: str | tuple[str, ...] = _opt(_choices(*SensorKind), SensorKind.STRAIN_X.value)
-    name: str = _opt(_string, "")
+    x: float | tuple[float, ...] | None = _opt(_number_or_numbers)
+    y: float | tuple[float, ...] | None = _opt(_number_or_numbers)
+    kind: str | tuple[str, ...] = _opt(_choices(*_SENSOR_KINDS), SensorKind.STRAIN_X.value)
+    name: str | tuple[str, ...] = _opt(_name_or_names, "")
+
+
+_DELIMITERS = (",", ";", "tab", "whitespace", "\t", " ")
+
+
+@dataclass(frozen=True, kw_only=True)
+class LoggerSpec:
+    """The ``[logger]`` section: how a logger's text export is laid out
+    (:class:`bwim.io.LoggerFormat`).  ``columns`` names every column in order (``"-"``
+    skips one; ``"time"`` is the time column, in s); the delimiter and a header row are
+    detected unless given; ``sampling_rate`` (Hz) when there is no time column; ``scale``
+    turns logger units into strain (one number or one per channel in column order)."""
+
+    columns: tuple[str, ...] = _req(_strings)
+    delimiter: str | None = _opt(_choice(*_DELIMITERS))
+    header: bool | None = _opt(_boolean)
+    sampling_rate: float | None = _opt(_number)
+    scale: float | tuple[float, ...] = _opt(_number_or_numbers, 1.0)
+    decimal: str = _opt(_choice(".", ","), ".")
+    skip_lines: int = _opt(_integer, 0)
+
+
+@dataclass(frozen=True, kw_only=True)
+class AxleDetectorSpec:
+    """The ``[axle_detectors]`` section: two logger channels that respond to each axle,
+    named in the order traffic meets them, ``distance`` m apart; ``position`` is the first
+    detector's x in the influence-line frame (default 0: lines are measured from it)."""
+
+    channels: tuple[str, ...] = _req(_strings)
+    distance: float = _req(_number)
+    position: float = _opt(_number, 0.0)
+    max_spacing: float | None = _opt(_number)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -569,8 +633,10 @@ class Scenario:
     takes part in equality.
     """
 
-    bridge: BridgeSpec
+    bridge: BridgeSpec | None = None
     sensors: tuple[SensorSpec, ...] = ()
+    logger: LoggerSpec | None = None
+    axle_detectors: AxleDetectorSpec | None = None
     vehicle: VehicleSpec | None = None
     road: RoadSpec | None = None
     run: RunSpec | None = None
@@ -590,7 +656,8 @@ class Scenario:
 
 
 # --- parsing -------------------------------------------------------------------------------
-_SECTIONS = ("title", "bridge", "sensors", "vehicle", "road", "run", "identify", "calibrate")
+_SECTIONS = ("title", "bridge", "sensors", "logger", "axle_detectors", "vehicle", "road", "run",
+             "identify", "calibrate")
 
 
 def _parse_bridge(table: Any, src: str) -> BridgeSpec:
@@ -620,8 +687,12 @@ def _parse_vehicle(table: Any, src: str) -> VehicleSpec:
     at = _At(src, "[vehicle]")
     if not isinstance(table, dict):
         raise InputError(f"{src}: [vehicle] must be a table, got {_show(table)}")
+    if "name" not in table and "type" not in table and "axle_loads" in table:
+        # a calibration truck known by its static axle loads and spacings only
+        table = {"type": "moving_forces", **table}
     if ("name" in table) == ("type" in table):
-        raise at.error("give either name (a named vehicle) or type (with its parameters)")
+        raise at.error("give either name (a named vehicle), type (with its parameters), or "
+                       "axle_loads (static, N) with axle_spacings")
     if "name" in table:
         name = _choice(*NAMED_VEHICLES)(table["name"], _At(src, "[vehicle]", "name"))
         for key in table:
@@ -673,6 +744,33 @@ def _parse_road(table: Any, src: str) -> RoadSpec:
     return spec
 
 
+def _parse_logger(table: Any, src: str) -> LoggerSpec:
+    at = _At(src, "[logger]")
+    spec = _parse(LoggerSpec, table, at)
+    names = [c for c in spec.columns if c != "-"]
+    if len(set(names)) != len(names):
+        dup = next(c for c in names if names.count(c) > 1)
+        raise at.error(f"columns: the name {dup!r} appears twice")
+    if "time" not in names and spec.sampling_rate is None:
+        raise at.error("needs a 'time' column or sampling_rate")
+    if spec.sampling_rate is not None and not spec.sampling_rate > 0:
+        raise at.error(f"sampling_rate must be positive, got {spec.sampling_rate:g}")
+    return spec
+
+
+def _parse_detectors(table: Any, src: str) -> AxleDetectorSpec:
+    at = _At(src, "[axle_detectors]")
+    spec = _parse(AxleDetectorSpec, table, at)
+    if len(spec.channels) != 2 or spec.channels[0] == spec.channels[1]:
+        raise at.error("channels must name two different logger channels, in the order "
+                       f"traffic meets them, got {list(spec.channels)}")
+    if not spec.distance > 0:
+        raise at.error(f"distance must be positive, got {spec.distance:g}")
+    if spec.max_spacing is not None and not spec.max_spacing > 0:
+        raise at.error(f"max_spacing must be positive, got {spec.max_spacing:g}")
+    return spec
+
+
 def scenario_from_dict(
     doc: Mapping[str, Any],
     *,
@@ -702,10 +800,10 @@ def scenario_from_dict(
         if key not in _SECTIONS:
             raise InputError(f"{src}: unknown key {key!r} at the top level; allowed keys: "
                              f"{', '.join(_SECTIONS)}")
-    if "bridge" not in doc:
-        raise InputError(f"{src}: no [bridge] section")
     top = _At(src, "top level")
-    kw: dict[str, Any] = {"bridge": _parse_bridge(doc["bridge"], src)}
+    kw: dict[str, Any] = {}
+    if "bridge" in doc:
+        kw["bridge"] = _parse_bridge(doc["bridge"], src)
     if "title" in doc:
         kw["title"] = _string(doc["title"], _At(src, "top level", "title"))
     if "sensors" in doc:
@@ -714,6 +812,10 @@ def scenario_from_dict(
         kw["vehicle"] = _parse_vehicle(doc["vehicle"], src)
     if "road" in doc:
         kw["road"] = _parse_road(doc["road"], src)
+    if "logger" in doc:
+        kw["logger"] = _parse_logger(doc["logger"], src)
+    if "axle_detectors" in doc:
+        kw["axle_detectors"] = _parse_detectors(doc["axle_detectors"], src)
     for name, cls in (("run", RunSpec), ("identify", IdentifySpec),
                       ("calibrate", CalibrateSpec)):
         if name in doc:
@@ -808,10 +910,15 @@ def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
     doc: dict[str, Any] = {}
     if scenario.title:
         doc["title"] = scenario.title
-    bridge = _spec_dict(scenario.bridge)
-    doc["bridge"] = {"kind": bridge.pop("kind"), **bridge}
+    if scenario.bridge is not None:
+        bridge = _spec_dict(scenario.bridge)
+        doc["bridge"] = {"kind": bridge.pop("kind"), **bridge}
     if scenario.sensors:
         doc["sensors"] = [_spec_dict(s) for s in scenario.sensors]
+    for name in ("logger", "axle_detectors"):
+        spec = getattr(scenario, name)
+        if spec is not None:
+            doc[name] = _spec_dict(spec)
     if scenario.vehicle is not None:
         v = scenario.vehicle
         doc["vehicle"] = {"name": v.name} if v.name is not None else {

@@ -76,17 +76,18 @@ class ForceIdentification:
     unknowns: ForceUnknowns
     order: Order
 
-    def plot(self, truth=None, ax=None):
-        """Forces against the truth if known (see :func:`bwim.plots.mfi.plot_forces`)."""
+    def plot(self, truth=None, ax=None, **kw):
+        """Forces against the truth if known (see :func:`bwim.plots.mfi.plot_forces`;
+        ``kw``: by, label); returns the figure."""
         from bwim.plots.mfi import plot_forces
 
-        return plot_forces(self, truth=truth, ax=ax)
+        return plot_forces(self, truth=truth, ax=ax, **kw)
 
 
 def _auto_unknowns(bridge: Bridge, record: Record) -> ForceUnknowns:
     if not bridge.is_plate or all(p.track_width is None for p in record.passages):
         return ForceUnknowns.AXLE
-    ys = {round(s.y, 6) for s in record.sensors if s.kind.is_strain}
+    ys = {round(s.y, 6) for s in record.sensors if s.kind.is_strain and s.y is not None}
     return ForceUnknowns.WHEEL if len(ys) >= 2 else ForceUnknowns.AXLE
 
 

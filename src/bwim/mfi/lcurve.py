@@ -51,6 +51,13 @@ class LCurve:
     corner: float
     corner_scaled: float
 
+    def plot(self, ax=None):
+        """The curve and its corner (:func:`bwim.plots.mfi.plot_lcurve`); returns the
+        figure."""
+        from bwim.plots.mfi import plot_lcurve
+
+        return plot_lcurve(self, ax=ax)
+
 
 def _curvature(t, a, b):
     sa, sb = CubicSpline(t, a), CubicSpline(t, b)

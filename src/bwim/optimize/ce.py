@@ -43,7 +43,6 @@ from __future__ import annotations
 import math
 import os
 import pickle
-import tempfile
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from enum import StrEnum
@@ -53,6 +52,7 @@ from typing import Any
 import numpy as np
 from scipy.special import ndtr, ndtri
 
+from bwim.atomic import atomic_output
 from bwim.errors import InputError, require_finite
 from bwim.optimize.parallel import check_int, evaluate
 from bwim.optimize.substructure import (
@@ -184,6 +184,14 @@ class CEResult:
     elite_std: np.ndarray
     convergences: int
     convergence_iterations: tuple[int, ...]
+
+    def plot(self, ax=None, **kw):
+        """Mean ± std of one parameter's sampling distribution per iteration
+        (:func:`bwim.plots.calibration.plot_ce_convergence`; ``kw``: parameter, scale,
+        label); returns the figure."""
+        from bwim.plots.calibration import plot_ce_convergence
+
+        return plot_ce_convergence(self, ax=ax, **kw)
 
 
 def _vector(name: str, value: object, n: int) -> np.ndarray:
@@ -698,23 +706,15 @@ def _unit_weight(name: str, value: object) -> float:
 def save_checkpoint(opt: CrossEntropy, path: str | os.PathLike[str]) -> None:
     """Pickle an optimiser to ``path`` atomically.
 
-    The state is written to a temporary file in the same folder, flushed to disk and
-    then renamed over ``path`` (``os.replace``), so ``path`` always holds a complete
-    checkpoint, the previous one or none, even if the process dies mid-write.
+    The state is written through :func:`bwim.atomic.atomic_output` (a temporary file in
+    the same folder, flushed to disk and renamed over ``path``), so ``path`` always holds
+    a complete checkpoint, the previous one or none, even if the process dies mid-write;
+    an unwritable path is an :class:`~bwim.errors.InputError` naming it.
     """
     if not isinstance(opt, CrossEntropy):
         raise InputError(f"save_checkpoint needs a CrossEntropy, got {type(opt).__name__}")
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            pickle.dump(opt, f, protocol=pickle.HIGHEST_PROTOCOL)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_output(path) as tmp, open(tmp, "wb") as f:
+        pickle.dump(opt, f, protocol=pickle.HIGHEST_PROTOCOL)
 
 
 def load_checkpoint(path: str | os.PathLike[str]) -> CrossEntropy:

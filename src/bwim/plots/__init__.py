@@ -5,8 +5,14 @@ Contract
 * Every plotting function has the form ``plot_something(result, ..., ax=None) -> Figure``:
   it draws on ``ax`` if given, otherwise on a new figure, and never calls ``show()``.
 * Plots show strain in µε and forces in kN (:mod:`bwim.conventions`).
-* Nothing in the core imports this package; it imports matplotlib lazily through
-  :func:`axes`, so ``import bwim`` stays free of matplotlib.
+* Nothing in the core imports this package at import time; it imports matplotlib lazily
+  through :func:`axes`, so ``import bwim`` stays free of matplotlib.  Each result with a
+  figure has a thin ``.plot(ax=None, **kw)`` method that imports its function here when
+  called: :class:`~bwim.Record`, :class:`~bwim.InfluenceLine`,
+  :class:`~bwim.StaticWeights`, :class:`~bwim.ForceIdentification`,
+  :class:`~bwim.mfi.lcurve.LCurve`, :class:`~bwim.calibration.stages.StageResult`,
+  :class:`~bwim.Calibration` and :class:`~bwim.optimize.CEResult`;
+  :meth:`bwim.paper.reproduce.CaseReport.figures` gives a case's named figures.
 """
 
 from __future__ import annotations

@@ -8,6 +8,7 @@ import numpy as np
 from bwim.conventions import KILONEWTON
 from bwim.optimize import CEHistory
 from bwim.plots import axes
+from bwim.tables import pct_change
 
 __all__ = ["plot_ce_convergence", "plot_mfi_comparison", "plot_zone_errors"]
 
@@ -15,11 +16,17 @@ __all__ = ["plot_ce_convergence", "plot_mfi_comparison", "plot_zone_errors"]
 def plot_ce_convergence(stage, *, parameter: int = 0, scale: float = 1.0, ax=None,
                         label: str | None = None):
     """Mean ± std of one parameter's sampling distribution at each CE iteration, with the
-    best-ever trial; injections show as jumps in the spread (paper Fig. 6 and 18)."""
-    ax = axes(ax)
+    best-ever trial; injections show as jumps in the spread (paper Fig. 6 and 18).
+
+    ``stage`` is a calibration stage (:class:`~bwim.calibration.stages.StageResult`,
+    named, with parameter labels) or a :class:`~bwim.optimize.CEResult` (``x[i]``).
+    """
     h = stage.history
     if not isinstance(h, CEHistory):
         raise ValueError("this stage was not run by Cross-Entropy")
+    labels = getattr(stage, "labels", None)
+    name = labels[parameter] if labels else f"x[{parameter}]"
+    ax = axes(ax)
     it = np.arange(1, h.mean.shape[0] + 1)
     m, s = h.mean[:, parameter] / scale, h.std[:, parameter] / scale
     ax.errorbar(it, m, yerr=s, fmt="o", capsize=3, label="sampling mean ± std")
@@ -27,8 +34,8 @@ def plot_ce_convergence(stage, *, parameter: int = 0, scale: float = 1.0, ax=Non
     for k in np.flatnonzero(h.converged):
         ax.axvline(it[k] + 0.5, color="0.7", lw=0.8)
     ax.set_xlabel("iteration")
-    ax.set_ylabel(label or stage.labels[parameter])
-    ax.set_title(f"{stage.name}: {stage.labels[parameter]}")
+    ax.set_ylabel(label or name)
+    ax.set_title(f"{getattr(stage, 'name', 'Cross-Entropy')}: {name}")
     ax.legend(fontsize="small")
     ax.grid(alpha=0.3)
     return ax.figure
@@ -60,7 +67,7 @@ def plot_zone_errors(true_bridge, calibrated_bridge, *, family: str = "E_x", ax=
     ax = axes(ax)
     model = true_bridge.model
     g = model.grid
-    err = 100 * (calibrated_bridge.params[family] / true_bridge.params[family] - 1)
+    err = pct_change(calibrated_bridge.params[family], true_bridge.params[family])
     per_element = err[model.zone_of_element].reshape(g.nx, g.ny).T
     lim = max(float(np.abs(err).max()), 1e-9)
     mesh = ax.pcolormesh(g.x_lines, g.y_lines, per_element, cmap="RdBu_r", vmin=-lim,

@@ -39,8 +39,9 @@ def plot_forces(ident, truth=None, *, by="axle", ax=None, label="MFI"):
 
 
 def plot_lcurve(ident, *, ax=None):
-    """The L-curve (residual norm against solution seminorm, log–log) and its corner."""
-    curve = ident.lcurve
+    """The L-curve (residual norm against solution seminorm, log–log) and its corner, of an
+    identification or of an :class:`~bwim.mfi.lcurve.LCurve` itself."""
+    curve = getattr(ident, "lcurve", ident)
     if curve is None:
         raise ValueError("this identification used a given λ: it has no L-curve")
     ax = axes(ax)

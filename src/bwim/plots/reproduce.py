@@ -1,4 +1,4 @@
-"""Figures of the reproduced experiments (see :mod:`bwim.reproduce`)."""
+"""Figures of the reproduced experiments (see :mod:`bwim.paper.reproduce`)."""
 
 from __future__ import annotations
 

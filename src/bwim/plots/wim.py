@@ -12,6 +12,7 @@ import numpy as np
 from bwim.conventions import KILONEWTON, MICROSTRAIN
 from bwim.plots import axes
 from bwim.sensors import SensorKind
+from bwim.tables import format_kn, format_kn_each
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -75,12 +76,12 @@ def plot_static_fit(
                 label=f"{ch.name} measured")
         ax.plot(weights.time, weights.fitted[:, k] * scale, "--", color=f"C{k % 10}",
                 label=f"{ch.name} static fit")
-    kn = ", ".join(f"{w / KILONEWTON:.1f}" for w in weights.axle_weights)
-    text = f"Moses: {kn} kN, GVW {weights.gvw / KILONEWTON:.1f} kN"
+    kn = ", ".join(format_kn_each(weights.axle_weights))
+    text = f"Moses: {kn} kN, GVW {format_kn(weights.gvw)} kN"
     if record is not None and record.truths:
         true = record.truth.static_axle_loads
-        text += ("\ntrue: " + ", ".join(f"{w / KILONEWTON:.1f}" for w in true)
-                 + f" kN, GVW {np.sum(true) / KILONEWTON:.1f} kN")
+        text += (f"\ntrue: {', '.join(format_kn_each(true))} kN, "
+                 f"GVW {format_kn(np.sum(true))} kN")
     ax.set_title(text, fontsize="small")
     ax.set_xlabel("time (s)")
     units = {_unit(ch.kind)[1] for ch in weights.channels}

@@ -176,6 +176,13 @@ class InfluenceLine:
         )
         return out.reshape(*xa.shape, len(self.channels))
 
+    def plot(self, ax=None, **kw):
+        """Each channel's line per kN against position, with a ``reference`` line if given
+        (:func:`bwim.plots.wim.plot_influence_line`); returns the figure."""
+        from bwim.plots.wim import plot_influence_line
+
+        return plot_influence_line(self, ax=ax, **kw)
+
     def response(self, passage: Passage, axle_loads: np.ndarray, time: np.ndarray) -> np.ndarray:
         """Static readings of a vehicle of ``axle_loads`` (N) on ``passage`` at ``time``,
         shape (n_t, n_channels): ``Σ_i A_i I(v (t − delay) − a_i)``."""
@@ -200,7 +207,8 @@ def resolve_channels(
         The available sensors (a record's).
     spec : "sum", "each", None or sequence
         ``"sum"``: one channel, the sum of the longitudinal strain gauges (``strain_x``) of
-        the section nearest ``section_x`` (ties: the section with more gauges);
+        the section nearest ``section_x`` (ties: the section with more gauges; gauges
+        that all lack ``x`` are taken as one section);
         ``"each"`` or None: every sensor on its own; a sequence: one channel per item, an
         item being a sensor (or its name) or a list/tuple of sensors (or names) to sum.
     section_x : float, optional
@@ -230,6 +238,13 @@ def resolve_channels(
             raise InputError(
                 "channels='sum' adds the longitudinal strain gauges (strain_x) of one "
                 f"section, but there are none among {list(by_name)}; name the channels")
+        unplaced = [s.name for s in gauges if s.x is None]
+        if unplaced:
+            if len(unplaced) < len(gauges):
+                raise InputError(
+                    f"channels='sum' cannot tell the section of gauge {unplaced[0]!r} (no "
+                    "x) among gauges with positions; name the channels")
+            return (Channel.of(gauges),)   # no positions: all gauges are one section
         sections = sorted({round(s.x, 6) for s in gauges})
         target = 0.5 * (sections[0] + sections[-1]) if section_x is None else section_x
         counts = {xs: sum(round(s.x, 6) == xs for s in gauges) for xs in sections}

@@ -79,6 +79,13 @@ class StaticWeights:
         """Weight of each axle group, N, shape (n_groups,)."""
         return np.array([self.axle_weights[list(g)].sum() for g in self.groups])
 
+    def plot(self, ax=None, **kw):
+        """Measured readings and the static fit, with a simulated ``record``'s true weights
+        if given (:func:`bwim.plots.wim.plot_static_fit`); returns the figure."""
+        from bwim.plots.wim import plot_static_fit
+
+        return plot_static_fit(self, ax=ax, **kw)
+
 
 def group_axles(spacings: Passage | np.ndarray, max_spacing: float = 2.0
                 ) -> tuple[tuple[int, ...], ...]:

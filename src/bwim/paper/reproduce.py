@@ -4,7 +4,8 @@ Contract
 --------
 Each ``case_*`` function runs one experiment of PAPER_CASES.md and returns a
 :class:`CaseReport`: printable tables with the paper's numbers beside ours, the measured
-numbers (for tests and the note), the objects figures are drawn from, and the wall time.
+numbers (for tests and the note), the objects figures are drawn from
+(:meth:`CaseReport.figures`), and the wall time.
 ``quick=True`` runs a smaller version (shorter approach, smaller populations, fewer
 seeds) for the test suite; the full runs are ``bwim reproduce`` / ``make reproduce``.
 
@@ -26,6 +27,7 @@ from bwim.dynamics.crossing import simulate
 from bwim.fe.bridge import Bridge
 from bwim.mfi import ForceIdentification, force_errors, identify_forces
 from bwim.records import Record
+from bwim.tables import Table, format_pct, pct_change
 
 __all__ = ["CASES", "CaseReport", "Table", "case_5_1", "case_5_2", "case_5_3", "case_5_4",
            "compare_methods"]
@@ -42,24 +44,6 @@ PAPER = {
 START = {"E_x": 0.8, "E_y": 1.2, "mu": 1.25, "E_girder": 0.9, "mu_girder": 0.85}
 
 
-@dataclass(frozen=True)
-class Table:
-    """A printable table."""
-
-    title: str
-    header: tuple[str, ...]
-    rows: tuple[tuple[str, ...], ...]
-
-    def render(self) -> str:
-        cells = [self.header, *self.rows]
-        widths = [max(len(str(r[i])) for r in cells) for i in range(len(self.header))]
-        line = "  ".join(str(h).rjust(w) for h, w in zip(self.header, widths, strict=True))
-        out = [self.title, line, "-" * len(line)]
-        out += ["  ".join(str(c).rjust(w) for c, w in zip(r, widths, strict=True))
-                for r in self.rows]
-        return "\n".join(out)
-
-
 @dataclass(frozen=True, kw_only=True, eq=False)
 class CaseReport:
     """One reproduced experiment."""
@@ -71,12 +55,16 @@ class CaseReport:
     artefacts: dict = field(default_factory=dict)
 
     def render(self) -> str:
+        """The tables as text, then the wall time."""
         body = "\n\n".join(t.render() for t in self.tables)
         return f"{body}\n\n(case {self.case}: {self.wall_time:.1f} s)"
 
+    def figures(self) -> dict:
+        """Named figures of the case (:func:`bwim.plots.reproduce.report_figures`); imports
+        matplotlib."""
+        from bwim.plots.reproduce import report_figures
 
-def _pct(a, b):
-    return 100.0 * (np.asarray(a, dtype=float) / np.asarray(b, dtype=float) - 1.0)
+        return report_figures(self)
 
 
 def _start(bridge: Bridge, unknowns: Sequence[str]) -> Bridge:
@@ -116,9 +104,10 @@ def case_5_1(*, quick: bool = False, seed: int = 0, method: str = "ce", n_jobs: 
     two = _two_stage_params(cal, truth)
     rows = []
     for k in ("E_x", "E_y", "mu"):
-        rows.append((k, f"{PAPER['5.1'][k]:+.2f}", f"{_pct(two[k], truth.params[k])[0]:+.3f}",
-                     f"{_pct(cal.params[k], truth.params[k])[0]:+.5f}",
-                     f"{cal.uncertainty[k][0] / truth.params[k][0] * 100:.3f}"))
+        t = truth.params[k][0]
+        rows.append((k, f"{PAPER['5.1'][k]:+.2f}", format_pct(two[k][0], t, 3),
+                     format_pct(cal.params[k][0], t, 5),
+                     f"{cal.uncertainty[k][0] / t * 100:.3f}"))
     exact, calibrated = _mfi(truth, rec), _mfi(cal.bridge, rec)
     e_exact, e_cal = force_errors(exact, rec.truth), force_errors(calibrated, rec.truth)
     mfi_rows = [
@@ -138,8 +127,8 @@ def case_5_1(*, quick: bool = False, seed: int = 0, method: str = "ce", n_jobs: 
         _stage_table(cal),
     )
     numbers = {
-        "errors": {k: float(_pct(cal.params[k], truth.params[k])[0]) for k in cal.params},
-        "two_stage_errors": {k: float(_pct(two[k], truth.params[k])[0]) for k in two},
+        "errors": {k: float(pct_change(cal.params[k], truth.params[k])[0]) for k in cal.params},
+        "two_stage_errors": {k: float(pct_change(two[k], truth.params[k])[0]) for k in two},
         "mfi_weight_error": e_cal.weight_error.tolist(), "mfi_rms_error": e_cal.rms_error.tolist(),
         "mfi_exact_rms_error": e_exact.rms_error.tolist(), "nfev": cal.nfev,
     }
@@ -195,7 +184,8 @@ def case_5_2(*, quick: bool = False, levels: Sequence[float] | None = None,
                             seed=sd, method=method, population=s["population"],
                             convergences=s["convergences"], n_jobs=n_jobs,
                             weights=peak_weights([rec]) if weighted else None)
-            errs.append([_pct(cal.params[k], truth.params[k])[0] for k in ("E_x", "E_y", "mu")])
+            errs.append([pct_change(cal.params[k], truth.params[k])[0]
+                         for k in ("E_x", "E_y", "mu")])
         e = np.array(errs)
         numbers[p] = {"mean_abs": np.abs(e).mean(0).tolist(), "max_abs": np.abs(e).max(0).tolist()}
         paper_note = "< 1" if p <= 5 else ("μ 42" if p == 20 else "> 1")
@@ -216,7 +206,7 @@ def case_5_4(*, quick: bool = False, seed: int = 0, method: str = "ce", n_jobs: 
     t0 = time.perf_counter()
     s = _settings(quick)
     truth = paper.vransko_bridge()
-    unknowns = ("E_x", "E_y", "mu", "E_girder", "mu_girder")
+    unknowns = Bridge.PARAM_FAMILIES
     rec = _crossing(truth, paper.vransko_sensors(), seed=2, approach=s["approach"])
     cal = calibrate(_start(truth, unknowns), [rec], paper.truck(),
                     road=paper.road(2, approach=s["approach"]), approach=s["approach"],
@@ -230,7 +220,7 @@ def case_5_4(*, quick: bool = False, seed: int = 0, method: str = "ce", n_jobs: 
         scale = 1e9 if k.startswith("E") else 1.0
         rows.append((k, f"{t_paper / scale:g}", f"{ce_paper / scale:g}",
                      f"{(ce_paper / t_paper - 1) * 100:+.2f}", f"{ours / scale:.4g}",
-                     f"{_pct(ours, truth.params[k].mean()):+.3f}"))
+                     format_pct(ours, truth.params[k].mean(), 3)))
     exact, calibrated = identify_forces(truth, rec), identify_forces(cal.bridge, rec)
     e_cal = force_errors(calibrated, rec.truth)
     tables = (
@@ -244,7 +234,7 @@ def case_5_4(*, quick: bool = False, seed: int = 0, method: str = "ce", n_jobs: 
                                                    strict=True)))),
         _stage_table(cal),
     )
-    numbers = {"errors": {k: float(_pct(cal.params[k].mean(), truth.params[k].mean()))
+    numbers = {"errors": {k: float(pct_change(cal.params[k].mean(), truth.params[k].mean()))
                           for k in unknowns},
                "mfi_weight_error": e_cal.weight_error.tolist(),
                "mfi_rms_error": e_cal.rms_error.tolist()}
@@ -290,7 +280,7 @@ def case_5_3(*, quick: bool = False, seed: int = 0, bridges: Sequence[int] | Non
             numbers[label][b + 1] = {"sum_sq": float(err.sum_sq.mean()),
                                      "rms": float(err.wheel_rms_error.mean())}
             row += [f"{err.sum_sq.mean():.1f}", f"{err.wheel_rms_error.mean() * 100:.1f}"]
-        ex_err = np.abs(_pct(cal48.bridge.E_x, truth.E_x))
+        ex_err = np.abs(pct_change(cal48.bridge.E_x, truth.E_x))
         numbers["bridge_Ex_error"][b + 1] = float(ex_err.mean())
         row += [f"{ex_err.mean():.2f}", f"{PAPER['5.3_48'][b]:g}", f"{PAPER['5.3_3'][b]:g}"]
         rows.append(tuple(row))
@@ -299,7 +289,7 @@ def case_5_3(*, quick: bool = False, seed: int = 0, bridges: Sequence[int] | Non
             f"§5.3 bridge #{b + 1}: E_x per zone, GPa (true → calibrated, error %)",
             ("zone", "true", "calibrated", "error %"),
             tuple((str(z + 1), f"{truth.E_x[z] / 1e9:.2f}", f"{cal48.bridge.E_x[z] / 1e9:.2f}",
-                   f"{_pct(cal48.bridge.E_x[z], truth.E_x[z]):+.2f}")
+                   format_pct(cal48.bridge.E_x[z], truth.E_x[z]))
                   for z in range(truth.n_zones))))
     table = Table(
         "§5.3 Table 1: MFI force error of the calibration truck with each calibrated model "
@@ -384,7 +374,7 @@ def compare_methods(*, quick: bool = False, seed: int = 0) -> CaseReport:
                         approach=approach, seed=seed, max_evals=budgets,
                         population=(s["population"][0], 100), convergences=s["convergences"],
                         **kw)
-        e = np.abs(np.concatenate([_pct(cal.params[k], truth3.params[k])
+        e = np.abs(np.concatenate([pct_change(cal.params[k], truth3.params[k])
                                    for k in ("E_x", "E_y")]))
         numbers[("5.3", name)] = {"nfev": cal.nfev, "time": time.perf_counter() - t,
                                   "mean": float(e.mean()), "max": float(e.max())}

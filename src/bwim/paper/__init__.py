@@ -4,9 +4,15 @@ Every value the paper leaves unstated is *assumed* here, once, with the reason; 
 bwim (tests, benchmarks, the demo, the reproductions) takes them from this module.  See
 ``shared/PAPER_CASES.md``.
 
+The paper stands apart from the library: this package holds its data (this module), its
+§5 experiments (:mod:`bwim.paper.reproduce`) and the demo (:mod:`bwim.paper.demo`).  The
+library never imports the package's submodules, and ``import bwim`` loads only this one.
+
+Contract
+--------
 Units follow :mod:`bwim.conventions`.  The paper prints its flexural parameters as
 "EI = 35 × 10⁹ N m²"; they only fit its strains as the **moduli** E of a solid slab, which
-is how they are used here.
+is how they are used here.  Every function returns a new object (no shared state).
 """
 
 from __future__ import annotations

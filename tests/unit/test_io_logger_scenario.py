@@ -1,0 +1,120 @@
+"""A real installation's scenario: [logger], [axle_detectors], gauges without positions,
+a calibration truck known by its static axle loads, no [bridge] (issue 11's contract)."""
+
+import numpy as np
+import pytest
+
+from bwim import io
+from bwim.errors import InputError
+from bwim.io.build import build_logger_format, build_sensors, build_vehicle, load_record
+from bwim.sensors import SensorKind
+
+GAUGES = [f"s{i:02d}" for i in range(1, 15)]
+SITE = f"""
+[logger]
+columns = ["time", "ad1", "ad2", {", ".join(f'"{g}"' for g in GAUGES)}, "-", "-"]
+[[sensors]]
+name = [{", ".join(f'"{g}"' for g in GAUGES)}]
+kind = "strain_x"
+[axle_detectors]
+channels = ["ad1", "ad2"]
+distance = 3.0
+[vehicle]          # the calibration truck
+axle_spacings = [3.8, 6.0, 1.3, 1.3]
+axle_loads = [61607.0, 108499.0, 90841.0, 69847.0, 70632.0]   # static, N
+"""
+
+
+def _write(tmp_path, text, name="site.toml"):
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+def _event(tmp_path, name, delimiter, header, n=300, rate=512.0, t0=36000.0):
+    rng = np.random.default_rng(1)
+    data = rng.normal(size=(n, 16))
+    t = t0 + np.arange(n) / rate
+    cols = ["time", "ad1", "ad2", *GAUGES, "temp", "status"]
+    lines = [delimiter.join(cols)] if header else []
+    for k in range(n):
+        fields = [f"{t[k]:.6f}", *(f"{v:.6f}" for v in data[k]), "12.5", "OK"]
+        lines.append(delimiter.join(fields))
+    p = tmp_path / name
+    p.write_text("\n".join(lines) + "\n")
+    return p, t, data
+
+
+def test_the_issue_scenario_parses_and_builds(tmp_path):
+    s = io.load_scenario(_write(tmp_path, SITE))
+    assert s.bridge is None
+    sensors = build_sensors(s)
+    assert [x.name for x in sensors] == GAUGES
+    assert all(x.x is None and x.kind is SensorKind.STRAIN_X for x in sensors)
+    truck = build_vehicle(s)
+    np.testing.assert_array_equal(truck.axle_spacings, [3.8, 6.0, 1.3, 1.3])
+    assert truck.static_axle_loads.sum() == pytest.approx(401426.0)
+    fmt = build_logger_format(s)
+    assert fmt.kinds["ad1"] is SensorKind.AXLE_DETECTOR
+    assert s.axle_detectors.distance == 3.0 and s.axle_detectors.channels == ("ad1", "ad2")
+
+
+@pytest.mark.parametrize(("name", "delimiter", "header"), [
+    ("e.txt", "\t", True), ("e.csv", ",", False), ("e.dat", ";", True), ("e.log", " ", False),
+])
+def test_logger_files_of_any_shape_load(tmp_path, name, delimiter, header):
+    s = io.load_scenario(_write(tmp_path, SITE))
+    p, t, data = _event(tmp_path, name, delimiter, header)
+    rec = load_record(p, s)
+    np.testing.assert_allclose(rec.time, t, rtol=0, atol=1e-6)
+    np.testing.assert_allclose(rec.data, data, rtol=0, atol=1e-6)
+    assert [x.name for x in rec.sensors] == ["ad1", "ad2", *GAUGES]
+    assert rec.passages == ()
+
+
+def test_scenario_round_trip(tmp_path):
+    s = io.load_scenario(_write(tmp_path, SITE))
+    out = tmp_path / "again.toml"
+    io.dump_scenario(s, out)
+    assert io.load_scenario(out) == s
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    (("distance = 3.0", "distance = -3.0"), "distance must be positive"),
+    (('channels = ["ad1", "ad2"]', 'channels = ["ad1", "ad1"]'), "two different"),
+    (('channels = ["ad1", "ad2"]', 'channels = ["ad1"]'), "two different"),
+    (('"-", "-"]', '"-", "s01"]'), "appears twice"),
+    (('columns = ["time", ', 'columns = ['), "needs a 'time' column or sampling_rate"),
+])
+def test_bad_site_scenarios(tmp_path, change, message):
+    p = _write(tmp_path, SITE.replace(*change))
+    with pytest.raises(InputError, match=message):
+        io.load_scenario(p)
+
+
+def test_columns_must_match_the_channels(tmp_path):
+    s = io.load_scenario(_write(tmp_path, SITE.replace('"-", "-"]', '"s99", "-"]')))
+    with pytest.raises(InputError, match="'s99' is neither a"):
+        build_logger_format(s)
+    s = io.load_scenario(_write(tmp_path, SITE.replace('"ad2", ', '"-", ')))
+    with pytest.raises(InputError, match="no column for the \\[axle_detectors\\] channel 'ad2'"):
+        build_logger_format(s)
+
+
+def test_a_missing_column_in_the_file_is_one_line(tmp_path):
+    s = io.load_scenario(_write(tmp_path, SITE))
+    p, _, _ = _event(tmp_path, "short.txt", "\t", True)
+    text = p.read_text().splitlines()
+    text[5] = "\t".join(text[5].split("\t")[:-1])
+    p.write_text("\n".join(text) + "\n")
+    with pytest.raises(InputError) as err:
+        load_record(p, s)
+    assert "short.txt" in str(err.value) and "\n" not in str(err.value)
+
+
+def test_named_gauges_with_transverse_positions(tmp_path):
+    text = SITE.replace('kind = "strain_x"', 'kind = "strain_x"\ny = [' +
+                        ", ".join(f"{0.5 + 0.7 * i:.1f}" for i in range(14)) + "]")
+    sensors = build_sensors(io.load_scenario(_write(tmp_path, text)))
+    assert [x.y for x in sensors] == pytest.approx([0.5 + 0.7 * i for i in range(14)])
+    assert all(x.x is None for x in sensors)
