@@ -13,7 +13,7 @@ from bwim.errors import BwimError, InputError, NumericalError
 from bwim.fe import Bridge, Girder, Modes, Supports, composite_section, grid_lines
 from bwim.loads import PointLoad
 from bwim.mfi import ForceIdentification, force_errors, identify_forces
-from bwim.records import Passage, Record, Truth
+from bwim.records import Passage, Record, SimulationSettings, Truth
 from bwim.road import RoadProfile
 from bwim.sensors import Sensor, SensorKind
 from bwim.vehicles import HalfCar, MovingForces, SprungMass, TractorSemitrailer, Truck3D
@@ -48,6 +48,7 @@ __all__ = [
     "RoadProfile",
     "Sensor",
     "SensorKind",
+    "SimulationSettings",
     "SprungMass",
     "StaticWeights",
     "Supports",

@@ -48,6 +48,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from bwim.calibration import Method
 from bwim.errors import BwimError, InputError
 from bwim.tables import Table, format_kn, format_kn_each, format_pct, param_values
 
@@ -197,8 +198,6 @@ def _calibrate(args: argparse.Namespace) -> int:
             kwargs[key] = getattr(args, key)
     if args.jobs is not None:
         kwargs["n_jobs"] = args.jobs
-    if scenario.run is not None:
-        kwargs.setdefault("approach", scenario.run.approach)
     progress = _CalibrationProgress()
     try:
         cal = calibrate(start, records, vehicle, road=road, callback=progress, **kwargs)
@@ -532,7 +531,7 @@ COMMANDS: tuple[Command, ...] = (
              help="records of the calibration truck (.h5 or .csv; folders expanded)"),
          arg("-o", "--output", default="calibrated.toml", metavar="MODEL.toml",
              help="the calibrated bridge model (default calibrated.toml)"),
-         arg("--method", choices=["ce", "lm", "cma"],
+         arg("--method", choices=[m.value for m in Method],
              help="optimiser: ce = Cross-Entropy (the paper's), lm = Levenberg-Marquardt, "
              "cma = CMA-ES (default: the scenario's, else ce)"),
          arg("--jobs", type=int, help="worker processes for the populations"),

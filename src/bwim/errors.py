@@ -16,11 +16,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable
+from enum import Enum
+from typing import TypeVar
 
 __all__ = [
     "BwimError",
     "InputError",
     "NumericalError",
+    "parse_enum",
     "require_choice",
     "require_finite",
     "require_positive",
@@ -80,8 +83,26 @@ def require_range(
 
 
 def require_choice(name: str, value: object, choices: Iterable[str]) -> str:
-    """Return ``value`` if it is one of ``choices`` or raise :class:`InputError`."""
+    """Return ``value`` if it is one of ``choices`` or raise :class:`InputError` (plain
+    string options; an enum's are :func:`parse_enum`'s)."""
     options = list(choices)
     if not isinstance(value, str) or value not in options:
         raise InputError(f"unknown {name} {_fmt(value)}; expected one of {', '.join(options)}")
     return value
+
+
+E = TypeVar("E", bound=Enum)
+
+
+def parse_enum(enum: type[E], value: object, name: str, *, context: str = "") -> E:
+    """``enum(value)``, or raise :class:`InputError` naming ``name`` and listing the options.
+
+    ``context`` follows the value in the message (e.g. ``" for edge x0"``).
+    """
+    try:
+        return enum(value)
+    except ValueError:
+        options = ", ".join(str(m.value) for m in enum)
+        raise InputError(
+            f"unknown {name} {_fmt(value)}{context}; expected one of {options}"
+        ) from None

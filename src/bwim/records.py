@@ -12,6 +12,10 @@ Contract
 * :class:`Record` is a time series of sensor readings (strain dimensionless, deflection m)
   with its sensors, passages and, for simulated records, truths.  Time 0 is the instant
   the first axle of the first vehicle reaches x = 0.
+* :class:`SimulationSettings` is how a crossing was simulated (run-up ``approach`` in m,
+  free vibration ``tail`` in s): what re-simulating it needs (calibration's dynamic
+  stages).  :func:`bwim.simulate` sets it on its records; measured records may carry the
+  settings their model should use.
 """
 
 from __future__ import annotations
@@ -25,7 +29,8 @@ import numpy as np
 from bwim.errors import InputError, require_finite, require_positive
 from bwim.sensors import Sensor
 
-__all__ = ["Passage", "Record", "Truth", "VBIConvergence", "axle_offsets"]
+__all__ = ["Passage", "Record", "SimulationSettings", "Truth", "VBIConvergence",
+           "axle_offsets"]
 
 
 def axle_offsets(spacings: np.ndarray) -> np.ndarray:
@@ -96,10 +101,15 @@ class Passage:
         half = self.track_width / 2
         return np.tile([self.lane - half, self.lane + half], self.n_axles)
 
+    def axle_x(self, time: np.ndarray) -> np.ndarray:
+        """Longitudinal axle positions at record times, m, shape (n_t, n_axles):
+        ``speed (t − delay) − axle_offsets``."""
+        t = np.asarray(time, dtype=float).reshape(-1)
+        return self.speed * (t[:, None] - self.delay) - self.axle_offsets[None, :]
+
     def wheel_x(self, time: np.ndarray) -> np.ndarray:
         """Longitudinal wheel positions at record times, m, shape (n_t, n_wheels)."""
-        t = np.asarray(time, dtype=float)
-        return self.speed * (t[:, None] - self.delay) - self.axle_offsets[self.wheel_axle]
+        return self.axle_x(time)[:, self.wheel_axle]
 
     def axle_times_on(self, length: float) -> np.ndarray:
         """Entry and exit time of each axle on a span of ``length``, shape (n_axles, 2)."""
@@ -147,6 +157,30 @@ class VBIConvergence:
     converged: bool = True
 
 
+@dataclass(frozen=True, kw_only=True)
+class SimulationSettings:
+    """How a crossing was simulated (see module docstring).
+
+    Attributes
+    ----------
+    approach : float
+        Run-up of each vehicle before the bridge, m (>= 0).
+    tail : float
+        Free vibration recorded after the last axle leaves, s (>= 0).
+    """
+
+    approach: float
+    tail: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("approach", "tail"):
+            v = require_finite(name, getattr(self, name))
+            if v < 0:
+                unit = "m" if name == "approach" else "s"
+                raise InputError(f"{name} must be >= 0 {unit}, got {v:g}")
+            object.__setattr__(self, name, v)
+
+
 @dataclass(frozen=True, kw_only=True, eq=False)
 class Record:
     """Sensor readings of one event (one or more vehicles crossing).
@@ -163,6 +197,9 @@ class Record:
         Empty for measured records.
     convergence : VBIConvergence or None
         For simulated records.
+    settings : SimulationSettings or None
+        How the crossing was simulated (simulated records), or the settings a model of
+        it should use.
     """
 
     time: np.ndarray
@@ -171,6 +208,7 @@ class Record:
     passages: tuple[Passage, ...] = ()
     truths: tuple[Truth, ...] = ()
     convergence: VBIConvergence | None = None
+    settings: SimulationSettings | None = None
 
     def __post_init__(self) -> None:
         t = np.asarray(self.time, dtype=float)
@@ -197,11 +235,22 @@ class Record:
         object.__setattr__(self, "sensors", tuple(self.sensors))
         object.__setattr__(self, "passages", tuple(self.passages))
         object.__setattr__(self, "truths", tuple(self.truths))
+        if self.settings is not None and not isinstance(self.settings, SimulationSettings):
+            raise InputError(f"settings must be a SimulationSettings, got "
+                             f"{type(self.settings).__name__}")
 
     @property
     def sampling_rate(self) -> float:
         """Samples per second (from the median time step)."""
         return float(1.0 / np.median(np.diff(self.time)))
+
+    def time_after_exit(self, length: float) -> float:
+        """Record time after the last axle of every passage has left a span of ``length``
+        m, s (0 if the record ends earlier)."""
+        if not self.passages:
+            raise InputError("this record has no passage: the axles' exit is unknown")
+        exit_time = max(p.axle_times_on(length)[-1, 1] for p in self.passages)
+        return max(0.0, float(self.time[-1] - exit_time))
 
     @property
     def passage(self) -> Passage:

@@ -25,7 +25,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from enum import StrEnum
 
-from bwim.errors import InputError, require_finite
+from bwim.errors import InputError, parse_enum, require_finite
 
 __all__ = ["Sensor", "SensorKind"]
 
@@ -84,13 +84,7 @@ class Sensor:
             object.__setattr__(self, "name", "")
         if not isinstance(self.name, str):
             raise InputError(f"Sensor.name must be a string, got {self.name!r}")
-        try:
-            kind = SensorKind(self.kind)
-        except ValueError:
-            options = ", ".join(k.value for k in SensorKind)
-            raise InputError(
-                f"unknown sensor kind {self.kind!r}; expected one of {options}"
-            ) from None
+        kind = parse_enum(SensorKind, self.kind, "sensor kind")
         object.__setattr__(self, "kind", kind)
         if not self.name:
             if self.x is None:

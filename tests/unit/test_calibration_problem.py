@@ -1,13 +1,15 @@
 """Calibration problem pieces: weighted adjoint Jacobian against finite differences, the
 neighbour map of §5.3, shared (tied) parameter families."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 import bwim
 from bwim import paper
-from bwim.calibration.calibrate import _static_jacobian
 from bwim.calibration.problem import (
+    DynamicObjective,
     ParameterSpace,
     StaticObjective,
     neighbour_map,
@@ -29,7 +31,7 @@ def test_weighted_jacobian_equals_finite_differences(record, rng):
     w = [rng.uniform(0.5, 2.0, rec.data.shape[1]) / np.abs(rec.data).max(axis=0) ** 2]
     obj = StaticObjective(space, [rec], paper.truck(), weights=w)
     theta = space.vector() * rng.uniform(0.9, 1.1, space.n)
-    J = _static_jacobian(obj, theta)
+    J = obj.jacobian(theta)
     fd = np.empty_like(J)
     for k in range(space.n):
         h = 1e-4 * theta[k]
@@ -48,7 +50,7 @@ def test_shared_girder_family_jacobian_and_broadcast():
     assert space.n == 2 and space.split([3e10, 3.6e10])["E_girder"].tolist() == [3.6e10] * 5
     obj = StaticObjective(space, [rec], paper.truck())
     theta = space.vector()
-    J = _static_jacobian(obj, theta)
+    J = obj.jacobian(theta)
     h = 1e-4 * theta[1]
     step = np.array([0.0, h])
     fd = (obj.residuals(theta + step) - obj.residuals(theta - step)) / (2 * h)
@@ -72,3 +74,23 @@ def test_peak_weights_and_bad_weights(record):
     space = ParameterSpace(bridge, ("E_x",))
     with pytest.raises(InputError, match="channel weights of record 0 must be 18"):
         StaticObjective(space, [rec], paper.truck(), weights=[np.ones(3)])
+
+
+def test_dynamic_objective_takes_the_records_settings(record):
+    """Equivalence: a record's own simulation settings, the same approach given
+    explicitly, and a record without settings (tail from its time axis) re-simulate the
+    same crossing."""
+    bridge, rec = record
+    assert rec.settings == bwim.SimulationSettings(approach=0.0, tail=0.0)
+    space = ParameterSpace(bridge, ("mu",))
+    theta = space.vector() * 1.1
+    own = DynamicObjective(space, [rec], paper.truck(), None, bridge, n_modes=6)
+    given = DynamicObjective(space, [rec], paper.truck(), None, bridge, approach=0.0,
+                             n_modes=6)
+    bare = dataclasses.replace(rec, settings=None)
+    derived = DynamicObjective(space, [bare], paper.truck(), None, bridge, approach=0.0,
+                               n_modes=6)
+    ref = own.residuals(theta)
+    assert np.abs(ref).max() > 0
+    np.testing.assert_array_equal(given.residuals(theta), ref)
+    np.testing.assert_array_equal(derived.residuals(theta), ref)

@@ -44,7 +44,8 @@ def synthetic_record(rng, *, truths=True) -> bwim.Record:
     return bwim.Record(time=t, data=rng.normal(size=(50, 3)) * 1e-5, sensors=SENSORS,
                        passages=passages, truths=tr,
                        convergence=VBIConvergence(method="iterative", iterations=7,
-                                                  change=3.2e-7, converged=False))
+                                                  change=3.2e-7, converged=False),
+                       settings=bwim.SimulationSettings(approach=37.5, tail=0.125))
 
 
 def assert_same_passage(p, q):
@@ -69,6 +70,7 @@ def assert_same_record(r, q):
             a, b = getattr(t, name), getattr(tt, name)
             assert a.dtype == b.dtype and np.array_equal(a, b)
     assert r.convergence == q.convergence
+    assert r.settings == q.settings
 
 
 # --- CSV -------------------------------------------------------------------------------------
@@ -337,6 +339,8 @@ def test_load_record_by_extension(tmp_path, rng):
     got = io.load_record(tmp_path / "log.csv", scenario)
     assert np.array_equal(got.data, rec.data)
     assert_same_passage(got.passage, io.build_passage(scenario))
+    # a measured record takes the [run]'s approach; it ends before the vehicle leaves
+    assert got.settings == bwim.SimulationSettings(approach=50.0, tail=0.0)
     io.write_record(got, tmp_path / "log.h5")
     assert_same_record(io.load_record(tmp_path / "log.h5"), got)
     with raises(f"{tmp_path / 'log.csv'}: a CSV record needs a scenario for its sensor "

@@ -35,9 +35,9 @@ def crossing():
 @pytest.mark.parametrize("static_correction", [True, False])
 @pytest.mark.parametrize("lam", [1e-3, 1.0])
 def test_dp_equals_batch_tikhonov(small, order, static_correction, lam):
-    beam, sensors, rec = small
+    beam, _, rec = small
     scale = np.abs(rec.data).max()
-    model = build_model(beam, beam.modes(4), sensors, rec.passages, rec.time, scale,
+    model = build_model(beam, beam.modes(4), rec, scale,
                         unknowns=ForceUnknowns.AXLE, order=order,
                         static_correction=static_correction)
     d = rec.data / scale
@@ -50,9 +50,9 @@ def test_dp_equals_batch_tikhonov(small, order, static_correction, lam):
 
 
 def test_lambda_units_round_trip(crossing):
-    beam, sensors, rec = crossing
+    beam, _, rec = crossing
     scale = np.abs(rec.data).max()
-    model = build_model(beam, beam.modes(2), sensors, rec.passages, rec.time, scale,
+    model = build_model(beam, beam.modes(2), rec, scale,
                         unknowns=ForceUnknowns.AXLE, order=Order.FIRST)
     assert model.lam_scaled(model.lam_physical(0.37)) == pytest.approx(0.37)
     # physical λ multiplies (N/s)²: scaled λ = λ_phys (f_scale / dt)² / d_scale²

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import bwim
-from bwim.calibration.calibrate import Calibration, StageResult
+from bwim.calibration import Calibration, StageResult
 from bwim.optimize import minimize_ce
 from bwim.plots import axes
 from bwim.plots.calibration import plot_ce_convergence

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from bwim import paper
-from bwim.dynamics.simulate import simulate
+from bwim.dynamics.crossing import simulate
 from bwim.errors import InputError
 from bwim.io import save_bridge, write_record
 from bwim.mfi import identify_forces

@@ -28,6 +28,9 @@ def test_record_layout_and_time_origin():
     assert rec.time[0] == 0.0 and rec.sampling_rate == pytest.approx(fs)
     # last axle leaves at (12 + 5.5) / 20 s, then 0.1 s of free vibration
     assert rec.time[-1] == pytest.approx((12 + 5.5) / 20 + 0.1, abs=1.5 / fs)
+    # the settings a re-simulation needs travel with the record
+    assert rec.settings == bwim.SimulationSettings(approach=10.0, tail=0.1)
+    assert rec.time_after_exit(bridge.length) == pytest.approx(0.1, abs=1.0 / fs)
     assert rec.data.shape == (rec.time.size, 2)
     truth = rec.truth
     assert truth.wheel_forces.shape == (rec.time.size, 4)

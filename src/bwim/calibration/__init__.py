@@ -1,7 +1,6 @@
 """Calibration of the bridge FE model from strains under a truck of known weight."""
 
-from bwim.calibration.calibrate import Calibration, Method, Refine, StageResult, calibrate
-from bwim.calibration.identifiability import Identifiability, identifiability
+from bwim.calibration.driver import Calibration, Refine, calibrate
 from bwim.calibration.problem import (
     DynamicObjective,
     ParameterSpace,
@@ -9,6 +8,8 @@ from bwim.calibration.problem import (
     neighbour_map,
     peak_weights,
 )
+from bwim.calibration.sensitivity import Identifiability, identifiability
+from bwim.calibration.stages import Method, StageResult, run_stage
 
 __all__ = [
     "Calibration",
@@ -23,4 +24,5 @@ __all__ = [
     "identifiability",
     "neighbour_map",
     "peak_weights",
+    "run_stage",
 ]

@@ -11,6 +11,8 @@ Contract
   sensor, §1.5), against the measured (dynamic) strains.
 * :class:`DynamicObjective` (step 2) simulates the calibration crossing on the trial
   bridge (vehicle–bridge interaction over the given road) and compares total strains.
+* :meth:`StaticObjective.jacobian` is the residuals' Jacobian by the adjoint method
+  (THEORY §1.5).
 * Both return, per trial, the squared misfit of each **part**: the channels of one
   measurement point (the sub-objectives of sub-structured CE, paper §4.1).  Their sum is
   the objective.  :func:`neighbour_map` says which parameters neighbour which part: the
@@ -27,11 +29,14 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from bwim.dynamics.simulate import prepare_crossing, run_crossing
+from bwim.dynamics.crossing import DEFAULT_APPROACH, prepare_crossing, run_crossing
 from bwim.errors import InputError, NumericalError
 from bwim.fe.bridge import Bridge
-from bwim.records import Record
+from bwim.fe.influence import static_sensitivities
+from bwim.fe.modal import select_modes
+from bwim.records import Record, SimulationSettings
 from bwim.road import RoadProfile
+from bwim.vehicles import Vehicle
 
 __all__ = [
     "DynamicObjective",
@@ -135,14 +140,14 @@ def neighbour_map(space: ParameterSpace, sensors) -> np.ndarray:
         for p, (name, idx) in enumerate(fam):
             if idx is None:  # shared by all zones or girders
                 nb[j, p] = True
-            elif name in ("E_girder", "mu_girder"):
+            elif name in Bridge.GIRDER_FAMILIES:
                 nb[j, p] = idx in near_girders
             else:
                 nb[j, p] = idx in zones
     return nb
 
 
-def _check_records(records: Sequence[Record], vehicle) -> list[Record]:
+def _check_records(records: Sequence[Record], vehicle: Vehicle) -> list[Record]:
     records = list(records) if isinstance(records, (list, tuple)) else [records]
     if not records:
         raise InputError("calibration needs at least one record of the calibration truck")
@@ -192,7 +197,7 @@ class StaticObjective:
     residuals; default 1 (the paper's plain sum).
     """
 
-    def __init__(self, space: ParameterSpace, records: Sequence[Record], vehicle,
+    def __init__(self, space: ParameterSpace, records: Sequence[Record], vehicle: Vehicle,
                  base: Bridge | None = None, weights=None):
         self.space = space
         self.base = space.start if base is None else base
@@ -255,16 +260,45 @@ class StaticObjective:
                                zip(self.predicted(theta), self._data, self.weights,
                                    strict=True)])
 
+    def jacobian(self, theta: np.ndarray) -> np.ndarray:
+        """∂(residuals)/∂θ by the adjoint method, shape (n_residuals, n_params).
+
+        A shared family's value drives all its zones or girders: its column is the sum of
+        theirs (chain rule through the broadcast).
+        """
+        space = self.space
+        bridge = space.bridge(theta, self.base)
+        blocks = []
+        for rec, w in zip(self.records, self.weights, strict=True):
+            p = rec.passage
+            x = p.wheel_x(rec.time)
+            y = np.broadcast_to(p.wheel_y, x.shape) if bridge.is_plate else None
+            sens = static_sensitivities(bridge, rec.sensors, x, y,
+                                        self.static_wheels[None, :], wrt=space.names)
+            weighted = sens.values * np.sqrt(w)[None, :, None]  # rows as in residuals()
+            vals = weighted.reshape(-1, sens.values.shape[2])
+            names = np.asarray(sens.names)
+            cols = [vals[:, names == n].sum(axis=1, keepdims=True) if n in space.shared
+                    else vals[:, names == n] for n in space.names]
+            blocks.append(np.hstack(cols))
+        return np.vstack(blocks)
+
     def __call__(self, theta: np.ndarray) -> np.ndarray:
         return self.parts(theta)
 
 
 class DynamicObjective:
     """Dynamic misfit of trial parameters: the calibration crossings re-simulated
-    (channel ``weights`` as in :class:`StaticObjective`)."""
+    (channel ``weights`` as in :class:`StaticObjective`).
 
-    def __init__(self, space: ParameterSpace, records: Sequence[Record], vehicle,
-                 road: RoadProfile | None, base: Bridge, *, approach: float,
+    Each crossing is re-simulated with its record's :class:`~bwim.records.
+    SimulationSettings` (run-up and tail); ``approach`` (m), when given, overrides the
+    run-up of every record.  A record without settings runs up
+    :data:`~bwim.dynamics.DEFAULT_APPROACH` and is simulated to its end.
+    """
+
+    def __init__(self, space: ParameterSpace, records: Sequence[Record], vehicle: Vehicle,
+                 road: RoadProfile | None, base: Bridge, *, approach: float | None = None,
                  n_modes: int | None = None, weights=None):
         self.space = space
         self.base = base
@@ -274,20 +308,22 @@ class DynamicObjective:
         self._parts = []
         for rec in self.records:
             p = rec.passage
+            settings = rec.settings
+            if settings is None:
+                settings = SimulationSettings(approach=DEFAULT_APPROACH,
+                                              tail=rec.time_after_exit(base.length))
             prep = prepare_crossing(base, vehicle, speed=p.speed, sensors=rec.sensors,
                                     lane=p.lane if base.is_plate else None, road=road,
-                                    sampling_rate=rec.sampling_rate, approach=approach,
-                                    tail=max(0.0, rec.time[-1] - (base.length + p.axle_offsets[
-                                        -1]) / p.speed))
+                                    sampling_rate=rec.sampling_rate,
+                                    approach=settings.approach if approach is None else approach,
+                                    tail=settings.tail)
             self._prepared.append(prep)
             self._parts.append(measurement_points(rec.sensors)[0])
         self.n_parts = max(int(p.max()) for p in self._parts) + 1
         if n_modes is None:
-            from bwim.dynamics.simulate import select_modes
-
             n_modes = select_modes(base, sampling_rate=self.records[0].sampling_rate).n
         self.n_modes = n_modes
-        stiff = set(self.space.names) & {"E_x", "E_y", "E_girder"}
+        stiff = set(self.space.names) & set(Bridge.STIFFNESS_FAMILIES)
         # K fixed (mass stage): the influence surfaces are computed once
         self._influence = (None if stiff else
                            [base.influence(rec.sensors) for rec in self.records])

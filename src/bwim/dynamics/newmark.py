@@ -2,9 +2,11 @@
 
 Contract
 --------
-* :class:`Newmark` holds β, γ and the step Δt and gives the standard coefficients; the
-  default (β = 1/4, γ = 1/2) is the average-acceleration rule: unconditionally stable,
-  second-order accurate, no numerical damping.
+* :class:`Newmark` holds β, γ and the step Δt and gives the standard coefficients
+  ``a0 … a5`` (Bathe's notation) and the history terms built from them; nothing else in
+  bwim spells a Newmark coefficient out.  The default (β = 1/4, γ = 1/2) is the
+  average-acceleration rule: unconditionally stable, second-order accurate, no numerical
+  damping.
 * :func:`integrate` advances a time-invariant system over a whole load history with a
   precomputed step operator ``[u; v; a]ₖ₊₁ = A [u; v; a]ₖ + B fₖ₊₁``: one small matrix
   product per step.  Diagonal systems (modal coordinates) may pass 1-D arrays for M, C, K
@@ -39,34 +41,62 @@ class Newmark:
                              f"got beta={self.beta}, gamma={self.gamma}")
 
     @property
-    def a0(self) -> float:  # coefficient of M in the effective stiffness
+    def a0(self) -> float:
+        """Coefficient of M in the effective stiffness (and of u in M's history)."""
         return 1.0 / (self.beta * self.dt**2)
 
     @property
-    def a1(self) -> float:  # coefficient of C in the effective stiffness
+    def a1(self) -> float:
+        """Coefficient of C in the effective stiffness (and of u in C's history)."""
         return self.gamma / (self.beta * self.dt)
+
+    @property
+    def a2(self) -> float:
+        """Coefficient of v in M's history."""
+        return 1.0 / (self.beta * self.dt)
+
+    @property
+    def a3(self) -> float:
+        """Coefficient of a in M's history."""
+        return 0.5 / self.beta - 1.0
+
+    @property
+    def a4(self) -> float:
+        """Coefficient of v in C's history."""
+        return self.gamma / self.beta - 1.0
+
+    @property
+    def a5(self) -> float:
+        """Coefficient of a in C's history."""
+        return self.dt * (0.5 * self.gamma / self.beta - 1.0)
 
     def effective(self, M, C, K):
         """Effective stiffness ``K + a1 C + a0 M``."""
         return K + self.a1 * C + self.a0 * M
+
+    def mass_history(self, u, v, a):
+        """``a0 u + a2 v + a3 a``: what multiplies M in the known part of the load."""
+        return self.a0 * u + self.a2 * v + self.a3 * a
+
+    def damping_history(self, u, v, a):
+        """``a1 u + a4 v + a5 a``: what multiplies C in the known part of the load."""
+        return self.a1 * u + self.a4 * v + self.a5 * a
 
     def history(self, M, C, u, v, a):
         """The known part of the effective load: ``M(·) + C(·)`` of the last state.
 
         Works for full matrices (vectors u, v, a) and for diagonal 1-D arrays.
         """
-        b, g, dt = self.beta, self.gamma, self.dt
-        mu = self.a0 * u + v / (b * dt) + (0.5 / b - 1.0) * a
-        cu = self.a1 * u + (g / b - 1.0) * v + dt * (0.5 * g / b - 1.0) * a
+        mu = self.mass_history(u, v, a)
+        cu = self.damping_history(u, v, a)
         if np.ndim(M) == 1:
             return M * mu + C * cu
         return M @ mu + C @ cu
 
     def update(self, u_new, u, v, a):
         """Velocity and acceleration at the new step from the new displacement."""
-        b, g, dt = self.beta, self.gamma, self.dt
-        a_new = self.a0 * (u_new - u) - v / (b * dt) - (0.5 / b - 1.0) * a
-        v_new = v + dt * ((1.0 - g) * a + g * a_new)
+        a_new = self.a0 * (u_new - u) - self.a2 * v - self.a3 * a
+        v_new = v + self.dt * ((1.0 - self.gamma) * a + self.gamma * a_new)
         return v_new, a_new
 
 
@@ -118,14 +148,14 @@ def integrate(
     a = np.linalg.solve(M, f[0] - C @ v - K @ u) if a0 is None else np.asarray(a0, float).copy()
     # step operator: z_{k+1} = Tz z_k + Tf f_{k+1}, z = [u; v; a]
     kinv = np.linalg.inv(scheme.effective(M, C, K))
-    b, g, dt = scheme.beta, scheme.gamma, scheme.dt
+    g, dt = scheme.gamma, scheme.dt
     I = np.eye(n)
     hu = kinv @ (scheme.a0 * M + scheme.a1 * C)
-    hv = kinv @ (M / (b * dt) + (g / b - 1.0) * C)
-    ha = kinv @ ((0.5 / b - 1.0) * M + dt * (0.5 * g / b - 1.0) * C)
+    hv = kinv @ (scheme.a2 * M + scheme.a4 * C)
+    ha = kinv @ (scheme.a3 * M + scheme.a5 * C)
     au = scheme.a0 * (hu - I)
-    av = scheme.a0 * hv - I / (b * dt)
-    aa = scheme.a0 * ha - (0.5 / b - 1.0) * I
+    av = scheme.a0 * hv - scheme.a2 * I
+    aa = scheme.a0 * ha - scheme.a3 * I
     Tz = np.block([
         [hu, hv, ha],
         [dt * g * au, I + dt * g * av, dt * ((1 - g) * I + g * aa)],
@@ -136,8 +166,7 @@ def integrate(
     Z[0] = np.concatenate([u, v, a])
     forced = Tf @ f.T  # (3n, n_t)
     z = Z[0]
-    TzT = Tz
     for k in range(1, n_t):
-        z = TzT @ z + forced[:, k]
+        z = Tz @ z + forced[:, k]
         Z[k] = z
     return NewmarkResult(u=Z[:, :n], v=Z[:, n:2 * n], a=Z[:, 2 * n:])

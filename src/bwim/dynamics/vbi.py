@@ -159,9 +159,10 @@ class FullBridge:
     def n(self) -> int:
         return self.K.shape[0]
 
-    def _factor(self, scheme: Newmark):
-        keff = (self.K + scheme.a1 * self.C + scheme.a0 * self.M).tocsr()
-        return _banded_cholesky(keff)
+    def effective_factor(self, scheme: Newmark) -> tuple[np.ndarray, bool]:
+        """Banded Cholesky factor of the effective stiffness ``K + a1 C + a0 M`` (for
+        ``scipy.linalg.cho_solve_banded``)."""
+        return _banded_cholesky(scheme.effective(self.M, self.C, self.K).tocsr())
 
     def _load(self, k: int, F_k: np.ndarray) -> np.ndarray:
         f = np.zeros(self.n)
@@ -170,7 +171,7 @@ class FullBridge:
 
     def forced(self, F: np.ndarray, scheme: Newmark, start: int = 0,
                u0=None, v0=None, a0=None) -> NewmarkResult:
-        fac = self._factor(scheme)
+        fac = self.effective_factor(scheme)
         n_t = F.shape[0]
         U = np.zeros((n_t, self.n))
         V = np.zeros_like(U)
@@ -365,16 +366,12 @@ def _modal_steps(crossing, bridge: ModalBridge, scheme, start, k_out, y_state, v
         C[:, n_m:, n_m:] = veh.damping
         K[:, n_m:, n_m:] = veh.stiffness
         f[:, n_m:] = -(kt * r + ct * rd) @ E.T
-    Keff = K + scheme.a1 * C + scheme.a0 * Mfull
-    b, g, dt = scheme.beta, scheme.gamma, scheme.dt
-    c_u, c_v, c_a = scheme.a1, g / b - 1.0, dt * (0.5 * g / b - 1.0)
-    m_u, m_v, m_a = scheme.a0, 1.0 / (b * dt), 0.5 / b - 1.0
+    Keff = scheme.effective(Mfull, C, K)
     Z = np.empty((n_w, n))
     ZV = np.empty((n_w, n))
     ZA = np.empty((n_w, n))
     for i in range(n_w):
-        rhs = f[i] + Mfull @ (m_u * z + m_v * zv + m_a * za) + C[i] @ (c_u * z + c_v * zv
-                                                                      + c_a * za)
+        rhs = f[i] + scheme.history(Mfull, C[i], z, zv, za)
         z_new = np.linalg.solve(Keff[i], rhs)
         zv, za = scheme.update(z_new, z, zv, za)
         z = z_new
@@ -403,7 +400,7 @@ def _full_steps(crossing, bridge: FullBridge, scheme, start, k_out, y_state, vst
     n_t, n_b, n_v = crossing.n_t, bridge.n, veh.n_dof
     kt, ct, E = veh.tyre_stiffness, veh.tyre_damping, veh.contact
     n_c = kt.size
-    fac = bridge._factor(scheme)
+    fac = bridge.effective_factor(scheme)
     at = kt + scheme.a1 * ct
     if n_v:
         kv_eff = scheme.effective(veh.mass, veh.damping, veh.stiffness)
@@ -417,15 +414,14 @@ def _full_steps(crossing, bridge: FullBridge, scheme, start, k_out, y_state, vst
     y, yv, ya = y_state
     F[: start + 1] = _forces(veh, _slice_result(Y, YV, start + 1) if n_v else None,
                              -crossing.r[: start + 1], -crossing.r_dot[: start + 1])
-    b, g, dt = scheme.beta, scheme.gamma, scheme.dt
     for k in range(start + 1, k_out + 1):
         dofs, vals, slopes = bridge.dofs[k], bridge.vals[k], bridge.slopes[k]
         r, rd = crossing.r[k], crossing.r_dot[k]
-        cu_b = scheme.a1 * u + (g / b - 1.0) * uv + dt * (0.5 * g / b - 1.0) * ua
+        cu_b = scheme.damping_history(u, uv, ua)
         Lt_cu = np.einsum("cj,cj->c", vals, cu_b[dofs])
         hist_b = scheme.history(bridge.M, bridge.C, u, uv, ua)
         if n_v:
-            cu_y = scheme.a1 * y + (g / b - 1.0) * yv + dt * (0.5 * g / b - 1.0) * ya
+            cu_y = scheme.damping_history(y, yv, ya)
             coupling_b = ct * (Lt_cu - cu_y @ E)
             rv = (scheme.history(veh.mass, veh.damping, y, yv, ya) - E @ (ct * Lt_cu)
                   - E @ (kt * r + ct * rd))

@@ -9,7 +9,7 @@ from bwim.fe.influence import (
     static_sensitivities,
 )
 from bwim.fe.mesh import Grid, grid_lines
-from bwim.fe.modal import Modes
+from bwim.fe.modal import Modes, select_modes
 from bwim.fe.model import EdgeSupport, FEModel, Supports
 
 __all__ = [
@@ -27,5 +27,6 @@ __all__ = [
     "composite_section",
     "grid_lines",
     "influence_surfaces",
+    "select_modes",
     "static_sensitivities",
 ]

@@ -27,7 +27,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 import scipy.linalg as sla
@@ -48,9 +48,6 @@ from bwim.loads import PointLoad
 from bwim.sensors import Sensor
 
 __all__ = ["Bridge", "RayleighDamping"]
-
-_STIFFNESS = ("E_x", "E_y", "E_girder")
-_MASS = ("mu", "mu_girder")
 
 
 @dataclass(frozen=True)
@@ -122,8 +119,18 @@ class Bridge:
     """A bridge finite-element model with its material parameters.
 
     Build one with :meth:`Bridge.plate` or :meth:`Bridge.beam`; change parameters with
-    :meth:`with_params`.
+    :meth:`with_params`.  The parameter families' names are the class constants below
+    (the module docstring's table).
     """
+
+    #: Every parameter family, in the order of :attr:`params`.
+    PARAM_FAMILIES: ClassVar[tuple[str, ...]] = ("E_x", "E_y", "mu", "E_girder", "mu_girder")
+    #: The stiffness families (moduli, Pa).
+    STIFFNESS_FAMILIES: ClassVar[tuple[str, ...]] = ("E_x", "E_y", "E_girder")
+    #: The mass families (kg/m² or kg/m).
+    MASS_FAMILIES: ClassVar[tuple[str, ...]] = ("mu", "mu_girder")
+    #: The families with one value per girder (the others have one per zone).
+    GIRDER_FAMILIES: ClassVar[tuple[str, ...]] = ("E_girder", "mu_girder")
 
     model: FEModel
     E_x: np.ndarray
@@ -298,14 +305,13 @@ class Bridge:
     # --- parameters ------------------------------------------------------------------
     @property
     def params(self) -> dict[str, np.ndarray]:
-        """The calibratable parameters present on this bridge (copies)."""
-        out = {"E_x": self.E_x.copy()}
-        if self.model.is_plate:
-            out["E_y"] = self.E_y.copy()
-        out["mu"] = self.mu.copy()
-        if self.model.girders:
-            out["E_girder"] = self.E_girder.copy()
-            out["mu_girder"] = self.mu_girder.copy()
+        """The calibratable parameters present on this bridge (copies), in the order of
+        :attr:`PARAM_FAMILIES` (``E_y`` on plates only, the girder families with girders)."""
+        out = {}
+        for name in self.PARAM_FAMILIES:
+            value = getattr(self, name)
+            if value is not None and value.size:
+                out[name] = value.copy()
         return out
 
     def with_params(self, **params: Any) -> Bridge:

@@ -136,7 +136,7 @@ def static_sensitivities(
     Sensitivities
     """
     model = bridge.model
-    present = [n for n in ("E_x", "E_y", "E_girder") if n in bridge.params]
+    present = [n for n in bridge.STIFFNESS_FAMILIES if n in bridge.params]
     wrt = tuple(present if wrt is None else wrt)
     for n in wrt:
         if n not in present:

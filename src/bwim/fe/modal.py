@@ -8,20 +8,27 @@ Contract
 * Shapes are mass-normalised (``Φᵀ M Φ = I``) and signed so that the largest deflection
   component of each mode is positive, which makes results reproducible.
 * Frequencies are returned in Hz, ascending; ``omega`` in rad/s.
+* :func:`select_modes` is the truncation a simulation or an identification uses: every
+  mode up to a cut-off frequency (default sampling_rate / 8), checked against the
+  sampling rate (at least 2.5 × the highest frequency in use).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from bwim.errors import InputError
+from bwim.errors import InputError, require_positive
 
-__all__ = ["Modes", "lowest_modes"]
+if TYPE_CHECKING:
+    from bwim.fe.bridge import Bridge
+
+__all__ = ["Modes", "lowest_modes", "select_modes"]
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -89,3 +96,35 @@ def lowest_modes(
     vecs = vecs * np.sign(w[big, np.arange(w.shape[1])])
     omega = np.sqrt(np.clip(vals, 0.0, None))
     return Modes(frequencies=omega / (2 * np.pi), omega=omega, shapes=vecs)
+
+
+def select_modes(
+    bridge: Bridge, *, n_modes: int | None = None, max_frequency: float | None = None,
+    sampling_rate: float,
+) -> Modes:
+    """The modes a simulation (or identification) uses.
+
+    All modes up to ``max_frequency`` (default ``sampling_rate / 8``) unless ``n_modes``
+    is given.  Raises :class:`InputError` if the sampling rate is below 2.5 × the highest
+    frequency in use (Nyquist with a margin).
+    """
+    if n_modes is not None:
+        modes = bridge.modes(n_modes)
+    else:
+        f_cut = sampling_rate / 8 if max_frequency is None else require_positive(
+            "max_frequency", max_frequency)
+        k = min(10, bridge.n_free - 1)
+        while True:
+            modes = bridge.modes(k)
+            if modes.frequencies[-1] > f_cut or k >= bridge.n_free - 1:
+                break
+            k = min(2 * k, bridge.n_free - 1)
+        n = max(int(np.searchsorted(modes.frequencies, f_cut, side="right")), 1)
+        modes = bridge.modes(n)
+    f_max = modes.frequencies[-1]
+    if sampling_rate < 2.5 * f_max:
+        raise InputError(
+            f"sampling_rate {sampling_rate:g} Hz is too low for the modes in use (highest "
+            f"{f_max:.1f} Hz); use at least {2.5 * f_max:.0f} Hz or fewer modes"
+        )
+    return modes

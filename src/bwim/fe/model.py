@@ -26,7 +26,7 @@ from enum import StrEnum
 
 import numpy as np
 
-from bwim.errors import InputError
+from bwim.errors import InputError, parse_enum
 from bwim.fe.assembly import Assembler, ElementSet
 from bwim.fe.girder import Girder, beam_unit_matrices, girder_unit_matrices
 from bwim.fe.mesh import Grid
@@ -75,14 +75,8 @@ class Supports:
 
     def __post_init__(self) -> None:
         for name in ("x0", "x_end", "y0", "y_end"):
-            value = getattr(self, name)
-            try:
-                object.__setattr__(self, name, EdgeSupport(value))
-            except ValueError:
-                options = ", ".join(e.value for e in EdgeSupport)
-                raise InputError(
-                    f"unknown support {value!r} for edge {name}; expected one of {options}"
-                ) from None
+            object.__setattr__(self, name, parse_enum(EdgeSupport, getattr(self, name),
+                                                      "support", context=f" for edge {name}"))
 
     @classmethod
     def parse(cls, value: Supports | str | Mapping[str, str]) -> Supports:

@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bwim.dynamics import simulate
+from bwim.dynamics import DEFAULT_APPROACH, simulate
 from bwim.errors import InputError, require_positive
 from bwim.fe.bridge import Bridge
 from bwim.fe.girder import Girder, composite_section
@@ -40,10 +40,10 @@ from bwim.io._csv import read_numeric_csv
 from bwim.io.logger import LoggerFormat, read_logger
 from bwim.io.records import read_csv_record, read_record
 from bwim.io.scenario import VEHICLE_TYPES, BridgeSpec, GirderSpec, Scenario
-from bwim.records import Passage, Record
+from bwim.records import Passage, Record, SimulationSettings
 from bwim.road import RoadProfile
 from bwim.sensors import Sensor, SensorKind
-from bwim.vehicles import named
+from bwim.vehicles import Vehicle, named
 from bwim.vehicles.types import Truck3D
 
 __all__ = [
@@ -305,7 +305,7 @@ def build_logger_format(scenario: Scenario) -> LoggerFormat:
                             decimal=spec.decimal, kinds=kinds, skip_lines=spec.skip_lines)
 
 
-def build_vehicle(scenario: Scenario):
+def build_vehicle(scenario: Scenario) -> Vehicle:
     """The scenario's vehicle: a named one or a :mod:`bwim.vehicles` class instance."""
     spec = scenario.require("vehicle")
     with _context(f"{scenario.source}: [vehicle]"):
@@ -321,7 +321,7 @@ def build_vehicle(scenario: Scenario):
 def _road_extent(scenario: Scenario) -> tuple[float, float]:
     """Default (start, end) of a random road: the whole run with a 5 m margin."""
     run = scenario.run
-    approach = 100.0 if run is None else run.approach
+    approach = DEFAULT_APPROACH if run is None else run.approach
     run_out = 0.0 if run is None else run.speed * run.tail
     vehicle = 0.0 if scenario.vehicle is None else build_vehicle(scenario).length
     margin = 5.0 + (scenario.road.smoothing or 0.0)
@@ -374,7 +374,7 @@ def build_road(scenario: Scenario) -> RoadProfile:
     return road
 
 
-def build_passage(scenario: Scenario, vehicle=None) -> Passage:
+def build_passage(scenario: Scenario, vehicle: Vehicle | None = None) -> Passage:
     """The passage a B-WIM system sees: the ``[run]`` speed, lane and delay and the
     vehicle's axle layout (of ``vehicle``, default the scenario's)."""
     run = scenario.require("run")
@@ -437,18 +437,21 @@ def load_record(
         read with :func:`bwim.io.read_csv_record`.
     scenario : Scenario, optional
         Needed for CSV: its ``[[sensors]]`` name the columns, and its ``[run]`` and
-        ``[vehicle]`` (when present) give the passage.
+        ``[vehicle]`` (when present) give the passage.  A record without simulation
+        settings (every CSV, and HDF5 records of measurements) takes the ``[run]``'s
+        approach, with the tail the record has after the last axle leaves the bridge.
     time_column, allow_extra, scale
         As for :func:`bwim.io.read_csv_record` (CSV only).
     """
     p = Path(path)
     suffix = p.suffix.lower()
     if suffix in _HDF5_SUFFIXES:
-        return read_record(p)
+        return _with_run_settings(read_record(p), scenario)
     if scenario is not None and scenario.logger is not None:
         # a logger's export, any extension: the [logger] section says how it is laid out
         sensors = [s for s in build_sensors(scenario) if s.x is not None]
-        return read_logger(p, build_logger_format(scenario), sensors=sensors or None)
+        return _with_run_settings(
+            read_logger(p, build_logger_format(scenario), sensors=sensors or None), scenario)
     if suffix not in _CSV_SUFFIXES:
         raise InputError(f"{p}: unknown record format {p.suffix!r}; use .csv or .h5")
     if scenario is None:
@@ -457,5 +460,17 @@ def load_record(
     sensors = build_sensors(scenario)
     passage = (build_passage(scenario) if scenario.run is not None
                and scenario.vehicle is not None else None)
-    return read_csv_record(p, sensors, passage, time_column=time_column,
-                           allow_extra=allow_extra, scale=scale)
+    record = read_csv_record(p, sensors, passage, time_column=time_column,
+                             allow_extra=allow_extra, scale=scale)
+    return _with_run_settings(record, scenario)
+
+
+def _with_run_settings(record: Record, scenario: Scenario | None) -> Record:
+    """The record with the scenario's ``[run]`` approach as its simulation settings, if it
+    has none (see :func:`load_record`)."""
+    if (record.settings is not None or scenario is None or scenario.run is None
+            or scenario.bridge is None or not record.passages):
+        return record
+    settings = SimulationSettings(approach=scenario.run.approach,
+                                  tail=record.time_after_exit(scenario.bridge.length))
+    return dataclasses.replace(record, settings=settings)

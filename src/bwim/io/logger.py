@@ -56,7 +56,7 @@ from typing import TextIO
 
 import numpy as np
 
-from bwim.errors import InputError, require_positive
+from bwim.errors import InputError, parse_enum, require_positive
 from bwim.io._csv import check_time
 from bwim.records import Record
 from bwim.sensors import Sensor, SensorKind
@@ -163,11 +163,9 @@ class LoggerFormat:
                 raise InputError(f"LoggerFormat.kinds: {name!r} is not a channel of the "
                                  f"columns {list(channels)}")
             try:
-                kinds[name] = SensorKind(kind)
-            except ValueError:
-                options = ", ".join(k.value for k in SensorKind)
-                raise InputError(f"LoggerFormat.kinds[{name!r}]: unknown sensor kind "
-                                 f"{kind!r}; expected one of {options}") from None
+                kinds[name] = parse_enum(SensorKind, kind, "sensor kind")
+            except InputError as exc:
+                raise InputError(f"LoggerFormat.kinds[{name!r}]: {exc}") from None
         object.__setattr__(self, "kinds", MappingProxyType(kinds))
 
     @staticmethod

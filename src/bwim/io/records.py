@@ -14,9 +14,9 @@ Contract
   that ``read_csv_record(write_csv_record(r))`` gives the same time and data bit for bit.
 * HDF5 (bwim's records, simulated or measured): :func:`write_record` /
   :func:`read_record` round-trip a :class:`~bwim.Record` exactly: time, data, sensors,
-  passages, truths and the VBI convergence.  :func:`write_records` / :func:`read_records`
-  hold several records in one file (``records/0``, ``records/1``, …); ``read_records``
-  also reads a single-record file.
+  passages, truths, the VBI convergence and the simulation settings.
+  :func:`write_records` / :func:`read_records` hold several records in one file
+  (``records/0``, ``records/1``, …); ``read_records`` also reads a single-record file.
 * Every writer is atomic (:mod:`bwim.io.atomic`): no half-written file, ever.
 
 HDF5 layout of one record (a group, or the file root)::
@@ -27,6 +27,7 @@ HDF5 layout of one record (a group, or the file root)::
     truths/ count; 0/ wheel_forces axle_forces static_wheel_loads static_axle_loads
                       contact_lost
     convergence/ attrs method iterations change converged      (if present)
+    settings/ attrs approach tail                               (if present)
 """
 
 from __future__ import annotations
@@ -44,7 +45,7 @@ from bwim.errors import InputError
 from bwim.io import _hdf5 as h5
 from bwim.io._csv import check_time, read_numeric_csv
 from bwim.io.atomic import atomic_open
-from bwim.records import Passage, Record, Truth, VBIConvergence
+from bwim.records import Passage, Record, SimulationSettings, Truth, VBIConvergence
 from bwim.sensors import Sensor
 
 __all__ = [
@@ -184,6 +185,10 @@ def _put_record(g: h5py.Group, record: Record) -> None:
         cg.attrs["iterations"] = int(c.iterations)
         cg.attrs["change"] = float(c.change)
         cg.attrs["converged"] = bool(c.converged)
+    if record.settings is not None:
+        sg = g.create_group("settings")
+        sg.attrs["approach"] = float(record.settings.approach)
+        sg.attrs["tail"] = float(record.settings.tail)
 
 
 def _get_record(g: h5py.Group) -> Record:
@@ -194,10 +199,15 @@ def _get_record(g: h5py.Group) -> Record:
                               iterations=int(h5.attr(cg, "iterations")),
                               change=float(h5.attr(cg, "change")),
                               converged=bool(h5.attr(cg, "converged")))
+    settings = None
+    if "settings" in g:
+        sg = g["settings"]
+        settings = SimulationSettings(approach=float(h5.attr(sg, "approach")),
+                                      tail=float(h5.attr(sg, "tail")))
     return Record(
         time=h5.array(g, "time"), data=h5.array(g, "data"), sensors=h5.get_sensors(g),
         passages=h5.get_list(g, "passages", h5.get_passage),
-        truths=h5.get_list(g, "truths", _get_truth), convergence=conv,
+        truths=h5.get_list(g, "truths", _get_truth), convergence=conv, settings=settings,
     )
 
 

@@ -102,9 +102,14 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
+from bwim.calibration import Method, Refine
+from bwim.dynamics import DEFAULT_APPROACH, DEFAULT_SAMPLING_RATE, VBIMethod
 from bwim.errors import InputError
+from bwim.fe import EdgeSupport, Supports
 from bwim.io.atomic import atomic_open
 from bwim.io.toml_writer import to_toml
+from bwim.mfi import ForceUnknowns, Order
+from bwim.sensors import SensorKind
 from bwim.vehicles import NAMED_VEHICLES
 from bwim.vehicles.types import HalfCar, MovingForces, SprungMass, TractorSemitrailer, Truck3D
 
@@ -293,8 +298,7 @@ def _number_or_string(v: Any, at: _At) -> float | str:
     return float(v)
 
 
-_EDGES = ("x0", "x_end", "y0", "y_end")
-_EDGE_VALUES = ("free", "simple", "clamped")
+_EDGES = tuple(f.name for f in fields(Supports))
 
 
 def _supports(v: Any, at: _At) -> str | Mapping[str, str]:
@@ -307,7 +311,7 @@ def _supports(v: Any, at: _At) -> str | Mapping[str, str]:
         if edge not in _EDGES:
             raise InputError(f"{at.src}: unknown key {edge!r} in {sub.section}; "
                              f"allowed keys: {', '.join(_EDGES)}")
-        _choice(*_EDGE_VALUES)(value, _At(at.src, sub.section, edge))
+        _choice(*EdgeSupport)(value, _At(at.src, sub.section, edge))
     return MappingProxyType(dict(v))
 
 
@@ -440,7 +444,6 @@ class BridgeSpec:
     girders: tuple[GirderSpec, ...] = _opt(_GIRDER_TABLES, (), _PLATE)
 
 
-_SENSOR_KINDS = ("strain_x", "strain_y", "deflection")
 
 
 def _name_or_names(v: Any, at: _At) -> str | tuple[str, ...]:
@@ -452,6 +455,10 @@ def _name_or_names(v: Any, at: _At) -> str | tuple[str, ...]:
     return _string(v, at)
 
 
+#: Kinds of a ``[[sensors]]`` entry (axle detectors are declared in ``[axle_detectors]``).
+_SENSOR_KINDS = tuple(k for k in SensorKind if k is not SensorKind.AXLE_DETECTOR)
+
+
 @dataclass(frozen=True, kw_only=True)
 class SensorSpec:
     """One ``[[sensors]]`` entry: a sensor, or a grid when ``x``, ``y`` or ``kind`` is a
@@ -461,7 +468,7 @@ class SensorSpec:
 
     x: float | tuple[float, ...] | None = _opt(_number_or_numbers)
     y: float | tuple[float, ...] | None = _opt(_number_or_numbers)
-    kind: str | tuple[str, ...] = _opt(_choices(*_SENSOR_KINDS), "strain_x")
+    kind: str | tuple[str, ...] = _opt(_choices(*_SENSOR_KINDS), SensorKind.STRAIN_X.value)
     name: str | tuple[str, ...] = _opt(_name_or_names, "")
 
 
@@ -544,10 +551,10 @@ class RunSpec:
 
     speed: float = _req(_number)
     lane: float | None = _opt(_number)
-    sampling_rate: float = _opt(_number, 1000.0)
-    approach: float = _opt(_number, 100.0)
+    sampling_rate: float = _opt(_number, DEFAULT_SAMPLING_RATE)
+    approach: float = _opt(_number, DEFAULT_APPROACH)
     tail: float = _opt(_number, 0.0)
-    method: str = _opt(_choice("coupled", "iterative"), "coupled")
+    method: str = _opt(_choice(*VBIMethod), VBIMethod.COUPLED.value)
     delay: float = _opt(_number, 0.0)
     n_modes: int | None = _opt(_integer)
     max_frequency: float | None = _opt(_number)
@@ -584,8 +591,8 @@ class IdentifySpec:
 
     n_modes: int | None = _opt(_integer)
     lam: float | str | None = _opt(_lam)
-    order: str | None = _opt(_choice("first", "zeroth"))
-    unknowns: str | None = _opt(_choice("auto", "wheel", "axle"))
+    order: str | None = _opt(_choice(*Order))
+    unknowns: str | None = _opt(_choice(*ForceUnknowns))
     central: float | None = _opt(_number)
     static_correction: bool | None = _opt(_boolean)
     lam_range: tuple[float, float] | None = _opt(_pair)
@@ -602,8 +609,8 @@ class CalibrateSpec:
 
     unknowns: tuple[str, ...] | None = _opt(_strings)
     seed: int | None = _opt(_integer)
-    method: str | None = _opt(_string)
-    refine: str | None = _opt(_string)
+    method: str | None = _opt(_choice(*Method))
+    refine: str | None = _opt(_choice(*Refine))
     population: int | tuple[int, int] | None = _opt(_int_or_pair)
     elite_fraction: float | None = _opt(_number)
     convergences: int | None = _opt(_integer)

@@ -13,7 +13,8 @@ In first order ``f_0`` is free (only force *changes* are penalised); in zeroth o
 * :func:`solve_dp` is Bellman's recursion (THEORY §4): cost-to-go
   ``V_k(X) = Xᵀ R_k X + 2 s_kᵀ X + const`` backwards, then the optimal ``r_k = −K_k X_k −
   g_k`` forwards.  O(N) time and memory in the record length.  The gains do not depend on
-  the data, so :class:`DPGains` can be reused for further data vectors (GCV probes).
+  the data: :func:`dp_gains` computes them once and :func:`solve_with_gains` reuses them
+  for further data vectors (GCV probes).
 * :func:`solve_batch` stacks the whole problem as one dense least-squares system; it is
   O(N³) and exists to check the recursion (they agree to round-off).
 * Everything is in the model's scaled units.
@@ -28,7 +29,7 @@ import numpy as np
 from bwim.errors import InputError
 from bwim.mfi.statespace import MFIModel
 
-__all__ = ["DPGains", "Solution", "dp_gains", "solve_batch", "solve_dp"]
+__all__ = ["DPGains", "Solution", "dp_gains", "solve_batch", "solve_dp", "solve_with_gains"]
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -98,7 +99,12 @@ def dp_gains(model: MFIModel, lam: float, weights: np.ndarray) -> DPGains:
     return DPGains(K=K, G=G, A=A, R0_ff_inv=R0_ff_inv, lam=lam)
 
 
-def _run(model: MFIModel, gains: DPGains, d: np.ndarray, W: np.ndarray) -> Solution:
+def solve_with_gains(model: MFIModel, gains: DPGains, d: np.ndarray,
+                     weights: np.ndarray) -> Solution:
+    """The data-dependent passes of the recursion with precomputed ``gains`` (made by
+    :func:`dp_gains` for the same ``weights``); ``d`` (N, n_s) and ``weights`` (n_s,) in
+    scaled units, not checked (see :func:`solve_dp` for the checked entry point)."""
+    W = weights
     N, nz, nf = model.n_steps, model.n_z, model.n_f
     QWd = model.qwd(W, d)
     # data-dependent backward pass: s_k and g_k
@@ -132,7 +138,7 @@ def solve_dp(
     d, W = _check(model, d, weights)
     if gains is None:
         gains = dp_gains(model, lam, W)
-    return _run(model, gains, d, W)
+    return solve_with_gains(model, gains, d, W)
 
 
 def solve_batch(

@@ -20,9 +20,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bwim.dynamics.simulate import select_modes
-from bwim.errors import InputError
+from bwim.errors import InputError, parse_enum
 from bwim.fe.bridge import Bridge
+from bwim.fe.modal import select_modes
 from bwim.mfi.dp import Solution, solve_dp
 from bwim.mfi.lcurve import LCurve, gcv, lcurve
 from bwim.mfi.statespace import ForceUnknowns, MFIModel, Order, build_model, force_layout
@@ -136,15 +136,8 @@ def identify_forces(
                          "to place the forces")
     if not np.all(np.isfinite(record.data)):
         raise InputError("the record contains NaN or infinite samples")
-    try:
-        order = Order(order)
-    except ValueError:
-        raise InputError(f"unknown order {order!r}; expected 'first' or 'zeroth'") from None
-    try:
-        unknowns = ForceUnknowns(unknowns)
-    except ValueError:
-        raise InputError(f"unknown unknowns {unknowns!r}; expected 'auto', 'wheel' or "
-                         "'axle'") from None
+    order = parse_enum(Order, order, "order")
+    unknowns = parse_enum(ForceUnknowns, unknowns, "unknowns")
     if unknowns is ForceUnknowns.AUTO:
         unknowns = _auto_unknowns(bridge, record)
     if not 0.0 < central <= 1.0:
@@ -159,15 +152,15 @@ def identify_forces(
     d_scale = float(np.abs(d).max())
     if d_scale == 0.0:
         raise InputError("the record is all zeros")
-    _, offsets, _ = force_layout(record.passages, unknowns)
-    n_f = offsets.size
+    _, axles, _ = force_layout(record.passages, unknowns)
+    n_f = axles.size
     if record.data.shape[1] < n_f and unknowns is ForceUnknowns.WHEEL:
         raise InputError(
             f"{record.data.shape[1]} sensor channels cannot identify {n_f} wheel forces; "
             "use unknowns='axle' or more sensors"
         )
-    model = build_model(bridge, modes, record.sensors, record.passages, record.time, d_scale,
-                        unknowns=unknowns, order=order, static_correction=static_correction)
+    model = build_model(bridge, modes, record, d_scale, unknowns=unknowns, order=order,
+                        static_correction=static_correction)
     w = None if weights is None else np.asarray(weights, dtype=float)
     d_scaled = d / d_scale
     W = np.ones(model.n_s) if w is None else w

@@ -20,7 +20,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 from scipy.optimize import minimize_scalar
 
-from bwim.mfi.dp import _run, dp_gains
+from bwim.mfi.dp import dp_gains, solve_with_gains
 from bwim.mfi.statespace import MFIModel
 
 __all__ = ["LCurve", "gcv", "lcurve"]
@@ -71,7 +71,7 @@ def lcurve(model: MFIModel, d, weights, lam_grid_scaled: np.ndarray) -> LCurve:
     rho = np.empty(lam_grid_scaled.size)
     eta = np.empty(lam_grid_scaled.size)
     for i, lam in enumerate(lam_grid_scaled):
-        sol = _run(model, dp_gains(model, float(lam), weights), d, weights)
+        sol = solve_with_gains(model, dp_gains(model, float(lam), weights), d, weights)
         rho[i], eta[i] = sol.residual_norm, sol.seminorm
     t = np.log(lam_grid_scaled)
     a = np.log(np.maximum(rho, 1e-300))
@@ -104,12 +104,12 @@ def gcv(model: MFIModel, d, weights, bounds_scaled: tuple[float, float], *, prob
 
     def score(log_lam: float) -> float:
         gains = dp_gains(model, float(np.exp(log_lam)), weights)
-        sol = _run(model, gains, d, weights)
+        sol = solve_with_gains(model, gains, d, weights)
         trace = 0.0
         for z in Z:
             # A maps weighted data ỹ = W^{1/2} d to W^{1/2} Q X̂: probe with d = W^{-1/2} z
             dz = np.divide(z, sw, out=np.zeros_like(z), where=sw > 0)
-            trace += np.sum(z * sw * fitted(_run(model, gains, dz, weights)))
+            trace += np.sum(z * sw * fitted(solve_with_gains(model, gains, dz, weights)))
         trace /= probes
         return n * sol.residual_norm**2 / max(n - trace, 1e-12) ** 2
 

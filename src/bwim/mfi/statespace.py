@@ -32,8 +32,7 @@ import scipy.linalg as sla
 from bwim.errors import InputError
 from bwim.fe.bridge import Bridge
 from bwim.fe.modal import Modes
-from bwim.records import Passage
-from bwim.sensors import Sensor
+from bwim.records import Passage, Record
 
 __all__ = ["ForceUnknowns", "MFIModel", "Order", "build_model"]
 
@@ -170,47 +169,46 @@ def _mode_blocks(omega: np.ndarray, zeta: np.ndarray, dt: float):
 
 
 def force_layout(passages: Sequence[Passage], unknowns: ForceUnknowns):
-    """Force positions: per force (n_f) its passage index, axle offset and lateral list.
+    """Force positions: per force (n_f) its passage index, axle index and lateral list.
 
-    Returns ``(passage_of, offset_of, ys_of)`` where ``ys_of[f]`` lists the wheel y
+    Returns ``(passage_of, axle_of, ys_of)`` where ``ys_of[f]`` lists the wheel y
     positions sharing force f equally (one wheel, or both wheels of an axle).
     """
-    passage_of, offset_of, ys_of = [], [], []
+    passage_of, axle_of, ys_of = [], [], []
     for j, p in enumerate(passages):
         wy = p.wheel_y.reshape(p.n_axles, p.wheels_per_axle)
         for a in range(p.n_axles):
             if unknowns is ForceUnknowns.WHEEL:
                 for y in wy[a]:
                     passage_of.append(j)
-                    offset_of.append(p.axle_offsets[a])
+                    axle_of.append(a)
                     ys_of.append([float(y)])
             else:
                 passage_of.append(j)
-                offset_of.append(p.axle_offsets[a])
+                axle_of.append(a)
                 ys_of.append([float(y) for y in wy[a]])
-    return np.array(passage_of), np.array(offset_of), ys_of
+    return np.array(passage_of, dtype=int), np.array(axle_of, dtype=int), ys_of
 
 
 def build_model(
     bridge: Bridge,
     modes: Modes,
-    sensors: Sequence[Sensor],
-    passages: Sequence[Passage],
-    time: np.ndarray,
+    record: Record,
     d_scale: float,
     *,
     unknowns: ForceUnknowns,
     order: Order,
     static_correction: bool = True,
 ) -> MFIModel:
-    """The scaled discrete model for a record's time axis and passages."""
-    dt = float(np.median(np.diff(time)))
+    """The scaled discrete model of a record (its sensors, time axis and passages)."""
+    sensors, passages, time = record.sensors, record.passages, record.time
+    dt = 1.0 / record.sampling_rate
     n_t = time.size
     S = bridge.sensor_matrix(sensors)
     s_phi = S @ modes.shapes  # (n_s, n_m)
     zeta = bridge.rayleigh.ratio(modes.omega)
-    passage_of, offset_of, ys_of = force_layout(passages, unknowns)
-    n_f = offset_of.size
+    passage_of, axle_of, ys_of = force_layout(passages, unknowns)
+    n_f = axle_of.size
     n_m = modes.n
     # G(t_k): modal force per unit force f (each force shared by its wheels)
     G = np.zeros((n_t, n_m, n_f))
@@ -218,8 +216,7 @@ def build_model(
     on = np.zeros((n_t, n_f), dtype=bool)
     inf = bridge.influence(sensors) if static_correction else None
     for f in range(n_f):
-        p = passages[passage_of[f]]
-        x = p.speed * (time - p.delay) - offset_of[f]
+        x = passages[passage_of[f]].axle_x(time)[:, axle_of[f]]
         inside = (x >= 0.0) & (x <= bridge.length)
         on[:, f] = inside
         if not inside.any():

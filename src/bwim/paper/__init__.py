@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from bwim.dynamics.crossing import DEFAULT_APPROACH, DEFAULT_SAMPLING_RATE
 from bwim.fe.bridge import Bridge
 from bwim.fe.girder import Girder, composite_section
 from bwim.fe.mesh import grid_lines
@@ -61,11 +62,11 @@ AXLE_SPACING = 5.5  #: m (paper)
 SPEED = 20.0  #: m/s (paper)
 LANE = 2.0  #: m, vehicle centre line from the right-hand edge, *assumed*
 TRACK_WIDTH = 2.0  #: m, *assumed*
-SAMPLING_RATE = 1000.0  #: Hz, *assumed*
+SAMPLING_RATE = DEFAULT_SAMPLING_RATE  #: Hz, *assumed* (the library's default)
 
 # --- the road (paper §2, §5.1) -----------------------------------------------------------
 ROUGHNESS = 65e-6  #: m³/cycle, G_d(n₀) (paper; its "class C", ISO's class B mean)
-APPROACH = 100.0  #: m of run-up before the bridge, *assumed*
+APPROACH = DEFAULT_APPROACH  #: m of run-up before the bridge, *assumed* (the default)
 TYRE_PATCH = 0.24  #: m, moving-average tyre contact length, *assumed* (usual value)
 
 # --- the beam-and-slab bridge after Vransko (paper §5.4) ---------------------------------

@@ -33,7 +33,7 @@ import numpy as np
 from bwim import paper
 from bwim.calibration import Calibration, calibrate
 from bwim.conventions import MICROSTRAIN
-from bwim.dynamics.simulate import simulate
+from bwim.dynamics.crossing import simulate
 from bwim.errors import InputError
 from bwim.fe.bridge import Bridge
 from bwim.loads import PointLoad

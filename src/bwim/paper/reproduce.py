@@ -22,8 +22,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bwim import paper
-from bwim.calibration import Calibration, calibrate, peak_weights
-from bwim.dynamics.simulate import simulate
+from bwim.calibration import Calibration, Method, calibrate, peak_weights, run_stage
+from bwim.dynamics.crossing import simulate
 from bwim.fe.bridge import Bridge
 from bwim.mfi import ForceIdentification, force_errors, identify_forces
 from bwim.records import Record
@@ -206,7 +206,7 @@ def case_5_4(*, quick: bool = False, seed: int = 0, method: str = "ce", n_jobs: 
     t0 = time.perf_counter()
     s = _settings(quick)
     truth = paper.vransko_bridge()
-    unknowns = ("E_x", "E_y", "mu", "E_girder", "mu_girder")
+    unknowns = Bridge.PARAM_FAMILIES
     rec = _crossing(truth, paper.vransko_sensors(), seed=2, approach=s["approach"])
     cal = calibrate(_start(truth, unknowns), [rec], paper.truck(),
                     road=paper.road(2, approach=s["approach"]), approach=s["approach"],
@@ -326,8 +326,8 @@ def compare_methods(*, quick: bool = False, seed: int = 0) -> CaseReport:
       the truth (the dynamics' bias grows along the objective's weak directions: measured
       −77 … +537 %), so a race to it would compare methods on reaching a wrong point.
     """
-    from bwim.calibration.calibrate import SUBSTRUCTURED_SMOOTHING, _static_jacobian
     from bwim.calibration.problem import ParameterSpace, StaticObjective, neighbour_map
+    from bwim.calibration.stages import SUBSTRUCTURED_SMOOTHING
 
     t0 = time.perf_counter()
     approach = 20.0 if quick else paper.APPROACH
@@ -338,7 +338,7 @@ def compare_methods(*, quick: bool = False, seed: int = 0) -> CaseReport:
     start = _start(truth, ("E_x", "E_y"))
     space = ParameterSpace(start, ("E_x", "E_y"))
     obj = StaticObjective(space, [rec], paper.truck())
-    star = _stage_optimum(obj, space.vector())
+    star = _stage_optimum(obj, space)
 
     def close(x):
         return bool(np.all(np.abs(np.asarray(x) / star - 1) <= 0.01))
@@ -347,7 +347,7 @@ def compare_methods(*, quick: bool = False, seed: int = 0) -> CaseReport:
         t = time.perf_counter()
         n, used, final = _race(name, obj, space, close, seed=seed, budget=budget,
                                neighbours=neighbour_map(space, rec.sensors),
-                               smoothing=SUBSTRUCTURED_SMOOTHING, jac=_static_jacobian)
+                               smoothing=SUBSTRUCTURED_SMOOTHING)
         dev = float(np.abs(final / star - 1).max() * 100)
         numbers[("5.1", name)] = (n, time.perf_counter() - t, used, dev)
         rows.append(("§5.1 stiffness stage", name, "not reached" if n is None else f"{n:,}",
@@ -391,74 +391,53 @@ def compare_methods(*, quick: bool = False, seed: int = 0) -> CaseReport:
                       wall_time=time.perf_counter() - t0)
 
 
-def _stage_optimum(obj, x0):
-    """The stiffness stage's optimum to full precision (bounded least squares)."""
-    from scipy.optimize import least_squares
-
-    from bwim.calibration.calibrate import _static_jacobian
-
-    res = least_squares(lambda u: obj.residuals(u * x0) / 1e-6, np.ones_like(x0),
-                        jac=lambda u: _static_jacobian(obj, u * x0) * x0 / 1e-6,
-                        bounds=(0.2, 5.0), xtol=1e-12, ftol=1e-12)
-    return res.x * x0
+def _stage_optimum(obj, space):
+    """The stiffness stage's optimum to full precision (bounded least squares with the
+    adjoint Jacobian)."""
+    return run_stage(Method.LM, obj, space, options={"xtol": 1e-12, "ftol": 1e-12}).x
 
 
-def _race(name, obj, space, close, *, seed, budget, neighbours, smoothing, jac):
+class _Counted:
+    """An objective that counts its residual and Jacobian evaluations and notes the first
+    residual evaluation at a point satisfying ``close``."""
+
+    def __init__(self, objective, close):
+        self.objective, self.close = objective, close
+        self.calls, self.first = 0, None
+
+    def __call__(self, theta):
+        return self.objective(theta)
+
+    def residuals(self, theta):
+        self.calls += 1
+        if self.first is None and self.close(theta):
+            self.first = self.calls
+        return self.objective.residuals(theta)
+
+    def jacobian(self, theta):
+        self.calls += 1
+        return self.objective.jacobian(theta)
+
+
+def _race(name, obj, space, close, *, seed, budget, neighbours, smoothing):
     """(evaluations until ``close(best)`` or None, evaluations used, final best x).
 
     The population methods stop at the target, at their own stopping rule, or at the
-    budget; least squares runs to its own convergence.
+    budget; least squares runs to its own convergence (its evaluations count the
+    Jacobian's).
     """
-    x0 = space.vector()
-    lo, hi = 0.2 * x0, 5.0 * x0
+    if name == "least squares":
+        counted = _Counted(obj, close)
+        res = run_stage(Method.LM, counted, space)
+        return counted.first, counted.calls, res.x
     if name.startswith("CE"):
-        from bwim.optimize import CrossEntropy
-
         sub = name.endswith("structured")
-        opt = CrossEntropy(x0, population=200, bounds=(lo, hi), seed=seed,
-                           neighbours=neighbours if sub else None, convergences=50,
-                           max_evals=budget, smoothing=smoothing if sub else 1.0)
-        while not opt.should_stop():
-            X = opt.ask()
-            V = np.array([obj(x) for x in X])
-            opt.tell(X, V if sub else V.sum(axis=1))
-            if close(opt.best_x):
-                return opt.nfev, opt.nfev, opt.best_x
-        return None, opt.nfev, opt.best_x
-    if name == "CMA-ES":
-        import cmaes
-
-        cma = cmaes.CMA(mean=np.ones_like(x0), sigma=0.3, seed=seed,
-                        bounds=np.stack([lo / x0, hi / x0], 1))
-        nfev, best, best_f = 0, x0, np.inf
-        while nfev < budget and not cma.should_stop():
-            U = [cma.ask() for _ in range(cma.population_size)]
-            V = [float(obj(u * x0).sum()) for u in U]
-            cma.tell(list(zip(U, V, strict=True)))
-            nfev += len(U)
-            k = int(np.argmin(V))
-            if V[k] < best_f:
-                best_f, best = V[k], U[k] * x0
-            if close(best):
-                return nfev, nfev, best
-        return None, nfev, best
-    from scipy.optimize import least_squares
-
-    count = {"n": 0}
-    found = {"n": None}
-
-    def fun(u):
-        count["n"] += 1
-        if found["n"] is None and close(u * x0):
-            found["n"] = count["n"]
-        return obj.residuals(u * x0) / 1e-6
-
-    def jacobian(u):
-        count["n"] += 1
-        return jac(obj, u * x0) * x0 / 1e-6
-
-    res = least_squares(fun, np.ones_like(x0), jac=jacobian, bounds=(lo / x0, hi / x0))
-    return found["n"], count["n"], res.x * x0
+        res = run_stage(Method.CE, obj, space, seed=seed, population=200, convergences=50,
+                        max_evals=budget, neighbours=neighbours if sub else None,
+                        options={"smoothing": smoothing} if sub else None, stop=close)
+    else:
+        res = run_stage(Method.CMA, obj, space, seed=seed, max_evals=budget, stop=close)
+    return (res.nfev if close(res.x) else None), res.nfev, res.x
 
 
 #: The reproducible cases, by the names the command line uses.

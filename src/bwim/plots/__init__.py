@@ -10,7 +10,7 @@ Contract
   figure has a thin ``.plot(ax=None, **kw)`` method that imports its function here when
   called: :class:`~bwim.Record`, :class:`~bwim.InfluenceLine`,
   :class:`~bwim.StaticWeights`, :class:`~bwim.ForceIdentification`,
-  :class:`~bwim.mfi.lcurve.LCurve`, :class:`~bwim.calibration.calibrate.StageResult`,
+  :class:`~bwim.mfi.lcurve.LCurve`, :class:`~bwim.calibration.stages.StageResult`,
   :class:`~bwim.Calibration` and :class:`~bwim.optimize.CEResult`;
   :meth:`bwim.paper.reproduce.CaseReport.figures` gives a case's named figures.
 """

@@ -18,7 +18,7 @@ def plot_ce_convergence(stage, *, parameter: int = 0, scale: float = 1.0, ax=Non
     """Mean ± std of one parameter's sampling distribution at each CE iteration, with the
     best-ever trial; injections show as jumps in the spread (paper Fig. 6 and 18).
 
-    ``stage`` is a calibration stage (:class:`~bwim.calibration.calibrate.StageResult`,
+    ``stage`` is a calibration stage (:class:`~bwim.calibration.stages.StageResult`,
     named, with parameter labels) or a :class:`~bwim.optimize.CEResult` (``x[i]``).
     """
     h = stage.history
@@ -46,7 +46,7 @@ def plot_mfi_comparison(exact, calibrated, truth, *, ax=None):
     the first axle's distance along the bridge (paper Fig. 8 and 19)."""
     ax = axes(ax)
     p = exact.passages[0]
-    dist = p.speed * (exact.time - p.delay)
+    dist = p.axle_x(exact.time)[:, 0]
     for a in range(truth.axle_forces.shape[1]):
         c = f"C{a}"
         ax.plot(dist, truth.axle_forces[:, a] / KILONEWTON, color=c, lw=2, alpha=0.4,

@@ -8,7 +8,14 @@ from bwim.vehicles.library import (
     two_axle_truck,
 )
 from bwim.vehicles.model import VehicleModel
-from bwim.vehicles.types import HalfCar, MovingForces, SprungMass, TractorSemitrailer, Truck3D
+from bwim.vehicles.types import (
+    HalfCar,
+    MovingForces,
+    SprungMass,
+    TractorSemitrailer,
+    Truck3D,
+    Vehicle,
+)
 
 __all__ = [
     "NAMED_VEHICLES",
@@ -17,6 +24,7 @@ __all__ = [
     "SprungMass",
     "TractorSemitrailer",
     "Truck3D",
+    "Vehicle",
     "VehicleModel",
     "named",
     "three_axle_truck",

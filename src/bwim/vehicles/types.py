@@ -21,7 +21,7 @@ from bwim.errors import InputError, require_finite, require_positive
 from bwim.records import Passage, axle_offsets
 from bwim.vehicles.model import BodySpec, VehicleModel, WheelSpec, assemble
 
-__all__ = ["HalfCar", "MovingForces", "SprungMass", "TractorSemitrailer", "Truck3D"]
+__all__ = ["HalfCar", "MovingForces", "SprungMass", "TractorSemitrailer", "Truck3D", "Vehicle"]
 
 
 def _per_axle(name: str, value, n: int, *, positive: bool = True, allow_zero=False):
@@ -47,8 +47,9 @@ def _spacings(value) -> np.ndarray:
     return sp
 
 
-class _Vehicle(ABC):
-    """Shared conveniences (the subclasses are frozen dataclasses)."""
+class Vehicle(ABC):
+    """The base of every vehicle model: what simulation, calibration and weighing use
+    (``model()``, ``passage()``, the axle layout); the subclasses are frozen dataclasses."""
 
     axle_spacings: np.ndarray
     track_width: float | None
@@ -87,7 +88,7 @@ class _Vehicle(ABC):
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class MovingForces(_Vehicle):
+class MovingForces(Vehicle):
     """Constant axle loads at fixed spacings (no vehicle dynamics).
 
     ``track_width`` None: one force per axle on the lane centre line (1-D bridges);
@@ -122,7 +123,7 @@ class MovingForces(_Vehicle):
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class SprungMass(_Vehicle):
+class SprungMass(Vehicle):
     """A single sprung mass (quarter car): body ``mass`` on ``stiffness``/``damping``.
 
     Without ``unsprung_mass`` the spring–damper rests on the road (Biggs' sprung mass);
@@ -189,7 +190,7 @@ def _axle_wheels(
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class HalfCar(_Vehicle):
+class HalfCar(Vehicle):
     """A 2-D vehicle: body bounce and pitch, one wheel mass per axle (values per axle).
 
     ``cg_offset`` is the body's centre of gravity behind the first axle, m.  With a
@@ -218,7 +219,7 @@ class HalfCar(_Vehicle):
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class Truck3D(_Vehicle):
+class Truck3D(Vehicle):
     """The paper's 3-D rigid truck: body bounce, pitch and roll; each axle a rigid bar
     with a wheel mass at each end (values **per wheel**, one per axle).
 
@@ -268,7 +269,7 @@ class Truck3D(_Vehicle):
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class TractorSemitrailer(_Vehicle):
+class TractorSemitrailer(Vehicle):
     """An articulated 3-D vehicle: a tractor and a semitrailer, each a rigid body with
     bounce, pitch and roll, joined at the fifth wheel (a hitch that transmits vertical
     force and, being roll-stiff, roll).  Axles as in :class:`Truck3D` (values per wheel).

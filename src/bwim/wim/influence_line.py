@@ -39,6 +39,7 @@ from bwim.sensors import Sensor, SensorKind
 
 if TYPE_CHECKING:
     from bwim.fe.bridge import Bridge
+    from bwim.vehicles import Vehicle
 
 __all__ = [
     "DEFAULT_SMOOTHING",
@@ -190,7 +191,7 @@ class InfluenceLine:
             raise InputError(
                 f"axle_loads needs one value per axle ({passage.n_axles}), got shape "
                 f"{loads.shape}")
-        return np.einsum("kic,i->kc", self.at(_axle_positions(passage, time)), loads)
+        return np.einsum("kic,i->kc", self.at(passage.axle_x(time)), loads)
 
 
 # --- channels ---------------------------------------------------------------------------
@@ -263,12 +264,6 @@ def resolve_channels(
 
 # --- the matrix method ------------------------------------------------------------------
 
-def _axle_positions(passage: Passage, time: np.ndarray) -> np.ndarray:
-    """Position of each axle at each time, m, shape (n_t, n_axles)."""
-    t = np.asarray(time, dtype=float)
-    return passage.speed * (t[:, None] - passage.delay) - passage.axle_offsets[None, :]
-
-
 def _hat_design(positions: np.ndarray, loads: np.ndarray, x0: float, h: float,
                 n: int) -> sp.csr_matrix:
     """``G[k, j-1] = Σ_i W_i φ_j(p_ki)`` for the interior hat functions j = 1 … n−1 on the
@@ -287,7 +282,7 @@ def _hat_design(positions: np.ndarray, loads: np.ndarray, x0: float, h: float,
     return sp.csr_matrix((v[keep], (r[keep], c[keep] - 1)), shape=(n_t, n - 1))
 
 
-def _static_axle_loads(vehicle: Any) -> np.ndarray:
+def _static_axle_loads(vehicle: Vehicle | Sequence[float]) -> np.ndarray:
     loads = getattr(vehicle, "static_axle_loads", vehicle)
     try:
         arr = np.array(loads, dtype=float, ndmin=1)
@@ -327,7 +322,7 @@ def _check_records(records: Any, n_axles: int | None) -> list[Record]:
 
 def calibrate_influence_line(
     records: Sequence[Record] | Record,
-    vehicle: Any,
+    vehicle: Vehicle | Sequence[float],
     *,
     channels: Any = "sum",
     regularization: float = DEFAULT_SMOOTHING,
@@ -396,9 +391,9 @@ def calibrate_influence_line(
         raise InputError(f"the calibration crossings have different track widths {tracks}")
 
     if support is None:
-        starts = [p.speed * (r.time[0] - p.delay) for r, p in zip(recs, passages, strict=True)]
-        ends = [p.speed * (r.time[-1] - p.delay) - p.axle_offsets[-1]
-                for r, p in zip(recs, passages, strict=True)]
+        # from the first axle's first position to the last axle's last one
+        starts = [p.axle_x(r.time[:1])[0, 0] for r, p in zip(recs, passages, strict=True)]
+        ends = [p.axle_x(r.time[-1:])[0, -1] for r, p in zip(recs, passages, strict=True)]
         x0, x1 = min(starts), max(ends)
         if x1 <= x0:
             raise InputError(
@@ -421,7 +416,7 @@ def calibrate_influence_line(
     chans = resolve_channels(recs[0].sensors, channels, section_x=section)
     blocks, data = [], []
     for r, p in zip(recs, passages, strict=True):
-        G = _hat_design(_axle_positions(p, r.time), loads, x0, h, n)
+        G = _hat_design(p.axle_x(r.time), loads, x0, h, n)
         used = np.diff(G.indptr) > 0  # samples with an axle on the support
         if not used.any():
             raise InputError(f"no axle of the record at speed {p.speed:g} m/s is on the "

@@ -25,7 +25,7 @@ import numpy as np
 
 from bwim.errors import InputError, require_finite
 from bwim.records import Passage, Record
-from bwim.wim.influence_line import Channel, InfluenceLine, _axle_positions, read_channels
+from bwim.wim.influence_line import Channel, InfluenceLine, read_channels
 
 __all__ = ["StaticWeights", "group_axles", "weigh_static"]
 
@@ -174,7 +174,7 @@ def weigh_static(
             f"{influence.lane:g} m (lane_tolerance {tol:g} m)")
 
     readings = read_channels(record, influence.channels)
-    pos = _axle_positions(passage, record.time)  # (n_t, n_axles)
+    pos = passage.axle_x(record.time)  # (n_t, n_axles)
     lo, hi = influence.support
     used = ((pos > lo) & (pos < hi)).any(axis=1)
     n_ax = passage.n_axles

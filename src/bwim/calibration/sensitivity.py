@@ -20,6 +20,7 @@ import numpy as np
 from bwim.fe.bridge import Bridge
 from bwim.fe.influence import static_sensitivities
 from bwim.records import Record
+from bwim.vehicles import Vehicle
 
 __all__ = ["Identifiability", "identifiability"]
 
@@ -45,14 +46,15 @@ class Identifiability:
 
 
 def identifiability(
-    bridge: Bridge, records: Sequence[Record], vehicle, *, names: Sequence[str] | None = None,
-    threshold: float = 1e-3,
+    bridge: Bridge, records: Sequence[Record], vehicle: Vehicle, *,
+    names: Sequence[str] | None = None, threshold: float = 1e-3,
 ) -> Identifiability:
     """The identifiability report (see module docstring)."""
-    present = [n for n in ("E_x", "E_y", "E_girder") if n in bridge.params]
+    present = [n for n in bridge.STIFFNESS_FAMILIES if n in bridge.params]
     names = tuple(present if names is None else [n for n in names if n in present])
     static = vehicle.model().static_forces
-    blocks, norm2 = [], 0.0
+    scale = np.concatenate([bridge.params[n] for n in names])
+    blocks, norm2, labels = [], 0.0, ()
     for rec in records:
         p = rec.passage
         x = p.wheel_x(rec.time)
@@ -61,7 +63,6 @@ def identifiability(
         blocks.append(sens.values.reshape(-1, sens.values.shape[2]))
         norm2 += float(np.sum(rec.data**2))
         labels = tuple(f"{n}[{i}]" for n, i in zip(sens.names, sens.index, strict=True))
-        scale = np.concatenate([bridge.params[n] for n in names])
     J = np.vstack(blocks) * scale[None, :] / np.sqrt(max(norm2, 1e-300))
     cols = np.linalg.norm(J, axis=0)
     _, sv, vt = np.linalg.svd(J, full_matrices=False)

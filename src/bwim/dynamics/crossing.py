@@ -16,6 +16,11 @@ Contract
   like the static solution rather than like the modal series.
 * Several vehicles: pass sequences for ``vehicle``, ``speed``, ``lane`` and ``delay``
   (record time at which each first axle reaches x = 0).
+* Defaults: :data:`DEFAULT_APPROACH` (100 m) of run-up and :data:`DEFAULT_SAMPLING_RATE`
+  (1 kHz), kept here only.  The record carries the crossing's
+  :class:`~bwim.records.SimulationSettings` (approach, tail) for later re-simulation.
+* Positions follow :meth:`bwim.records.Passage.axle_x`; the modal truncation is
+  :func:`bwim.fe.select_modes`.
 """
 
 from __future__ import annotations
@@ -37,17 +42,24 @@ from bwim.dynamics.vbi import (
     solve_coupled,
     solve_iterative,
 )
-from bwim.errors import InputError, require_positive
+from bwim.errors import InputError, parse_enum, require_positive
 from bwim.fe.bridge import Bridge
 from bwim.fe.influence import InfluenceSurfaces
-from bwim.fe.modal import Modes
-from bwim.records import Passage, Record, Truth, VBIConvergence
+from bwim.fe.modal import select_modes
+from bwim.records import Passage, Record, SimulationSettings, Truth, VBIConvergence
 from bwim.road import RoadProfile
 from bwim.sensors import Sensor
 from bwim.vehicles.model import VehicleModel
+from bwim.vehicles.types import Vehicle
 
-__all__ = ["PreparedCrossing", "VBIMethod", "prepare_crossing", "run_crossing",
-           "select_modes", "simulate"]
+__all__ = ["DEFAULT_APPROACH", "DEFAULT_SAMPLING_RATE", "PreparedCrossing", "VBIMethod",
+           "prepare_crossing", "run_crossing", "simulate"]
+
+#: Default run-up before the bridge, m (the vehicle's dynamic state on entry).
+DEFAULT_APPROACH = 100.0
+
+#: Default sampling rate, Hz (also the integration rate).
+DEFAULT_SAMPLING_RATE = 1000.0
 
 
 class VBIMethod(StrEnum):
@@ -55,38 +67,6 @@ class VBIMethod(StrEnum):
 
     COUPLED = "coupled"
     ITERATIVE = "iterative"
-
-
-def select_modes(
-    bridge: Bridge, *, n_modes: int | None = None, max_frequency: float | None = None,
-    sampling_rate: float,
-) -> Modes:
-    """The modes a simulation (or identification) uses.
-
-    All modes up to ``max_frequency`` (default ``sampling_rate / 8``) unless ``n_modes``
-    is given.  Raises :class:`InputError` if the sampling rate is below 2.5 × the highest
-    frequency in use (Nyquist with a margin).
-    """
-    if n_modes is not None:
-        modes = bridge.modes(n_modes)
-    else:
-        f_cut = sampling_rate / 8 if max_frequency is None else require_positive(
-            "max_frequency", max_frequency)
-        k = min(10, bridge.n_free - 1)
-        while True:
-            modes = bridge.modes(k)
-            if modes.frequencies[-1] > f_cut or k >= bridge.n_free - 1:
-                break
-            k = min(2 * k, bridge.n_free - 1)
-        n = max(int(np.searchsorted(modes.frequencies, f_cut, side="right")), 1)
-        modes = bridge.modes(n)
-    f_max = modes.frequencies[-1]
-    if sampling_rate < 2.5 * f_max:
-        raise InputError(
-            f"sampling_rate {sampling_rate:g} Hz is too low for the modes in use (highest "
-            f"{f_max:.1f} Hz); use at least {2.5 * f_max:.0f} Hz or fewer modes"
-        )
-    return modes
 
 
 def _as_list(name, value, n):
@@ -144,6 +124,7 @@ class PreparedCrossing:
     models: tuple[VehicleModel, ...]
     passages: tuple[Passage, ...]
     scheme: Newmark
+    settings: SimulationSettings
 
     @cached_property
     def approach_state(self):
@@ -153,23 +134,21 @@ class PreparedCrossing:
 
 def prepare_crossing(
     bridge: Bridge,
-    vehicle,
+    vehicle: Vehicle | Sequence[Vehicle],
     *,
     speed,
     sensors: Sequence[Sensor],
     lane=None,
     road: RoadProfile | None = None,
-    sampling_rate: float = 1000.0,
-    approach: float = 100.0,
+    sampling_rate: float = DEFAULT_SAMPLING_RATE,
+    approach: float = DEFAULT_APPROACH,
     tail: float = 0.0,
     delay=0.0,
 ) -> PreparedCrossing:
     """Validate a crossing and precompute its kinematics (see :func:`simulate`)."""
     fs = require_positive("sampling_rate", sampling_rate)
-    if not np.isfinite(approach) or approach < 0:
-        raise InputError(f"approach must be >= 0 m, got {approach!r}")
-    if not np.isfinite(tail) or tail < 0:
-        raise InputError(f"tail must be >= 0 s, got {tail!r}")
+    settings = SimulationSettings(approach=approach, tail=tail)  # validates both
+    approach, tail = settings.approach, settings.tail
     vehicles = list(vehicle) if isinstance(vehicle, (list, tuple)) else [vehicle]
     n_veh = len(vehicles)
     speeds = [require_positive("speed", v) for v in _as_list("speed", speed, n_veh)]
@@ -195,7 +174,6 @@ def prepare_crossing(
     veh = _combine(models)
     c_vehicle = np.repeat(np.arange(n_veh), [m.n_contacts for m in models])
     c_speed = np.array(speeds)[c_vehicle]
-    c_delay = delays[c_vehicle]
     c_y = np.array(lanes)[c_vehicle] + veh.contact_lateral
     if bridge.is_plate:
         off = (c_y < 0) | (c_y > bridge.width)
@@ -209,12 +187,12 @@ def prepare_crossing(
     # --- time grid ------------------------------------------------------------------
     dt = 1.0 / fs
     t_start = min(d - approach / v for d, v in zip(delays, speeds, strict=True))
-    t_end = max(d + (bridge.length + m.axle_offsets[-1]) / v
-                for d, v, m in zip(delays, speeds, models, strict=True)) + tail
+    t_end = max(p.axle_times_on(bridge.length)[-1, 1] for p in passages) + tail
     k0 = int(np.floor(t_start / dt + 1e-9))
     k1 = int(np.ceil(t_end / dt - 1e-9))
     t = dt * np.arange(k0, k1 + 1)
-    x = c_speed * (t[:, None] - c_delay) - veh.contact_offset
+    x = np.hstack([p.axle_x(t)[:, m.contact_axle] for p, m in zip(passages, models,
+                                                                  strict=True)])
     lo, hi = float(x.min()), float(x.max())
     if not road.covers(lo, hi):
         raise InputError(
@@ -232,6 +210,7 @@ def prepare_crossing(
         structure=bridge.model, crossing=crossing, time=t, keep=t >= -1e-9 * dt,
         rows=_contact_rows(bridge, x, c_y, on), sensors=sensors, S=S, models=tuple(models),
         passages=tuple(passages), scheme=Newmark(dt),
+        settings=settings,
     )
 
 
@@ -254,10 +233,7 @@ def run_crossing(
     ``influence`` may pass the sensors' influence surfaces of this bridge's stiffness to
     save their computation (calibration of the mass keeps K fixed).
     """
-    try:
-        method = VBIMethod(method)
-    except ValueError:
-        raise InputError(f"unknown method {method!r}; expected 'coupled' or 'iterative'") from None
+    method = parse_enum(VBIMethod, method, "method")
     if bridge.model is not prepared.structure:
         raise InputError("this crossing was prepared for a bridge of another structure")
     crossing, rows, scheme = prepared.crossing, prepared.rows, prepared.scheme
@@ -320,20 +296,21 @@ def run_crossing(
                             static_wheel_loads=m.static_forces.copy(),
                             static_axle_loads=m.static_axle_loads, contact_lost=lost))
     return Record(time=time, data=data[keep], sensors=prepared.sensors,
-                  passages=prepared.passages, truths=tuple(truths), convergence=conv)
+                  passages=prepared.passages, truths=tuple(truths), convergence=conv,
+                  settings=prepared.settings)
 
 
 def simulate(
     bridge: Bridge,
-    vehicle,
+    vehicle: Vehicle | Sequence[Vehicle],
     *,
     speed,
     sensors: Sequence[Sensor],
     lane=None,
     road: RoadProfile | None = None,
-    sampling_rate: float = 1000.0,
+    sampling_rate: float = DEFAULT_SAMPLING_RATE,
     method: VBIMethod | str = VBIMethod.COUPLED,
-    approach: float = 100.0,
+    approach: float = DEFAULT_APPROACH,
     tail: float = 0.0,
     delay=0.0,
     n_modes: int | None = None,
@@ -381,12 +358,10 @@ def simulate(
     Returns
     -------
     Record
-        Readings at t ≥ 0, passages, truths (wheel and axle forces) and convergence.
+        Readings at t ≥ 0, passages, truths (wheel and axle forces), convergence and the
+        simulation settings (approach, tail).
     """
-    try:
-        method = VBIMethod(method)
-    except ValueError:
-        raise InputError(f"unknown method {method!r}; expected 'coupled' or 'iterative'") from None
+    method = parse_enum(VBIMethod, method, "method")
     prepared = prepare_crossing(bridge, vehicle, speed=speed, sensors=sensors, lane=lane,
                                 road=road, sampling_rate=sampling_rate, approach=approach,
                                 tail=tail, delay=delay)
