@@ -14,6 +14,7 @@ from benchmarks import (  # noqa: E402
     bench_fe,
     bench_mfi,
     bench_optimize,
+    bench_testday,
     bench_vbi,
     bench_wim,
 )
@@ -26,6 +27,7 @@ def main() -> None:
     bench_mfi.main()
     bench_wim.main()
     bench_optimize.main()
+    bench_testday.main()
 
 
 if __name__ == "__main__":
