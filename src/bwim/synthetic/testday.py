@@ -41,7 +41,8 @@ plus the ground truth, into a new folder:
     axle leaves the bridge, so event lengths vary with speed and vehicle length
     (1.0–2.7 s, median 1.5 s, in the default day).
 ``reference.csv``
-    One row per traffic vehicle (arrival order within an event), the columns of
+    One row per single-vehicle traffic event (events with two trucks on the bridge are
+    for the system to flag, not to weigh: they are in ``truth.csv`` only), the columns of
     ISSUE 11's reference file: ``record, n_axles, axle_spacings_m, axle_weights_kN,
     gvw_kN, speed_m_s``; lists ``;``-separated; ``record`` = event file name; static axle
     loads from the simulation's vehicle models (N → kN, 3 decimals).
@@ -96,7 +97,7 @@ import numpy as np
 from scipy.signal import resample_poly
 
 from bwim.conventions import KILONEWTON, MICROSTRAIN
-from bwim.dynamics.simulate import prepare_crossing, run_crossing
+from bwim.dynamics.crossing import prepare_crossing, run_crossing
 from bwim.errors import InputError
 from bwim.fe.bridge import Bridge
 from bwim.io.atomic import atomic_open
@@ -596,6 +597,8 @@ def _write_reference(path: Path, events: list[Event]) -> None:
         w.writerow(["record", "n_axles", "axle_spacings_m", "axle_weights_kN", "gvw_kN",
                     "speed_m_s"])
         for e in events:
+            if len(e.vehicles) != 1:  # flagged by a B-WIM system, not weighed: truth.csv only
+                continue
             for v in e.vehicles:
                 loads = v.static_axle_loads / KILONEWTON
                 w.writerow([e.name, v.vehicle.n_axles, _joined(v.vehicle.axle_spacings, ".3f"),
@@ -679,7 +682,7 @@ scenario.toml          the installation's scenario ([logger], [[sensors]],
 calibration/           {n_cal} runs of the calibration truck: cal_NN_hhmmss.txt
 traffic/               {n_traffic} traffic events ({n_multiple} with two trucks):
                        evt_NNNN_hhmmss.txt
-reference.csv          static weights of the traffic (one row per truck)
+reference.csv          static weights of the traffic (single-vehicle events)
 truth.csv              everything simulated, one row per vehicle of every event
 site_truth.toml        gauge positions and gains, noise, drift (hidden from weighing)
 
