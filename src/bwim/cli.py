@@ -307,9 +307,155 @@ def _identify(args: argparse.Namespace) -> int:
 
 
 # --- weigh -----------------------------------------------------------------------------------
+#: summary.csv of ``bwim weigh``: the contract's columns first, then bwim's extras.
+WEIGH_COLUMNS = ("record", "n_axles", "speed_m_s", "axle_spacings_m", "axle_weights_kN",
+                 "gvw_kN", "flags", "group_weights_kN", "lateral", "confidence", "residual",
+                 "quality", "reason")
+
+
+def _joined(values, fmt: str) -> str:
+    return ";".join(format(float(v), fmt) for v in values)
+
+
+def _weigh_row(name: str, *, passage=None, weights=None, gvw=None, groups=None, flags=(),
+               lateral=None, confidence=None, residual=None, quality="", reason="") -> list:
+    """One summary row; weights are written only when given (a weighed vehicle)."""
+    import numpy as np
+
+    def num(v, fmt):
+        return "" if v is None or not np.isfinite(v) else format(float(v), fmt)
+
+    return [name,
+            "" if passage is None else passage.n_axles,
+            "" if passage is None else f"{passage.speed:.3f}",
+            "" if passage is None else _joined(passage.axle_spacings, ".3f"),
+            "" if weights is None else _joined(np.asarray(weights) / 1e3, ".2f"),
+            "" if gvw is None else f"{gvw / 1e3:.2f}",
+            ";".join(flags),
+            "" if groups is None else _joined(np.asarray(groups) / 1e3, ".2f"),
+            num(lateral, ".3f"), num(confidence, ".3f"), num(residual, ".4g"), quality,
+            " ".join(str(reason).split())]
+
+
+def _done_rows(summary: Path, resume: bool) -> dict[str, list[str]]:
+    """Rows of a previous run to keep with ``--resume`` (by record name)."""
+    if not resume or not summary.exists():
+        return {}
+    with summary.open(newline="") as f:
+        rows = list(csv.reader(f))
+    if not rows or tuple(rows[0]) != WEIGH_COLUMNS:
+        raise InputError(f"{summary}: not a bwim weigh summary; cannot resume from it")
+    return {r[0]: r for r in rows[1:] if r and r[-1] == ""}
+
+
+def _site_setup(scenario):
+    from bwim.io import build_vehicle
+    from bwim.site import SiteSetup
+
+    truck = build_vehicle(scenario)
+    det = scenario.axle_detectors
+    return SiteSetup(
+        calibration_loads=truck.static_axle_loads, calibration_spacings=truck.axle_spacings,
+        detectors=None if det is None else det.channels,
+        distance=None if det is None else det.distance,
+        position=0.0 if det is None else det.position,
+        max_spacing=None if det is None else det.max_spacing)
+
+
+def _calibrate_site(paths: Sequence[Path], scenario, folder: Path):
+    """Lines from the calibration truck's logger events; a table of the runs."""
+    from bwim.io import load_record, write_influence_line
+    from bwim.site import calibrate_site
+
+    setup = _site_setup(scenario)
+    records, used, unread = [], [], []
+    for p in paths:
+        try:
+            records.append(load_record(p, scenario))
+            used.append(p)
+        except InputError as exc:
+            unread.append((p.name, str(exc)))
+    site = calibrate_site(records, setup)
+    rows = []
+    for p, det, reason, fit in zip(used, site.detections, site.reasons, site.fits,
+                                   strict=True):
+        v = det.vehicles[0].passage if len(det.vehicles) == 1 else None
+        rows.append((p.name, "" if v is None else f"{v.speed:.2f}",
+                     "" if v is None else f"{v.lane:.2f}",
+                     "" if fit is None else f"{fit.scale:.4f}",
+                     "" if fit is None else f"{fit.residual:.3g}",
+                     reason or "used"))
+    rows += [(name, "", "", "", "", f"unreadable: {msg}") for name, msg in unread]
+    header = ("run", "speed (m/s)", "lateral", "scale", "residual", "status")
+    _write_csv(folder / "calibration_runs.csv", header, rows)
+    print(Table(f"Calibration runs ({site.n_used} of {len(paths)} used):", header,
+                rows).render())
+    write_influence_line(site.lines.line_at(), folder / "influence_lines.h5")
+    return site
+
+
+def _weigh_site(args: argparse.Namespace, scenario, folder: Path) -> int:
+    """``bwim weigh`` on a real installation's logger files (scenario with [logger])."""
+    from bwim.io import load_record
+    from bwim.site import weigh_event
+
+    if not args.calibration_records:
+        raise InputError("weighing logger files needs --calibration-records (runs of the "
+                         "calibration truck)")
+    paths = _record_paths(args.records)
+    summary = folder / "summary.csv"
+    done = _done_rows(summary, args.resume)
+    site = _calibrate_site(_record_paths(args.calibration_records), scenario, folder)
+    rows: list[list] = []
+    n_failed = n_weighed = 0
+    t0 = time.perf_counter()
+    try:
+        with _bar(len(paths) if len(paths) > 1 else None, "weighing") as bar:
+            for p in paths:
+                bar.update()
+                if p.name in done:
+                    rows.append(done[p.name])
+                    n_weighed += 1
+                    continue
+                try:
+                    rec = load_record(p, scenario)
+                except InputError as exc:
+                    rows.append(_weigh_row(p.name, reason=str(exc)))
+                    n_failed += 1
+                    continue
+                ev = weigh_event(rec, site)
+                det = ev.detection
+                v = det.vehicles[0] if det is not None and len(det.vehicles) == 1 else None
+                w = ev.weighing
+                rows.append(_weigh_row(
+                    p.name, passage=None if v is None else v.passage,
+                    weights=ev.axle_weights, gvw=ev.gvw,
+                    groups=w.group_weights if ev.weighed else None, flags=ev.flags,
+                    lateral=None if v is None else v.lateral,
+                    confidence=None if v is None else v.confidence,
+                    residual=None if w is None else w.residual,
+                    quality="" if w is None else w.quality, reason=ev.reason))
+                n_weighed += ev.weighed
+    finally:  # an interrupted run keeps what it weighed (rerun with --resume)
+        _write_csv(summary, WEIGH_COLUMNS, rows)
+    elapsed = time.perf_counter() - t0
+    n_flagged = len(paths) - n_weighed - n_failed
+    print(f"{len(paths)} event(s) in {elapsed:.1f} s: {n_weighed} weighed, {n_flagged} "
+          f"not weighed (flagged), {n_failed} failed")
+    shown = [(r[0], r[1], r[4].replace(";", ", "), r[5], r[6] or r[12]) for r in rows[:20]]
+    print(Table("Static weights (multi-run influence lines, gauges combined):",
+                ("record", "axles", "axle weights (kN)", "GVW (kN)", "flags / reason"),
+                shown).render())
+    if len(rows) > 20:
+        print(f"... {len(rows) - 20} more in the summary")
+    print(f"summary: {summary}")
+    return 1 if n_failed else 0
+
+
 def _weigh(args: argparse.Namespace) -> int:
     from bwim.io import (
         build_vehicle,
+        load_record,
         load_scenario,
         read_influence_line,
         write_influence_line,
@@ -319,8 +465,9 @@ def _weigh(args: argparse.Namespace) -> int:
 
     folder = _out_folder(args.output)
     scenario = load_scenario(args.scenario)
+    if scenario.logger is not None:
+        return _weigh_site(args, scenario, folder)
     paths = _record_paths(args.records)
-    records = _load_records(paths, scenario)
     if args.influence:
         il = read_influence_line(args.influence)
         print(f"influence line: {args.influence}")
@@ -331,30 +478,44 @@ def _weigh(args: argparse.Namespace) -> int:
         write_influence_line(il, target)
         print(f"influence line calibrated from {len(cal_records)} crossing(s) "
               f"(residual {il.residual:.3g}): {target}")
-    n_max = 0
-    results = []
-    with _bar(len(records) if len(records) > 1 else None, "weighing") as bar:
-        for path, rec in zip(paths, records, strict=True):
-            try:
-                results.append(weigh_static(rec, il))
-            except InputError as exc:
-                raise InputError(f"{path}: {exc}") from None
-            n_max = max(n_max, results[-1].n_axles)
-            bar.update()
-    header = ["record", "axles", *(f"axle_{i + 1}_kN" for i in range(n_max)), "gvw_kN",
-              "residual"]
+    summary = folder / "summary.csv"
+    done = _done_rows(summary, args.resume)
     rows, shown = [], []
-    for path, stem, w in zip(paths, _unique_stems(paths), results, strict=True):
-        write_static_weights(w, folder / f"{stem}_static.h5")
-        cells = format_kn_each(w.axle_weights)
-        rows.append([path.name, w.n_axles, *cells, *[""] * (n_max - len(cells)),
-                     format_kn(w.gvw, 2), f"{w.residual:.4g}"])
-        shown.append((path.name, ", ".join(cells), format_kn(w.gvw), f"{w.residual:.3g}"))
-    _write_csv(folder / "summary.csv", header, rows)
+    n_failed = 0
+    try:
+        with _bar(len(paths) if len(paths) > 1 else None, "weighing") as bar:
+            for path, stem in zip(paths, _unique_stems(paths), strict=True):
+                bar.update()
+                if path.name in done:
+                    rows.append(done[path.name])
+                    continue
+                try:
+                    rec = load_record(path, scenario)
+                    w = weigh_static(rec, il)
+                except InputError as exc:
+                    rows.append(_weigh_row(path.name, reason=str(exc)))
+                    shown.append((path.name, "", "", f"failed: {exc}"))
+                    n_failed += 1
+                    continue
+                flags = w.flags
+                ok = w.quality != "reject"
+                if ok:
+                    write_static_weights(w, folder / f"{stem}_static.h5")
+                rows.append(_weigh_row(
+                    path.name, passage=w.passage, weights=w.axle_weights if ok else None,
+                    gvw=w.gvw if ok else None, groups=w.group_weights if ok else None,
+                    flags=flags, residual=w.residual, quality=w.quality,
+                    reason="" if ok else f"implausible weighing ({';'.join(flags)})"))
+                shown.append((path.name, ", ".join(format_kn_each(w.axle_weights)) if ok
+                              else "-", format_kn(w.gvw) if ok else "-",
+                              ";".join(flags) or f"{w.residual:.3g}"))
+    finally:  # an interrupted run keeps what it weighed (rerun with --resume)
+        _write_csv(summary, WEIGH_COLUMNS, rows)
     print(Table("Static weights (Moses):",
-                ("record", "axle weights (kN)", "GVW (kN)", "residual"), shown).render())
-    print(f"summary: {folder / 'summary.csv'}\nweights: {folder}/<record>_static.h5")
-    return 0
+                ("record", "axle weights (kN)", "GVW (kN)", "flags / residual"),
+                shown).render())
+    print(f"summary: {summary}\nweights: {folder}/<record>_static.h5")
+    return 1 if n_failed else 0
 
 
 # --- accuracy --------------------------------------------------------------------------------
@@ -574,7 +735,10 @@ COMMANDS: tuple[Command, ...] = (
                 arg("--influence", metavar="IL.h5", help="a saved influence line")),
                required=True),
          arg("-o", "--output", default="bwim-out/weigh", metavar="FOLDER",
-             help="results folder (default bwim-out/weigh)"))),
+             help="results folder (default bwim-out/weigh)"),
+         arg("--resume", action="store_true",
+             help="keep the records already weighed in the folder's summary.csv and weigh "
+             "only the others"))),
     Command(
         "accuracy", _accuracy,
         "COST 323 accuracy classes of weights against statically weighed references",
