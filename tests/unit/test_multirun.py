@@ -120,11 +120,11 @@ def test_the_support_is_found_from_the_data():
     s = _factors(False)
     recs, pas = _runs(s, LANES, lateral=False)
     cal = calibrate_lines(recs, pas, TRUCK)
-    lo, hi = cal.support  # measured −1.77 … 7.75: 2 spacings (0.2 m) of margin
+    lo, hi = cal.support  # measured −1.80 … 7.73: 2 spacings (0.2 m) of margin
     assert -1.5 - 0.35 < lo <= -1.5 and 7.5 <= hi < 7.5 + 0.35
     peak = np.abs(_lines()[0]).max()
     err = cal.line.ordinates - np.stack([np.interp(cal.line.x, X, c) for c in _lines()[0].T], 1)
-    assert np.abs(err).max() < 3e-3 * peak  # the default 0.1 m smoothing; measured 0.11 %
+    assert np.abs(err).max() < 3e-3 * peak  # the default 0.1 m smoothing; measured 0.13 %
 
 
 def test_weighing_exact_data():
