@@ -21,7 +21,7 @@ import pytest
 from bwim.errors import InputError
 from bwim.records import Passage, Record
 from bwim.sensors import Sensor
-from bwim.wim.multirun import OutlierRule, ScaleTrend, calibrate_lines
+from bwim.wim.multirun import CV_BANDWIDTHS, OutlierRule, ScaleTrend, calibrate_lines
 from bwim.wim.weigh import HARD_FLAGS, SOFT_FLAGS, Limits, weigh
 
 FS = 256.0
@@ -162,7 +162,8 @@ def test_weighing_exact_data():
 
 def test_scale_trend_is_local_linear():
     """A straight line passes unchanged (knots and between); constant beyond the span;
-    bandwidth 0 interpolates; runs at the same time are averaged."""
+    bandwidth 0 interpolates; runs at the same time are averaged; cross-validation smooths
+    alternating scatter the most."""
     t = np.array([8.0, 9.5, 10.0, 12.0, 15.0, 17.0]) * HOUR
     f = 0.98 + 0.004 * (t / HOUR - 8)
     tr = ScaleTrend.fit(t, f)
@@ -170,9 +171,13 @@ def test_scale_trend_is_local_linear():
     assert tr(13.5 * HOUR) == pytest.approx(0.98 + 0.004 * 5.5, rel=1e-12)
     assert tr(6 * HOUR) == pytest.approx(f[0]) and tr(20 * HOUR) == pytest.approx(f[-1])
     assert tr.covers(12 * HOUR) and not tr.covers(18 * HOUR)
-    assert tr.bandwidth == pytest.approx(np.median(np.diff(t)))
+    # cross-validation: scatter about a straight line calls for the widest bandwidth
+    spacing = np.median(np.diff(t))
+    assert tr.bandwidth / spacing in CV_BANDWIDTHS
     bumpy = f + np.array([0.01, -0.01, 0.01, -0.01, 0.01, -0.01])
-    assert np.ptp(ScaleTrend.fit(t, bumpy).factor - f) < np.ptp(bumpy - f)
+    smooth = ScaleTrend.fit(t, bumpy)
+    assert smooth.bandwidth == pytest.approx(max(CV_BANDWIDTHS) * spacing)
+    assert np.ptp(smooth.factor - f) < 0.5 * np.ptp(bumpy - f)
     exact = ScaleTrend.fit([1.0, 2.0, 2.0, 3.0], [1.0, 0.9, 1.1, 1.2], bandwidth=0.0)
     np.testing.assert_allclose(exact.factor, [1.0, 1.0, 1.2])
 
@@ -264,6 +269,9 @@ def test_gls_and_blue_are_unbiased_on_noisy_data():
         w = weigh(rec, p, cal, combine=combine)
         assert w.gvw == pytest.approx(250e3, rel=0.01), combine  # measured +0.64 % each
         assert w.combine == combine
+    summed = calibrate_lines(recs, pas, TRUCK, channels="sum")  # one channel: all alike
+    assert summed.channels[0].name == "g0+g1+g2+g3"
+    assert weigh(rec, p, summed).gvw == pytest.approx(250e3, rel=0.01)
 
 
 def test_bad_input():

@@ -52,7 +52,7 @@ def test_scale_factors_follow_the_drift(installation):
     lateral model; 1.35 % / 0.82 % without it, the lateral mismatch leaking into the
     factors), while the drift itself spans ±4 %.  On the class A road the truck's own
     dynamics add a per-run error of 2.4 % RMS (measured), which the trend's smoothing
-    halves (1.0 %)."""
+    halves (0.93 % RMS)."""
     day = installation["flat_day"]
     cal = _calibrate(day, lateral="linear")
     truth = np.array([site.drift(e.clock) for e in day])
@@ -67,7 +67,7 @@ def test_scale_factors_follow_the_drift(installation):
 
 def test_an_outlier_run_is_rejected_with_its_reason(installation):
     """A 13th run with a second truck in the other lane, not in its passage: rejected for
-    its factor (measured +35 %, limit 22 %), or because detection flagged it; the other
+    its factor (measured +35 %, limit 16 %), or because detection flagged it; the other
     12 runs are kept and give the same lines as without it."""
     bridge, gauges, day = installation["bridge"], installation["gauges"], installation["day"]
     truck = site.calibration_truck()
@@ -84,9 +84,9 @@ def test_an_outlier_run_is_rejected_with_its_reason(installation):
 
 def test_gls_beats_the_plain_sum_on_held_out_traffic(installation):
     """40 trucks (2-, 3- and 5-axle, 12–40 t) at other times, speeds, lanes and roads than
-    the calibration: GVW RMS error with the per-gauge lines combined by GLS 2.52 %, with
-    the plain sum of the gauges 2.60 % (measured; the same order over three calibration
-    days, 3.18 / 3.26 % over all 120 trucks).  Most of the error is the vehicles' own
+    the calibration: GVW RMS error with the per-gauge lines combined by GLS 2.45 %, with
+    the plain sum of the gauges 2.52 % (measured; the same order over three calibration
+    days, 2.92 / 2.99 % over all 120 trucks).  Most of the error is the vehicles' own
     dynamics, common to all gauges, which no combination removes."""
     cal = _calibrate(installation["day"])
     traffic = installation["traffic"]
@@ -94,12 +94,12 @@ def test_gls_beats_the_plain_sum_on_held_out_traffic(installation):
     plain = site.errors(cal, traffic, combine="sum")
     assert _rms(gls["gvw"]) < _rms(plain["gvw"])
     assert _rms(gls["group"]) < _rms(plain["group"])
-    assert _rms(gls["gvw"]) < 3.0 and abs(gls["gvw"].mean()) < 1.0  # measured 2.52, +0.24
+    assert _rms(gls["gvw"]) < 3.0 and abs(gls["gvw"].mean()) < 1.0  # measured 2.45, +0.40
 
 
 def test_tridem_group_weights(installation):
     """The 5-axle trucks' tridems (1.31 m spacing) weighed as groups: within 2 % on a flat
-    road (measured max 1.15 %), within 7.9 % on the class A road (measured, 14 tridems:
+    road (measured max 1.54 %), within 6.6 % on the class A road (measured, 14 tridems:
     the trailer's dynamics)."""
     flat = _calibrate(installation["flat_day"])
     errs = []
@@ -114,7 +114,7 @@ def test_tridem_group_weights(installation):
     rough = [weigh(e.record, e.passage, cal).group_weights[-1]
              / e.static_axle_loads[2:].sum() - 1
              for e in installation["traffic"] if e.passage.n_axles == 5]
-    assert np.abs(rough).max() < 0.09
+    assert np.abs(rough).max() < 0.08
 
 
 def test_flags_on_simulated_events(installation):
