@@ -62,7 +62,6 @@ from bwim.wim.influence_line import (
     DEFAULT_SMOOTHING,
     Channel,
     InfluenceLine,
-    _axle_positions,
     hat_design,
     read_channels,
     resolve_channels,
@@ -798,7 +797,7 @@ def calibrate_lines(
     else:
         chans = resolve_channels(sens, channels)
     E_all = [read_channels(r, chans) for r in recs]
-    P_all = [_axle_positions(p, r.time) for r, p in zip(recs, pas, strict=True)]
+    P_all = [p.axle_x(r.time) for r, p in zip(recs, pas, strict=True)]
     lanes = np.array([p.lane for p in pas])
     times = np.array([float(r.time[0]) for r in recs])
     if spacing is None:

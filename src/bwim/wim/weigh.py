@@ -68,7 +68,7 @@ import scipy.linalg
 
 from bwim.errors import InputError, require_finite, require_positive
 from bwim.records import Passage, Record
-from bwim.wim.influence_line import Channel, _axle_positions, hat_design, read_channels
+from bwim.wim.influence_line import Channel, hat_design, read_channels
 from bwim.wim.moses import group_axles, group_share
 from bwim.wim.multirun import MultiRunCalibration
 
@@ -332,7 +332,7 @@ def weigh(
     E = read_channels(record, line.channels)  # (n_t, n_c)
     n_t, n_c = E.shape
     ords = calibration.ordinates_at(y)[1:-1]  # interior ordinates (m, n_c)
-    pos = _axle_positions(passage, record.time)  # (n_t, n_axles)
+    pos = passage.axle_x(record.time)  # (n_t, n_axles)
     n_ax = pos.shape[1]
     H = hat_design(pos.reshape(-1, 1), np.ones(1), line.x[0], line.spacing, line.x.size - 1)
     M = np.asarray(H @ ords).reshape(n_t, n_ax, n_c)
