@@ -197,7 +197,7 @@ def run(*, roads: Sequence[str] = ("A", "flat"), days: Sequence[int] = (11, 12, 
                 for scale in (False, True):
                     cal = calibrate_lines(recs, pas, day[0].static_axle_loads, lateral=lat,
                                           per_run_scale=scale)
-                    for combine in ("sum", "gls", "blue"):
+                    for combine in ("sum", "gls", "blue", "auto"):
                         errs.setdefault((lat, scale, combine), []).append(
                             errors(cal, events, combine=combine))
                     if rate == 0.0 and lat is None and scale:
@@ -212,7 +212,68 @@ def run(*, roads: Sequence[str] = ("A", "flat"), days: Sequence[int] = (11, 12, 
     return rows, rate
 
 
+def weigh_test_day(folder: str, *, combine: str = "auto") -> None:
+    """Weigh a test day of :func:`bwim.synthetic.make_test_day` end to end: logger files,
+    detection by the axle detectors, :func:`calibrate_lines` on the calibration runs
+    (detection's flags as upstream flags), :func:`weigh` on the single-vehicle traffic
+    events, and the COST 323 classes against ``reference.csv``."""
+    import glob
+    from pathlib import Path
+
+    from bwim.accuracy import SummaryRow, assess
+    from bwim.detect import detect_axles
+    from bwim.io import load_scenario, read_logger
+    from bwim.io.accuracy_csv import read_reference
+    from bwim.io.build import build_logger_format, build_sensors, build_vehicle
+
+    root = Path(folder)
+    scenario = load_scenario(root / "scenario.toml")
+    fmt, gauges = build_logger_format(scenario), build_sensors(scenario)
+    loads = build_vehicle(scenario).static_axle_loads
+
+    def load(path):
+        record = read_logger(path, fmt, sensors=gauges)
+        return record, detect_axles(record, ("ad1", "ad2"), 3.0)
+
+    runs = [load(p) for p in sorted(glob.glob(str(root / "calibration" / "*.txt")))]
+    cal = calibrate_lines([r for r, _ in runs], [d.vehicles[0].passage for _, d in runs],
+                          loads, run_flags=[d.flags for _, d in runs])
+    rows, errs = [], []
+    ref = {r.record: r for r in read_reference(root / "reference.csv")}
+    for path in sorted(glob.glob(str(root / "traffic" / "*.txt"))):
+        record, det = load(path)
+        name = Path(path).name
+        if det.n_vehicles != 1:
+            rows.append(SummaryRow(record=name, gvw=None, axle_weights=(), axle_spacings=(),
+                                   n_axles=None, speed=None, flags=tuple(det.flags)))
+            continue
+        p = det.vehicles[0].passage
+        w = weigh(record, p, cal, combine=combine)
+        flags = tuple(det.flags) + w.flags
+        ok = w.quality != "reject" and "multiple_presence" not in flags
+        rows.append(SummaryRow(record=name, gvw=w.gvw if ok else None,
+                               axle_weights=tuple(w.axle_weights) if ok else (),
+                               axle_spacings=tuple(p.axle_spacings), n_axles=p.n_axles,
+                               speed=p.speed, flags=flags))
+        if ok and name in ref:
+            errs.append(100 * (w.gvw / ref[name].gvw - 1))
+    res = assess(rows, list(ref.values()))
+    e = np.array(errs)
+    print(f"\ntest day {folder} (combine={combine}): {e.size} trucks weighed, GVW error "
+          f"{_stat(e)} %, RMS {_rms(e)} %; rejected runs "
+          f"{[(r.index, r.reason) for r in cal.rejected]}")
+    print_table("COST 323 (RR2, environment I)", ["criterion", "n", "mean %", "sd %", "class"],
+                [[c.name, c.n, f"{c.mean:+.2f}", f"{c.std:.2f}", c.class_name]
+                 for c in res.criteria] + [["overall", "", "", "", res.overall_class]])
+
+
 def main() -> None:
+    import sys
+
+    if len(sys.argv) > 2 and sys.argv[1] == "--test-day":
+        for combine in ("auto", "sum", "gls"):
+            weigh_test_day(sys.argv[2], combine=combine)
+        return
     rows, rate = run()
     print_table(
         "Multi-run lines, weighing unknown traffic on the simulated 9 m slab: error % "

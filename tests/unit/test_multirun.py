@@ -241,7 +241,9 @@ def test_plausibility_flags():
     late = flags(clock=20 * HOUR)
     assert late.flags == ("outside_calibration_time",) and late.quality == "warning"
     assert late.scale_factor == pytest.approx(cal.scale_trend.factor[-1])
-    assert flags(lane=cal.lateral_range[1] + 0.2).flags == ("lateral_extrapolated",)
+    aside = flags(lane=cal.lateral_range[1] + 0.2)
+    assert aside.flags == ("lateral_extrapolated",)
+    assert ok.combine == "gls" and aside.combine == "sum"  # combine="auto"
     assert "truncated_start" in flags(start_late=0.5).flags
     assert "truncated_end" in flags(end_early=0.3).flags
     short = flags(start_late=0.35, tail=0.0, end_early=0.05)
