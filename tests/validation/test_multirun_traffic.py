@@ -143,7 +143,7 @@ def test_flags_on_simulated_events(installation):
 
 def test_weighing_throughput(installation):
     """Moses weighing of a 1.5 s, 512 Hz, 14-gauge event: at least 100 events per second
-    on one core (measured ≈ 700 / s)."""
+    on one core (measured 375–470 / s on the shared 2-core machine under load 7)."""
     cal = _calibrate(installation["day"])
     e = installation["traffic"][0]
     assert e.record.data.shape[1] == 14 and e.record.time.size >= 700
