@@ -13,6 +13,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from benchmarks import (  # noqa: E402
     bench_fe,
     bench_mfi,
+    bench_multirun,
     bench_optimize,
     bench_testday,
     bench_vbi,
@@ -26,6 +27,7 @@ def main() -> None:
     bench_vbi.main()
     bench_mfi.main()
     bench_wim.main()
+    bench_multirun.main()
     bench_optimize.main()
     bench_testday.main()
 

@@ -27,7 +27,7 @@ from bwim.errors import InputError, require_finite
 from bwim.records import Passage, Record
 from bwim.wim.influence_line import Channel, InfluenceLine, read_channels
 
-__all__ = ["StaticWeights", "group_axles", "weigh_static"]
+__all__ = ["StaticWeights", "group_axles", "group_share", "weigh_static"]
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -111,6 +111,20 @@ def group_axles(spacings: Passage | np.ndarray, max_spacing: float = 2.0
     return tuple(tuple(g) for g in groups)
 
 
+def group_share(groups, n_axles: int) -> tuple[tuple[tuple[int, ...], ...], np.ndarray]:
+    """Checked axle groups and the matrix ``S`` (n_axles, n_groups) with axle weights
+    ``S @ group_weights``: the axles of a group share its weight equally.
+
+    ``groups`` None means every axle on its own; otherwise a sequence of sequences of axle
+    indices (from 0) listing every axle once.
+    """
+    out = _check_groups(groups, n_axles)
+    share = np.zeros((n_axles, len(out)))
+    for k, g in enumerate(out):
+        share[list(g), k] = 1.0 / len(g)
+    return out, share
+
+
 def _check_groups(groups, n_axles: int) -> tuple[tuple[int, ...], ...]:
     if groups is None:
         return tuple((i,) for i in range(n_axles))
@@ -178,10 +192,7 @@ def weigh_static(
     lo, hi = influence.support
     used = ((pos > lo) & (pos < hi)).any(axis=1)
     n_ax = passage.n_axles
-    groups = _check_groups(groups, n_ax)
-    share = np.zeros((n_ax, len(groups)))  # axle weight = share @ group weight
-    for k, g in enumerate(groups):
-        share[list(g), k] = 1.0 / len(g)
+    groups, share = group_share(groups, n_ax)  # axle weight = share @ group weight
     n_unknown = len(groups)
     if used.sum() < n_unknown:
         raise InputError(
