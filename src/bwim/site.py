@@ -68,7 +68,9 @@ class SiteSetup:
     max_spacing : float or None
         Largest axle spacing within one vehicle, m (default :mod:`bwim.detect`'s).
     combine : str
-        How the gauges are combined: ``"gls"`` (default), ``"blue"`` or ``"sum"``.
+        How the gauges are combined (:func:`bwim.wim.weigh`): ``"auto"`` (default:
+        generalised least squares inside the calibrated lateral range, the gauges' sum
+        outside it), ``"gls"``, ``"blue"`` or ``"sum"``.
     lateral : str or None
         ``"linear"``: lines linear in the lateral position; None: one line per gauge.
     """
@@ -79,7 +81,7 @@ class SiteSetup:
     distance: float | None = None
     position: float = 0.0
     max_spacing: float | None = None
-    combine: str = "gls"
+    combine: str = "auto"
     lateral: str | None = None
 
     def __post_init__(self) -> None:
@@ -104,8 +106,8 @@ class SiteSetup:
         if self.max_spacing is not None:
             object.__setattr__(self, "max_spacing",
                                require_positive("max_spacing", self.max_spacing))
-        if self.combine not in ("gls", "blue", "sum"):
-            raise InputError(f"combine must be gls, blue or sum, got {self.combine!r}")
+        if self.combine not in ("auto", "gls", "blue", "sum"):
+            raise InputError(f"combine must be auto, gls, blue or sum, got {self.combine!r}")
         if self.lateral not in (None, "linear"):
             raise InputError(f"lateral must be None or 'linear', got {self.lateral!r}")
 

@@ -72,83 +72,21 @@ from typing import Any
 import numpy as np
 import scipy.linalg
 
-from bwim.errors import InputError, require_finite, require_positive
+from bwim.errors import InputError, require_finite
 from bwim.records import Passage, Record
 from bwim.wim.influence_line import Channel, hat_design, read_channels
 from bwim.wim.moses import group_axles, group_share
 from bwim.wim.multirun import MultiRunCalibration
+from bwim.wim.plausibility import (
+    HARD_FLAGS,
+    SOFT_FLAGS,
+    Limits,
+    ordered_flags,
+    quality_of,
+    weight_flags,
+)
 
 __all__ = ["HARD_FLAGS", "SOFT_FLAGS", "Limits", "Weighing", "weigh"]
-
-#: Flags that make a weighing unusable (quality "reject").
-HARD_FLAGS = (
-    "undetermined",          # the weights are not determined (rank-deficient fit)
-    "negative_axle_weight",  # an axle weight < 0
-    "negative_group_weight",  # a group weight < 0
-    "axle_weight_high",      # an axle weight > Limits.axle_max
-    "axle_weight_low",       # an axle weight in [0, Limits.axle_min)
-    "gvw_high",              # GVW > Limits.gvw_max
-    "gvw_low",               # GVW < Limits.gvw_min
-    "residual_high",         # misfit > the calibration's misfit limit
-    "truncated_start",       # an axle is already on the lines' support at the first sample
-    "truncated_end",         # an axle is still on the lines' support at the last sample
-    "no_baseline",           # too few samples without an axle on the support for the offsets
-)
-#: Flags that call for a look but keep the weights (quality "warning").
-SOFT_FLAGS = (
-    "outside_calibration_time",  # clock time outside the calibration runs' span
-    "lateral_extrapolated",      # lateral covariate outside the calibration runs' range
-    "ill_conditioned",           # condition number > Limits.condition
-)
-
-
-@dataclass(frozen=True, kw_only=True)
-class Limits:
-    """Plausibility thresholds of :func:`weigh` (N, dimensionless).
-
-    Attributes
-    ----------
-    axle_max, axle_min : float
-        An axle heavier than ``axle_max`` (250 kN: 2.2 × the EU 115 kN drive-axle limit)
-        or lighter than ``axle_min`` (1 kN, far below any road vehicle's axle) is absurd.
-    gvw_max, gvw_min : float
-        GVW above ``gvw_max`` (1000 kN: 2.5 × the EU 40 t limit; abnormal loads need a
-        permit and an escort) or below ``gvw_min`` (5 kN, a light car is ≈ 10 kN).
-    misfit : float
-        A misfit above ``misfit`` × the calibration runs' median misfit is
-        ``residual_high``.  The misfit is in units of the expected residual deviation of a
-        vehicle of the weighed weight (:meth:`~bwim.wim.multirun.MultiRunCalibration.
-        error_covariance`: noise plus dynamics scaled with the load), so neither light nor
-        heavy vehicles are flagged for their weight, while a second vehicle's response,
-        a wrong passage or a faulty channel stand out.
-    condition : float
-        Condition number of the (whitened) least-squares matrix above which the weights
-        are ``ill_conditioned``.
-    lateral_tolerance : float
-        A lateral covariate may leave the calibrated range by this much before it is
-        ``lateral_extrapolated`` (units of the covariate).
-    min_baseline : int
-        Samples without an axle on the support needed to fit the offsets.
-    """
-
-    axle_max: float = 250e3
-    axle_min: float = 1e3
-    gvw_max: float = 1000e3
-    gvw_min: float = 5e3
-    misfit: float = 3.0
-    condition: float = 100.0
-    lateral_tolerance: float = 0.0
-    min_baseline: int = 8
-
-    def __post_init__(self) -> None:
-        for name in ("axle_max", "gvw_max", "condition", "misfit"):
-            require_positive(f"Limits.{name}", getattr(self, name))
-        for name in ("axle_min", "gvw_min", "lateral_tolerance"):
-            if require_finite(f"Limits.{name}", getattr(self, name)) < 0:
-                raise InputError(f"Limits.{name} must be >= 0")
-        if int(self.min_baseline) < 1:
-            raise InputError(f"Limits.min_baseline must be >= 1, got {self.min_baseline!r}")
-
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class Weighing:
@@ -283,7 +221,7 @@ def weigh(
     lateral: float | None = None,
     baseline: str = "fit",
     scale_correction: bool = True,
-    limits: Limits = Limits(),
+    limits: Limits | None = None,
 ) -> Weighing:
     """Static axle and group weights of one vehicle, with plausibility flags.
 
@@ -333,6 +271,7 @@ def weigh(
         raise InputError(f"combine must be one of {', '.join(_COMBINE)}, got {combine!r}")
     if baseline not in _BASELINE:
         raise InputError(f"baseline must be one of {', '.join(_BASELINE)}, got {baseline!r}")
+    limits = Limits() if limits is None else limits
     if not isinstance(limits, Limits):
         raise InputError(f"limits must be a Limits, got {type(limits).__name__}")
     y = passage.lane if lateral is None else require_finite("lateral", lateral)
@@ -404,19 +343,8 @@ def weigh(
     misfit = float(np.sqrt(np.mean(((meas - fitted) / sd) ** 2)))
 
     # plausibility
-    if np.any(axle_w < 0):
-        flags.append("negative_axle_weight")
-    if np.any(group_w < 0):
-        flags.append("negative_group_weight")
-    if np.any(axle_w > limits.axle_max):
-        flags.append("axle_weight_high")
-    if np.any((axle_w >= 0) & (axle_w < limits.axle_min)):
-        flags.append("axle_weight_low")
+    flags += weight_flags(axle_w, group_w, limits)
     gvw = float(axle_w.sum())
-    if gvw > limits.gvw_max:
-        flags.append("gvw_high")
-    if gvw < limits.gvw_min:
-        flags.append("gvw_low")
     if not misfit <= limits.misfit * calibration.misfit_median:
         flags.append("residual_high")
     t_lo, t_hi = calibration.time_span
@@ -426,9 +354,8 @@ def weigh(
         flags.append("lateral_extrapolated")
     if condition > limits.condition:
         flags.append("ill_conditioned")
-    flags_t = tuple(f for f in HARD_FLAGS + SOFT_FLAGS if f in flags)
-    quality = ("reject" if any(f in HARD_FLAGS for f in flags_t)
-               else "warning" if flags_t else "ok")
+    flags_t = ordered_flags(flags)
+    quality = quality_of(flags_t)
     return Weighing(
         axle_weights=axle_w, group_weights=group_w, groups=groups_t, gvw=gvw,
         residual=resid, misfit=misfit, condition=condition, scale_factor=s, flags=flags_t,
