@@ -1,12 +1,13 @@
 """Write a simulated B-WIM test day to a folder (see README.md beside this script).
 
-Run: ``python examples/test_day/make_test_day.py OUT_DIR [--seed N] [--small]``
+Run: ``python examples/test_day/make_test_day.py OUT_DIR [--seed N] [--small] [--wim-grade]``
 """
 
 import argparse
 import time
 
 from bwim.synthetic import make_test_day
+from bwim.synthetic.testday import WIM_GRADE_ROUGHNESS
 
 
 def main(argv=None) -> None:
@@ -15,8 +16,13 @@ def main(argv=None) -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--small", action="store_true",
                         help="4 calibration runs, 8 traffic events, 0.5 m data mesh")
+    parser.add_argument("--wim-grade", action="store_true",
+                        help="roads within ISO 8608 class A (a smooth WIM approach) instead "
+                        "of class A to B")
     args = parser.parse_args(argv)
     kw = {"n_calibration": 4, "n_traffic": 8, "mesh": 0.5} if args.small else {}
+    if args.wim_grade:
+        kw["roughness"] = WIM_GRADE_ROUGHNESS
     t0 = time.perf_counter()
     day = make_test_day(args.out_dir, seed=args.seed, **kw)
     elapsed = time.perf_counter() - t0

@@ -131,7 +131,13 @@ BASELINE = 2.0  #: σ of a channel's baseline change over an event, in noise σ
 DETECTOR_NOISE = 0.2  #: σ of detector noise, logger units
 DETECTOR_OFFSET = 2.0  #: half-range of the per-event detector offset, logger units
 TYRE_PATCH = 0.24  #: m, road smoothing length
-ROUGHNESS = (ISO_CLASSES["A"], ISO_CLASSES["B"])  #: G_d(n₀) range, m³/cycle
+#: Default G_d(n₀) range of the roads, m³/cycle: from the ISO 8608 class A mean to the
+#: class B mean (drawn log-uniformly per event).
+ROUGHNESS = (ISO_CLASSES["A"], ISO_CLASSES["B"])
+#: A WIM-grade approach: within ISO 8608 class A (G_d(n₀) ≤ 16e-6 m³), the even pavement
+#: a WIM site asks for (the COST 323 specification grades sites by the pavement's
+#: evenness before the sensors; a B-WIM site is chosen on a smooth approach).
+WIM_GRADE_ROUGHNESS = (ISO_CLASSES["A"] / 8.0, ISO_CLASSES["A"])
 LANE2_SHARE = 0.15  #: share of single traffic vehicles in lane 2
 WANDER = 0.3  #: m, half-range of the lateral wander about the lane centre
 CAL_SPEED = (18.0, 25.0)  #: m/s
@@ -226,6 +232,7 @@ def make_test_day(
     noise: float = 0.02,
     drift: float = 0.08,
     approach: float = 60.0,
+    roughness: tuple[float, float] = ROUGHNESS,
 ) -> TestDay:
     """Simulate a B-WIM test day and write it to the new folder ``out_dir``.
 
@@ -251,6 +258,9 @@ def make_test_day(
         Amplitude of the strain factor's variation over the day (0.08: ±8 %).
     approach : float
         Run-up of each vehicle on its road before the bridge, m.
+    roughness : (float, float)
+        Range of the roads' G_d(n₀), m³/cycle (drawn log-uniformly per event); default
+        :data:`ROUGHNESS`, class A to B; :data:`WIM_GRADE_ROUGHNESS` is a smooth approach.
 
     Returns
     -------
@@ -273,6 +283,12 @@ def make_test_day(
         raise InputError(f"seed must be a non-negative integer, got {seed!r}")
     if not isinstance(drift, (int, float)) or not 0 <= drift < 1:
         raise InputError(f"drift must be a fraction in [0, 1), got {drift!r}")
+    try:
+        lo_r, hi_r = (float(v) for v in roughness)
+    except (TypeError, ValueError):
+        raise InputError(f"roughness must be two numbers (m³/cycle), got {roughness!r}") from None
+    if not 0 < lo_r <= hi_r < 1e-3:
+        raise InputError(f"roughness must be 0 < low <= high < 1e-3 m³/cycle, got {roughness!r}")
     out = _prepare_folder(out_dir)
 
     root = np.random.SeedSequence(int(seed))
@@ -291,7 +307,8 @@ def make_test_day(
     ref_strain = _peak_static_strain(influence, weights, cal_truck, cal_loads)
     sigma = noise * ref_strain
 
-    plans = _plan_day(plan_ss, n_calibration, n_traffic, n_multiple, cal_truck, fs)
+    plans = _plan_day(plan_ss, n_calibration, n_traffic, n_multiple, cal_truck, fs,
+                      (lo_r, hi_r))
     (out / "calibration").mkdir()
     (out / "traffic").mkdir()
     events = []
@@ -310,7 +327,8 @@ def make_test_day(
     site_truth = out / "site_truth.toml"
     _write_site_truth(site_truth, seed=int(seed), mesh=float(mesh), bridge=bridge, noise=noise,
                       sigma=sigma, ref_strain=ref_strain, gauge_gains=gauge_gains,
-                      detector_gains=detector_gains, drift=day_drift, approach=approach)
+                      detector_gains=detector_gains, drift=day_drift, approach=approach,
+                      roughness=(lo_r, hi_r))
     readme = out / "README.txt"
     _write_readme(readme, n_calibration, n_traffic, n_multiple)
     scenario = out / "scenario.toml"
@@ -394,7 +412,7 @@ def _traffic_speed(rng: np.random.Generator) -> float:
             return float(v)
 
 
-def _plan_day(ss, n_cal, n_traffic, n_multiple, cal_truck, fs) -> list[_Plan]:
+def _plan_day(ss, n_cal, n_traffic, n_multiple, cal_truck, fs, roughness) -> list[_Plan]:
     schedule_ss, *event_seeds = ss.spawn(1 + n_cal + n_traffic)
     rng = np.random.default_rng(schedule_ss)
     times, kinds = _event_times(rng, n_cal, n_traffic, fs)
@@ -405,7 +423,7 @@ def _plan_day(ss, n_cal, n_traffic, n_multiple, cal_truck, fs) -> list[_Plan]:
     for clock, kind, ess in zip(times, kinds, event_seeds, strict=True):
         plan_ss, noise_ss = ess.spawn(2)
         r = np.random.default_rng(plan_ss)
-        road = (float(np.exp(r.uniform(*np.log(ROUGHNESS)))), float(r.uniform(0.7, 0.95)),
+        road = (float(np.exp(r.uniform(*np.log(roughness)))), float(r.uniform(0.7, 0.95)),
                 int(r.integers(2**31)))
         if kind == "calibration":
             plans.append(_Plan(
@@ -643,7 +661,8 @@ def _write_scenario(path: Path, truck, loads) -> None:
 
 
 def _write_site_truth(path: Path, *, seed, mesh, bridge: Bridge, noise, sigma, ref_strain,
-                      gauge_gains, detector_gains, drift: Drift, approach) -> None:
+                      gauge_gains, detector_gains, drift: Drift, approach, roughness
+                      ) -> None:
     grid = bridge.model.grid
     doc = {
         "seed": seed,
@@ -668,7 +687,7 @@ def _write_site_truth(path: Path, *, seed, mesh, bridge: Bridge, noise, sigma, r
                   "norm": drift.norm},
         "simulation": {"sampling_rate": SAMPLING_RATE, "pre_trigger_samples": PRE_TRIGGER,
                        "post_trigger_s": POST_TRIGGER, "approach_m": approach,
-                       "tyre_patch_m": TYRE_PATCH, "roughness_range_m3": list(ROUGHNESS)},
+                       "tyre_patch_m": TYRE_PATCH, "roughness_range_m3": list(roughness)},
     }
     with atomic_open(path) as f:
         f.write(to_toml(doc, header="Hidden facts of the simulated site (not for weighing)."))
