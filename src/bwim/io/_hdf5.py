@@ -9,6 +9,8 @@ Contract
   each with an :class:`~bwim.errors.InputError` naming the file; a missing dataset inside
   is reported as a damaged file.
 * :func:`h5_writer` writes atomically (:func:`bwim.io.atomic.atomic_output`).
+* Readers check each dataset's declared shape × item size against
+  :func:`bwim.limits.check_memory` before reading it.
 * Arrays are stored as float64 / int64 / bool datasets and scalars as attributes, so
   every number reads back bit for bit; strings are UTF-8.
 """
@@ -25,6 +27,7 @@ import numpy as np
 
 from bwim.errors import InputError
 from bwim.io.atomic import atomic_output
+from bwim.limits import check_memory
 from bwim.records import Passage
 from bwim.sensors import Sensor
 from bwim.wim.influence_line import Channel
@@ -88,12 +91,24 @@ def attr(group: h5py.Group, name: str):
     return group.attrs[name]
 
 
+def _sized(group: h5py.Group, name: str):
+    """``group[name]`` as a dataset whose declared size fits the memory limit (checked
+    before a byte is read: a small file may declare a huge dataset)."""
+    ds = need(group, name)
+    if not isinstance(ds, h5py.Dataset):
+        raise KeyError(f"{group.name.rstrip('/')}/{name} is not a dataset")
+    n = float(np.prod([float(d) for d in ds.shape])) if ds.shape else 1.0
+    item = ds.dtype.itemsize if ds.dtype.kind not in "OSU" else 256
+    check_memory(n * item, f"the dataset {ds.name} of shape {ds.shape}")
+    return ds
+
+
 def array(group: h5py.Group, name: str) -> np.ndarray:
-    return np.asarray(need(group, name)[()])
+    return np.asarray(_sized(group, name)[()])
 
 
 def strings(group: h5py.Group, name: str) -> list[str]:
-    return [str(s) for s in need(group, name).asstr()[()]]
+    return [str(s) for s in _sized(group, name).asstr()[()]]
 
 
 def put_strings(group: h5py.Group, name: str, values: Sequence[str]) -> None:
