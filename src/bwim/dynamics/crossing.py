@@ -62,6 +62,9 @@ DEFAULT_APPROACH = 100.0
 #: Default sampling rate, Hz (also the integration rate).
 DEFAULT_SAMPLING_RATE = 1000.0
 
+#: Fewest samples while an axle crosses the bridge (a coarser time grid is refused).
+MIN_SAMPLES_ON_BRIDGE = 4
+
 
 class VBIMethod(StrEnum):
     """How vehicle and bridge are solved together."""
@@ -403,8 +406,14 @@ def _static_correction(inf, x, y, on, F, psi, s_modal, modes, is_plate):
 
 
 def _check_crossing_memory(bridge, vehicles, speeds, fs, approach, tail, delays, sensors):
-    """Refuse a crossing whose time grid (samples × (sensors + modes + vehicle DOF)) would
+    """Refuse a time grid too coarse for the bridge, or one whose (samples × (sensors + modes + vehicle DOF)) would
     exceed the memory limit, before it is built (``speed = 1e-6``, ``tail = 1e6``...)."""
+    per_crossing = fs * bridge.length / max(speeds)
+    if per_crossing < MIN_SAMPLES_ON_BRIDGE:
+        raise InputError(
+            f"sampling_rate = {fs:g} Hz gives {per_crossing:.3g} samples while an axle "
+            f"crosses the {bridge.length:g} m bridge at {max(speeds):g} m/s; at least "
+            f"{MIN_SAMPLES_ON_BRIDGE} are needed")
     longest = max(float(getattr(v, "length", 0.0) or 0.0) for v in vehicles)
     span = approach + bridge.length + longest
     n_t = fs * (span / min(speeds) + tail + float(np.max(delays)))
