@@ -49,6 +49,7 @@ memory of the run (:mod:`bwim.limits`).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import csv
 import os
 import sys
@@ -267,8 +268,6 @@ def _identify_one(bridge, record, kwargs):
 
 def _shutdown_workers() -> None:
     """Kill joblib's reusable loky workers (after an interrupt)."""
-    import contextlib
-
     with contextlib.suppress(Exception):
         from joblib.externals.loky import get_reusable_executor
 
@@ -313,12 +312,18 @@ def _check_jobs(jobs: int | None) -> None:
         raise InputError(f"--jobs must be a positive number or -1 (all cores), got {jobs}")
 
 
+def _name(path: Path) -> str:
+    """A file name as text that can be printed and written (a name that is not valid
+    UTF-8 shows its odd bytes as U+FFFD)."""
+    return os.fsencode(path.name).decode("utf-8", "replace")
+
+
 def _identify_rows(path: Path, ident) -> list[list]:
     rows, a0 = [], 0
     for v, p in enumerate(ident.passages):
         w = ident.axle_weights[a0:a0 + p.n_axles]
         a0 += p.n_axles
-        rows.append([path.name, v + 1, p.n_axles, format_kn_each(w), format_kn(ident.gvw[v], 2),
+        rows.append([_name(path), v + 1, p.n_axles, format_kn_each(w), format_kn(ident.gvw[v], 2),
                      f"{ident.lam:.4g}"])
     return rows
 
@@ -385,8 +390,8 @@ def _identify(args: argparse.Namespace) -> int:
                 _write_identify_summary(summary, paths, outcome)
                 bar.update()
         _write_identify_summary(summary, paths, outcome)
-    failed = [(paths[i].name, outcome[i][1]) for i in sorted(outcome) if outcome[i][1]]
-    shown = [(paths[i].name, r[1], ", ".join(r[3]), r[4], r[5])
+    failed = [(_name(paths[i]), outcome[i][1]) for i in sorted(outcome) if outcome[i][1]]
+    shown = [(r[0], r[1], ", ".join(r[3]), r[4], r[5])
              for i in sorted(outcome) for r in outcome[i][0]]
     print(Table(f"Moving force identification, {len(paths)} record(s)"
                 f"{f' ({skipped} done before)' if skipped else ''}, "
@@ -412,7 +417,7 @@ def _write_identify_summary(summary: Path, paths: Sequence[Path], outcome: dict)
     for i in sorted(outcome):
         rows, error = outcome[i]
         if error is not None:
-            out.append([paths[i].name, "", "", *[""] * n_max, "", "", error])
+            out.append([_name(paths[i]), "", "", *[""] * n_max, "", "", error])
         for name, v, n_axles, cells, gvw, lam in rows:
             out.append([name, v, n_axles, *cells, *[""] * (n_max - len(cells)), gvw, lam, ""])
     _write_csv(summary, header, out)
@@ -813,6 +818,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     from bwim.io.batch import signals_as_interrupt
     from bwim.limits import ENV_VAR, parse_size
 
+    for stream in (sys.stdout, sys.stderr):  # file names that are not UTF-8 print too
+        with contextlib.suppress(AttributeError, ValueError, OSError):
+            stream.reconfigure(errors="backslashreplace")
     parser = _parser()
     args = parser.parse_args(argv)
     saved = os.environ.get(ENV_VAR)
