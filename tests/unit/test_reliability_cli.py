@@ -186,7 +186,7 @@ def test_sigterm_stops_the_worker_pool(files, tmp_path):
     except subprocess.TimeoutExpired:
         proc.kill()
         pytest.fail("bwim identify ignored SIGTERM")
-    gone, alive = psutil.wait_procs(children, timeout=10)
+    _, alive = psutil.wait_procs(children, timeout=10)
     for p in alive:
         p.kill()
     assert not alive, alive
@@ -212,7 +212,7 @@ def test_record_name_not_utf8(files, tmp_path, capsys):
     raw = os.fsencode(tmp_path) + b"/rec\xff.h5"
     with open(raw, "wb") as f:
         f.write(files["a"].read_bytes())
-    code, stdout, err = _run(["identify", files["scen"], os.fsdecode(raw), "-o",
+    code, _, err = _run(["identify", files["scen"], os.fsdecode(raw), "-o",
                               tmp_path / "out"], capsys)
     assert code == 0, err
     assert "rec\ufffd.h5" in (tmp_path / "out" / "summary.csv").read_text(encoding="utf-8")

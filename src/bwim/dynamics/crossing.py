@@ -406,8 +406,9 @@ def _static_correction(inf, x, y, on, F, psi, s_modal, modes, is_plate):
 
 
 def _check_crossing_memory(bridge, vehicles, speeds, fs, approach, tail, delays, sensors):
-    """Refuse a time grid too coarse for the bridge, or one whose (samples × (sensors + modes + vehicle DOF)) would
-    exceed the memory limit, before it is built (``speed = 1e-6``, ``tail = 1e6``...)."""
+    """Refuse a time grid too coarse for the bridge, or one whose (samples × (sensors +
+    modes + vehicle DOF)) would exceed the memory limit, before it is built
+    (``speed = 1e-6``, ``tail = 1e6``...)."""
     per_crossing = fs * bridge.length / max(speeds)
     if per_crossing < MIN_SAMPLES_ON_BRIDGE:
         raise InputError(
