@@ -7,7 +7,8 @@ Contract
   ``bwim_format_version`` (an integer, :data:`VERSION`).  :func:`h5_reader` refuses a
   missing file, a file that is not HDF5, a file of another format and a newer version,
   each with an :class:`~bwim.errors.InputError` naming the file; a missing dataset inside
-  is reported as a damaged file.
+  is reported as a damaged file, and so is any content of the wrong type, shape or
+  encoding (the reader never lets a TypeError or ValueError escape).
 * :func:`h5_writer` writes atomically (:func:`bwim.io.atomic.atomic_output`).
 * Readers check each dataset's declared shape × item size against
   :func:`bwim.limits.check_memory` before reading it.
@@ -57,15 +58,25 @@ def h5_reader(path: str | os.PathLike, *fmts: str) -> Iterator[h5py.File]:
         raise InputError(f"{p}: is a folder, not a file")
     try:
         f = h5py.File(p, "r")
-    except OSError:
+    except (OSError, ValueError, RuntimeError):
         raise InputError(f"{p}: not an HDF5 file (or it cannot be read)") from None
     with f:
-        fmt = f.attrs.get("bwim_format")
+        try:
+            fmt = f.attrs.get("bwim_format")
+            raw_version = f.attrs.get("bwim_format_version", 0)
+        except (OSError, ValueError, TypeError, RuntimeError):
+            raise InputError(f"{p}: damaged HDF5 attributes") from None
+        if isinstance(fmt, bytes):
+            fmt = fmt.decode("utf-8", "replace")
         if fmt is None:
             raise InputError(f"{p}: not a bwim file (no bwim_format attribute)")
-        if fmt not in fmts:
-            raise InputError(f"{p}: holds a bwim {fmt}, not a {' or '.join(fmts)}")
-        version = int(f.attrs.get("bwim_format_version", 0))
+        if not isinstance(fmt, str) or fmt not in fmts:
+            shown = fmt if isinstance(fmt, str) else "(not a name)"
+            raise InputError(f"{p}: holds a bwim {shown[:40]}, not a {' or '.join(fmts)}")
+        try:
+            version = int(raw_version)
+        except (TypeError, ValueError, OverflowError):
+            raise InputError(f"{p}: damaged bwim {fmt} file (bad format version)") from None
         if version > VERSION:
             raise InputError(f"{p}: format version {version} is newer than this bwim reads "
                              f"({VERSION}); update bwim")
@@ -76,6 +87,9 @@ def h5_reader(path: str | os.PathLike, *fmts: str) -> Iterator[h5py.File]:
         except KeyError as exc:
             raise InputError(f"{p}: damaged bwim {fmt} file: {exc.args[0] if exc.args else exc}"
                              ) from None
+        except (ValueError, TypeError, AttributeError, IndexError, OSError,
+                RuntimeError) as exc:  # content of the wrong type, shape or encoding
+            raise InputError(f"{p}: damaged bwim {fmt} file ({type(exc).__name__})") from None
 
 
 def need(group: h5py.Group, name: str):
