@@ -129,3 +129,9 @@ def test_memory_limit_option(tmp_path, capsys):
     code = main(["--memory-limit", "lots", "simulate", str(scen)])
     assert code == 2 and "not a size" in capsys.readouterr().err
 
+
+
+def test_influence_line_ordinates_refused():
+    """A spacing of 1e-6 m over a 24 m support: 2.4e7 ordinates, a (2.4e7)² normal matrix."""
+    rec = _simulate()
+    _refused(lambda: bwim.calibrate_influence_line(rec, [50e3, 100e3], spacing=1e-6))
