@@ -146,3 +146,10 @@ def test_beam_default_unknowns_follow_the_bridge(setup, monkeypatch):
     with pytest.raises(InputError, match="stop"):
         bwim.calibrate(setup["bridge"], setup["record"], setup["truck"])
     assert seen["unknowns"] == ("E_x", "mu")
+
+
+@pytest.mark.parametrize("noise", [1e300, -0.1, math.nan, None, "0.1"])
+def test_noise_fraction_bounded(setup, noise):
+    """Issue 14: ``noise = 1e300`` was accepted; a noise fraction lies in [0, 1]."""
+    with pytest.raises(InputError, match="noise fraction"):
+        setup["record"].with_noise(noise, seed=0)

@@ -135,3 +135,18 @@ def test_influence_line_ordinates_refused():
     """A spacing of 1e-6 m over a 24 m support: 2.4e7 ordinates, a (2.4e7)² normal matrix."""
     rec = _simulate()
     _refused(lambda: bwim.calibrate_influence_line(rec, [50e3, 100e3], spacing=1e-6))
+
+
+def test_result_reader_declaring_a_huge_dataset_is_refused(tmp_path):
+    """The result readers share the record reader's guard (bwim.io._hdf5.array)."""
+    from bwim.io import read_identification, write_identification
+
+    rec = _simulate()
+    ident = bwim.identify_forces(_beam(), rec, lam=1.0)
+    p = tmp_path / "f.h5"
+    write_identification(ident, p)
+    with h5py.File(p, "a") as f:
+        name = next(k for k in f if isinstance(f[k], h5py.Dataset) and f[k].ndim == 2)
+        del f[name]
+        f.create_dataset(name, shape=(500_000_000, 3), dtype="f8", chunks=(1024, 3))
+    _refused(lambda: read_identification(p))
