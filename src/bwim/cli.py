@@ -20,8 +20,16 @@ Subcommands:
     vehicle; write the model (TOML) and print start → calibrated ± uncertainty.
 ``identify SCENARIO RECORD... [--bridge MODEL] [-o FOLDER|SUMMARY.csv] [--jobs|--scheduler]``
     Moving force identification on each record (folders expanded), in parallel with
-    joblib or on a dask.distributed scheduler; a CSV summary (one row per vehicle) and one
-    HDF5 result per record.
+    joblib or on a dask.distributed scheduler; a CSV summary (one row per vehicle, one
+    with the reason per failed record) and one HDF5 result per record, written as each
+    record finishes.  A rerun skips the records done (``manifest.json``); ``--force``
+    starts afresh.  Exit code 0: all records done; 1: some failed; 2: bad input.
+
+Safety of outputs (:mod:`bwim.io.batch`): an output that is one of the inputs is refused;
+an existing output file is refused unless ``--force``; an output folder is locked
+(``.bwim.lock``) for the run; SIGTERM ends a run like Ctrl-C (temporary files removed,
+worker processes stopped, exit code 130).  ``bwim --memory-limit SIZE COMMAND`` bounds the
+memory of the run (:mod:`bwim.limits`).
 ``weigh SCENARIO RECORD... (--calibration-records REC... | --influence IL.h5) [-o FOLDER]``
     Static weights by Moses' algorithm, the influence line calibrated from crossings of
     the scenario's vehicle (and written) or read from a file.
@@ -41,7 +49,9 @@ Subcommands:
 from __future__ import annotations
 
 import argparse
+import contextlib
 import csv
+import os
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -68,15 +78,20 @@ def _bar(total: int | None, desc: str):
     return tqdm(total=total, desc=desc, disable=_quiet(), file=sys.stderr, leave=False)
 
 
-def _out_file(path: str | Path, suffixes: Sequence[str] | None = None) -> Path:
-    """An output file that can be written (checked before any work)."""
+def _out_file(path: str | Path, suffixes: Sequence[str] | None = None, *,
+              inputs: Sequence[str | Path] = (), force: bool = True) -> Path:
+    """An output file that can be written (checked before any work): not one of the
+    ``inputs``, and not an existing file unless ``force``."""
     from bwim.io import check_writable
+    from bwim.io.batch import refuse_existing, refuse_input_overwrite
 
     p = Path(path)
     if suffixes is not None and p.suffix.lower() not in suffixes:
         raise InputError(f"{p}: unknown output format {p.suffix!r}; use "
                          f"{' or '.join(suffixes)}")
-    return check_writable(p)
+    refuse_input_overwrite([p], inputs)
+    check_writable(p)
+    return refuse_existing(p, force=force)
 
 
 def _out_folder(path: str | Path) -> Path:
@@ -92,6 +107,13 @@ def _out_folder(path: str | Path) -> Path:
         raise InputError(f"cannot create the folder {p}: {exc.strerror or exc}") from None
     check_writable(p / "summary.csv")
     return p
+
+
+def _locked(folder: Path):
+    """The output folder's lock for this run (:class:`bwim.io.batch.OutputLock`)."""
+    from bwim.io.batch import OutputLock
+
+    return OutputLock(folder)
 
 
 def _record_paths(items: Sequence[str]) -> list[Path]:
@@ -159,7 +181,9 @@ class _CalibrationProgress:
 def _simulate(args: argparse.Namespace) -> int:
     from bwim.io import load_scenario, simulate_scenario, write_csv_record, write_record
 
-    out = _out_file(args.output, (".h5", ".hdf5", ".hdf", ".csv"))
+    out = _out_file(args.output, (".h5", ".hdf5", ".hdf", ".csv"),
+                    inputs=[args.scenario, *([args.bridge] if args.bridge else [])],
+                    force=args.force)
     scenario = load_scenario(args.scenario)
     bridge = _bridge(args, scenario) if args.bridge else None
     t0 = time.perf_counter()
@@ -186,12 +210,15 @@ def _calibrate(args: argparse.Namespace) -> int:
     from bwim.calibration import calibrate
     from bwim.io import build_bridge, build_road, build_vehicle, load_scenario, save_bridge
 
-    out = _out_file(args.output, (".toml",))
+    _check_jobs(args.jobs)
+    paths = _record_paths(args.records)
+    out = _out_file(args.output, (".toml",), inputs=[args.scenario, *paths],
+                    force=args.force)
     scenario = load_scenario(args.scenario)
     start = build_bridge(scenario)
     vehicle = build_vehicle(scenario)
     road = build_road(scenario)
-    records = _load_records(_record_paths(args.records), scenario)
+    records = _load_records(paths, scenario)
     kwargs = scenario.calibrate.kwargs() if scenario.calibrate is not None else {}
     for key in ("method", "seed"):
         if getattr(args, key) is not None:
@@ -222,53 +249,97 @@ def _calibrate(args: argparse.Namespace) -> int:
 
 # --- identify --------------------------------------------------------------------------------
 def _identify_one(bridge, record, kwargs):
-    """One record's identification (a top-level function: it runs in worker processes)."""
+    """One record's identification (a top-level function: it runs in worker processes).
+
+    Returns the result, or the reason (a string) why the record failed: one bad record
+    must not end the batch.
+    """
+    from numpy.linalg import LinAlgError
+
     from bwim.mfi import identify_forces
 
-    return identify_forces(bridge, record, **kwargs)
+    try:
+        return identify_forces(bridge, record, **kwargs)
+    except BwimError as exc:
+        return " ".join(str(exc).split()) or type(exc).__name__
+    except (ValueError, ArithmeticError, LinAlgError) as exc:
+        return f"{type(exc).__name__}: {' '.join(str(exc).split())}"
 
 
-def _identify_all(bridge, records, kwargs, *, jobs: int, scheduler: str | None) -> list:
+def _shutdown_workers() -> None:
+    """Kill joblib's reusable loky workers (after an interrupt)."""
+    with contextlib.suppress(Exception):
+        from joblib.externals.loky import get_reusable_executor
+
+        get_reusable_executor().shutdown(wait=False, kill_workers=True)
+
+
+def _identify_iter(bridge, records, kwargs, *, jobs: int, scheduler: str | None):
+    """``(index, result or reason)`` as each record finishes."""
     n = len(records)
-    results: list = [None] * n
-    with _bar(n if n > 1 else None, "identifying forces") as bar:
-        if scheduler:
-            from distributed import Client, as_completed
+    if scheduler:
+        from distributed import Client, as_completed
 
-            try:
-                client = Client(scheduler, timeout=10)
-            except (OSError, TimeoutError, ValueError) as exc:
-                raise InputError(f"cannot reach the dask scheduler {scheduler}: {exc}") from None
-            try:
-                [b] = client.scatter([bridge], broadcast=True)
-                futures = [client.submit(_identify_one, b, r, kwargs, pure=False)
-                           for r in records]
-                index = {f.key: i for i, f in enumerate(futures)}
-                for fut in as_completed(futures):
-                    results[index[fut.key]] = fut.result()
-                    bar.update()
-            finally:
-                client.close()
-        elif jobs == 1 or n == 1:
-            for i, r in enumerate(records):
-                results[i] = _identify_one(bridge, r, kwargs)
-                bar.update()
-        else:
-            from joblib import Parallel, delayed
+        try:
+            client = Client(scheduler, timeout=10)
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise InputError(f"cannot reach the dask scheduler {scheduler}: {exc}") from None
+        try:
+            [b] = client.scatter([bridge], broadcast=True)
+            futures = [client.submit(_identify_one, b, r, kwargs, pure=False) for r in records]
+            index = {f.key: i for i, f in enumerate(futures)}
+            for fut in as_completed(futures):
+                yield index[fut.key], fut.result()
+        finally:
+            client.close()
+    elif jobs == 1 or n == 1:
+        for i, r in enumerate(records):
+            yield i, _identify_one(bridge, r, kwargs)
+    else:
+        from joblib import Parallel, delayed
 
-            run = Parallel(n_jobs=jobs, return_as="generator")
-            for i, res in enumerate(run(delayed(_identify_one)(bridge, r, kwargs)
-                                        for r in records)):
-                results[i] = res
-                bar.update()
-    return results
+        run = Parallel(n_jobs=jobs, return_as="generator")
+        try:
+            yield from enumerate(run(delayed(_identify_one)(bridge, r, kwargs)
+                                     for r in records))
+        except BaseException:
+            _shutdown_workers()
+            raise
+
+
+def _check_jobs(jobs: int | None) -> None:
+    if jobs is not None and jobs < 1 and jobs != -1:
+        raise InputError(f"--jobs must be a positive number or -1 (all cores), got {jobs}")
+
+
+def _name(path: Path) -> str:
+    """A file name as text that can be printed and written (a name that is not valid
+    UTF-8 shows its odd bytes as U+FFFD)."""
+    return os.fsencode(path.name).decode("utf-8", "replace")
+
+
+def _identify_rows(path: Path, ident) -> list[list]:
+    rows, a0 = [], 0
+    for v, p in enumerate(ident.passages):
+        w = ident.axle_weights[a0:a0 + p.n_axles]
+        a0 += p.n_axles
+        rows.append([_name(path), v + 1, p.n_axles, format_kn_each(w), format_kn(ident.gvw[v], 2),
+                     f"{ident.lam:.4g}"])
+    return rows
 
 
 def _identify(args: argparse.Namespace) -> int:
     from bwim.io import load_scenario, write_identification
+    from bwim.io.batch import (
+        EXIT_FAILED,
+        EXIT_OK,
+        Manifest,
+        OutputLock,
+        refuse_existing,
+        refuse_input_overwrite,
+    )
 
-    if args.jobs < 1 and args.jobs != -1:
-        raise InputError(f"--jobs must be a positive number or -1 (all cores), got {args.jobs}")
+    _check_jobs(args.jobs)
     out = Path(args.output)
     if out.suffix.lower() == ".csv":
         summary = _out_file(out)
@@ -276,34 +347,80 @@ def _identify(args: argparse.Namespace) -> int:
     else:
         folder = _out_folder(out)
         summary = folder / "summary.csv"
-    scenario = load_scenario(args.scenario)
-    bridge = _bridge(args, scenario)
     paths = _record_paths(args.records)
-    records = _load_records(paths, scenario)
-    kwargs = scenario.identify.kwargs() if scenario.identify is not None else {}
-    t0 = time.perf_counter()
-    results = _identify_all(bridge, records, kwargs, jobs=args.jobs, scheduler=args.scheduler)
-    n_max = max(ident.axle_weights.size for ident in results)
-    header = ["record", "vehicle", "axles", *(f"axle_{i + 1}_kN" for i in range(n_max)),
-              "gvw_kN", "lambda"]
-    rows, shown = [], []
-    for path, stem, ident in zip(paths, _unique_stems(paths), results, strict=True):
-        write_identification(ident, folder / f"{stem}_forces.h5")
-        a0 = 0
-        for v, p in enumerate(ident.passages):
-            w = ident.axle_weights[a0:a0 + p.n_axles]
-            a0 += p.n_axles
-            cells = format_kn_each(w)
-            rows.append([path.name, v + 1, p.n_axles, *cells, *[""] * (n_max - len(cells)),
-                         format_kn(ident.gvw[v], 2), f"{ident.lam:.4g}"])
-            shown.append((path.name, v + 1, ", ".join(cells), format_kn(ident.gvw[v]),
-                          f"{ident.lam:.3g}"))
-    _write_csv(summary, header, rows)
-    print(Table(f"Moving force identification, {len(records)} record(s), "
+    inputs = [args.scenario, *([args.bridge] if args.bridge else []), *paths]
+    stems = _unique_stems(paths)
+    targets = [folder / f"{stem}_forces.h5" for stem in stems]
+    refuse_input_overwrite([summary, *targets], inputs)
+    with OutputLock(folder):
+        manifest = Manifest(folder, fresh=args.force)
+        if not manifest.entries:
+            refuse_existing(summary, force=args.force)
+        scenario = load_scenario(args.scenario)
+        bridge = _bridge(args, scenario)
+        kwargs = scenario.identify.kwargs() if scenario.identify is not None else {}
+        t0 = time.perf_counter()
+        outcome: dict[int, tuple[list, str | None]] = {}
+        todo, records = [], []
+        for i, path in enumerate(paths):
+            entry = manifest.done(path)
+            if entry is not None:
+                outcome[i] = (entry["rows"], None)
+                continue
+            try:
+                records.append(_load_records([path], scenario)[0])
+                todo.append(i)
+            except BwimError as exc:
+                reason = " ".join(str(exc).split())
+                outcome[i] = ([], reason)
+                manifest.record(path, result=None, rows=[], error=reason)
+        skipped = len(paths) - len(todo) - sum(1 for r in outcome.values() if r[1])
+        with _bar(len(todo) if len(todo) > 1 else None, "identifying forces") as bar:
+            for k, res in _identify_iter(bridge, records, kwargs, jobs=args.jobs,
+                                         scheduler=args.scheduler):
+                i = todo[k]
+                if isinstance(res, str):
+                    outcome[i] = ([], res)
+                    manifest.record(paths[i], result=None, rows=[], error=res)
+                else:
+                    write_identification(res, targets[i])
+                    rows = _identify_rows(paths[i], res)
+                    outcome[i] = (rows, None)
+                    manifest.record(paths[i], result=targets[i].name, rows=rows, error=None)
+                _write_identify_summary(summary, paths, outcome)
+                bar.update()
+        _write_identify_summary(summary, paths, outcome)
+    failed = [(_name(paths[i]), outcome[i][1]) for i in sorted(outcome) if outcome[i][1]]
+    shown = [(r[0], r[1], ", ".join(r[3]), r[4], r[5])
+             for i in sorted(outcome) for r in outcome[i][0]]
+    print(Table(f"Moving force identification, {len(paths)} record(s)"
+                f"{f' ({skipped} done before)' if skipped else ''}, "
                 f"{time.perf_counter() - t0:.1f} s:",
                 ("record", "vehicle", "axle weights (kN)", "GVW (kN)", "λ"), shown).render())
+    for name, reason in failed:
+        print(f"bwim: {name} failed: {reason}", file=sys.stderr)
     print(f"summary: {summary}\nforces: {folder}/<record>_forces.h5")
-    return 0
+    if failed:
+        print(f"bwim: {len(failed)} of {len(paths)} record(s) failed (see the summary's "
+              "error column)", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+def _write_identify_summary(summary: Path, paths: Sequence[Path], outcome: dict) -> None:
+    """The summary of the records done so far: one row per vehicle, one per failed record
+    (with its reason in the ``error`` column)."""
+    n_max = max((r[2] for rows, _ in outcome.values() for r in rows), default=0)
+    header = ["record", "vehicle", "axles", *(f"axle_{i + 1}_kN" for i in range(n_max)),
+              "gvw_kN", "lambda", "error"]
+    out = []
+    for i in sorted(outcome):
+        rows, error = outcome[i]
+        if error is not None:
+            out.append([_name(paths[i]), "", "", *[""] * n_max, "", "", error])
+        for name, v, n_axles, cells, gvw, lam in rows:
+            out.append([name, v, n_axles, *cells, *[""] * (n_max - len(cells)), gvw, lam, ""])
+    _write_csv(summary, header, out)
 
 
 # --- weigh -----------------------------------------------------------------------------------
@@ -529,7 +646,8 @@ def _accuracy(args: argparse.Namespace) -> int:
                     environment=args.environment, strict=args.strict)
     print(result.render())
     if args.output:
-        target = _out_file(args.output, (".csv",))
+        target = _out_file(args.output, (".csv",), inputs=[args.summary, args.reference],
+                           force=args.force)
         table = result.table()
         _write_csv(target, table.header, table.rows)
         print(f"table: {target}")
@@ -540,7 +658,7 @@ def _accuracy(args: argparse.Namespace) -> int:
 def _report(args: argparse.Namespace) -> int:
     from bwim import report
 
-    out = _out_file(args.output, (".html", ".htm"))
+    out = _out_file(args.output, (".html", ".htm"), force=args.force)
     items = report.read_results(args.results)
     sections = [report.section(obj, name) for name, obj in items]
     report.write_report(out, sections, title=args.title)
@@ -563,6 +681,17 @@ def _write_figures(figures: dict, folder: Path, *, prefix: str = "", dpi: int) -
 
 
 def _demo(args: argparse.Namespace) -> int:
+    from bwim.paper.demo import MAX_MODES
+
+    if not 1 <= args.modes <= MAX_MODES:
+        raise InputError(f"--modes must be between 1 and {MAX_MODES}, got {args.modes}")
+    _check_jobs(args.jobs)
+    out = _out_folder(args.out)
+    with _locked(out):
+        return _demo_run(args, out)
+
+
+def _demo_run(args: argparse.Namespace, out: Path) -> int:
     from bwim.io import (
         save_bridge,
         write_identification,
@@ -570,12 +699,9 @@ def _demo(args: argparse.Namespace) -> int:
         write_record,
         write_static_weights,
     )
-    from bwim.paper.demo import MAX_MODES, REPORT_INTRO, REPORT_TITLE, run_demo
+    from bwim.paper.demo import REPORT_INTRO, REPORT_TITLE, run_demo
     from bwim.report import figure_files, write_report
 
-    if not 1 <= args.modes <= MAX_MODES:
-        raise InputError(f"--modes must be between 1 and {MAX_MODES}, got {args.modes}")
-    out = _out_folder(args.out)
     t0 = time.perf_counter()
     progress = _CalibrationProgress()
     try:
@@ -605,9 +731,17 @@ def _reproduce(args: argparse.Namespace) -> int:
     from bwim.paper import reproduce
 
     names = list(reproduce.CASES) if args.case == "all" else [args.case]
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    _check_jobs(args.jobs)
+    out = _out_folder(args.out)
     check_writable(out / ".probe")
+    with _locked(out):
+        _reproduce_cases(args, names, out)
+    return 0
+
+
+def _reproduce_cases(args: argparse.Namespace, names: Sequence[str], out: Path) -> None:
+    from bwim.paper import reproduce
+
     t0 = time.perf_counter()
     for name in names:
         print(f"== reproducing {name}{' (quick)' if args.quick else ''} ==", flush=True)
@@ -622,7 +756,6 @@ def _reproduce(args: argparse.Namespace) -> int:
                 print(f"  figure: {target}")
         print()
     print(f"total {time.perf_counter() - t0:.1f} s")
-    return 0
 
 
 # --- the parser: one declarative entry per command -------------------------------------------
@@ -663,6 +796,8 @@ class Command:
 
 
 _SCENARIO = arg("scenario", metavar="SCENARIO.toml")
+_FORCE = arg("--force", action="store_true",
+             help="overwrite existing outputs (an input is never overwritten)")
 
 COMMANDS: tuple[Command, ...] = (
     Command(
@@ -677,7 +812,8 @@ COMMANDS: tuple[Command, ...] = (
              "(time and readings only); default record.h5"),
          arg("--bridge", metavar="MODEL.toml",
              help="use this bridge model (e.g. a calibrated one) instead of the scenario's "
-             "[bridge]"))),
+             "[bridge]"),
+         _FORCE)),
     Command(
         "calibrate", _calibrate,
         "calibrate the bridge model from crossings of a truck of known weight",
@@ -696,7 +832,8 @@ COMMANDS: tuple[Command, ...] = (
              help="optimiser: ce = Cross-Entropy (the paper's), lm = Levenberg-Marquardt, "
              "cma = CMA-ES (default: the scenario's, else ce)"),
          arg("--jobs", type=int, help="worker processes for the populations"),
-         arg("--seed", type=int, help="random seed of the optimiser"))),
+         arg("--seed", type=int, help="random seed of the optimiser"),
+         _FORCE)),
     Command(
         "identify", _identify,
         "identify the moving axle forces and weights of vehicles (MFI)",
@@ -704,7 +841,10 @@ COMMANDS: tuple[Command, ...] = (
         "weight and the gross vehicle weight, from each record and the bridge model (ideally "
         "a calibrated one).  Many records run in parallel on this machine (--jobs) or on a "
         "dask.distributed cluster (--scheduler).  Writes a CSV summary, one row per vehicle, "
-        "and <record>_forces.h5 per record.\n\n"
+        "and <record>_forces.h5 per record, each as its record finishes; a record that "
+        "fails gets a summary row with its reason and the others go on.  A rerun into "
+        "the same OUT skips the records already done.  Exit code 0: all records done, "
+        "1: some failed, 2: bad input.\n\n"
         "  bwim identify examples/paper_slab.toml records/ --bridge calibrated.toml -o out/",
         (arg("scenario", metavar="SCENARIO.toml",
              help="the scenario (sensor positions; passage of CSV records)"),
@@ -718,7 +858,10 @@ COMMANDS: tuple[Command, ...] = (
          OneOf((arg("--jobs", type=int, default=1,
                     help="worker processes on this machine (-1: all cores); default 1"),
                 arg("--scheduler", metavar="ADDRESS",
-                    help="address of a dask.distributed scheduler, e.g. tcp://host:8786"))))),
+                    help="address of a dask.distributed scheduler, e.g. tcp://host:8786"))),
+         arg("--force", action="store_true",
+             help="start afresh: redo every record and overwrite the outputs (default: "
+             "records already done in OUT, per its manifest.json, are skipped)"))),
     Command(
         "weigh", _weigh,
         "static weights by Moses' algorithm from an influence line",
@@ -759,7 +902,8 @@ COMMANDS: tuple[Command, ...] = (
              "reproducibility, III full (seasons); default I"),
          arg("--strict", action="store_true",
              help="a reference record absent from the summary is an error"),
-         arg("-o", "--output", metavar="TABLE.csv", help="also write the table as CSV"))),
+         arg("-o", "--output", metavar="TABLE.csv", help="also write the table as CSV"),
+         _FORCE)),
     Command(
         "report", _report,
         "a single-file HTML report of result files",
@@ -770,7 +914,8 @@ COMMANDS: tuple[Command, ...] = (
         (arg("results", nargs="+", metavar="RESULTS"),
          arg("-o", "--output", default="report.html", metavar="REPORT.html",
              help="default report.html"),
-         arg("--title", default="bwim report", help="the page title"))),
+         arg("--title", default="bwim report", help="the page title"),
+         _FORCE)),
     Command(
         "demo", _demo,
         "the whole chain on the paper's slab bridge, in under a minute",
@@ -818,6 +963,10 @@ def _parser() -> argparse.ArgumentParser:
         epilog="Scenario files (TOML) describe the bridge, the sensors, the vehicle, the "
         "road and the run; see examples/paper_slab.toml.  Units are SI.",
     )
+    p.add_argument("--memory-limit", metavar="SIZE",
+                   help="most memory a command may use, e.g. 4G, 800M or 0.25 (a fraction "
+                   "of the machine's); default: the BWIM_MEMORY_LIMIT environment variable, "
+                   "else half the machine's memory")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for c in COMMANDS:
         fmt = {"formatter_class": argparse.RawDescriptionHelpFormatter} if c.raw else {}
@@ -830,17 +979,34 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``bwim`` command; returns the exit code."""
+    from bwim.io.batch import signals_as_interrupt
+    from bwim.limits import ENV_VAR, parse_size
+
+    for stream in (sys.stdout, sys.stderr):  # file names that are not UTF-8 print too
+        with contextlib.suppress(AttributeError, ValueError, OSError):
+            stream.reconfigure(errors="backslashreplace")
     parser = _parser()
     args = parser.parse_args(argv)
+    saved = os.environ.get(ENV_VAR)
     try:
-        return int(args.run(args))
+        if args.memory_limit is not None:
+            parse_size(args.memory_limit)  # a one-line error if it is not a size
+            os.environ[ENV_VAR] = args.memory_limit
+        with signals_as_interrupt():
+            return int(args.run(args))
     except BwimError as exc:
         message = " ".join(str(exc).split()) or type(exc).__name__
         print(f"bwim: error: {message}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print("bwim: interrupted", file=sys.stderr)
+        print("bwim: interrupted (the records finished so far are kept; rerun to go on)",
+              file=sys.stderr)
         return 130
+    finally:
+        if saved is None:
+            os.environ.pop(ENV_VAR, None)
+        else:
+            os.environ[ENV_VAR] = saved
 
 
 if __name__ == "__main__":  # pragma: no cover

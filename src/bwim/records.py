@@ -292,8 +292,11 @@ class Record:
     def with_noise(self, fraction: float, *, seed: int | np.random.Generator | None) -> Record:
         """A copy with Gaussian noise of standard deviation ``fraction`` × the peak absolute
         reading of each channel (the paper's §5.2 noise model)."""
-        if not np.isfinite(fraction) or fraction < 0:
-            raise InputError(f"noise fraction must be >= 0, got {fraction!r}")
+        if isinstance(fraction, bool) or not isinstance(fraction, (int, float, np.number)):
+            raise InputError(f"noise fraction must be a number in [0, 1], got {fraction!r}")
+        if not np.isfinite(fraction) or not 0.0 <= fraction <= 1.0:
+            raise InputError(f"noise fraction must lie in [0, 1] (a share of each channel's "
+                             f"peak), got {fraction!r}")
         rng = np.random.default_rng(seed)
         scale = fraction * np.abs(self.data).max(axis=0)
         return dataclasses.replace(self, data=self.data + rng.standard_normal(self.data.shape)

@@ -119,7 +119,7 @@ def calibrate(
     vehicle: Vehicle,
     *,
     road: RoadProfile | None = None,
-    unknowns: Sequence[str] = ("E_x", "E_y", "mu"),
+    unknowns: Sequence[str] | None = None,
     seed: int | np.random.Generator | None = None,
     method: Method | str = Method.CE,
     refine: Refine | str = Refine.LM,
@@ -155,7 +155,8 @@ def calibrate(
         The road the crossings were made on (default flat), for the dynamic stages.
     unknowns : sequence of str
         Parameter families to calibrate: stiffness ones (``E_x``, ``E_y``, ``E_girder``)
-        in stage 1, mass ones (``mu``, ``mu_girder``) in stage 2.
+        in stage 1, mass ones (``mu``, ``mu_girder``) in stage 2.  Default: those of
+        ``E_x``, ``E_y``, ``mu`` the bridge has (``E_x``, ``mu`` on a beam).
     seed : int or Generator
         Randomness of the population methods.
     method : "ce", "lm" or "cma"
@@ -196,7 +197,12 @@ def calibrate(
     t0 = time.perf_counter()
     method = parse_enum(Method, method, "method")
     refine = parse_enum(Refine, refine, "refine")
+    if isinstance(start_bridge, Bridge) and unknowns is None:
+        unknowns = tuple(u for u in ("E_x", "E_y", "mu") if u in start_bridge.params)
     records = _check_inputs(start_bridge, records, unknowns, bounds)
+    _check_options(population=population, max_evals=max_evals, n_jobs=n_jobs,
+                   n_modes=n_modes, elite_fraction=elite_fraction, weights=weights,
+                   n_records=len(records))
     unknowns = tuple(unknowns)
     rng = np.random.default_rng(seed)
     shared = frozenset(Bridge.GIRDER_FAMILIES if shared_girders else ())
@@ -236,7 +242,20 @@ def _check_inputs(start_bridge, records, unknowns, bounds) -> list[Record]:
     """The records as a list, after checking the bridge, the unknowns and the bounds."""
     if not isinstance(start_bridge, Bridge):
         raise InputError(f"start_bridge must be a bwim.Bridge, got {type(start_bridge).__name__}")
-    records = [records] if isinstance(records, Record) else list(records)
+    if isinstance(records, Record):
+        records = [records]
+    elif records is None or isinstance(records, (str, bytes)) or not hasattr(records,
+                                                                            "__iter__"):
+        raise InputError(f"records must be a bwim.Record or a sequence of them, got "
+                         f"{type(records).__name__}")
+    records = list(records)
+    if not records:
+        raise InputError("records must hold at least one record")
+    for k, r in enumerate(records):
+        if not isinstance(r, Record):
+            raise InputError(f"records[{k}] must be a bwim.Record, got {type(r).__name__}")
+    if unknowns is None or isinstance(unknowns, str):
+        raise InputError(f"unknowns must be a sequence of parameter names, got {unknowns!r}")
     present = start_bridge.params
     for u in unknowns:
         if u not in present:
@@ -244,10 +263,47 @@ def _check_inputs(start_bridge, records, unknowns, bounds) -> list[Record]:
                              f"{sorted(present)}")
     if not tuple(unknowns):
         raise InputError("unknowns must name at least one parameter family")
-    lo_f, hi_f = bounds
+    try:
+        lo_f, hi_f = (float(b) for b in bounds)
+    except (TypeError, ValueError):
+        raise InputError(f"bounds must be two factors (low, high), got {bounds!r}") from None
     if not 0 < lo_f < 1 < hi_f:
         raise InputError(f"bounds must be factors (low < 1 < high), got {bounds}")
     return records
+
+
+def _positive_int(name: str, value, low: int = 1) -> None:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
+        raise InputError(f"{name} must be an integer >= {low}, got {value!r}")
+
+
+def _check_options(*, population, max_evals, n_jobs, n_modes, elite_fraction, weights,
+                   n_records) -> None:
+    """calibrate's numeric options: refused (never silently replaced) when out of range."""
+    for name, value, low in (("population", population, 2), ("max_evals", max_evals, 1)):
+        if value is None:
+            continue
+        for v in (value if isinstance(value, tuple) else (value,)):
+            _positive_int(name, v, low)
+    if isinstance(n_jobs, bool) or not isinstance(n_jobs, (int, np.integer)) or (
+            n_jobs < 1 and n_jobs != -1):
+        raise InputError(f"n_jobs must be a positive integer or -1 (all cores), got {n_jobs!r}")
+    if n_modes is not None:
+        _positive_int("n_modes", n_modes)
+    if not isinstance(elite_fraction, (int, float, np.number)) or not (
+            0.0 < float(elite_fraction) <= 1.0):
+        raise InputError(f"elite_fraction must lie in (0, 1], got {elite_fraction!r}")
+    if weights is not None:
+        if isinstance(weights, (str, bytes)) or not hasattr(weights, "__len__") or len(
+                weights) != n_records:
+            raise InputError(f"weights must hold one array per record ({n_records})")
+        for k, w in enumerate(weights):
+            try:
+                arr = np.asarray(w, dtype=float)
+            except (TypeError, ValueError):
+                raise InputError(f"weights[{k}] must be an array of numbers") from None
+            if not np.all(np.isfinite(arr)) or np.any(arr < 0):
+                raise InputError(f"weights[{k}] must be finite and >= 0")
 
 
 def _pair(value) -> tuple:

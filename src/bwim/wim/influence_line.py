@@ -34,6 +34,7 @@ import scipy.linalg
 import scipy.sparse as sp
 
 from bwim.errors import InputError, NumericalError, require_finite, require_positive
+from bwim.limits import check_memory
 from bwim.records import Passage, Record
 from bwim.sensors import Sensor, SensorKind
 
@@ -432,7 +433,10 @@ def calibrate_influence_line(
         h_req = max(p.speed / r.sampling_rate for r, p in zip(recs, passages, strict=True))
     else:
         h_req = require_positive("spacing", spacing)
-    n = max(int(np.ceil((x1 - x0) / h_req - 1e-9)), 2)
+    n_ord = (x1 - x0) / h_req
+    check_memory(8.0 * (3 * n_ord * n_ord + 4 * loads.size * sum(r.time.size for r in recs)),
+                 f"an influence line of {n_ord:.3g} ordinates (spacing {h_req:.3g} m)")
+    n = max(int(np.ceil(n_ord - 1e-9)), 2)
     h = (x1 - x0) / n
 
     section = 0.5 * (x0 + x1)
