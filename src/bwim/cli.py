@@ -514,15 +514,22 @@ def _calibrate_site(paths: Sequence[Path], scenario, folder: Path):
 def _weigh_site(args: argparse.Namespace, scenario, folder: Path) -> int:
     """``bwim weigh`` on a real installation's logger files (scenario with [logger])."""
     from bwim.io import load_record
+    from bwim.io.batch import refuse_existing, refuse_input_overwrite
     from bwim.site import weigh_event
 
     if not args.calibration_records:
         raise InputError("weighing logger files needs --calibration-records (runs of the "
                          "calibration truck)")
     paths = _record_paths(args.records)
+    cal_paths = _record_paths(args.calibration_records)
     summary = folder / "summary.csv"
+    refuse_input_overwrite([summary, folder / "calibration_runs.csv",
+                            folder / "influence_lines.h5"],
+                           [args.scenario, *paths, *cal_paths])
+    if not args.resume:
+        refuse_existing(summary, force=args.force)
     done = _done_rows(summary, args.resume)
-    site = _calibrate_site(_record_paths(args.calibration_records), scenario, folder)
+    site = _calibrate_site(cal_paths, scenario, folder)
     rows: list[list] = []
     n_failed = n_weighed = 0
     t0 = time.perf_counter()
@@ -570,26 +577,43 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path) -> int:
 
 
 def _weigh(args: argparse.Namespace) -> int:
+    from bwim.io import load_scenario
+
+    folder = _out_folder(args.output)
+    with _locked(folder):
+        scenario = load_scenario(args.scenario)
+        if scenario.logger is not None:
+            return _weigh_site(args, scenario, folder)
+        return _weigh_moses(args, scenario, folder)
+
+
+def _weigh_moses(args: argparse.Namespace, scenario, folder: Path) -> int:
+    """``bwim weigh`` on records with their passages (simulated, or a [run] scenario)."""
     from bwim.io import (
         build_vehicle,
         load_record,
-        load_scenario,
         read_influence_line,
         write_influence_line,
         write_static_weights,
     )
+    from bwim.io.batch import refuse_existing, refuse_input_overwrite
     from bwim.wim import calibrate_influence_line, weigh_static
 
-    folder = _out_folder(args.output)
-    scenario = load_scenario(args.scenario)
-    if scenario.logger is not None:
-        return _weigh_site(args, scenario, folder)
     paths = _record_paths(args.records)
+    cal_paths = _record_paths(args.calibration_records) if args.calibration_records else []
+    summary = folder / "summary.csv"
+    stems = _unique_stems(paths)
+    refuse_input_overwrite(
+        [summary, folder / "influence_line.h5",
+         *(folder / f"{stem}_static.h5" for stem in stems)],
+        [args.scenario, *paths, *cal_paths, *([args.influence] if args.influence else [])])
+    if not args.resume:
+        refuse_existing(summary, force=args.force)
     if args.influence:
         il = read_influence_line(args.influence)
         print(f"influence line: {args.influence}")
     else:
-        cal_records = _load_records(_record_paths(args.calibration_records), scenario)
+        cal_records = _load_records(cal_paths, scenario)
         il = calibrate_influence_line(cal_records, build_vehicle(scenario))
         target = folder / "influence_line.h5"
         write_influence_line(il, target)
@@ -601,7 +625,7 @@ def _weigh(args: argparse.Namespace) -> int:
     n_failed = 0
     try:
         with _bar(len(paths) if len(paths) > 1 else None, "weighing") as bar:
-            for path, stem in zip(paths, _unique_stems(paths), strict=True):
+            for path, stem in zip(paths, stems, strict=True):
                 bar.update()
                 if path.name in done:
                     rows.append(done[path.name])
@@ -864,10 +888,18 @@ COMMANDS: tuple[Command, ...] = (
              "records already done in OUT, per its manifest.json, are skipped)"))),
     Command(
         "weigh", _weigh,
-        "static weights by Moses' algorithm from an influence line",
-        "Static axle weights and GVW by Moses' algorithm.  The influence line is either "
-        "calibrated from crossings of the scenario's vehicle (the calibration truck) and "
-        "written to the output folder, or read from a file.\n\n"
+        "static weights by Moses' algorithm from influence lines",
+        "Static axle weights and GVW by Moses' algorithm, one summary.csv row per record "
+        "(record, n_axles, speed_m_s, axle_spacings_m, axle_weights_kN, gvw_kN, flags, ...); "
+        "a record that cannot be weighed gets a row with its reason, and the exit code is 1 "
+        "if a record failed.  No weight is written without its plausibility checks.\n"
+        "With a scenario that has [logger] (a real installation's logger files): each "
+        "vehicle is detected (axle detectors, or the strain alone), every gauge's influence "
+        "line is calibrated from the calibration truck's runs (speed, lateral position and "
+        "drift of each run found from the data), and traffic is weighed with the gauges "
+        "combined.  Otherwise the records carry their passages and one line is calibrated "
+        "from crossings of the scenario's vehicle or read from a file.\n\n"
+        "  bwim weigh site.toml events/ --calibration-records calibration/ -o out/\n"
         "  bwim weigh examples/paper_slab.toml truck.h5 --calibration-records crossing.h5",
         (_SCENARIO,
          arg("records", nargs="+", metavar="RECORD",
@@ -881,7 +913,8 @@ COMMANDS: tuple[Command, ...] = (
              help="results folder (default bwim-out/weigh)"),
          arg("--resume", action="store_true",
              help="keep the records already weighed in the folder's summary.csv and weigh "
-             "only the others"))),
+             "only the others"),
+         _FORCE)),
     Command(
         "accuracy", _accuracy,
         "COST 323 accuracy classes of weights against statically weighed references",

@@ -347,6 +347,11 @@ class MultiRunCalibration:
     misfit_median : float
         Median misfit of the kept runs (≈ 1); a weighing's misfit is compared with a
         multiple of it (:class:`~bwim.wim.weigh.Limits`).
+    sum_misfit_median : float
+        The same for the sum of the channels (residual of the summed readings in units of
+        its standard deviation ``sqrt(1ᵀ C 1)``): the reference of a weighing made with
+        the gauges summed (``combine="sum"``), which per-gauge misfits would overstate
+        outside the calibrated lateral range.
     scale_trend : ScaleTrend or None
         The factors over clock time (None with ``per_run_scale=False``).
     time_span : (float, float)
@@ -367,6 +372,7 @@ class MultiRunCalibration:
     channel_noise: np.ndarray
     truck_weight: float
     misfit_median: float
+    sum_misfit_median: float
     scale_trend: ScaleTrend | None
     time_span: tuple[float, float]
     nit: int
@@ -895,6 +901,8 @@ def calibrate_lines(
     runs = []
     kept_pos = {k: i for i, k in enumerate(kept)}
     total_res = total_ee = 0.0
+    sum_var = float(np.sum(cov))  # variance of the summed channels' residual
+    sum_misfits = []
     for k in range(len(recs)):
         T = _t(fit, lanes[k] - ybar)
         if k in kept_pos:
@@ -909,6 +917,8 @@ def calibrate_lines(
             if k in kept_pos:
                 total_res += float(np.trace(res))
                 total_ee += float(np.trace(d.EE))
+                sum_misfits.append(float(np.sqrt(max(float(np.sum(res)), 0.0)
+                                                 / (d.n_t * max(sum_var, np.finfo(float).tiny)))))
         else:
             offsets, rel, mis = d.ebar, float("nan"), float("nan")
         runs.append(RunFit(index=k, time=float(times[k]), speed=pas[k].speed,
@@ -943,6 +953,7 @@ def calibrate_lines(
         runs=tuple(runs), channel_std=np.sqrt(np.diag(cov).clip(0.0)), channel_noise=noise,
         channel_covariance=cov, truck_weight=float(loads.sum()),
         misfit_median=float(np.median([runs[k].misfit for k in kept])),
+        sum_misfit_median=float(np.median(sum_misfits)),
         scale_trend=trend, time_span=(float(times[kept].min()), float(times[kept].max())),
         nit=fit.nit, success=fit.success, message=fit.message,
     )

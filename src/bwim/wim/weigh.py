@@ -339,13 +339,19 @@ def weigh(
     meas = E - offsets
     den = float(np.linalg.norm(meas))
     resid = float(np.linalg.norm(meas - fitted)) / den if den > 0 else float("inf")
-    sd = np.sqrt(np.clip(np.diag(C), np.finfo(float).tiny, None))
-    misfit = float(np.sqrt(np.mean(((meas - fitted) / sd) ** 2)))
+    if combine == "sum":  # the summed readings were fitted: judge their residual
+        sd_sum = np.sqrt(max(float(np.sum(C)), np.finfo(float).tiny))
+        misfit = float(np.sqrt(np.mean(((meas - fitted).sum(axis=1) / sd_sum) ** 2)))
+        misfit_ref = calibration.sum_misfit_median
+    else:
+        sd = np.sqrt(np.clip(np.diag(C), np.finfo(float).tiny, None))
+        misfit = float(np.sqrt(np.mean(((meas - fitted) / sd) ** 2)))
+        misfit_ref = calibration.misfit_median
 
     # plausibility
     flags += weight_flags(axle_w, group_w, limits)
     gvw = float(axle_w.sum())
-    if not misfit <= limits.misfit * calibration.misfit_median:
+    if not misfit <= limits.misfit * misfit_ref:
         flags.append("residual_high")
     t_lo, t_hi = calibration.time_span
     if not t_lo <= t0 <= t_hi:
