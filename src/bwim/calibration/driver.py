@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from enum import StrEnum
 
 import numpy as np
@@ -42,16 +42,22 @@ from bwim.calibration.problem import (
     ParameterSpace,
     StaticObjective,
     neighbour_map,
+    noise_weights,
+    peak_weights,
 )
 from bwim.calibration.sensitivity import Identifiability, identifiability
 from bwim.calibration.stages import SUBSTRUCTURED_SMOOTHING, Method, StageResult, run_stage
 from bwim.errors import InputError, parse_enum
 from bwim.fe.bridge import Bridge
+from bwim.fe.convergence import MeshConvergence, check_mesh
 from bwim.records import Record
 from bwim.road import RoadProfile
 from bwim.vehicles import Vehicle
 
 __all__ = ["Calibration", "Refine", "calibrate"]
+
+
+_REFINE_NAME = "joint refinement (dynamic)"
 
 
 class Refine(StrEnum):
@@ -79,6 +85,14 @@ class Calibration:
     wall_time : float
         Seconds.
     identifiability : Identifiability
+    two_stage : dict of str to ndarray
+        The parameters after the paper's two stages (before the refinement; equal to
+        ``params`` when ``refine="none"``).
+    weighting : str
+        How channels were weighted: "none", "noise", "peak" or "given".
+    discretisation : MeshConvergence or None
+        The model's discretisation error at the sensors
+        (:func:`bwim.fe.convergence.check_mesh`), when ``calibrate`` was asked for it.
     """
 
     bridge: Bridge
@@ -88,6 +102,9 @@ class Calibration:
     nfev: int
     wall_time: float
     identifiability: Identifiability
+    two_stage: dict = field(default_factory=dict)
+    weighting: str = "none"
+    discretisation: MeshConvergence | None = None
 
     @property
     def history(self) -> tuple[object, ...]:
@@ -132,6 +149,7 @@ def calibrate(
     substructure: bool | None = None,
     shared_girders: bool = True,
     weights=None,
+    mesh_check: float | None = None,
     n_modes: int | None = None,
     n_jobs: int = 1,
     client=None,
@@ -180,10 +198,18 @@ def calibrate(
     shared_girders : bool
         Calibrate one ``E_girder`` and one ``mu_girder`` for all girders (the paper's
         §5.4; identical girders), rather than one per girder.
-    weights : sequence of arrays, optional
-        Per-record, per-channel weights of the squared residuals (default 1, the paper's
-        plain sum); :func:`~bwim.calibration.problem.peak_weights` gives the
-        maximum-likelihood weights for noise proportional to each channel's peak.
+    weights : "none", "noise", "peak" or sequence of arrays, optional
+        Per-record, per-channel weights of the squared residuals.  Default (None,
+        "none"): 1, the paper's plain sum.  "noise": ``1 / σ̂²`` with each channel's noise
+        estimated from the data (:func:`~bwim.calibration.problem.noise_weights`; assumes
+        no noise model).  "peak": ``1 / peak²``
+        (:func:`~bwim.calibration.problem.peak_weights`; maximum likelihood only for the
+        paper's noise proportional to each channel's peak).
+    mesh_check : float, optional
+        Relative tolerance of a mesh-convergence check of the *calibrated* model at the
+        sensors under the calibration truck's static loads
+        (:func:`bwim.fe.convergence.check_mesh`); its discretisation error per sensor is
+        :attr:`Calibration.discretisation`.  Default: no check.
     n_modes : int, optional
         Modes of the dynamic simulations (default: up to sampling_rate / 8).
     n_jobs, client
@@ -197,12 +223,14 @@ def calibrate(
     method = parse_enum(Method, method, "method")
     refine = parse_enum(Refine, refine, "refine")
     records = _check_inputs(start_bridge, records, unknowns, bounds)
+    weighting, weights = _weights(weights, records)
     unknowns = tuple(unknowns)
     rng = np.random.default_rng(seed)
     shared = frozenset(Bridge.GIRDER_FAMILIES if shared_girders else ())
     current = start_bridge
     stages: list[StageResult] = []
     uncertainty: dict[str, np.ndarray] = {}
+    two_stage: dict[str, np.ndarray] = {}
     for stage in _plan(start_bridge, unknowns, method, refine, population, max_evals,
                        substructure):
         space = ParameterSpace(current, stage.families, shared)
@@ -221,15 +249,53 @@ def calibrate(
             options=_ce_options(stage, ce_options))
         current = space.bridge(result.x, current)
         stages.append(result)
+        if stage.method is not Method.LM or stage.name != _REFINE_NAME:
+            two_stage.update({f: current.params[f] for f in stage.families})
         if stage.keeps_uncertainty:
             uncertainty.update(space.split(result.uncertainty))
     stiff = tuple(u for u in unknowns if u in Bridge.STIFFNESS_FAMILIES)
     report = identifiability(current, records, vehicle, names=stiff or None)
     params = {u: current.params[u] for u in unknowns}
     unc = {u: uncertainty.get(u, np.full(params[u].shape, np.nan)) for u in unknowns}
+    two = {u: two_stage.get(u, params[u]) for u in unknowns}
+    disc = None
+    if mesh_check is not None:
+        disc = check_mesh(current, records[0].sensors,
+                          _static_loads(records[0], vehicle, current), tol=mesh_check)
     return Calibration(bridge=current, params=params, uncertainty=unc, stages=tuple(stages),
                        nfev=sum(s.nfev for s in stages),
-                       wall_time=time.perf_counter() - t0, identifiability=report)
+                       wall_time=time.perf_counter() - t0, identifiability=report,
+                       two_stage=two, weighting=weighting, discretisation=disc)
+
+
+def _weights(weights, records: list[Record]) -> tuple[str, list[np.ndarray] | None]:
+    """``(name, per-record channel weights)`` from the ``weights`` argument."""
+    if weights is None:
+        return "none", None
+    if isinstance(weights, str):
+        key = weights.strip().lower()
+        if key == "none":
+            return "none", None
+        if key == "noise":
+            return "noise", noise_weights(records)
+        if key == "peak":
+            return "peak", peak_weights(records)
+        raise InputError(f"weights must be 'none', 'noise', 'peak' or arrays, got {weights!r}")
+    return "given", list(weights)
+
+
+def _static_loads(record: Record, vehicle: Vehicle, bridge: Bridge):
+    """The calibration truck's static wheel loads at its position of peak total strain
+    in ``record`` (the load case of the mesh check)."""
+    from bwim.loads import PointLoad
+
+    p = record.passage
+    k = int(np.argmax(np.abs(record.data).sum(axis=1)))
+    x = p.wheel_x(record.time[k : k + 1])[0]
+    y = p.wheel_y if bridge.is_plate else np.zeros_like(x)
+    f = vehicle.model().static_forces
+    return [PointLoad(x=float(xi), y=float(yi), P=float(fi))
+            for xi, yi, fi in zip(x, y, f, strict=True) if 0 < xi < bridge.length]
 
 
 def _check_inputs(start_bridge, records, unknowns, bounds) -> list[Record]:
@@ -275,7 +341,7 @@ def _plan(bridge: Bridge, unknowns: tuple[str, ...], method: Method, refine: Ref
                            substructured=sub, keeps_uncertainty=True))
     if refine is Refine.LM:
         # CE's elite spread stays the reported uncertainty; otherwise the last LM's
-        plan.append(_Stage(name="joint refinement (dynamic)", families=unknowns,
+        plan.append(_Stage(name=_REFINE_NAME, families=unknowns,
                            dynamic=True, method=Method.LM, population=None, max_evals=ev_d,
                            substructured=False, keeps_uncertainty=method is not Method.CE))
     return plan

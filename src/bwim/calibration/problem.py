@@ -17,6 +17,9 @@ Contract
   measurement point (the sub-objectives of sub-structured CE, paper §4.1).  Their sum is
   the objective.  :func:`neighbour_map` says which parameters neighbour which part: the
   zones of the elements that touch the point, and girders within one element of it.
+* Channel weights: unweighted by default (the paper's plain sum);
+  :func:`noise_weights` estimates each channel's noise from the data itself (no noise
+  model assumed); :func:`peak_weights` is the paper's §5.2 model (noise ∝ channel peak).
 * Objectives are picklable, so populations can be evaluated in worker processes.
 """
 
@@ -44,6 +47,7 @@ __all__ = [
     "StaticObjective",
     "measurement_points",
     "neighbour_map",
+    "noise_weights",
     "peak_weights",
 ]
 
@@ -171,6 +175,30 @@ def peak_weights(records: Sequence[Record]) -> list[np.ndarray]:
         peak = np.abs(rec.data).max(axis=0)
         out.append(1.0 / np.where(peak > 0, peak, 1.0) ** 2)
     return out
+
+
+def noise_weights(records: Sequence[Record]) -> list[np.ndarray]:
+    """Channel weights ``1 / σ̂²`` from each channel's noise as estimated from the data.
+
+    σ̂ is the robust spread of the channel's second differences (``1.4826 × MAD / √6``,
+    exact for white noise): a strain signal sampled far above its bandwidth is smooth
+    from one sample to the next, its noise is not.  No noise model is assumed: under
+    gauge noise the weights come out equal, under noise proportional to each channel's
+    peak they come out ``∝ 1 / peak²``.  Weights are normalised to a mean of 1 over all
+    channels of all records (residuals stay strain-sized); an estimate below 10⁻³ of the
+    largest one is floored there (noise-free channels do not take all the weight).
+    """
+    sig = []
+    for rec in records:
+        d2 = np.diff(np.asarray(rec.data, dtype=float), n=2, axis=0)
+        mad = np.median(np.abs(d2 - np.median(d2, axis=0)), axis=0)
+        sig.append(1.4826 * mad / np.sqrt(6.0))
+    top = max((float(s.max()) for s in sig if s.size), default=0.0)
+    if top <= 0:
+        return [np.ones(r.data.shape[1]) for r in records]
+    var = [np.maximum(s, 1e-3 * top) ** 2 for s in sig]
+    mean_inv = float(np.mean(np.concatenate([1.0 / v for v in var])))
+    return [1.0 / v / mean_inv for v in var]
 
 
 def _channel_weights(weights, records) -> list[np.ndarray]:
