@@ -59,6 +59,10 @@ __all__ = ["Calibration", "Refine", "calibrate"]
 
 _REFINE_NAME = "joint refinement (dynamic)"
 
+#: Relative tolerance of the mesh check behind ``weights="model"`` when ``mesh_check``
+#: is not given.
+DEFAULT_MESH_TOL = 0.01
+
 
 class Refine(StrEnum):
     """Optional joint dynamic refinement after the two stages."""
@@ -204,7 +208,10 @@ def calibrate(
         estimated from the data (:func:`~bwim.calibration.problem.noise_weights`; assumes
         no noise model).  "peak": ``1 / peak²``
         (:func:`~bwim.calibration.problem.peak_weights`; maximum likelihood only for the
-        paper's noise proportional to each channel's peak).
+        paper's noise proportional to each channel's peak).  "model": ``1 / (σ̂² + e²)``
+        with ``e`` the starting model's discretisation error at each sensor
+        (:func:`bwim.fe.convergence.check_mesh` under the truck's static loads where its
+        strains peak): channels the mesh cannot reproduce weigh less.
     mesh_check : float, optional
         Relative tolerance of a mesh-convergence check of the *calibrated* model at the
         sensors under the calibration truck's static loads
@@ -223,7 +230,7 @@ def calibrate(
     method = parse_enum(Method, method, "method")
     refine = parse_enum(Refine, refine, "refine")
     records = _check_inputs(start_bridge, records, unknowns, bounds)
-    weighting, weights = _weights(weights, records)
+    weighting, weights, disc = _weights(weights, records, start_bridge, vehicle, mesh_check)
     unknowns = tuple(unknowns)
     rng = np.random.default_rng(seed)
     shared = frozenset(Bridge.GIRDER_FAMILIES if shared_girders else ())
@@ -258,7 +265,6 @@ def calibrate(
     params = {u: current.params[u] for u in unknowns}
     unc = {u: uncertainty.get(u, np.full(params[u].shape, np.nan)) for u in unknowns}
     two = {u: two_stage.get(u, params[u]) for u in unknowns}
-    disc = None
     if mesh_check is not None:
         disc = check_mesh(current, records[0].sensors,
                           _static_loads(records[0], vehicle, current), tol=mesh_check)
@@ -268,20 +274,28 @@ def calibrate(
                        two_stage=two, weighting=weighting, discretisation=disc)
 
 
-def _weights(weights, records: list[Record]) -> tuple[str, list[np.ndarray] | None]:
-    """``(name, per-record channel weights)`` from the ``weights`` argument."""
+def _weights(weights, records: list[Record], bridge: Bridge, vehicle: Vehicle,
+             mesh_check: float | None):
+    """``(name, per-record channel weights, mesh check or None)`` from ``weights``."""
     if weights is None:
-        return "none", None
+        return "none", None, None
     if isinstance(weights, str):
         key = weights.strip().lower()
         if key == "none":
-            return "none", None
+            return "none", None, None
         if key == "noise":
-            return "noise", noise_weights(records)
+            return "noise", noise_weights(records), None
         if key == "peak":
-            return "peak", peak_weights(records)
-        raise InputError(f"weights must be 'none', 'noise', 'peak' or arrays, got {weights!r}")
-    return "given", list(weights)
+            return "peak", peak_weights(records), None
+        if key == "model":
+            mc = check_mesh(bridge, records[0].sensors,
+                            _static_loads(records[0], vehicle, bridge),
+                            tol=mesh_check or DEFAULT_MESH_TOL)
+            err = np.abs(mc.error[0]).max(axis=0)
+            return "model", noise_weights(records, model_error=err), mc
+        raise InputError(f"weights must be 'none', 'noise', 'peak', 'model' or arrays, got "
+                         f"{weights!r}")
+    return "given", list(weights), None
 
 
 def _static_loads(record: Record, vehicle: Vehicle, bridge: Bridge):

@@ -45,6 +45,7 @@ __all__ = [
     "DynamicObjective",
     "ParameterSpace",
     "StaticObjective",
+    "estimate_noise",
     "measurement_points",
     "neighbour_map",
     "noise_weights",
@@ -177,26 +178,41 @@ def peak_weights(records: Sequence[Record]) -> list[np.ndarray]:
     return out
 
 
-def noise_weights(records: Sequence[Record]) -> list[np.ndarray]:
-    """Channel weights ``1 / σ̂²`` from each channel's noise as estimated from the data.
+def estimate_noise(records: Sequence[Record]) -> list[np.ndarray]:
+    """Each channel's noise standard deviation as estimated from the data, per record.
 
     σ̂ is the robust spread of the channel's second differences (``1.4826 × MAD / √6``,
     exact for white noise): a strain signal sampled far above its bandwidth is smooth
-    from one sample to the next, its noise is not.  No noise model is assumed: under
-    gauge noise the weights come out equal, under noise proportional to each channel's
-    peak they come out ``∝ 1 / peak²``.  Weights are normalised to a mean of 1 over all
-    channels of all records (residuals stay strain-sized); an estimate below 10⁻³ of the
-    largest one is floored there (noise-free channels do not take all the weight).
+    from one sample to the next, its noise is not.  No noise model is assumed.
     """
-    sig = []
+    out = []
     for rec in records:
         d2 = np.diff(np.asarray(rec.data, dtype=float), n=2, axis=0)
         mad = np.median(np.abs(d2 - np.median(d2, axis=0)), axis=0)
-        sig.append(1.4826 * mad / np.sqrt(6.0))
+        out.append(1.4826 * mad / np.sqrt(6.0))
+    return out
+
+
+def noise_weights(records: Sequence[Record], *,
+                  model_error: np.ndarray | None = None) -> list[np.ndarray]:
+    """Channel weights ``1 / (σ̂² + e²)`` from the data's own noise (:func:`estimate_noise`)
+    and, optionally, the model's error ``e`` at each channel (same units, e.g. the
+    discretisation error of :func:`bwim.fe.convergence.check_mesh`).
+
+    Under gauge noise the weights come out equal, under noise proportional to each
+    channel's peak ``∝ 1 / peak²``; a channel the model cannot reproduce weighs less.
+    Weights are normalised to a mean of 1 over all channels of all records (residuals
+    stay strain-sized); a σ̂ below 10⁻³ of the largest one is floored there (noise-free
+    channels do not take all the weight).
+    """
+    sig = estimate_noise(records)
     top = max((float(s.max()) for s in sig if s.size), default=0.0)
-    if top <= 0:
-        return [np.ones(r.data.shape[1]) for r in records]
     var = [np.maximum(s, 1e-3 * top) ** 2 for s in sig]
+    if model_error is not None:
+        e = np.asarray(model_error, dtype=float)
+        var = [v + e**2 for v in var]
+    if max(float(v.max()) for v in var) <= 0:
+        return [np.ones(r.data.shape[1]) for r in records]
     mean_inv = float(np.mean(np.concatenate([1.0 / v for v in var])))
     return [1.0 / v / mean_inv for v in var]
 
