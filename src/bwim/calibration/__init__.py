@@ -5,7 +5,9 @@ from bwim.calibration.problem import (
     DynamicObjective,
     ParameterSpace,
     StaticObjective,
+    estimate_noise,
     neighbour_map,
+    noise_weights,
     peak_weights,
 )
 from bwim.calibration.sensitivity import Identifiability, identifiability
@@ -21,8 +23,10 @@ __all__ = [
     "StageResult",
     "StaticObjective",
     "calibrate",
+    "estimate_noise",
     "identifiability",
     "neighbour_map",
+    "noise_weights",
     "peak_weights",
     "run_stage",
 ]
