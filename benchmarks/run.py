@@ -13,6 +13,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from benchmarks import (  # noqa: E402
     bench_fe,
     bench_mfi,
+    bench_mismatch,
     bench_optimize,
     bench_vbi,
     bench_wim,
@@ -26,6 +27,7 @@ def main() -> None:
     bench_mfi.main()
     bench_wim.main()
     bench_optimize.main()
+    bench_mismatch.main()
 
 
 if __name__ == "__main__":
