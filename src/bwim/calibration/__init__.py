@@ -10,7 +10,12 @@ from bwim.calibration.problem import (
     noise_weights,
     peak_weights,
 )
-from bwim.calibration.sensitivity import Identifiability, identifiability
+from bwim.calibration.sensitivity import (
+    Identifiability,
+    RoadSensitivity,
+    identifiability,
+    road_sensitivity,
+)
 from bwim.calibration.stages import Method, StageResult, run_stage
 
 __all__ = [
@@ -20,6 +25,7 @@ __all__ = [
     "Method",
     "ParameterSpace",
     "Refine",
+    "RoadSensitivity",
     "StageResult",
     "StaticObjective",
     "calibrate",
@@ -28,5 +34,6 @@ __all__ = [
     "neighbour_map",
     "noise_weights",
     "peak_weights",
+    "road_sensitivity",
     "run_stage",
 ]
