@@ -20,7 +20,13 @@ import pytest
 
 import bwim
 from bwim import paper
-from bwim.calibration import ParameterSpace, StaticObjective, noise_weights, run_stage
+from bwim.calibration import (
+    ParameterSpace,
+    StaticObjective,
+    noise_weights,
+    road_sensitivity,
+    run_stage,
+)
 from bwim.errors import InputError
 from bwim.fe.convergence import check_mesh, refine
 
@@ -124,3 +130,26 @@ def test_stiffness_from_finer_mesh_data_needs_a_converged_mesh(fine_record):
                                         bwim.PointLoad(x=6.0, y=3.0, P=5e4)], tol=0.01)
     err = mc.model_error
     assert max(err[n] for n in err if n.startswith("y")) > 0.05  # the check flags it
+
+
+def test_road_sensitivity_refit_and_first_order_agree_for_a_small_change():
+    """Algebra check (same model on purpose): for a road 2 % rougher than assumed, the
+    re-fit shift and the one-step Gauss–Newton shift agree to first order, and the
+    assumed road itself gives no shift."""
+    truth = paper.slab_bridge()
+    road = paper.road(1, approach=20.0)
+    rec = bwim.simulate(truth, paper.truck(), speed=paper.SPEED, lane=paper.LANE,
+                        sensors=paper.sensors(), road=road, approach=20.0)
+    rec = rec.channels([s for s in rec.sensors if s.name.endswith("_2")])
+    rougher = bwim.RoadProfile(x=road.x, elevation=1.02 * road.elevation)
+    kw = {"approach": 20.0, "unknowns": ("E_x", "mu")}
+    refit = road_sensitivity(truth, [rec], paper.truck(), road,
+                             {"same": road, "rougher": rougher}, **kw)
+    lin = road_sensitivity(truth, [rec], paper.truck(), road, {"rougher": rougher},
+                           linear=True, **kw)
+    np.testing.assert_allclose(refit.shifts["same"], 0.0, atol=1e-6)
+    d, d_lin = refit.shifts["rougher"], lin.shifts["rougher"]
+    assert np.abs(d).max() > 1e-5  # the road matters at all
+    # measured: μ +0.0827 % re-fitted, +0.0832 % in one step; E_x +0.0018 %, +0.0019 %
+    np.testing.assert_allclose(d_lin, d, atol=0.02 * np.abs(d).max())
+    assert "rougher" in refit.summary()
