@@ -101,14 +101,19 @@ class RoadSensitivity:
         The calibrated values the shifts are relative to.
     shifts : dict of str to ndarray
         For each alternative road, by name: the relative change of each parameter.
+    linear : bool
+        One Gauss–Newton step (True) or a re-fit (False).
     """
 
     labels: tuple[str, ...]
     values: np.ndarray
     shifts: dict
+    linear: bool = False
 
     def summary(self) -> str:
-        lines = ["road assumption: first-order change of the calibrated parameters, %"]
+        how = "first-order (one Gauss–Newton step)" if self.linear else "re-fitted"
+        lines = [f"road assumption: change of the calibrated parameters on each other road, "
+                 f"% ({how})"]
         for name, d in self.shifts.items():
             lines.append(f"  {name}: " + ", ".join(
                 f"{lab} {v * 100:+.2f}" for lab, v in zip(self.labels, d, strict=True)))
@@ -167,4 +172,5 @@ def road_sensitivity(
         dr = objective(alt).residuals(theta) - r0
         d, *_ = np.linalg.lstsq(Js, -dr, rcond=None)
         shifts[str(name)] = d
-    return RoadSensitivity(labels=tuple(space.labels()), values=theta, shifts=shifts)
+    return RoadSensitivity(labels=tuple(space.labels()), values=theta, shifts=shifts,
+                           linear=True)
