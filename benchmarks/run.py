@@ -13,6 +13,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from benchmarks import (  # noqa: E402
     bench_fe,
     bench_mfi,
+    bench_mismatch,
     bench_multirun,
     bench_optimize,
     bench_testday,
@@ -30,6 +31,7 @@ def main() -> None:
     bench_multirun.main()
     bench_optimize.main()
     bench_testday.main()
+    bench_mismatch.main()
 
 
 if __name__ == "__main__":

@@ -85,7 +85,7 @@ Contract
       ``speed``, [``lane``], [``sampling_rate`` = 1000], [``approach`` = 100],
       [``tail`` = 0], [``method`` = "coupled"], [``delay`` = 0], [``n_modes``],
       [``max_frequency``], [``full_system``], [``static_correction``], [``noise`` = 0:
-      noise as a fraction of each channel's peak], [``seed`` = 0: the noise seed].
+      gauge noise, a fraction of the peak strain], [``seed`` = 0: the noise seed].
   ``[identify]``, ``[calibrate]``
       options of :func:`bwim.identify_forces` and ``bwim.calibrate`` (see the classes).
 """
@@ -612,7 +612,9 @@ class RunSpec:
     full_system: bool = _opt(_boolean, False)
     static_correction: bool = _opt(_boolean, True)
     noise: float = _opt(_at_least(0.0, strict=False, high=1.0), 0.0)
-    """Gaussian noise, a fraction of each channel's peak (:meth:`bwim.Record.with_noise`)."""
+    """Gauge noise: one σ on every channel, a fraction of the record's peak strain
+    (:meth:`bwim.Record.with_noise`; the paper's per-channel model is not a scenario
+    option)."""
     seed: int = _opt(_integer, 0)
     """Seed of the noise."""
 
