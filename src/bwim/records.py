@@ -321,8 +321,8 @@ def noise_sigma(record: Record, fraction: float | None = None, *, sigma: float |
     ``per_channel=True`` (the paper's §5.2 definition), × each channel's own peak.
     """
     if (fraction is None) == (sigma is None):
-        raise InputError("give exactly one of fraction (of the peak reading) and sigma "
-                         "(absolute)")
+        raise InputError("noise fraction or sigma: give exactly one (fraction of the peak "
+                         "reading, or sigma absolute)")
     peak = np.abs(record.data).max(axis=0)
     if sigma is not None:
         if per_channel:

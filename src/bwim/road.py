@@ -126,6 +126,8 @@ class RoadProfile:
         check_memory(length / dx * 8.0 * 12, f"an ISO 8608 road profile of {length:g} m at "
                      f"dx = {dx:g} m")
         n = int(np.ceil(length / dx)) + 1
+        if isinstance(seed, (int, np.integer)) and not isinstance(seed, bool) and seed < 0:
+            raise InputError(f"seed must be a non-negative integer, got {seed}")
         rng = np.random.default_rng(seed)
         right = _harmonic_sum(n, dx, gd0, waviness, n_lo, n_hi, rng)
         x = x0 + dx * np.arange(n)

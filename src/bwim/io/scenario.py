@@ -585,7 +585,7 @@ class RoadSpec:
     """G_d(n₀), m³/cycle, or an ISO 8608 class letter."""
     length: float | None = _opt(_positive)
     start: float | None = _opt(_number)
-    seed: int = _opt(_integer, 0)
+    seed: int = _opt(_int_from(0), 0)
     dx: float | None = _opt(_positive)
     track_correlation: float | None = _opt(_number)
     waviness: float | None = _opt(_number)
@@ -615,7 +615,7 @@ class RunSpec:
     """Gauge noise: one σ on every channel, a fraction of the record's peak strain
     (:meth:`bwim.Record.with_noise`; the paper's per-channel model is not a scenario
     option)."""
-    seed: int = _opt(_integer, 0)
+    seed: int = _opt(_int_from(0), 0)
     """Seed of the noise."""
 
     def simulate_kwargs(self) -> dict[str, Any]:
