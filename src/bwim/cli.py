@@ -682,12 +682,30 @@ def _accuracy(args: argparse.Namespace) -> int:
 def _report(args: argparse.Namespace) -> int:
     from bwim import report
 
-    out = _out_file(args.output, (".html", ".htm"), force=args.force)
+    out = _out_file(args.output, (".html", ".htm"), force=args.force,
+                    inputs=[*args.results, *([args.reference] if args.reference else [])])
     items = report.read_results(args.results)
     sections = [report.section(obj, name) for name, obj in items]
+    if args.reference:  # COST 323 classes of every weigh summary among the results
+        from bwim.accuracy import assess
+        from bwim.io.accuracy_csv import read_reference, read_summary
+
+        reference = read_reference(args.reference)
+        summaries = [p for p in report.result_paths(args.results)
+                     if p.suffix.lower() == ".csv" and _is_weigh_summary(p)]
+        if not summaries:
+            raise InputError("--reference needs a weigh summary.csv among the results")
+        for p in summaries:
+            sections.append(report.section(assess(read_summary(p), reference), p.name))
     report.write_report(out, sections, title=args.title)
     print(f"report of {len(items)} result(s): {out}")
     return 0
+
+
+def _is_weigh_summary(path: Path) -> bool:
+    with path.open(newline="", encoding="utf-8", errors="replace") as f:
+        header = next(csv.reader(f), [])
+    return tuple(header[:len(WEIGH_COLUMNS)]) == WEIGH_COLUMNS
 
 
 # --- demo ------------------------------------------------------------------------------------
@@ -948,6 +966,9 @@ COMMANDS: tuple[Command, ...] = (
          arg("-o", "--output", default="report.html", metavar="REPORT.html",
              help="default report.html"),
          arg("--title", default="bwim report", help="the page title"),
+         arg("--reference", metavar="REF.csv",
+             help="static weights of the weighed vehicles: adds the COST 323 accuracy "
+             "classes of each weigh summary.csv among the results"),
          _FORCE)),
     Command(
         "demo", _demo,

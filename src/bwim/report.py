@@ -170,7 +170,8 @@ def section(obj: Any, name: str = "", *, truth=None, length: float | None = None
     ----------
     obj
         A result: ForceIdentification, StaticWeights, InfluenceLine, Record, Calibration,
-        Bridge, a :class:`Table` or a ready :class:`Section`.
+        Bridge, AccuracyResult (COST 323 classes), a :class:`Table` or a ready
+        :class:`Section`.
     name : str
         What the result is (a file name, a vehicle), shown in the title.
     truth : Truth, optional
@@ -203,6 +204,11 @@ def section(obj: Any, name: str = "", *, truth=None, length: float | None = None
         return _calibration(name, obj, start, true_bridge)
     if isinstance(obj, Bridge):
         return _bridge(name, obj)
+    from bwim.accuracy import AccuracyResult
+
+    if isinstance(obj, AccuracyResult):
+        return Section(f"COST 323 accuracy{f' of {name}' if name else ''}", (obj.table(),),
+                       note=" ".join(f"{n}." for n in obj.notes()))
     raise InputError(f"cannot report a {type(obj).__name__}")
 
 
@@ -237,7 +243,8 @@ def _read_h5(path: Path):
     raise last
 
 
-def _expand(paths: Iterable[str | os.PathLike]) -> list[Path]:
+def result_paths(paths: Iterable[str | os.PathLike]) -> list[Path]:
+    """The result files of ``paths``, folders expanded (sorted)."""
     return expand_paths(paths, RESULT_SUFFIXES, what="result files")
 
 
@@ -246,7 +253,7 @@ def read_results(paths: Sequence[str | os.PathLike]) -> list[tuple[str, Any]]:
     from bwim.io import load_bridge
 
     out = []
-    for p in _expand(paths):
+    for p in result_paths(paths):
         suffix = p.suffix.lower()
         if suffix in (".h5", ".hdf5", ".hdf"):
             out.append((p.name, _read_h5(p)))

@@ -120,6 +120,11 @@ def test_weigh_command_writes_the_contract_summary(day, tmp_path, capsys):
     capsys.readouterr()
     assert main(["accuracy", str(out / "summary.csv"), "--reference", str(day.reference)]) == 0
     assert "gross weight" in capsys.readouterr().out
+    html = tmp_path / "report.html"
+    assert main(["report", str(out / "summary.csv"), "--reference", str(day.reference),
+                 "-o", str(html)]) == 0
+    text = html.read_text()
+    assert "COST 323 accuracy of summary.csv" in text and "axle of a group" in text
 
 
 def _corrupt(src, dst, how):
