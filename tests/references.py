@@ -152,3 +152,26 @@ def sprung_mass_on_beam(*, L, EI, m, mass, k, c, v, zeta, t, n_modes=6, road=Non
     w_mid = mid @ sol.y[:n_modes]
     F = np.array([contact(tt, sol.y[:, i])[0] for i, tt in enumerate(sol.t)])
     return w_mid, F
+
+
+def levy_ss_free_first_frequency(a, b, D, mu, nu):
+    """First natural frequency (Hz) of an isotropic plate simply supported on x = 0, a
+    and free on y = ±b/2 (the beam-like mode m = 1, symmetric in y), by Lévy's exact
+    solution (Leissa, *Vibration of Plates*, NASA SP-160 (1969), §4.3): with
+    w = Y(y) sin(kx), k = π/a, λ⁴ = μω²/D, Y = A cosh(r₁y) + B cosh(r₂y),
+    r₁,₂² = k² ± λ², the free-edge conditions M_y = Y'' − νk²Y = 0 and
+    V_y = Y''' − (2 − ν)k²Y' = 0 at y = b/2 give a 2 × 2 determinant whose root λ < k
+    is found by bisection (scipy.optimize.brentq)."""
+    from scipy.optimize import brentq
+
+    k, c = np.pi / a, b / 2
+
+    def det(lam):
+        r1, r2 = np.sqrt(k**2 + lam**2), np.sqrt(k**2 - lam**2)
+        m1, m2 = (r1**2 - nu * k**2) * np.cosh(r1 * c), (r2**2 - nu * k**2) * np.cosh(r2 * c)
+        v1 = r1 * (r1**2 - (2 - nu) * k**2) * np.sinh(r1 * c)
+        v2 = r2 * (r2**2 - (2 - nu) * k**2) * np.sinh(r2 * c)
+        return m1 * v2 - m2 * v1
+
+    lam = brentq(det, 0.5 * k, k * (1 - 1e-12))
+    return lam**2 * np.sqrt(D / mu) / (2 * np.pi)

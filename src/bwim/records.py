@@ -33,7 +33,7 @@ import numpy as np
 from bwim.errors import InputError, require_finite, require_positive
 from bwim.sensors import Sensor
 
-__all__ = ["Passage", "Record", "SimulationSettings", "Truth", "VBIConvergence",
+__all__ = ["AxleLayout", "Passage", "Record", "SimulationSettings", "Truth", "VBIConvergence",
            "axle_offsets", "noise_sigma"]
 
 
@@ -42,8 +42,24 @@ def axle_offsets(spacings: np.ndarray) -> np.ndarray:
     return np.concatenate([[0.0], np.cumsum(spacings)])
 
 
+class AxleLayout:
+    """The axle count and offsets of anything with ``axle_spacings`` (m, shape
+    (n_axles − 1,)): a :class:`Passage` and every vehicle model."""
+
+    axle_spacings: np.ndarray
+
+    @property
+    def n_axles(self) -> int:
+        return self.axle_spacings.size + 1
+
+    @property
+    def axle_offsets(self) -> np.ndarray:
+        """Distance of each axle behind the first, m, shape (n_axles,)."""
+        return axle_offsets(self.axle_spacings)
+
+
 @dataclass(frozen=True, kw_only=True, eq=False)
-class Passage:
+class Passage(AxleLayout):
     """A vehicle's crossing as a B-WIM system sees it.
 
     Parameters
@@ -78,15 +94,6 @@ class Passage:
             object.__setattr__(self, "track_width",
                                require_positive("track_width", self.track_width))
         object.__setattr__(self, "delay", require_finite("delay", self.delay))
-
-    @property
-    def n_axles(self) -> int:
-        return self.axle_spacings.size + 1
-
-    @property
-    def axle_offsets(self) -> np.ndarray:
-        """Distance of each axle behind the first, m, shape (n_axles,)."""
-        return axle_offsets(self.axle_spacings)
 
     @property
     def wheels_per_axle(self) -> int:

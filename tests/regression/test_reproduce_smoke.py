@@ -1,26 +1,91 @@
-"""Fast smoke versions of the paper's §5.1 and §5.4 reproductions (the full runs are
-``make reproduce``): the report's numbers meet PAPER_CASES' targets."""
+"""Small versions of the paper's §5 reproductions (the full runs are ``make reproduce``):
+bwim's accuracy in each case, measured at a reduced size, against the truth the records
+were simulated from.  The measured numbers quoted in the docstrings were printed by
+``case_*(...).numbers`` with the arguments used here (OMP_NUM_THREADS=1, 2-core machine).
+"""
 
 import numpy as np
+import pytest
 
 from bwim.cli import main
-from bwim.paper.reproduce import case_5_1
+from bwim.paper import reproduce
+from bwim.paper.reproduce import case_5_1, case_5_2, compare_methods
 
 
 def test_reproduce_5_1_quick():
+    """§5.1 (identical elements, 3 unknowns, noise-free): the refinement returns the
+    truth (measured |error| ≤ 1.0e-6 %); the paper's two stages alone are biased by the
+    crossing's dynamics, upwards in all three parameters on this 20 m approach (measured
+    E_x +0.56, E_y +0.30, μ +0.55 %; the README's "0.5–5 % in E"); MFI with the
+    calibrated model is MFI with the exact model (the paper's "almost identical":
+    equivalence to 1e-6 of the RMS) and weighs within 1.5 % (measured −0.86, −0.14 %)."""
     report = case_5_1(quick=True)
-    errors = report.numbers["errors"]
-    # PAPER_CASES §5.1: each parameter within 1 %; calibrated MFI weights within 2 % and
-    # force RMS within 5 % over the central 80 %
-    assert max(abs(v) for v in errors.values()) < 1.0
-    assert np.all(np.abs(report.numbers["mfi_weight_error"]) < 0.02)
-    assert np.all(np.array(report.numbers["mfi_rms_error"]) < 0.05)
-    text = report.render()
-    assert "paper" in text and "-0.60" in text  # the paper's number beside ours
+    n = report.numbers
+    assert max(abs(v) for v in n["errors"].values()) < 3e-6
+    two = n["two_stage_errors"]
+    assert 0.35 < two["E_x"] < 0.8 and 0.15 < two["E_y"] < 0.6 and 0.35 < two["mu"] < 0.8, two
+    np.testing.assert_allclose(n["mfi_rms_error"], n["mfi_exact_rms_error"], rtol=1e-6)
+    assert np.all(np.abs(n["mfi_weight_error"]) < 0.015)
+    assert np.all(np.array(n["mfi_rms_error"]) < 0.012)
+    assert "paper" in report.render()
 
 
-def test_reproduce_5_4_quick_from_the_command_line(tmp_path, capsys):
+def test_reproduce_5_2_small():
+    """§5.2 at 5 % noise (one noise seed, CE populations 60/16): the paper's target is
+    every error < 1 %; measured E_x +0.054, E_y −0.071, μ +0.146 %.  Bounds at ≈ 2×
+    measured, and a lower bound that fails if the noise were not applied (noise-free
+    calibration returns the truth to 1e-6 %)."""
+    report = case_5_2(quick=True, levels=(5,), seeds=(0,), population=(60, 16))
+    err = np.array(report.numbers[5]["max_abs"])
+    assert np.all(err < [0.11, 0.15, 0.3]), err
+    assert err.max() > 0.05, err
+
+
+def test_compare_methods_small():
+    """compare_methods' §5.1 race (the 48-unknown runs left out: with the refinement they
+    take minutes): every method ends within 1 % of the static stage's optimum θ* (the
+    race's target; measured CE 0.18 %, CMA-ES 0.90 %), least squares reaches θ* to full
+    precision (measured 6e-6 %) and in the fewest evaluations (measured 5 against CMA-ES
+    126 and CE 800, the ordering the methods' information predicts: gradients, then a
+    covariance, then samples only)."""
+    n = compare_methods(quick=True, budget=3000, methods=()).numbers
+    assert set(n) == {("5.1", m) for m in ("CE", "CMA-ES", "least squares")}
+    reached = {m: n["5.1", m][0] for m in ("CE", "CMA-ES", "least squares")}
+    assert None not in reached.values(), reached
+    assert all(n["5.1", m][3] <= 1.0 for m in reached)
+    assert n["5.1", "least squares"][3] < 1e-5
+    assert reached["least squares"] < reached["CMA-ES"] < reached["CE"], reached
+
+
+def test_reproduce_5_4_quick_from_the_command_line(tmp_path, capsys, monkeypatch):
+    """§5.4 (beam-and-slab, five unknowns) through ``bwim reproduce``, checked on the
+    report the command printed.  The paper's target is all five within 1.1 %.  Measured:
+    the three moduli within 0.004 %; the masses −0.39 / +0.38 % (slab/girder split, 20
+    modes), their total per metre μ·W + 5 μ_girder within 0.003 %; MFI weights −0.73 /
+    −0.20 %, force RMS 1.5 / 0.9 %.  Bounds ≈ 1.5–2.5× measured."""
+    from bwim import paper
+
+    reports, case = [], reproduce.CASES["5.4"]
+
+    def spy(**kw):
+        reports.append(case(**kw))
+        return reports[-1]
+
+    monkeypatch.setitem(reproduce.CASES, "5.4", spy)
     assert main(["reproduce", "5.4", "--quick", "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out
-    assert "Table 2" in out and "34.8" in out  # the paper's girder E beside ours
+    [report] = reports
+    assert report.render() in out
+    e = report.numbers["errors"]
+    assert max(abs(e[k]) for k in ("E_x", "E_y", "E_girder")) < 0.01, e
+    assert max(abs(e[k]) for k in ("mu", "mu_girder")) < 0.6, e
+    truth = paper.vransko_bridge().params
+    cal = report.artefacts["calibration"].params
+
+    def per_metre(p):
+        return float(np.mean(p["mu"])) * paper.VRANSKO_WIDTH + 5 * float(np.mean(p["mu_girder"]))
+
+    assert per_metre(cal) == pytest.approx(per_metre(truth), rel=6e-5)
+    assert np.all(np.abs(report.numbers["mfi_weight_error"]) < 0.012)
+    assert np.all(np.array(report.numbers["mfi_rms_error"]) < 0.025)
     assert (tmp_path / "5_4_mfi_forces.png").stat().st_size > 10_000

@@ -519,93 +519,74 @@ def test_missing_keys_and_sections(tmp_path):
         io.simulate_scenario(io.load_scenario(p))
 
 
-def test_negative_modulus_keeps_the_library_message(tmp_path):
-    p = write(tmp_path, PLATE.replace("E = 35e9", "E = -35e9"))
-    with raises(f"{p}: [bridge]: E_x must be positive, got -3.5e+10"):
-        io.build_bridge(io.load_scenario(p))
-    p = write(tmp_path, PLATE.replace("E = 35e9", "E_x = [35e9, -1.0]\nE_y = 35e9")
-              + "zones = [2, 1]\n")
-    with raises(f"{p}: [bridge]: E_x must be positive, got -1"):
-        io.build_bridge(io.load_scenario(p))
-    p = write(tmp_path, PLATE + "[[bridge.girders]]\ny = 2.0\nE = 35e9\nmu = 1000\nI = -0.1\n"
-              "z_bottom = 0.8\n")
-    with raises(f"{p}: [[bridge.girders]] entry 1: Girder.I must be positive, got -0.1"):
-        io.build_bridge(io.load_scenario(p))
-    p = write(tmp_path, PLATE + "[[bridge.girders]]\ny = 2.0\nE = 35e9\nmu = 1000\n")
-    with raises(f"{p}: [[bridge.girders]] entry 1: give I and z_bottom, or a "
-                "[bridge.girders.section] table"):
-        io.build_bridge(io.load_scenario(p))
+_GIRDER = "[[bridge.girders]]\ny = 2.0\nE = 35e9\nmu = 1000\n"
+_BEAM = (EXAMPLES / "beam.toml").read_text() + '\n[[sensors]]\nx = 3.0\nkind = "strain_y"\n'
+_STAGES = {
+    "load": lambda s: s,
+    "bridge": io.build_bridge, "vehicle": io.build_vehicle, "sensors": io.build_sensors,
+    "road": io.build_road, "passage": io.build_passage,
+}
 
 
-def test_unknown_vehicle_name_and_type(tmp_path):
-    p = write(tmp_path, PLATE + '[vehicle]\nname = "lorry"\n')
-    with raises(f"{p}: [vehicle] name: unknown value 'lorry'; expected one of "
-                "two_axle_truck, three_axle_truck, tractor_semitrailer"):
-        io.load_scenario(p)
-    p = write(tmp_path, PLATE + '[vehicle]\ntype = "bus"\n')
-    with raises(f"{p}: [vehicle] type: unknown value 'bus'; expected one of moving_forces, "
-                "sprung_mass, half_car, truck3d, tractor_semitrailer"):
-        io.load_scenario(p)
-    p = write(tmp_path, PLATE + '[vehicle]\nname = "two_axle_truck"\nspeed = 3\n')
-    with raises(f"{p}: unknown key 'speed' in [vehicle] with a name; allowed keys: name"):
-        io.load_scenario(p)
-    p = write(tmp_path, PLATE + '[vehicle]\ntype = "moving_forces"\naxle_loads = [1e5, -1e4]\n'
-              "axle_spacings = [4.0]\n")
-    with raises(f"{p}: [vehicle]: axle_loads must be positive, got -10000"):
-        io.build_vehicle(io.load_scenario(p))
+# (scenario text, the step that must refuse it, the exact message after "<path>: "); the
+# library's own messages are kept, prefixed with the file and section
+@pytest.mark.parametrize(("text", "stage", "message"), [
+    (PLATE.replace("E = 35e9", "E = -35e9"), "bridge",
+     "[bridge]: E_x must be positive, got -3.5e+10"),
+    (PLATE.replace("E = 35e9", "E_x = [35e9, -1.0]\nE_y = 35e9") + "zones = [2, 1]\n",
+     "bridge", "[bridge]: E_x must be positive, got -1"),
+    (PLATE + _GIRDER + "I = -0.1\nz_bottom = 0.8\n", "bridge",
+     "[[bridge.girders]] entry 1: Girder.I must be positive, got -0.1"),
+    (PLATE + _GIRDER, "bridge",
+     "[[bridge.girders]] entry 1: give I and z_bottom, or a [bridge.girders.section] table"),
+    (PLATE + '[vehicle]\nname = "lorry"\n', "load",
+     "[vehicle] name: unknown value 'lorry'; expected one of two_axle_truck, "
+     "three_axle_truck, tractor_semitrailer"),
+    (PLATE + '[vehicle]\ntype = "bus"\n', "load",
+     "[vehicle] type: unknown value 'bus'; expected one of moving_forces, sprung_mass, "
+     "half_car, truck3d, tractor_semitrailer"),
+    (PLATE + '[vehicle]\nname = "two_axle_truck"\nspeed = 3\n', "load",
+     "unknown key 'speed' in [vehicle] with a name; allowed keys: name"),
+    (PLATE + '[vehicle]\ntype = "moving_forces"\naxle_loads = [1e5, -1e4]\n'
+     "axle_spacings = [4.0]\n", "vehicle", "[vehicle]: axle_loads must be positive, got -10000"),
+    (PLATE + "[[sensors]]\nx = [6.0, 13.0]\ny = 2.0\nname = \"s{x:g}\"\n", "sensors",
+     "[[sensors]] entry 1: sensor 's13' at x = 13 m, y = 2 m is off the deck (12 m × 8 m)"),
+    (PLATE + '[[sensors]]\nx = 6.0\nname = "a"\n[[sensors]]\nx = 7.0\nname = "a"\n',
+     "sensors", "[[sensors]] entry 2: sensor name 'a' is already used by entry 1"),
+    (PLATE + '[[sensors]]\nx = 6.0\nname = "{z}"\n', "sensors",
+     "[[sensors]] entry 1 name: bad template '{z}' ('z'); fields are kind, short, x, y, i"),
+    (PLATE + '[[sensors]]\nx = 6.0\nkind = "strain_z"\n', "load",
+     "[[sensors]] entry 1 kind: unknown value 'strain_z'; expected one of strain_x, "
+     "strain_y, deflection"),
+    (_BEAM, "sensors",
+     "[[sensors]] entry 4: sensor 'strain_y@3,0': strain_y is not available on a beam"),
+    (PLATE + "zones = [2, 2]\nzone_map = [[0]]\n", "load",
+     "[bridge]: give zones or zone_map, not both"),
+    (PLATE + "zone_map = [[0, 1], [1, 0]]\n", "bridge",
+     "[bridge]: zone_map must have shape (nx, ny) = (6, 4), got (2, 2)"),
+    (PLATE + "[road]\nflat = true\nroughness = 1e-6\n", "load",
+     "[road]: a flat road takes no other keys, got 'roughness'"),
+    (PLATE + "[road]\nseed = 3\n", "load",
+     "[road]: needs roughness (ISO 8608), profile (a CSV file) or flat = true"),
+    (PLATE + '[road]\nroughness = "Z"\nlength = 10.0\n', "road",
+     "[road]: unknown ISO 8608 class 'Z'; expected one of A, B, C, D, E, F, G, H or a "
+     "number G_d(n0) in m^3/cycle"),
+    (PLATE + '[run]\nspeed = 20.0\nmethod = "exact"\n', "load",
+     "[run] method: unknown value 'exact'; expected one of coupled, iterative"),
+    (PLATE + '[run]\nspeed = 20.0\n[vehicle]\nname = "two_axle_truck"\n', "passage",
+     "[run] needs lane on a plate bridge"),
+])
+def test_inconsistent_scenarios_are_refused_naming_file_and_section(tmp_path, text, stage,
+                                                                   message):
+    p = write(tmp_path, text)
+    with raises(f"{p}: {message}"):
+        _STAGES[stage](io.load_scenario(p))
 
 
-def test_sensor_errors(tmp_path):
-    p = write(tmp_path, PLATE + "[[sensors]]\nx = [6.0, 13.0]\ny = 2.0\nname = \"s{x:g}\"\n")
-    with raises(f"{p}: [[sensors]] entry 1: sensor 's13' at x = 13 m, y = 2 m is off the deck "
-                "(12 m × 8 m)"):
-        io.build_sensors(io.load_scenario(p))
-    p = write(tmp_path, PLATE + '[[sensors]]\nx = 6.0\nname = "a"\n[[sensors]]\nx = 7.0\n'
-              'name = "a"\n')
-    with raises(f"{p}: [[sensors]] entry 2: sensor name 'a' is already used by entry 1"):
-        io.build_sensors(io.load_scenario(p))
-    p = write(tmp_path, PLATE + '[[sensors]]\nx = 6.0\nname = "{z}"\n')
-    with raises(f"{p}: [[sensors]] entry 1 name: bad template '{{z}}' ('z'); fields are kind, "
-                "short, x, y, i"):
-        io.build_sensors(io.load_scenario(p))
-    p = write(tmp_path, PLATE + '[[sensors]]\nx = 6.0\nkind = "strain_z"\n')
-    with raises(f"{p}: [[sensors]] entry 1 kind: unknown value 'strain_z'; expected one of "
-                "strain_x, strain_y, deflection"):
-        io.load_scenario(p)
-    beam = (EXAMPLES / "beam.toml").read_text() + '\n[[sensors]]\nx = 3.0\nkind = "strain_y"\n'
-    p = write(tmp_path, beam)
-    with raises(f"{p}: [[sensors]] entry 4: sensor 'strain_y@3,0': strain_y is not available "
-                "on a beam"):
-        io.build_sensors(io.load_scenario(p))
-
-
-def test_other_consistency_errors(tmp_path):
-    p = write(tmp_path, PLATE + "zones = [2, 2]\nzone_map = [[0]]\n")
-    with raises(f"{p}: [bridge]: give zones or zone_map, not both"):
-        io.load_scenario(p)
-    p = write(tmp_path, PLATE + "zone_map = [[0, 1], [1, 0]]\n")
-    with raises(f"{p}: [bridge]: zone_map must have shape (nx, ny) = (6, 4), got (2, 2)"):
-        io.build_bridge(io.load_scenario(p))
-    p = write(tmp_path, PLATE + "[road]\nflat = true\nroughness = 1e-6\n")
-    with raises(f"{p}: [road]: a flat road takes no other keys, got 'roughness'"):
-        io.load_scenario(p)
-    p = write(tmp_path, PLATE + "[road]\nseed = 3\n")
-    with raises(f"{p}: [road]: needs roughness (ISO 8608), profile (a CSV file) or flat = true"):
-        io.load_scenario(p)
-    p = write(tmp_path, PLATE + '[road]\nroughness = "Z"\nlength = 10.0\n')
-    with raises(f"{p}: [road]: unknown ISO 8608 class 'Z'; expected one of A, B, C, D, E, F, "
-                "G, H or a number G_d(n0) in m^3/cycle"):
-        io.build_road(io.load_scenario(p))
+def test_missing_road_profile_names_the_file(tmp_path):
     p = write(tmp_path, PLATE + '[road]\nprofile = "missing.csv"\n')
     with raises(f"{tmp_path / 'missing.csv'}: no such file"):
         io.build_road(io.load_scenario(p))
-    p = write(tmp_path, PLATE + '[run]\nspeed = 20.0\nmethod = "exact"\n')
-    with raises(f"{p}: [run] method: unknown value 'exact'; expected one of coupled, "
-                "iterative"):
-        io.load_scenario(p)
-    p = write(tmp_path, PLATE + '[run]\nspeed = 20.0\n[vehicle]\nname = "two_axle_truck"\n')
-    with raises(f"{p}: [run] needs lane on a plate bridge"):
-        io.build_passage(io.load_scenario(p))
 
 
 def test_scenario_from_dict_uses_the_source_name():

@@ -33,8 +33,9 @@ def test_slab_5_1_ce_then_mfi(slab_case):
     cal = calibrate(start, [rec], truck, road=road, approach=APPROACH, seed=3,
                     population=(100, 24), convergences=2)
     err = _errors(cal.params, bridge.params)
-    # the paper's two stages then the joint dynamic refinement: measured ≤ 1e-6 %
-    assert max(err.values()) < 0.01
+    # the paper's two stages then the joint dynamic refinement: every parameter back to
+    # the truth in a noise-free run (README: "refined 0.000 %"); measured ≤ 1.0e-6 %
+    assert max(err.values()) < 3e-8
     static = cal.stages[0]
     assert static.name.startswith("stiffness") and static.nfev >= 100
     assert cal.nfev == sum(s.nfev for s in cal.stages)
@@ -42,19 +43,27 @@ def test_slab_5_1_ce_then_mfi(slab_case):
     # MFI with the calibrated model weighs like the exact model (PAPER_CASES §5.1)
     ident = bwim.identify_forces(cal.bridge, rec)
     e = bwim.force_errors(ident, rec.truth)
-    assert np.all(np.abs(e.weight_error) < 0.02) and np.all(e.rms_error < 0.05)
+    # (PAPER_CASES' targets: weights within 2 %, RMS within 5 %; measured −0.86 / −0.14 %
+    # and 0.69 / 0.69 %, the MFI's own error with the exact model)
+    assert np.all(np.abs(e.weight_error) < 0.015) and np.all(e.rms_error < 0.012)
 
 
 def test_two_stages_alone_are_biased_by_dynamics(slab_case):
     """Without the refinement the pseudo-static stage carries the dynamics' bias (the
-    reason for the refinement); LM reaches the same two-stage optimum."""
+    reason for the refinement, README: "biases that fit by 0.5–5 % in E"): fitting static
+    influence surfaces to strains that carry the bridge's dynamic amplification over this
+    20 m approach overestimates E_x and μ (measured +0.54 %, +0.45 %) and leaves E_y
+    within 0.2 % (measured −0.11 %).  The bias is a property of the data, not of the
+    optimiser: CE's two stages (tests/regression/test_reproduce_smoke.py) land within
+    0.1 % of these E_x and μ."""
     bridge, truck, road, rec = slab_case
     start = bridge.with_params(E_x=0.9 * 35e9, E_y=1.1 * 35e9, mu=1.1 * 1560.0)
     cal = calibrate(start, [rec], truck, road=road, approach=APPROACH, method="lm",
                     refine="none")
-    err = _errors(cal.params, bridge.params)
     assert len(cal.stages) == 2
-    assert err["E_x"] < 0.05 and err["E_y"] < 0.1 and err["mu"] < 0.1
+    bias = {k: float(v[0] / bridge.params[k][0] - 1) * 100 for k, v in cal.params.items()}
+    assert 0.35 < bias["E_x"] < 0.8 and 0.3 < bias["mu"] < 0.7, bias
+    assert abs(bias["E_y"]) < 0.2, bias
 
 
 def test_vransko_5_4_lm():

@@ -86,9 +86,13 @@ def _mfi(bridge: Bridge, rec: Record) -> ForceIdentification:
     return identify_forces(bridge, long)
 
 
-def _settings(quick: bool) -> dict:
-    return ({"approach": 20.0, "population": (100, 24), "convergences": 2} if quick
-            else {"approach": paper.APPROACH, "population": (200, 40), "convergences": 3})
+def _settings(quick: bool, **overrides) -> dict:
+    """Run sizes: the full run, the quick one, and any ``overrides`` that are not None
+    (the tests' still smaller runs)."""
+    s = ({"approach": 20.0, "population": (100, 24), "convergences": 2} if quick
+         else {"approach": paper.APPROACH, "population": (200, 40), "convergences": 3})
+    s.update({k: v for k, v in overrides.items() if v is not None})
+    return s
 
 
 def case_5_1(*, quick: bool = False, seed: int = 0, method: str = "ce", n_jobs: int = 1,
@@ -167,7 +171,8 @@ def _stage_table(cal: Calibration) -> Table:
 
 def case_5_2(*, quick: bool = False, levels: Sequence[float] | None = None,
              seeds: Sequence[int] | None = None, method: str = "ce", n_jobs: int = 1,
-             weighted: bool = True, noise: str = "paper") -> CaseReport:
+             weighted: bool = True, noise: str = "paper",
+             population: tuple[int, int] | None = None) -> CaseReport:
     """§5.2: measurement noise of p %; parameter errors over noise seeds, the paper's two
     stages beside the refined answer.
 
@@ -183,7 +188,7 @@ def case_5_2(*, quick: bool = False, levels: Sequence[float] | None = None,
     if noise not in ("paper", "gauge"):
         raise InputError(f"noise must be 'paper' or 'gauge', got {noise!r}")
     t0 = time.perf_counter()
-    s = _settings(quick)
+    s = _settings(quick, population=population)
     levels = (1, 5, 20) if quick and levels is None else (levels or (1, 2, 3, 4, 5, 10, 15, 20))
     seeds = (0,) if quick and seeds is None else (seeds or (0, 1, 2))
     truth = paper.slab_bridge()
@@ -276,24 +281,26 @@ def case_5_4(*, quick: bool = False, seed: int = 0, method: str = "ce", n_jobs: 
 
 
 def case_5_3(*, quick: bool = False, seed: int = 0, bridges: Sequence[int] | None = None,
-             n_jobs: int = 1, callback=None) -> CaseReport:
+             n_jobs: int = 1, callback=None, budgets: tuple[int, int] | None = None,
+             population: tuple[int, int] | None = None, refine: str = "lm") -> CaseReport:
     """§5.3: six zoned bridges; 48 unknowns (sub-structured CE) against one zone (3).
 
     Calibrated from two crossings of the paper truck (20 and 24 m/s; the paper: 20–25),
     then MFI of the calibration truck with each calibrated model.  The force error is the
     paper's Table 1 measure, Σ (identified − true wheel force)² over the central 80 %
     (kN², units not stated by the paper), averaged over the four wheels, with the RMS %
-    beside it.
+    beside it.  ``budgets`` (evaluations of the two stages) and ``population`` override the
+    run sizes, and ``refine="none"`` skips the joint refinement (smaller runs).
     """
     t0 = time.perf_counter()
-    s = _settings(quick)
+    s = _settings(quick, population=population)
     approach = s["approach"]
     truths = paper.zoned_bridges(seed)
     which = list(range(6)) if bridges is None else list(bridges)
     if quick and bridges is None:
         which = [1]
     rows, numbers, zone_tables = [], {"48": {}, "3": {}, "bridge_Ex_error": {}}, []
-    budgets = ((8000, 600) if quick else (40000, 1500))
+    budgets = budgets or ((8000, 600) if quick else (40000, 1500))
     artefacts = {}
     for b in which:
         truth = truths[b]
@@ -301,9 +308,9 @@ def case_5_3(*, quick: bool = False, seed: int = 0, bridges: Sequence[int] | Non
         recs = [_crossing(truth, paper.sensors(), seed=road_seed, approach=approach, speed=v)
                 for v in (20.0, 24.0)]
         cal48 = _calibrate_runs(truth, recs, (4, 4), approach, road_seed, seed, s, budgets,
-                                n_jobs, callback)
+                                n_jobs, callback, population, refine)
         cal3 = _calibrate_runs(truth, recs, (1, 1), approach, road_seed, seed, s, budgets,
-                               n_jobs, callback)
+                               n_jobs, callback, population, refine)
         row = [f"#{b + 1}", f"{paper.ZONE_SPREADS[b] * 100:g}"]
         for label, cal in (("48", cal48), ("3", cal3)):
             ident = _mfi(cal.bridge, recs[0])
@@ -338,19 +345,25 @@ def case_5_3(*, quick: bool = False, seed: int = 0, bridges: Sequence[int] | Non
 
 
 def _calibrate_runs(truth, recs, zones, approach, road_seed, seed, s, budgets, n_jobs,
-                    callback) -> Calibration:
+                    callback, population=None, refine="lm") -> Calibration:
     nzx, nzy = zones
     start = paper.slab_bridge(zones=zones)
     start = _start(start, ("E_x", "E_y", "mu"))
     return calibrate(start, recs, paper.truck(),
                      road=paper.road(road_seed, approach=approach), approach=approach,
-                     seed=seed, population=(s["population"][0], min(100, 10 * nzx * nzy)
-                                            if nzx * nzy > 1 else s["population"][1]),
+                     seed=seed, population=population or (
+                         s["population"][0],
+                         min(100, 10 * nzx * nzy) if nzx * nzy > 1 else s["population"][1]),
                      convergences=s["convergences"], max_evals=budgets, n_jobs=n_jobs,
-                     callback=callback)
+                     callback=callback, refine=refine)
 
 
-def compare_methods(*, quick: bool = False, seed: int = 0) -> CaseReport:
+def compare_methods(*, quick: bool = False, seed: int = 0, budget: int | None = None,
+                    budgets: tuple[int, int] | None = None,
+                    population: tuple[int, int] | None = None,
+                    methods: Sequence[str] = ("CE", "CE sub-structured", "CMA-ES",
+                                              "least squares"),
+                    refine: str = "lm") -> CaseReport:
     """Plain CE, sub-structured CE, CMA-ES and least squares, measured in one run.
 
     * §5.1 stiffness stage (2 unknowns): evaluations and wall time until every parameter
@@ -361,13 +374,17 @@ def compare_methods(*, quick: bool = False, seed: int = 0) -> CaseReport:
       true zone moduli.  The pseudo-static optimum of 32 zone moduli is itself far from
       the truth (the dynamics' bias grows along the objective's weak directions: measured
       −77 … +537 %), so a race to it would compare methods on reaching a wrong point.
+
+    ``budget`` (the race's evaluations), ``budgets`` (the two stages' evaluations in the
+    48-unknown runs) and ``population`` override the run sizes; ``methods`` chooses the
+    48-unknown runs and ``refine="none"`` skips their refinement (smaller runs).
     """
     from bwim.calibration.problem import ParameterSpace, StaticObjective, neighbour_map
     from bwim.calibration.stages import SUBSTRUCTURED_SMOOTHING
 
     t0 = time.perf_counter()
     approach = 20.0 if quick else paper.APPROACH
-    budget = 20000 if quick else 200000
+    budget = budget or (20000 if quick else 200000)
     rows, numbers = [], {}
     truth = paper.slab_bridge()
     rec = _crossing(truth, paper.sensors(), seed=11, approach=approach)
@@ -394,22 +411,24 @@ def compare_methods(*, quick: bool = False, seed: int = 0) -> CaseReport:
                    ("problem", "method", "evaluations", "time (s)", "final dev %"),
                    tuple(rows))
 
-    s = _settings(quick)
+    s = _settings(quick, population=population)
     truth3 = paper.zoned_bridges(0)[1]
     recs = [_crossing(truth3, paper.sensors(), seed=11, approach=approach, speed=v)
             for v in (20.0, 24.0)]
     start3 = _start(paper.slab_bridge(zones=(4, 4)), ("E_x", "E_y", "mu"))
-    budgets = (8000, 600) if quick else (40000, 1500)
+    budgets = budgets or ((8000, 600) if quick else (40000, 1500))
     rows3 = []
     for name, kw in (("CE", {"method": "ce", "substructure": False}),
                      ("CE sub-structured", {"method": "ce", "substructure": True}),
                      ("CMA-ES", {"method": "cma"}),
                      ("least squares", {"method": "lm"})):
+        if name not in methods:
+            continue
         t = time.perf_counter()
         cal = calibrate(start3, recs, paper.truck(), road=paper.road(11, approach=approach),
                         approach=approach, seed=seed, max_evals=budgets,
-                        population=(s["population"][0], 100), convergences=s["convergences"],
-                        **kw)
+                        population=population or (s["population"][0], 100),
+                        convergences=s["convergences"], refine=refine, **kw)
         e = np.abs(np.concatenate([pct_change(cal.params[k], truth3.params[k])
                                    for k in ("E_x", "E_y")]))
         numbers[("5.3", name)] = {"nfev": cal.nfev, "time": time.perf_counter() - t,

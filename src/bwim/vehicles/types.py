@@ -18,7 +18,7 @@ import numpy as np
 
 from bwim.conventions import GRAVITY
 from bwim.errors import InputError, require_finite, require_positive
-from bwim.records import Passage, axle_offsets
+from bwim.records import AxleLayout, Passage
 from bwim.vehicles.model import BodySpec, VehicleModel, WheelSpec, assemble
 
 __all__ = ["HalfCar", "MovingForces", "SprungMass", "TractorSemitrailer", "Truck3D", "Vehicle"]
@@ -47,20 +47,12 @@ def _spacings(value) -> np.ndarray:
     return sp
 
 
-class Vehicle(ABC):
+class Vehicle(AxleLayout, ABC):
     """The base of every vehicle model: what simulation, calibration and weighing use
     (``model()``, ``passage()``, the axle layout); the subclasses are frozen dataclasses."""
 
     axle_spacings: np.ndarray
     track_width: float | None
-
-    @property
-    def n_axles(self) -> int:
-        return self.axle_spacings.size + 1
-
-    @property
-    def axle_offsets(self) -> np.ndarray:
-        return axle_offsets(self.axle_spacings)
 
     @property
     def length(self) -> float:
