@@ -135,25 +135,42 @@ def test_record_validation_and_helpers(rng):
         np.testing.assert_array_equal(rec.with_noise(0.0, seed=1).data, rec.data)
 
 
-def test_with_noise_has_the_papers_standard_deviation():
-    """Record.with_noise(p) adds, to each channel, independent zero-mean Gaussian noise of
-    standard deviation p × the channel's peak |reading| (the paper's §5.2 noise model).
-    Checked statistically against that definition on n ≈ 1900 samples per channel: the
-    sample standard deviation s of a normal sample has relative standard error
-    1/√(2(n − 1)) ≈ 1.6 %, so |s/σ − 1| < 5 % is a > 3-standard-error band, and the mean
-    lies within 4 σ/√n of 0; the two channels' noises are uncorrelated (|r| < 4/√n)."""
-    rec = simulate(paper.slab_bridge(), two_axle_truck(), speed=20.0, lane=2.0,
-                   sensors=[bwim.Sensor(x=6.0, y=2.0), bwim.Sensor(x=9.0, y=6.0)],
-                   approach=10.0, tail=1.0)
-    p = 0.05
-    noise = rec.with_noise(p, seed=3).data - rec.data
+@pytest.fixture(scope="module")
+def two_channel_record():
+    return simulate(paper.slab_bridge(), two_axle_truck(), speed=20.0, lane=2.0,
+                    sensors=[bwim.Sensor(x=6.0, y=2.0), bwim.Sensor(x=9.0, y=6.0)],
+                    approach=10.0, tail=1.0)
+
+
+def _check_noise(noise, sigma):
+    """Zero-mean, independent, Gaussian of std ``sigma`` per channel, statistically: on
+    n ≈ 1900 samples the sample std has relative standard error 1/√(2(n − 1)) ≈ 1.6 %, so
+    |s/σ − 1| < 5 % is a > 3-standard-error band; the mean lies within 4 σ/√n of 0; the
+    channels' noises are uncorrelated (|r| < 4/√n)."""
     n = noise.shape[0]
     assert n > 1800
-    sigma = p * np.abs(rec.data).max(axis=0)
-    assert sigma[0] != pytest.approx(sigma[1], rel=0.1)  # the channels' scales differ
     np.testing.assert_allclose(noise.std(axis=0, ddof=1) / sigma, 1.0, atol=0.05)
     assert np.all(np.abs(noise.mean(axis=0)) < 4 * sigma / np.sqrt(n))
     assert abs(np.corrcoef(noise.T)[0, 1]) < 4 / np.sqrt(n)
+
+
+def test_with_noise_per_channel_is_the_papers_standard_deviation(two_channel_record):
+    """``per_channel=True``: σ = p × each channel's own peak |reading| (the paper's §5.2)."""
+    rec = two_channel_record
+    p = 0.05
+    sigma = p * np.abs(rec.data).max(axis=0)
+    assert sigma[0] != pytest.approx(sigma[1], rel=0.1)  # the channels' scales differ
+    _check_noise(rec.with_noise(p, seed=3, per_channel=True).data - rec.data, sigma)
+
+
+def test_with_noise_default_is_gauge_noise(two_channel_record):
+    """Default: one σ = p × the record's overall peak strain on every strain channel (a
+    gauge's noise does not scale with its signal); ``sigma=`` gives it absolutely."""
+    rec = two_channel_record
+    p = 0.05
+    sigma = np.full(2, p * np.abs(rec.data).max())
+    _check_noise(rec.with_noise(p, seed=3).data - rec.data, sigma)
+    _check_noise(rec.with_noise(sigma=1e-6, seed=4).data - rec.data, np.full(2, 1e-6))
     # reproducible by seed, zero noise is the identity
     np.testing.assert_array_equal(rec.with_noise(p, seed=3).data, rec.with_noise(p, seed=3).data)
     np.testing.assert_array_equal(rec.with_noise(0.0, seed=3).data, rec.data)
