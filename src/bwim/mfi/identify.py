@@ -23,8 +23,8 @@ import numpy as np
 from bwim.errors import InputError, parse_enum
 from bwim.fe.bridge import Bridge
 from bwim.fe.modal import select_modes
-from bwim.mfi.dp import Solution, solve_dp
-from bwim.mfi.lcurve import LCurve, gcv, lcurve
+from bwim.mfi.dp import Solution, sweep
+from bwim.mfi.lcurve import LCurve, gcv, lcurve_search
 from bwim.mfi.statespace import ForceUnknowns, MFIModel, Order, build_model, force_layout
 from bwim.records import Passage, Record
 
@@ -102,7 +102,7 @@ def identify_forces(
     weights: np.ndarray | None = None,
     static_correction: bool = True,
     lam_range: tuple[float, float] = (1e-6, 1e3),
-    n_lam: int = 30,
+    n_lam: int = 16,
     central: float = 0.8,
 ) -> ForceIdentification:
     """Identify the moving forces of a record (see module docstring).
@@ -125,7 +125,9 @@ def identify_forces(
     static_correction : bool
         Include the truncated modes' static response in the readings model.
     lam_range, n_lam
-        Scaled λ grid of the L-curve (and the GCV search interval).
+        Scaled λ range of the L-curve (and the GCV search interval), and the number of λ
+        solved for the L-curve: half on a coarse log grid over the range, half within one
+        coarse spacing of its corner (:func:`bwim.mfi.lcurve.lcurve_search`).
     central : float
         Fraction of each axle's time on the deck used for its static weight.
     """
@@ -166,9 +168,10 @@ def identify_forces(
     W = np.ones(model.n_s) if w is None else w
     curve = None
     if isinstance(lam, str):
-        grid = np.geomspace(lam_range[0], lam_range[1], n_lam)
         if lam == "lcurve":
-            curve = lcurve(model, d_scaled, W, grid)
+            n_coarse = max(4, n_lam // 2)
+            curve = lcurve_search(model, d_scaled, W, lam_range, n_coarse=n_coarse,
+                                  n_fine=max(n_lam - n_coarse, 0))
             lam_s = curve.corner_scaled
         elif lam == "gcv":
             lam_s = gcv(model, d_scaled, W, lam_range)
@@ -178,7 +181,9 @@ def identify_forces(
         if not np.isfinite(lam) or lam <= 0:
             raise InputError(f"lam must be positive, got {lam!r}")
         lam_s = model.lam_scaled(float(lam))
-    sol = solve_dp(model, d_scaled, lam_s, W)
+    best = sweep(model, d_scaled, [lam_s], W, keep=True)
+    sol = Solution(X=best.X[0], r=best.r[0], residual_norm=float(best.residual_norm[0]),
+                   seminorm=float(best.seminorm[0]))
     return _result(model, sol, record, unknowns, order, lam_s, curve, central, bridge.length)
 
 
