@@ -226,11 +226,23 @@ def solve_iterative(
     it = 0
     state = None
     F = None
+    # before the first contact reaches the deck the deflection under the contacts is 0 in
+    # every iteration: the vehicles' approach is integrated once
+    pre = approach_phase(crossing, scheme) if veh.n_dof else None
+
+    def vehicle(g, g_dot):
+        if pre is None or pre.start == 0:
+            return _vehicle_on_ground(veh, g, g_dot, scheme, y0=_static_on_ground(veh, g[0]))
+        s = pre.start
+        rest = _vehicle_on_ground(veh, g[s:], g_dot[s:], scheme, y0=pre.Y[s], v0=pre.YV[s],
+                                  a0=pre.YA[s])
+        return NewmarkResult(u=np.concatenate([pre.Y[:s], rest.u]),
+                             v=np.concatenate([pre.YV[:s], rest.v]),
+                             a=np.concatenate([pre.YA[:s], rest.a]))
+
     for it in range(1, max_iter + 1):  # noqa: B007 - reported below
         g, g_dot = w - crossing.r, w_dot - crossing.r_dot
-        ys = None
-        if veh.n_dof:
-            ys = _vehicle_on_ground(veh, g, g_dot, scheme, y0=_static_on_ground(veh, g[0]))
+        ys = vehicle(g, g_dot) if veh.n_dof else None
         F = _forces(veh, ys, g, g_dot)
         state = bridge.forced(np.where(crossing.on, F, 0.0), scheme)
         w_new, w_dot_new = bridge.under(state)
@@ -241,9 +253,7 @@ def solve_iterative(
             break
     # forces consistent with the final deflection
     g, g_dot = w - crossing.r, w_dot - crossing.r_dot
-    ys = None
-    if veh.n_dof:
-        ys = _vehicle_on_ground(veh, g, g_dot, scheme, y0=_static_on_ground(veh, g[0]))
+    ys = vehicle(g, g_dot) if veh.n_dof else None
     F = _forces(veh, ys, g, g_dot)
     return Solution(state=state, forces=F, iterations=it, change=0.0 if veh.n_dof == 0
                     else change)
