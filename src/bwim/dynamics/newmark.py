@@ -184,10 +184,17 @@ def integrate(
     Z[0] = np.concatenate([u, v, a])
     forced = Tf @ f.T  # (3n, n_t)
     z = Z[0]
-    for k in range(1, n_t):
+    explicit = min(3, n_t) if scheme.is_average_acceleration else n_t
+    for k in range(1, explicit):
         z = Tz @ z + forced[:, k]
         Z[k] = z
-    return NewmarkResult(u=Z[:, :n], v=Z[:, n:2 * n], a=Z[:, 2 * n:])
+    res = NewmarkResult(u=Z[:, :n], v=Z[:, n:2 * n], a=Z[:, 2 * n:])
+    if explicit < n_t and not _filter_coupled(M, C, K, f, scheme.dt, explicit,
+                                              (res.u, res.v, res.a)):
+        for k in range(explicit, n_t):  # an eigenbasis too ill-conditioned: keep stepping
+            z = Tz @ z + forced[:, k]
+            Z[k] = z
+    return res
 
 
 def _filter_modes(M, C, K, f, dt, k0, out) -> None:
@@ -216,3 +223,44 @@ def _filter_modes(M, C, K, f, dt, k0, out) -> None:
         for b, Y in zip(nums, out, strict=True):
             zi = signal.lfiltic(b, den, Y[k0 - 1::-1, m][:2], x_past[:, m])
             Y[k0:, m] = signal.lfilter(b, den, x, zi=zi)[0]
+
+
+#: Largest condition number of the eigenvector basis :func:`_filter_coupled` accepts.
+MAX_EIGENBASIS_CONDITION = 1e6
+
+
+def _filter_coupled(M, C, K, f, dt, k0, out) -> bool:
+    """The coupled (full-matrix) twin of :func:`_filter_modes`: continue the
+    average-acceleration recursion from step ``k0`` as first-order complex filters.
+
+    With ``K_e = M + h C/2 + h² K/4``, ``D₁ = h² K/2 − 2 M``, ``D₂ = M − h C/2 + h² K/4``,
+    each of u, v, a obeys ``K_e y_{k+1} + D₁ y_k + D₂ y_{k−1} = N_{k+1}`` with
+    ``N = (h²/4)(f_{k+1} + 2 f_k + f_{k−1})``, ``(h/2)(f_{k+1} − f_{k−1})`` and
+    ``f_{k+1} − 2 f_k + f_{k−1}`` respectively.  In companion form ``w = [y_k; y_{k−1}]``,
+    ``w_{k+1} = A w_k + B N_{k+1}``; in A's eigenbasis every coordinate is a first-order
+    recursion (lfilter).  Returns False (and leaves ``out`` alone) when the eigenbasis
+    is ill-conditioned (near-defective A)."""
+    n = M.shape[0]
+    h = dt
+    Ke = M + h / 2 * C + h * h / 4 * K
+    Ki = np.linalg.inv(Ke)
+    A = np.zeros((2 * n, 2 * n))
+    A[:n, :n] = -Ki @ (h * h / 2 * K - 2 * M)
+    A[:n, n:] = -Ki @ (M - h / 2 * C + h * h / 4 * K)
+    A[n:, :n] = np.eye(n)
+    lam, V = np.linalg.eig(A)
+    if np.linalg.cond(V) > MAX_EIGENBASIS_CONDITION:
+        return False
+    Vi = np.linalg.inv(V)
+    ViB = Vi[:, :n] @ Ki  # V⁻¹ B, (2n, n)
+    fk1, fk, fkm1 = f[k0:], f[k0 - 1:-1], f[k0 - 2:-2]
+    forcing = (h * h / 4 * (fk1 + 2 * fk + fkm1), h / 2 * (fk1 - fkm1), fk1 - 2 * fk + fkm1)
+    for N, Y in zip(forcing, out, strict=True):
+        e = N @ ViB.T  # (n_t − k0, 2n)
+        xi0 = Vi @ np.concatenate([Y[k0 - 1], Y[k0 - 2]])
+        xi = np.empty_like(e)
+        for j in range(2 * n):
+            xi[:, j] = signal.lfilter([1.0], [1.0, -lam[j]], e[:, j],
+                                      zi=[lam[j] * xi0[j]])[0]
+        Y[k0:] = (xi @ V[:n].T).real
+    return True
