@@ -255,12 +255,13 @@ def _filter_coupled(M, C, K, f, dt, k0, out) -> bool:
     ViB = Vi[:, :n] @ Ki  # V⁻¹ B, (2n, n)
     fk1, fk, fkm1 = f[k0:], f[k0 - 1:-1], f[k0 - 2:-2]
     forcing = (h * h / 4 * (fk1 + 2 * fk + fkm1), h / 2 * (fk1 - fkm1), fk1 - 2 * fk + fkm1)
-    for N, Y in zip(forcing, out, strict=True):
-        e = N @ ViB.T  # (n_t − k0, 2n)
-        xi0 = Vi @ np.concatenate([Y[k0 - 1], Y[k0 - 2]])
-        xi = np.empty_like(e)
-        for j in range(2 * n):
-            xi[:, j] = signal.lfilter([1.0], [1.0, -lam[j]], e[:, j],
-                                      zi=[lam[j] * xi0[j]])[0]
-        Y[k0:] = (xi @ V[:n].T).real
+    # u, v and a side by side: (n_t − k0, 2n, 3) forcings in the eigenbasis
+    e = np.stack([N @ ViB.T for N in forcing], axis=2)
+    xi0 = Vi @ np.stack([np.concatenate([Y[k0 - 1], Y[k0 - 2]]) for Y in out], axis=1)
+    xi = np.empty_like(e)
+    for j in range(2 * n):
+        xi[:, j] = signal.lfilter([1.0], [1.0, -lam[j]], e[:, j], axis=0,
+                                  zi=lam[j] * xi0[j][None, :])[0]
+    for i, Y in enumerate(out):
+        Y[k0:] = (xi[:, :, i] @ V[:n].T).real
     return True
