@@ -21,7 +21,6 @@ import bwim
 from benchmarks._timing import median_time, print_table
 from bwim import paper
 from bwim.mfi import build_model, identify_forces, solve_batch, solve_dp
-from bwim.mfi.dp import sweep
 from bwim.mfi.statespace import ForceUnknowns, Order
 
 
@@ -117,7 +116,7 @@ def run_floor(duration: float = 1.0, repeat: int = 3):
                         order=ident.order)
     d, W = rec.data / scale, np.ones(rec.data.shape[1])
     X = sparse_tikhonov(model, d, ident.lam_scaled, W)
-    ref = sweep(model, d, [ident.lam_scaled], W, keep=True).X[0]
+    ref = solve_dp(model, d, ident.lam_scaled, W).X
     assert np.allclose(X, ref, atol=1e-6 * np.abs(ref).max()), "floor and DP disagree"
     t_floor = median_time(lambda: sparse_tikhonov(model, d, ident.lam_scaled, W),
                           repeat=repeat, min_time=0.0)
