@@ -13,7 +13,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from benchmarks import (  # noqa: E402
     bench_fe,
     bench_mfi,
+    bench_mismatch,
+    bench_multirun,
     bench_optimize,
+    bench_testday,
     bench_vbi,
     bench_wim,
 )
@@ -25,7 +28,10 @@ def main() -> None:
     bench_vbi.main()
     bench_mfi.main()
     bench_wim.main()
+    bench_multirun.main()
     bench_optimize.main()
+    bench_testday.main()
+    bench_mismatch.main()
 
 
 if __name__ == "__main__":

@@ -20,8 +20,16 @@ Subcommands:
     vehicle; write the model (TOML) and print start → calibrated ± uncertainty.
 ``identify SCENARIO RECORD... [--bridge MODEL] [-o FOLDER|SUMMARY.csv] [--jobs|--scheduler]``
     Moving force identification on each record (folders expanded), in parallel with
-    joblib or on a dask.distributed scheduler; a CSV summary (one row per vehicle) and one
-    HDF5 result per record.
+    joblib or on a dask.distributed scheduler; a CSV summary (one row per vehicle, one
+    with the reason per failed record) and one HDF5 result per record, written as each
+    record finishes.  A rerun skips the records done (``manifest.json``); ``--force``
+    starts afresh.  Exit code 0: all records done; 1: some failed; 2: bad input.
+
+Safety of outputs (:mod:`bwim.io.batch`): an output that is one of the inputs is refused;
+an existing output file is refused unless ``--force``; an output folder is locked
+(``.bwim.lock``) for the run; SIGTERM ends a run like Ctrl-C (temporary files removed,
+worker processes stopped, exit code 130).  ``bwim --memory-limit SIZE COMMAND`` bounds the
+memory of the run (:mod:`bwim.limits`).
 ``weigh SCENARIO RECORD... (--calibration-records REC... | --influence IL.h5) [-o FOLDER]``
     Static weights by Moses' algorithm, the influence line calibrated from crossings of
     the scenario's vehicle (and written) or read from a file.
@@ -41,7 +49,9 @@ Subcommands:
 from __future__ import annotations
 
 import argparse
+import contextlib
 import csv
+import os
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -68,15 +78,20 @@ def _bar(total: int | None, desc: str):
     return tqdm(total=total, desc=desc, disable=_quiet(), file=sys.stderr, leave=False)
 
 
-def _out_file(path: str | Path, suffixes: Sequence[str] | None = None) -> Path:
-    """An output file that can be written (checked before any work)."""
+def _out_file(path: str | Path, suffixes: Sequence[str] | None = None, *,
+              inputs: Sequence[str | Path] = (), force: bool = True) -> Path:
+    """An output file that can be written (checked before any work): not one of the
+    ``inputs``, and not an existing file unless ``force``."""
     from bwim.io import check_writable
+    from bwim.io.batch import refuse_existing, refuse_input_overwrite
 
     p = Path(path)
     if suffixes is not None and p.suffix.lower() not in suffixes:
         raise InputError(f"{p}: unknown output format {p.suffix!r}; use "
                          f"{' or '.join(suffixes)}")
-    return check_writable(p)
+    refuse_input_overwrite([p], inputs)
+    check_writable(p)
+    return refuse_existing(p, force=force)
 
 
 def _out_folder(path: str | Path) -> Path:
@@ -92,6 +107,13 @@ def _out_folder(path: str | Path) -> Path:
         raise InputError(f"cannot create the folder {p}: {exc.strerror or exc}") from None
     check_writable(p / "summary.csv")
     return p
+
+
+def _locked(folder: Path):
+    """The output folder's lock for this run (:class:`bwim.io.batch.OutputLock`)."""
+    from bwim.io.batch import OutputLock
+
+    return OutputLock(folder)
 
 
 def _record_paths(items: Sequence[str]) -> list[Path]:
@@ -159,7 +181,9 @@ class _CalibrationProgress:
 def _simulate(args: argparse.Namespace) -> int:
     from bwim.io import load_scenario, simulate_scenario, write_csv_record, write_record
 
-    out = _out_file(args.output, (".h5", ".hdf5", ".hdf", ".csv"))
+    out = _out_file(args.output, (".h5", ".hdf5", ".hdf", ".csv"),
+                    inputs=[args.scenario, *([args.bridge] if args.bridge else [])],
+                    force=args.force)
     scenario = load_scenario(args.scenario)
     bridge = _bridge(args, scenario) if args.bridge else None
     t0 = time.perf_counter()
@@ -186,12 +210,15 @@ def _calibrate(args: argparse.Namespace) -> int:
     from bwim.calibration import calibrate
     from bwim.io import build_bridge, build_road, build_vehicle, load_scenario, save_bridge
 
-    out = _out_file(args.output, (".toml",))
+    _check_jobs(args.jobs)
+    paths = _record_paths(args.records)
+    out = _out_file(args.output, (".toml",), inputs=[args.scenario, *paths],
+                    force=args.force)
     scenario = load_scenario(args.scenario)
     start = build_bridge(scenario)
     vehicle = build_vehicle(scenario)
     road = build_road(scenario)
-    records = _load_records(_record_paths(args.records), scenario)
+    records = _load_records(paths, scenario)
     kwargs = scenario.calibrate.kwargs() if scenario.calibrate is not None else {}
     for key in ("method", "seed"):
         if getattr(args, key) is not None:
@@ -222,53 +249,97 @@ def _calibrate(args: argparse.Namespace) -> int:
 
 # --- identify --------------------------------------------------------------------------------
 def _identify_one(bridge, record, kwargs):
-    """One record's identification (a top-level function: it runs in worker processes)."""
+    """One record's identification (a top-level function: it runs in worker processes).
+
+    Returns the result, or the reason (a string) why the record failed: one bad record
+    must not end the batch.
+    """
+    from numpy.linalg import LinAlgError
+
     from bwim.mfi import identify_forces
 
-    return identify_forces(bridge, record, **kwargs)
+    try:
+        return identify_forces(bridge, record, **kwargs)
+    except BwimError as exc:
+        return " ".join(str(exc).split()) or type(exc).__name__
+    except (ValueError, ArithmeticError, LinAlgError) as exc:
+        return f"{type(exc).__name__}: {' '.join(str(exc).split())}"
 
 
-def _identify_all(bridge, records, kwargs, *, jobs: int, scheduler: str | None) -> list:
+def _shutdown_workers() -> None:
+    """Kill joblib's reusable loky workers (after an interrupt)."""
+    with contextlib.suppress(Exception):
+        from joblib.externals.loky import get_reusable_executor
+
+        get_reusable_executor().shutdown(wait=False, kill_workers=True)
+
+
+def _identify_iter(bridge, records, kwargs, *, jobs: int, scheduler: str | None):
+    """``(index, result or reason)`` as each record finishes."""
     n = len(records)
-    results: list = [None] * n
-    with _bar(n if n > 1 else None, "identifying forces") as bar:
-        if scheduler:
-            from distributed import Client, as_completed
+    if scheduler:
+        from distributed import Client, as_completed
 
-            try:
-                client = Client(scheduler, timeout=10)
-            except (OSError, TimeoutError, ValueError) as exc:
-                raise InputError(f"cannot reach the dask scheduler {scheduler}: {exc}") from None
-            try:
-                [b] = client.scatter([bridge], broadcast=True)
-                futures = [client.submit(_identify_one, b, r, kwargs, pure=False)
-                           for r in records]
-                index = {f.key: i for i, f in enumerate(futures)}
-                for fut in as_completed(futures):
-                    results[index[fut.key]] = fut.result()
-                    bar.update()
-            finally:
-                client.close()
-        elif jobs == 1 or n == 1:
-            for i, r in enumerate(records):
-                results[i] = _identify_one(bridge, r, kwargs)
-                bar.update()
-        else:
-            from joblib import Parallel, delayed
+        try:
+            client = Client(scheduler, timeout=10)
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise InputError(f"cannot reach the dask scheduler {scheduler}: {exc}") from None
+        try:
+            [b] = client.scatter([bridge], broadcast=True)
+            futures = [client.submit(_identify_one, b, r, kwargs, pure=False) for r in records]
+            index = {f.key: i for i, f in enumerate(futures)}
+            for fut in as_completed(futures):
+                yield index[fut.key], fut.result()
+        finally:
+            client.close()
+    elif jobs == 1 or n == 1:
+        for i, r in enumerate(records):
+            yield i, _identify_one(bridge, r, kwargs)
+    else:
+        from joblib import Parallel, delayed
 
-            run = Parallel(n_jobs=jobs, return_as="generator")
-            for i, res in enumerate(run(delayed(_identify_one)(bridge, r, kwargs)
-                                        for r in records)):
-                results[i] = res
-                bar.update()
-    return results
+        run = Parallel(n_jobs=jobs, return_as="generator")
+        try:
+            yield from enumerate(run(delayed(_identify_one)(bridge, r, kwargs)
+                                     for r in records))
+        except BaseException:
+            _shutdown_workers()
+            raise
+
+
+def _check_jobs(jobs: int | None) -> None:
+    if jobs is not None and jobs < 1 and jobs != -1:
+        raise InputError(f"--jobs must be a positive number or -1 (all cores), got {jobs}")
+
+
+def _name(path: Path) -> str:
+    """A file name as text that can be printed and written (a name that is not valid
+    UTF-8 shows its odd bytes as U+FFFD)."""
+    return os.fsencode(path.name).decode("utf-8", "replace")
+
+
+def _identify_rows(path: Path, ident) -> list[list]:
+    rows, a0 = [], 0
+    for v, p in enumerate(ident.passages):
+        w = ident.axle_weights[a0:a0 + p.n_axles]
+        a0 += p.n_axles
+        rows.append([_name(path), v + 1, p.n_axles, format_kn_each(w), format_kn(ident.gvw[v], 2),
+                     f"{ident.lam:.4g}"])
+    return rows
 
 
 def _identify(args: argparse.Namespace) -> int:
     from bwim.io import load_scenario, write_identification
+    from bwim.io.batch import (
+        EXIT_FAILED,
+        EXIT_OK,
+        Manifest,
+        OutputLock,
+        refuse_existing,
+        refuse_input_overwrite,
+    )
 
-    if args.jobs < 1 and args.jobs != -1:
-        raise InputError(f"--jobs must be a positive number or -1 (all cores), got {args.jobs}")
+    _check_jobs(args.jobs)
     out = Path(args.output)
     if out.suffix.lower() == ".csv":
         summary = _out_file(out)
@@ -276,85 +347,316 @@ def _identify(args: argparse.Namespace) -> int:
     else:
         folder = _out_folder(out)
         summary = folder / "summary.csv"
-    scenario = load_scenario(args.scenario)
-    bridge = _bridge(args, scenario)
     paths = _record_paths(args.records)
-    records = _load_records(paths, scenario)
-    kwargs = scenario.identify.kwargs() if scenario.identify is not None else {}
-    t0 = time.perf_counter()
-    results = _identify_all(bridge, records, kwargs, jobs=args.jobs, scheduler=args.scheduler)
-    n_max = max(ident.axle_weights.size for ident in results)
-    header = ["record", "vehicle", "axles", *(f"axle_{i + 1}_kN" for i in range(n_max)),
-              "gvw_kN", "lambda"]
-    rows, shown = [], []
-    for path, stem, ident in zip(paths, _unique_stems(paths), results, strict=True):
-        write_identification(ident, folder / f"{stem}_forces.h5")
-        a0 = 0
-        for v, p in enumerate(ident.passages):
-            w = ident.axle_weights[a0:a0 + p.n_axles]
-            a0 += p.n_axles
-            cells = format_kn_each(w)
-            rows.append([path.name, v + 1, p.n_axles, *cells, *[""] * (n_max - len(cells)),
-                         format_kn(ident.gvw[v], 2), f"{ident.lam:.4g}"])
-            shown.append((path.name, v + 1, ", ".join(cells), format_kn(ident.gvw[v]),
-                          f"{ident.lam:.3g}"))
-    _write_csv(summary, header, rows)
-    print(Table(f"Moving force identification, {len(records)} record(s), "
+    inputs = [args.scenario, *([args.bridge] if args.bridge else []), *paths]
+    stems = _unique_stems(paths)
+    targets = [folder / f"{stem}_forces.h5" for stem in stems]
+    refuse_input_overwrite([summary, *targets], inputs)
+    with OutputLock(folder):
+        manifest = Manifest(folder, fresh=args.force)
+        if not manifest.entries:
+            refuse_existing(summary, force=args.force)
+        scenario = load_scenario(args.scenario)
+        bridge = _bridge(args, scenario)
+        kwargs = scenario.identify.kwargs() if scenario.identify is not None else {}
+        t0 = time.perf_counter()
+        outcome: dict[int, tuple[list, str | None]] = {}
+        todo, records = [], []
+        for i, path in enumerate(paths):
+            entry = manifest.done(path)
+            if entry is not None:
+                outcome[i] = (entry["rows"], None)
+                continue
+            try:
+                records.append(_load_records([path], scenario)[0])
+                todo.append(i)
+            except BwimError as exc:
+                reason = " ".join(str(exc).split())
+                outcome[i] = ([], reason)
+                manifest.record(path, result=None, rows=[], error=reason)
+        skipped = len(paths) - len(todo) - sum(1 for r in outcome.values() if r[1])
+        with _bar(len(todo) if len(todo) > 1 else None, "identifying forces") as bar:
+            for k, res in _identify_iter(bridge, records, kwargs, jobs=args.jobs,
+                                         scheduler=args.scheduler):
+                i = todo[k]
+                if isinstance(res, str):
+                    outcome[i] = ([], res)
+                    manifest.record(paths[i], result=None, rows=[], error=res)
+                else:
+                    write_identification(res, targets[i])
+                    rows = _identify_rows(paths[i], res)
+                    outcome[i] = (rows, None)
+                    manifest.record(paths[i], result=targets[i].name, rows=rows, error=None)
+                _write_identify_summary(summary, paths, outcome)
+                bar.update()
+        _write_identify_summary(summary, paths, outcome)
+    failed = [(_name(paths[i]), outcome[i][1]) for i in sorted(outcome) if outcome[i][1]]
+    shown = [(r[0], r[1], ", ".join(r[3]), r[4], r[5])
+             for i in sorted(outcome) for r in outcome[i][0]]
+    print(Table(f"Moving force identification, {len(paths)} record(s)"
+                f"{f' ({skipped} done before)' if skipped else ''}, "
                 f"{time.perf_counter() - t0:.1f} s:",
                 ("record", "vehicle", "axle weights (kN)", "GVW (kN)", "λ"), shown).render())
+    for name, reason in failed:
+        print(f"bwim: {name} failed: {reason}", file=sys.stderr)
     print(f"summary: {summary}\nforces: {folder}/<record>_forces.h5")
-    return 0
+    if failed:
+        print(f"bwim: {len(failed)} of {len(paths)} record(s) failed (see the summary's "
+              "error column)", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+def _write_identify_summary(summary: Path, paths: Sequence[Path], outcome: dict) -> None:
+    """The summary of the records done so far: one row per vehicle, one per failed record
+    (with its reason in the ``error`` column)."""
+    n_max = max((r[2] for rows, _ in outcome.values() for r in rows), default=0)
+    header = ["record", "vehicle", "axles", *(f"axle_{i + 1}_kN" for i in range(n_max)),
+              "gvw_kN", "lambda", "error"]
+    out = []
+    for i in sorted(outcome):
+        rows, error = outcome[i]
+        if error is not None:
+            out.append([_name(paths[i]), "", "", *[""] * n_max, "", "", error])
+        for name, v, n_axles, cells, gvw, lam in rows:
+            out.append([name, v, n_axles, *cells, *[""] * (n_max - len(cells)), gvw, lam, ""])
+    _write_csv(summary, header, out)
 
 
 # --- weigh -----------------------------------------------------------------------------------
+#: summary.csv of ``bwim weigh``: the contract's columns first, then bwim's extras.
+WEIGH_COLUMNS = ("record", "n_axles", "speed_m_s", "axle_spacings_m", "axle_weights_kN",
+                 "gvw_kN", "flags", "group_weights_kN", "lateral", "confidence", "residual",
+                 "quality", "reason")
+
+
+def _joined(values, fmt: str) -> str:
+    return ";".join(format(float(v), fmt) for v in values)
+
+
+def _weigh_row(name: str, *, passage=None, weights=None, gvw=None, groups=None, flags=(),
+               lateral=None, confidence=None, residual=None, quality="", reason="") -> list:
+    """One summary row; weights are written only when given (a weighed vehicle)."""
+    import numpy as np
+
+    def num(v, fmt):
+        return "" if v is None or not np.isfinite(v) else format(float(v), fmt)
+
+    return [name,
+            "" if passage is None else passage.n_axles,
+            "" if passage is None else f"{passage.speed:.3f}",
+            "" if passage is None else _joined(passage.axle_spacings, ".3f"),
+            "" if weights is None else _joined(np.asarray(weights) / 1e3, ".2f"),
+            "" if gvw is None else f"{gvw / 1e3:.2f}",
+            ";".join(flags),
+            "" if groups is None else _joined(np.asarray(groups) / 1e3, ".2f"),
+            num(lateral, ".3f"), num(confidence, ".3f"), num(residual, ".4g"), quality,
+            " ".join(str(reason).split())]
+
+
+def _done_rows(summary: Path, resume: bool) -> dict[str, list[str]]:
+    """Rows of a previous run to keep with ``--resume`` (by record name)."""
+    if not resume or not summary.exists():
+        return {}
+    with summary.open(newline="") as f:
+        rows = list(csv.reader(f))
+    if not rows or tuple(rows[0]) != WEIGH_COLUMNS:
+        raise InputError(f"{summary}: not a bwim weigh summary; cannot resume from it")
+    return {r[0]: r for r in rows[1:] if r and r[-1] == ""}
+
+
+def _site_setup(scenario):
+    from bwim.io import build_vehicle
+    from bwim.site import SiteSetup
+
+    truck = build_vehicle(scenario)
+    det = scenario.axle_detectors
+    return SiteSetup(
+        calibration_loads=truck.static_axle_loads, calibration_spacings=truck.axle_spacings,
+        detectors=None if det is None else det.channels,
+        distance=None if det is None else det.distance,
+        position=0.0 if det is None else det.position,
+        max_spacing=None if det is None else det.max_spacing)
+
+
+def _calibrate_site(paths: Sequence[Path], scenario, folder: Path):
+    """Lines from the calibration truck's logger events; a table of the runs."""
+    from bwim.io import load_record, write_influence_line
+    from bwim.site import calibrate_site
+
+    setup = _site_setup(scenario)
+    records, used, unread = [], [], []
+    for p in paths:
+        try:
+            records.append(load_record(p, scenario))
+            used.append(p)
+        except InputError as exc:
+            unread.append((p.name, str(exc)))
+    site = calibrate_site(records, setup)
+    rows = []
+    for p, det, reason, fit in zip(used, site.detections, site.reasons, site.fits,
+                                   strict=True):
+        v = det.vehicles[0].passage if len(det.vehicles) == 1 else None
+        rows.append((p.name, "" if v is None else f"{v.speed:.2f}",
+                     "" if v is None else f"{v.lane:.2f}",
+                     "" if fit is None else f"{fit.scale:.4f}",
+                     "" if fit is None else f"{fit.residual:.3g}",
+                     reason or "used"))
+    rows += [(name, "", "", "", "", f"unreadable: {msg}") for name, msg in unread]
+    header = ("run", "speed (m/s)", "lateral", "scale", "residual", "status")
+    _write_csv(folder / "calibration_runs.csv", header, rows)
+    print(Table(f"Calibration runs ({site.n_used} of {len(paths)} used):", header,
+                rows).render())
+    write_influence_line(site.lines.line_at(), folder / "influence_lines.h5")
+    return site
+
+
+def _weigh_site(args: argparse.Namespace, scenario, folder: Path) -> int:
+    """``bwim weigh`` on a real installation's logger files (scenario with [logger])."""
+    from bwim.io import load_record
+    from bwim.io.batch import refuse_existing, refuse_input_overwrite
+    from bwim.site import weigh_event
+
+    if not args.calibration_records:
+        raise InputError("weighing logger files needs --calibration-records (runs of the "
+                         "calibration truck)")
+    paths = _record_paths(args.records)
+    cal_paths = _record_paths(args.calibration_records)
+    summary = folder / "summary.csv"
+    refuse_input_overwrite([summary, folder / "calibration_runs.csv",
+                            folder / "influence_lines.h5"],
+                           [args.scenario, *paths, *cal_paths])
+    if not args.resume:
+        refuse_existing(summary, force=args.force)
+    done = _done_rows(summary, args.resume)
+    site = _calibrate_site(cal_paths, scenario, folder)
+    rows: list[list] = []
+    n_failed = n_weighed = 0
+    t0 = time.perf_counter()
+    try:
+        with _bar(len(paths) if len(paths) > 1 else None, "weighing") as bar:
+            for p in paths:
+                bar.update()
+                if p.name in done:
+                    rows.append(done[p.name])
+                    n_weighed += 1
+                    continue
+                try:
+                    rec = load_record(p, scenario)
+                except InputError as exc:
+                    rows.append(_weigh_row(p.name, reason=str(exc)))
+                    n_failed += 1
+                    continue
+                ev = weigh_event(rec, site)
+                det = ev.detection
+                v = det.vehicles[0] if det is not None and len(det.vehicles) == 1 else None
+                w = ev.weighing
+                rows.append(_weigh_row(
+                    p.name, passage=None if v is None else v.passage,
+                    weights=ev.axle_weights, gvw=ev.gvw,
+                    groups=w.group_weights if ev.weighed else None, flags=ev.flags,
+                    lateral=None if v is None else v.lateral,
+                    confidence=None if v is None else v.confidence,
+                    residual=None if w is None else w.residual,
+                    quality="" if w is None else w.quality, reason=ev.reason))
+                n_weighed += ev.weighed
+    finally:  # an interrupted run keeps what it weighed (rerun with --resume)
+        _write_csv(summary, WEIGH_COLUMNS, rows)
+    elapsed = time.perf_counter() - t0
+    n_flagged = len(paths) - n_weighed - n_failed
+    print(f"{len(paths)} event(s) in {elapsed:.1f} s: {n_weighed} weighed, {n_flagged} "
+          f"not weighed (flagged), {n_failed} failed")
+    shown = [(r[0], r[1], r[4].replace(";", ", "), r[5], r[6] or r[12]) for r in rows[:20]]
+    print(Table("Static weights (multi-run influence lines, gauges combined):",
+                ("record", "axles", "axle weights (kN)", "GVW (kN)", "flags / reason"),
+                shown).render())
+    if len(rows) > 20:
+        print(f"... {len(rows) - 20} more in the summary")
+    print(f"summary: {summary}")
+    return 1 if n_failed else 0
+
+
 def _weigh(args: argparse.Namespace) -> int:
+    from bwim.io import load_scenario
+
+    folder = _out_folder(args.output)
+    with _locked(folder):
+        scenario = load_scenario(args.scenario)
+        if scenario.logger is not None:
+            return _weigh_site(args, scenario, folder)
+        return _weigh_moses(args, scenario, folder)
+
+
+def _weigh_moses(args: argparse.Namespace, scenario, folder: Path) -> int:
+    """``bwim weigh`` on records with their passages (simulated, or a [run] scenario)."""
     from bwim.io import (
         build_vehicle,
-        load_scenario,
+        load_record,
         read_influence_line,
         write_influence_line,
         write_static_weights,
     )
+    from bwim.io.batch import refuse_existing, refuse_input_overwrite
     from bwim.wim import calibrate_influence_line, weigh_static
 
-    folder = _out_folder(args.output)
-    scenario = load_scenario(args.scenario)
     paths = _record_paths(args.records)
-    records = _load_records(paths, scenario)
+    cal_paths = _record_paths(args.calibration_records) if args.calibration_records else []
+    summary = folder / "summary.csv"
+    stems = _unique_stems(paths)
+    refuse_input_overwrite(
+        [summary, folder / "influence_line.h5",
+         *(folder / f"{stem}_static.h5" for stem in stems)],
+        [args.scenario, *paths, *cal_paths, *([args.influence] if args.influence else [])])
+    if not args.resume:
+        refuse_existing(summary, force=args.force)
     if args.influence:
         il = read_influence_line(args.influence)
         print(f"influence line: {args.influence}")
     else:
-        cal_records = _load_records(_record_paths(args.calibration_records), scenario)
+        cal_records = _load_records(cal_paths, scenario)
         il = calibrate_influence_line(cal_records, build_vehicle(scenario))
         target = folder / "influence_line.h5"
         write_influence_line(il, target)
         print(f"influence line calibrated from {len(cal_records)} crossing(s) "
               f"(residual {il.residual:.3g}): {target}")
-    n_max = 0
-    results = []
-    with _bar(len(records) if len(records) > 1 else None, "weighing") as bar:
-        for path, rec in zip(paths, records, strict=True):
-            try:
-                results.append(weigh_static(rec, il))
-            except InputError as exc:
-                raise InputError(f"{path}: {exc}") from None
-            n_max = max(n_max, results[-1].n_axles)
-            bar.update()
-    header = ["record", "axles", *(f"axle_{i + 1}_kN" for i in range(n_max)), "gvw_kN",
-              "residual"]
+    summary = folder / "summary.csv"
+    done = _done_rows(summary, args.resume)
     rows, shown = [], []
-    for path, stem, w in zip(paths, _unique_stems(paths), results, strict=True):
-        write_static_weights(w, folder / f"{stem}_static.h5")
-        cells = format_kn_each(w.axle_weights)
-        rows.append([path.name, w.n_axles, *cells, *[""] * (n_max - len(cells)),
-                     format_kn(w.gvw, 2), f"{w.residual:.4g}"])
-        shown.append((path.name, ", ".join(cells), format_kn(w.gvw), f"{w.residual:.3g}"))
-    _write_csv(folder / "summary.csv", header, rows)
+    n_failed = 0
+    try:
+        with _bar(len(paths) if len(paths) > 1 else None, "weighing") as bar:
+            for path, stem in zip(paths, stems, strict=True):
+                bar.update()
+                if path.name in done:
+                    rows.append(done[path.name])
+                    continue
+                try:
+                    rec = load_record(path, scenario)
+                    w = weigh_static(rec, il)
+                except InputError as exc:
+                    rows.append(_weigh_row(path.name, reason=str(exc)))
+                    shown.append((path.name, "", "", f"failed: {exc}"))
+                    n_failed += 1
+                    continue
+                flags = w.flags
+                ok = w.quality != "reject"
+                if ok:
+                    write_static_weights(w, folder / f"{stem}_static.h5")
+                rows.append(_weigh_row(
+                    path.name, passage=w.passage, weights=w.axle_weights if ok else None,
+                    gvw=w.gvw if ok else None, groups=w.group_weights if ok else None,
+                    flags=flags, residual=w.residual, quality=w.quality,
+                    reason="" if ok else f"implausible weighing ({';'.join(flags)})"))
+                shown.append((path.name, ", ".join(format_kn_each(w.axle_weights)) if ok
+                              else "-", format_kn(w.gvw) if ok else "-",
+                              ";".join(flags) or f"{w.residual:.3g}"))
+    finally:  # an interrupted run keeps what it weighed (rerun with --resume)
+        _write_csv(summary, WEIGH_COLUMNS, rows)
     print(Table("Static weights (Moses):",
-                ("record", "axle weights (kN)", "GVW (kN)", "residual"), shown).render())
-    print(f"summary: {folder / 'summary.csv'}\nweights: {folder}/<record>_static.h5")
-    return 0
+                ("record", "axle weights (kN)", "GVW (kN)", "flags / residual"),
+                shown).render())
+    print(f"summary: {summary}\nweights: {folder}/<record>_static.h5")
+    return 1 if n_failed else 0
 
 
 # --- accuracy --------------------------------------------------------------------------------
@@ -368,7 +670,8 @@ def _accuracy(args: argparse.Namespace) -> int:
                     environment=args.environment, strict=args.strict)
     print(result.render())
     if args.output:
-        target = _out_file(args.output, (".csv",))
+        target = _out_file(args.output, (".csv",), inputs=[args.summary, args.reference],
+                           force=args.force)
         table = result.table()
         _write_csv(target, table.header, table.rows)
         print(f"table: {target}")
@@ -379,7 +682,7 @@ def _accuracy(args: argparse.Namespace) -> int:
 def _report(args: argparse.Namespace) -> int:
     from bwim import report
 
-    out = _out_file(args.output, (".html", ".htm"))
+    out = _out_file(args.output, (".html", ".htm"), force=args.force)
     items = report.read_results(args.results)
     sections = [report.section(obj, name) for name, obj in items]
     report.write_report(out, sections, title=args.title)
@@ -402,6 +705,17 @@ def _write_figures(figures: dict, folder: Path, *, prefix: str = "", dpi: int) -
 
 
 def _demo(args: argparse.Namespace) -> int:
+    from bwim.paper.demo import MAX_MODES
+
+    if not 1 <= args.modes <= MAX_MODES:
+        raise InputError(f"--modes must be between 1 and {MAX_MODES}, got {args.modes}")
+    _check_jobs(args.jobs)
+    out = _out_folder(args.out)
+    with _locked(out):
+        return _demo_run(args, out)
+
+
+def _demo_run(args: argparse.Namespace, out: Path) -> int:
     from bwim.io import (
         save_bridge,
         write_identification,
@@ -409,12 +723,9 @@ def _demo(args: argparse.Namespace) -> int:
         write_record,
         write_static_weights,
     )
-    from bwim.paper.demo import MAX_MODES, REPORT_INTRO, REPORT_TITLE, run_demo
+    from bwim.paper.demo import REPORT_INTRO, REPORT_TITLE, run_demo
     from bwim.report import figure_files, write_report
 
-    if not 1 <= args.modes <= MAX_MODES:
-        raise InputError(f"--modes must be between 1 and {MAX_MODES}, got {args.modes}")
-    out = _out_folder(args.out)
     t0 = time.perf_counter()
     progress = _CalibrationProgress()
     try:
@@ -444,9 +755,17 @@ def _reproduce(args: argparse.Namespace) -> int:
     from bwim.paper import reproduce
 
     names = list(reproduce.CASES) if args.case == "all" else [args.case]
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    _check_jobs(args.jobs)
+    out = _out_folder(args.out)
     check_writable(out / ".probe")
+    with _locked(out):
+        _reproduce_cases(args, names, out)
+    return 0
+
+
+def _reproduce_cases(args: argparse.Namespace, names: Sequence[str], out: Path) -> None:
+    from bwim.paper import reproduce
+
     t0 = time.perf_counter()
     for name in names:
         print(f"== reproducing {name}{' (quick)' if args.quick else ''} ==", flush=True)
@@ -461,7 +780,6 @@ def _reproduce(args: argparse.Namespace) -> int:
                 print(f"  figure: {target}")
         print()
     print(f"total {time.perf_counter() - t0:.1f} s")
-    return 0
 
 
 # --- the parser: one declarative entry per command -------------------------------------------
@@ -502,6 +820,8 @@ class Command:
 
 
 _SCENARIO = arg("scenario", metavar="SCENARIO.toml")
+_FORCE = arg("--force", action="store_true",
+             help="overwrite existing outputs (an input is never overwritten)")
 
 COMMANDS: tuple[Command, ...] = (
     Command(
@@ -516,7 +836,8 @@ COMMANDS: tuple[Command, ...] = (
              "(time and readings only); default record.h5"),
          arg("--bridge", metavar="MODEL.toml",
              help="use this bridge model (e.g. a calibrated one) instead of the scenario's "
-             "[bridge]"))),
+             "[bridge]"),
+         _FORCE)),
     Command(
         "calibrate", _calibrate,
         "calibrate the bridge model from crossings of a truck of known weight",
@@ -535,7 +856,8 @@ COMMANDS: tuple[Command, ...] = (
              help="optimiser: ce = Cross-Entropy (the paper's), lm = Levenberg-Marquardt, "
              "cma = CMA-ES (default: the scenario's, else ce)"),
          arg("--jobs", type=int, help="worker processes for the populations"),
-         arg("--seed", type=int, help="random seed of the optimiser"))),
+         arg("--seed", type=int, help="random seed of the optimiser"),
+         _FORCE)),
     Command(
         "identify", _identify,
         "identify the moving axle forces and weights of vehicles (MFI)",
@@ -543,7 +865,10 @@ COMMANDS: tuple[Command, ...] = (
         "weight and the gross vehicle weight, from each record and the bridge model (ideally "
         "a calibrated one).  Many records run in parallel on this machine (--jobs) or on a "
         "dask.distributed cluster (--scheduler).  Writes a CSV summary, one row per vehicle, "
-        "and <record>_forces.h5 per record.\n\n"
+        "and <record>_forces.h5 per record, each as its record finishes; a record that "
+        "fails gets a summary row with its reason and the others go on.  A rerun into "
+        "the same OUT skips the records already done.  Exit code 0: all records done, "
+        "1: some failed, 2: bad input.\n\n"
         "  bwim identify examples/paper_slab.toml records/ --bridge calibrated.toml -o out/",
         (arg("scenario", metavar="SCENARIO.toml",
              help="the scenario (sensor positions; passage of CSV records)"),
@@ -557,13 +882,24 @@ COMMANDS: tuple[Command, ...] = (
          OneOf((arg("--jobs", type=int, default=1,
                     help="worker processes on this machine (-1: all cores); default 1"),
                 arg("--scheduler", metavar="ADDRESS",
-                    help="address of a dask.distributed scheduler, e.g. tcp://host:8786"))))),
+                    help="address of a dask.distributed scheduler, e.g. tcp://host:8786"))),
+         arg("--force", action="store_true",
+             help="start afresh: redo every record and overwrite the outputs (default: "
+             "records already done in OUT, per its manifest.json, are skipped)"))),
     Command(
         "weigh", _weigh,
-        "static weights by Moses' algorithm from an influence line",
-        "Static axle weights and GVW by Moses' algorithm.  The influence line is either "
-        "calibrated from crossings of the scenario's vehicle (the calibration truck) and "
-        "written to the output folder, or read from a file.\n\n"
+        "static weights by Moses' algorithm from influence lines",
+        "Static axle weights and GVW by Moses' algorithm, one summary.csv row per record "
+        "(record, n_axles, speed_m_s, axle_spacings_m, axle_weights_kN, gvw_kN, flags, ...); "
+        "a record that cannot be weighed gets a row with its reason, and the exit code is 1 "
+        "if a record failed.  No weight is written without its plausibility checks.\n"
+        "With a scenario that has [logger] (a real installation's logger files): each "
+        "vehicle is detected (axle detectors, or the strain alone), every gauge's influence "
+        "line is calibrated from the calibration truck's runs (speed, lateral position and "
+        "drift of each run found from the data), and traffic is weighed with the gauges "
+        "combined.  Otherwise the records carry their passages and one line is calibrated "
+        "from crossings of the scenario's vehicle or read from a file.\n\n"
+        "  bwim weigh site.toml events/ --calibration-records calibration/ -o out/\n"
         "  bwim weigh examples/paper_slab.toml truck.h5 --calibration-records crossing.h5",
         (_SCENARIO,
          arg("records", nargs="+", metavar="RECORD",
@@ -574,7 +910,11 @@ COMMANDS: tuple[Command, ...] = (
                 arg("--influence", metavar="IL.h5", help="a saved influence line")),
                required=True),
          arg("-o", "--output", default="bwim-out/weigh", metavar="FOLDER",
-             help="results folder (default bwim-out/weigh)"))),
+             help="results folder (default bwim-out/weigh)"),
+         arg("--resume", action="store_true",
+             help="keep the records already weighed in the folder's summary.csv and weigh "
+             "only the others"),
+         _FORCE)),
     Command(
         "accuracy", _accuracy,
         "COST 323 accuracy classes of weights against statically weighed references",
@@ -595,7 +935,8 @@ COMMANDS: tuple[Command, ...] = (
              "reproducibility, III full (seasons); default I"),
          arg("--strict", action="store_true",
              help="a reference record absent from the summary is an error"),
-         arg("-o", "--output", metavar="TABLE.csv", help="also write the table as CSV"))),
+         arg("-o", "--output", metavar="TABLE.csv", help="also write the table as CSV"),
+         _FORCE)),
     Command(
         "report", _report,
         "a single-file HTML report of result files",
@@ -606,7 +947,8 @@ COMMANDS: tuple[Command, ...] = (
         (arg("results", nargs="+", metavar="RESULTS"),
          arg("-o", "--output", default="report.html", metavar="REPORT.html",
              help="default report.html"),
-         arg("--title", default="bwim report", help="the page title"))),
+         arg("--title", default="bwim report", help="the page title"),
+         _FORCE)),
     Command(
         "demo", _demo,
         "the whole chain on the paper's slab bridge, in under a minute",
@@ -654,6 +996,10 @@ def _parser() -> argparse.ArgumentParser:
         epilog="Scenario files (TOML) describe the bridge, the sensors, the vehicle, the "
         "road and the run; see examples/paper_slab.toml.  Units are SI.",
     )
+    p.add_argument("--memory-limit", metavar="SIZE",
+                   help="most memory a command may use, e.g. 4G, 800M or 0.25 (a fraction "
+                   "of the machine's); default: the BWIM_MEMORY_LIMIT environment variable, "
+                   "else half the machine's memory")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for c in COMMANDS:
         fmt = {"formatter_class": argparse.RawDescriptionHelpFormatter} if c.raw else {}
@@ -666,17 +1012,34 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``bwim`` command; returns the exit code."""
+    from bwim.io.batch import signals_as_interrupt
+    from bwim.limits import ENV_VAR, parse_size
+
+    for stream in (sys.stdout, sys.stderr):  # file names that are not UTF-8 print too
+        with contextlib.suppress(AttributeError, ValueError, OSError):
+            stream.reconfigure(errors="backslashreplace")
     parser = _parser()
     args = parser.parse_args(argv)
+    saved = os.environ.get(ENV_VAR)
     try:
-        return int(args.run(args))
+        if args.memory_limit is not None:
+            parse_size(args.memory_limit)  # a one-line error if it is not a size
+            os.environ[ENV_VAR] = args.memory_limit
+        with signals_as_interrupt():
+            return int(args.run(args))
     except BwimError as exc:
         message = " ".join(str(exc).split()) or type(exc).__name__
         print(f"bwim: error: {message}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print("bwim: interrupted", file=sys.stderr)
+        print("bwim: interrupted (the records finished so far are kept; rerun to go on)",
+              file=sys.stderr)
         return 130
+    finally:
+        if saved is None:
+            os.environ.pop(ENV_VAR, None)
+        else:
+            os.environ[ENV_VAR] = saved
 
 
 if __name__ == "__main__":  # pragma: no cover

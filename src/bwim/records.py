@@ -16,6 +16,10 @@ Contract
   free vibration ``tail`` in s): what re-simulating it needs (calibration's dynamic
   stages).  :func:`bwim.simulate` sets it on its records; measured records may carry the
   settings their model should use.
+* :meth:`Record.with_noise` adds Gaussian noise; by default **gauge noise**: one σ for
+  every channel of a kind (strain, deflection), absolute or a fraction of the record's
+  overall peak of that kind.  The paper's per-channel model (σ ∝ each channel's peak) is
+  ``per_channel=True``.
 """
 
 from __future__ import annotations
@@ -30,7 +34,7 @@ from bwim.errors import InputError, require_finite, require_positive
 from bwim.sensors import Sensor
 
 __all__ = ["Passage", "Record", "SimulationSettings", "Truth", "VBIConvergence",
-           "axle_offsets"]
+           "axle_offsets", "noise_sigma"]
 
 
 def axle_offsets(spacings: np.ndarray) -> np.ndarray:
@@ -289,12 +293,55 @@ class Record:
 
         return plot_record(self, ax, **kw)
 
-    def with_noise(self, fraction: float, *, seed: int | np.random.Generator | None) -> Record:
-        """A copy with Gaussian noise of standard deviation ``fraction`` × the peak absolute
-        reading of each channel (the paper's §5.2 noise model)."""
-        if not np.isfinite(fraction) or fraction < 0:
-            raise InputError(f"noise fraction must be >= 0, got {fraction!r}")
+    def with_noise(self, fraction: float | None = None, *,
+                   seed: int | np.random.Generator | None, sigma: float | None = None,
+                   per_channel: bool = False) -> Record:
+        """A copy with Gaussian measurement noise (see :func:`noise_sigma`).
+
+        Gauge noise is the default: one standard deviation for every channel of a kind of
+        reading (all strain gauges share one σ in strain, all deflection channels one in
+        m), given either absolutely (``sigma``) or as a ``fraction`` of the record's
+        overall peak reading of that kind.  ``per_channel=True`` is the paper's §5.2
+        model instead: each channel's σ is ``fraction`` × its own peak (a real gauge's
+        noise does not scale with its signal; keep it to reproduce the paper).
+        """
+        scale = noise_sigma(self, fraction, sigma=sigma, per_channel=per_channel)
         rng = np.random.default_rng(seed)
-        scale = fraction * np.abs(self.data).max(axis=0)
         return dataclasses.replace(self, data=self.data + rng.standard_normal(self.data.shape)
                                    * scale)
+
+
+def noise_sigma(record: Record, fraction: float | None = None, *, sigma: float | None = None,
+                per_channel: bool = False) -> np.ndarray:
+    """Noise standard deviation of each channel, shape (n_sensors,), in reading units.
+
+    Exactly one of ``fraction`` and ``sigma``: ``sigma`` is absolute (every channel);
+    ``fraction`` × the peak |reading| over all channels with the same unit (strain,
+    deflection…; absolute gauge noise scaled to the event), or, with
+    ``per_channel=True`` (the paper's §5.2 definition), × each channel's own peak.
+    """
+    if (fraction is None) == (sigma is None):
+        raise InputError("give exactly one of fraction (of the peak reading) and sigma "
+                         "(absolute)")
+    peak = np.abs(record.data).max(axis=0)
+    if sigma is not None:
+        if per_channel:
+            raise InputError("per_channel scales a fraction of each channel's peak; an "
+                             "absolute sigma is the same on every channel")
+        if isinstance(sigma, bool) or not isinstance(sigma, (int, float, np.number)) \
+                or not np.isfinite(sigma) or sigma < 0:
+            raise InputError(f"sigma must be a number >= 0 (reading units), got {sigma!r}")
+        return np.full(peak.shape, float(sigma))
+    if isinstance(fraction, bool) or not isinstance(fraction, (int, float, np.number)):
+        raise InputError(f"noise fraction must be a number in [0, 1], got {fraction!r}")
+    if not np.isfinite(fraction) or not 0.0 <= fraction <= 1.0:
+        raise InputError(f"noise fraction must lie in [0, 1] (a share of the peak reading), "
+                         f"got {fraction!r}")
+    if per_channel:
+        return fraction * peak
+    units = np.array([s.kind.unit for s in record.sensors])
+    out = np.empty_like(peak)
+    for unit in set(units.tolist()):
+        group = units == unit
+        out[group] = fraction * peak[group].max()
+    return out

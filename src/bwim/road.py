@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from bwim.errors import InputError, require_positive, require_range
+from bwim.limits import check_memory
 
 __all__ = ["ISO_CLASSES", "RoadProfile"]
 
@@ -122,6 +123,8 @@ class RoadProfile:
         if not 0 < n_lo < n_hi:
             raise InputError(f"band must be 0 < low < high cycle/m, got {band}")
         x0 = -0.75 * length if start is None else float(start)
+        check_memory(length / dx * 8.0 * 12, f"an ISO 8608 road profile of {length:g} m at "
+                     f"dx = {dx:g} m")
         n = int(np.ceil(length / dx)) + 1
         rng = np.random.default_rng(seed)
         right = _harmonic_sum(n, dx, gd0, waviness, n_lo, n_hi, rng)

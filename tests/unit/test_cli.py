@@ -210,12 +210,15 @@ def test_bad_csv_records(files, tmp_path, capsys):
     for name, edit, needle in (("missing", drop, "y9_6"), ("extra", extra, "spare"),
                                ("nan", nan, "nan"), ("time", backwards, "time")):
         bad = _csv_copy(src, tmp_path / f"{name}.csv", edit)
-        before = {p for p in tmp_path.rglob("*")}
         code = main(["identify", str(scen), str(bad), "-o", str(out)])
         err = capsys.readouterr().err
-        assert code == 2 and err.startswith("bwim: error: ") and err.count("\n") == 1, err
+        # a bad record is a failed record (exit 1, issue 14): a summary row with its reason
+        assert code == 1 and err.startswith(f"bwim: {bad.name} failed: "), err
         assert needle.lower() in err.lower(), err
-        assert not out.exists() and {p for p in tmp_path.rglob("*")} == before
+        rows = list(csv.DictReader(out.open()))
+        row = next(r for r in rows if r["record"] == bad.name)
+        assert needle.lower() in row["error"].lower()
+        assert not (tmp_path / f"{name}_forces.h5").exists()
 
 
 def test_unwritable_output_paths(files, tmp_path, capsys):
@@ -244,8 +247,12 @@ def test_unwritable_output_paths(files, tmp_path, capsys):
 def test_bad_record_and_model_files(files, tmp_path, capsys):
     junk = tmp_path / "junk.h5"
     junk.write_text("not hdf5")
-    _bad(tmp_path, capsys, ["identify", files["three"], junk, "-o", tmp_path / "s.csv"],
-         "junk.h5")
+    # a bad record in a batch is a failed record: exit 1, its reason in the summary
+    code = main([str(a) for a in ["identify", files["three"], junk, "-o", tmp_path / "s.csv"]])
+    err = capsys.readouterr().err
+    assert code == 1 and "junk.h5" in err and "not an HDF5 file" in err, err
+    (tmp_path / "s.csv").unlink()
+    (tmp_path / "manifest.json").unlink()
     _bad(tmp_path, capsys, ["calibrate", files["cal"], tmp_path / "gone.h5", "-o",
                             tmp_path / "m.toml"], "gone.h5", output=tmp_path / "m.toml")
     _bad(tmp_path, capsys, ["identify", files["three"], files["truck_h5"], "--bridge",

@@ -5,10 +5,17 @@ from bwim.calibration.problem import (
     DynamicObjective,
     ParameterSpace,
     StaticObjective,
+    estimate_noise,
     neighbour_map,
+    noise_weights,
     peak_weights,
 )
-from bwim.calibration.sensitivity import Identifiability, identifiability
+from bwim.calibration.sensitivity import (
+    Identifiability,
+    RoadSensitivity,
+    identifiability,
+    road_sensitivity,
+)
 from bwim.calibration.stages import Method, StageResult, run_stage
 
 __all__ = [
@@ -18,11 +25,15 @@ __all__ = [
     "Method",
     "ParameterSpace",
     "Refine",
+    "RoadSensitivity",
     "StageResult",
     "StaticObjective",
     "calibrate",
+    "estimate_noise",
     "identifiability",
     "neighbour_map",
+    "noise_weights",
     "peak_weights",
+    "road_sensitivity",
     "run_stage",
 ]

@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from enum import StrEnum
 
 import numpy as np
@@ -42,16 +42,26 @@ from bwim.calibration.problem import (
     ParameterSpace,
     StaticObjective,
     neighbour_map,
+    noise_weights,
+    peak_weights,
 )
 from bwim.calibration.sensitivity import Identifiability, identifiability
 from bwim.calibration.stages import SUBSTRUCTURED_SMOOTHING, Method, StageResult, run_stage
 from bwim.errors import InputError, parse_enum
 from bwim.fe.bridge import Bridge
+from bwim.fe.convergence import MeshConvergence, check_mesh
 from bwim.records import Record
 from bwim.road import RoadProfile
 from bwim.vehicles import Vehicle
 
 __all__ = ["Calibration", "Refine", "calibrate"]
+
+
+_REFINE_NAME = "joint refinement (dynamic)"
+
+#: Relative tolerance of the mesh check behind ``weights="model"`` when ``mesh_check``
+#: is not given.
+DEFAULT_MESH_TOL = 0.01
 
 
 class Refine(StrEnum):
@@ -79,6 +89,14 @@ class Calibration:
     wall_time : float
         Seconds.
     identifiability : Identifiability
+    two_stage : dict of str to ndarray
+        The parameters after the paper's two stages (before the refinement; equal to
+        ``params`` when ``refine="none"``).
+    weighting : str
+        How channels were weighted: "none", "noise", "peak" or "given".
+    discretisation : MeshConvergence or None
+        The model's discretisation error at the sensors
+        (:func:`bwim.fe.convergence.check_mesh`), when ``calibrate`` was asked for it.
     """
 
     bridge: Bridge
@@ -88,6 +106,9 @@ class Calibration:
     nfev: int
     wall_time: float
     identifiability: Identifiability
+    two_stage: dict = field(default_factory=dict)
+    weighting: str = "none"
+    discretisation: MeshConvergence | None = None
 
     @property
     def history(self) -> tuple[object, ...]:
@@ -119,7 +140,7 @@ def calibrate(
     vehicle: Vehicle,
     *,
     road: RoadProfile | None = None,
-    unknowns: Sequence[str] = ("E_x", "E_y", "mu"),
+    unknowns: Sequence[str] | None = None,
     seed: int | np.random.Generator | None = None,
     method: Method | str = Method.CE,
     refine: Refine | str = Refine.LM,
@@ -132,6 +153,7 @@ def calibrate(
     substructure: bool | None = None,
     shared_girders: bool = True,
     weights=None,
+    mesh_check: float | None = None,
     n_modes: int | None = None,
     n_jobs: int = 1,
     client=None,
@@ -155,7 +177,8 @@ def calibrate(
         The road the crossings were made on (default flat), for the dynamic stages.
     unknowns : sequence of str
         Parameter families to calibrate: stiffness ones (``E_x``, ``E_y``, ``E_girder``)
-        in stage 1, mass ones (``mu``, ``mu_girder``) in stage 2.
+        in stage 1, mass ones (``mu``, ``mu_girder``) in stage 2.  Default: those of
+        ``E_x``, ``E_y``, ``mu`` the bridge has (``E_x``, ``mu`` on a beam).
     seed : int or Generator
         Randomness of the population methods.
     method : "ce", "lm" or "cma"
@@ -180,10 +203,21 @@ def calibrate(
     shared_girders : bool
         Calibrate one ``E_girder`` and one ``mu_girder`` for all girders (the paper's
         §5.4; identical girders), rather than one per girder.
-    weights : sequence of arrays, optional
-        Per-record, per-channel weights of the squared residuals (default 1, the paper's
-        plain sum); :func:`~bwim.calibration.problem.peak_weights` gives the
-        maximum-likelihood weights for noise proportional to each channel's peak.
+    weights : "none", "noise", "peak" or sequence of arrays, optional
+        Per-record, per-channel weights of the squared residuals.  Default (None,
+        "none"): 1, the paper's plain sum.  "noise": ``1 / σ̂²`` with each channel's noise
+        estimated from the data (:func:`~bwim.calibration.problem.noise_weights`; assumes
+        no noise model).  "peak": ``1 / peak²``
+        (:func:`~bwim.calibration.problem.peak_weights`; maximum likelihood only for the
+        paper's noise proportional to each channel's peak).  "model": ``1 / (σ̂² + e²)``
+        with ``e`` the starting model's discretisation error at each sensor
+        (:func:`bwim.fe.convergence.check_mesh` under the truck's static loads where its
+        strains peak): channels the mesh cannot reproduce weigh less.
+    mesh_check : float, optional
+        Relative tolerance of a mesh-convergence check of the *calibrated* model at the
+        sensors under the calibration truck's static loads
+        (:func:`bwim.fe.convergence.check_mesh`); its discretisation error per sensor is
+        :attr:`Calibration.discretisation`.  Default: no check.
     n_modes : int, optional
         Modes of the dynamic simulations (default: up to sampling_rate / 8).
     n_jobs, client
@@ -196,13 +230,21 @@ def calibrate(
     t0 = time.perf_counter()
     method = parse_enum(Method, method, "method")
     refine = parse_enum(Refine, refine, "refine")
+    if isinstance(start_bridge, Bridge) and unknowns is None:
+        unknowns = tuple(u for u in ("E_x", "E_y", "mu") if u in start_bridge.params)
     records = _check_inputs(start_bridge, records, unknowns, bounds)
+    _check_options(population=population, max_evals=max_evals, n_jobs=n_jobs,
+                   n_modes=n_modes, elite_fraction=elite_fraction,
+                   weights=None if isinstance(weights, str) else weights,
+                   n_records=len(records))
+    weighting, weights, disc = _weights(weights, records, start_bridge, vehicle, mesh_check)
     unknowns = tuple(unknowns)
     rng = np.random.default_rng(seed)
     shared = frozenset(Bridge.GIRDER_FAMILIES if shared_girders else ())
     current = start_bridge
     stages: list[StageResult] = []
     uncertainty: dict[str, np.ndarray] = {}
+    two_stage: dict[str, np.ndarray] = {}
     for stage in _plan(start_bridge, unknowns, method, refine, population, max_evals,
                        substructure):
         space = ParameterSpace(current, stage.families, shared)
@@ -221,22 +263,80 @@ def calibrate(
             options=_ce_options(stage, ce_options))
         current = space.bridge(result.x, current)
         stages.append(result)
+        if stage.method is not Method.LM or stage.name != _REFINE_NAME:
+            two_stage.update({f: current.params[f] for f in stage.families})
         if stage.keeps_uncertainty:
             uncertainty.update(space.split(result.uncertainty))
     stiff = tuple(u for u in unknowns if u in Bridge.STIFFNESS_FAMILIES)
     report = identifiability(current, records, vehicle, names=stiff or None)
     params = {u: current.params[u] for u in unknowns}
     unc = {u: uncertainty.get(u, np.full(params[u].shape, np.nan)) for u in unknowns}
+    two = {u: two_stage.get(u, params[u]) for u in unknowns}
+    if mesh_check is not None:
+        disc = check_mesh(current, records[0].sensors,
+                          _static_loads(records[0], vehicle, current), tol=mesh_check)
     return Calibration(bridge=current, params=params, uncertainty=unc, stages=tuple(stages),
                        nfev=sum(s.nfev for s in stages),
-                       wall_time=time.perf_counter() - t0, identifiability=report)
+                       wall_time=time.perf_counter() - t0, identifiability=report,
+                       two_stage=two, weighting=weighting, discretisation=disc)
+
+
+def _weights(weights, records: list[Record], bridge: Bridge, vehicle: Vehicle,
+             mesh_check: float | None):
+    """``(name, per-record channel weights, mesh check or None)`` from ``weights``."""
+    if weights is None:
+        return "none", None, None
+    if isinstance(weights, str):
+        key = weights.strip().lower()
+        if key == "none":
+            return "none", None, None
+        if key == "noise":
+            return "noise", noise_weights(records), None
+        if key == "peak":
+            return "peak", peak_weights(records), None
+        if key == "model":
+            mc = check_mesh(bridge, records[0].sensors,
+                            _static_loads(records[0], vehicle, bridge),
+                            tol=mesh_check or DEFAULT_MESH_TOL)
+            err = np.abs(mc.error[0]).max(axis=0)
+            return "model", noise_weights(records, model_error=err), mc
+        raise InputError(f"weights must be 'none', 'noise', 'peak', 'model' or arrays, got "
+                         f"{weights!r}")
+    return "given", list(weights), None
+
+
+def _static_loads(record: Record, vehicle: Vehicle, bridge: Bridge):
+    """The calibration truck's static wheel loads at its position of peak total strain
+    in ``record`` (the load case of the mesh check)."""
+    from bwim.loads import PointLoad
+
+    p = record.passage
+    k = int(np.argmax(np.abs(record.data).sum(axis=1)))
+    x = p.wheel_x(record.time[k : k + 1])[0]
+    y = p.wheel_y if bridge.is_plate else np.zeros_like(x)
+    f = vehicle.model().static_forces
+    return [PointLoad(x=float(xi), y=float(yi), P=float(fi))
+            for xi, yi, fi in zip(x, y, f, strict=True) if 0 < xi < bridge.length]
 
 
 def _check_inputs(start_bridge, records, unknowns, bounds) -> list[Record]:
     """The records as a list, after checking the bridge, the unknowns and the bounds."""
     if not isinstance(start_bridge, Bridge):
         raise InputError(f"start_bridge must be a bwim.Bridge, got {type(start_bridge).__name__}")
-    records = [records] if isinstance(records, Record) else list(records)
+    if isinstance(records, Record):
+        records = [records]
+    elif records is None or isinstance(records, (str, bytes)) or not hasattr(records,
+                                                                            "__iter__"):
+        raise InputError(f"records must be a bwim.Record or a sequence of them, got "
+                         f"{type(records).__name__}")
+    records = list(records)
+    if not records:
+        raise InputError("records must hold at least one record")
+    for k, r in enumerate(records):
+        if not isinstance(r, Record):
+            raise InputError(f"records[{k}] must be a bwim.Record, got {type(r).__name__}")
+    if unknowns is None or isinstance(unknowns, str):
+        raise InputError(f"unknowns must be a sequence of parameter names, got {unknowns!r}")
     present = start_bridge.params
     for u in unknowns:
         if u not in present:
@@ -244,10 +344,47 @@ def _check_inputs(start_bridge, records, unknowns, bounds) -> list[Record]:
                              f"{sorted(present)}")
     if not tuple(unknowns):
         raise InputError("unknowns must name at least one parameter family")
-    lo_f, hi_f = bounds
+    try:
+        lo_f, hi_f = (float(b) for b in bounds)
+    except (TypeError, ValueError):
+        raise InputError(f"bounds must be two factors (low, high), got {bounds!r}") from None
     if not 0 < lo_f < 1 < hi_f:
         raise InputError(f"bounds must be factors (low < 1 < high), got {bounds}")
     return records
+
+
+def _positive_int(name: str, value, low: int = 1) -> None:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
+        raise InputError(f"{name} must be an integer >= {low}, got {value!r}")
+
+
+def _check_options(*, population, max_evals, n_jobs, n_modes, elite_fraction, weights,
+                   n_records) -> None:
+    """calibrate's numeric options: refused (never silently replaced) when out of range."""
+    for name, value, low in (("population", population, 2), ("max_evals", max_evals, 1)):
+        if value is None:
+            continue
+        for v in (value if isinstance(value, tuple) else (value,)):
+            _positive_int(name, v, low)
+    if isinstance(n_jobs, bool) or not isinstance(n_jobs, (int, np.integer)) or (
+            n_jobs < 1 and n_jobs != -1):
+        raise InputError(f"n_jobs must be a positive integer or -1 (all cores), got {n_jobs!r}")
+    if n_modes is not None:
+        _positive_int("n_modes", n_modes)
+    if not isinstance(elite_fraction, (int, float, np.number)) or not (
+            0.0 < float(elite_fraction) <= 1.0):
+        raise InputError(f"elite_fraction must lie in (0, 1], got {elite_fraction!r}")
+    if weights is not None:
+        if isinstance(weights, (str, bytes)) or not hasattr(weights, "__len__") or len(
+                weights) != n_records:
+            raise InputError(f"weights must hold one array per record ({n_records})")
+        for k, w in enumerate(weights):
+            try:
+                arr = np.asarray(w, dtype=float)
+            except (TypeError, ValueError):
+                raise InputError(f"weights[{k}] must be an array of numbers") from None
+            if not np.all(np.isfinite(arr)) or np.any(arr < 0):
+                raise InputError(f"weights[{k}] must be finite and >= 0")
 
 
 def _pair(value) -> tuple:
@@ -275,7 +412,7 @@ def _plan(bridge: Bridge, unknowns: tuple[str, ...], method: Method, refine: Ref
                            substructured=sub, keeps_uncertainty=True))
     if refine is Refine.LM:
         # CE's elite spread stays the reported uncertainty; otherwise the last LM's
-        plan.append(_Stage(name="joint refinement (dynamic)", families=unknowns,
+        plan.append(_Stage(name=_REFINE_NAME, families=unknowns,
                            dynamic=True, method=Method.LM, population=None, max_evals=ev_d,
                            substructured=False, keeps_uncertainty=method is not Method.CE))
     return plan

@@ -17,6 +17,9 @@ Contract
   measurement point (the sub-objectives of sub-structured CE, paper §4.1).  Their sum is
   the objective.  :func:`neighbour_map` says which parameters neighbour which part: the
   zones of the elements that touch the point, and girders within one element of it.
+* Channel weights: unweighted by default (the paper's plain sum);
+  :func:`noise_weights` estimates each channel's noise from the data itself (no noise
+  model assumed); :func:`peak_weights` is the paper's §5.2 model (noise ∝ channel peak).
 * Objectives are picklable, so populations can be evaluated in worker processes.
 """
 
@@ -42,8 +45,10 @@ __all__ = [
     "DynamicObjective",
     "ParameterSpace",
     "StaticObjective",
+    "estimate_noise",
     "measurement_points",
     "neighbour_map",
+    "noise_weights",
     "peak_weights",
 ]
 
@@ -171,6 +176,45 @@ def peak_weights(records: Sequence[Record]) -> list[np.ndarray]:
         peak = np.abs(rec.data).max(axis=0)
         out.append(1.0 / np.where(peak > 0, peak, 1.0) ** 2)
     return out
+
+
+def estimate_noise(records: Sequence[Record]) -> list[np.ndarray]:
+    """Each channel's noise standard deviation as estimated from the data, per record.
+
+    σ̂ is the robust spread of the channel's second differences (``1.4826 × MAD / √6``,
+    exact for white noise): a strain signal sampled far above its bandwidth is smooth
+    from one sample to the next, its noise is not.  No noise model is assumed.
+    """
+    out = []
+    for rec in records:
+        d2 = np.diff(np.asarray(rec.data, dtype=float), n=2, axis=0)
+        mad = np.median(np.abs(d2 - np.median(d2, axis=0)), axis=0)
+        out.append(1.4826 * mad / np.sqrt(6.0))
+    return out
+
+
+def noise_weights(records: Sequence[Record], *,
+                  model_error: np.ndarray | None = None) -> list[np.ndarray]:
+    """Channel weights ``1 / (σ̂² + e²)`` from the data's own noise (:func:`estimate_noise`)
+    and, optionally, the model's error ``e`` at each channel (same units, e.g. the
+    discretisation error of :func:`bwim.fe.convergence.check_mesh`).
+
+    Under gauge noise the weights come out equal, under noise proportional to each
+    channel's peak ``∝ 1 / peak²``; a channel the model cannot reproduce weighs less.
+    Weights are normalised to a mean of 1 over all channels of all records (residuals
+    stay strain-sized); a σ̂ below 10⁻³ of the largest one is floored there (noise-free
+    channels do not take all the weight).
+    """
+    sig = estimate_noise(records)
+    top = max((float(s.max()) for s in sig if s.size), default=0.0)
+    var = [np.maximum(s, 1e-3 * top) ** 2 for s in sig]
+    if model_error is not None:
+        e = np.asarray(model_error, dtype=float)
+        var = [v + e**2 for v in var]
+    if max(float(v.max()) for v in var) <= 0:
+        return [np.ones(r.data.shape[1]) for r in records]
+    mean_inv = float(np.mean(np.concatenate([1.0 / v for v in var])))
+    return [1.0 / v / mean_inv for v in var]
 
 
 def _channel_weights(weights, records) -> list[np.ndarray]:

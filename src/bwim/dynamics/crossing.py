@@ -46,6 +46,7 @@ from bwim.errors import InputError, parse_enum, require_positive
 from bwim.fe.bridge import Bridge
 from bwim.fe.influence import InfluenceSurfaces
 from bwim.fe.modal import select_modes
+from bwim.limits import check_memory
 from bwim.records import Passage, Record, SimulationSettings, Truth, VBIConvergence
 from bwim.road import RoadProfile
 from bwim.sensors import Sensor
@@ -60,6 +61,9 @@ DEFAULT_APPROACH = 100.0
 
 #: Default sampling rate, Hz (also the integration rate).
 DEFAULT_SAMPLING_RATE = 1000.0
+
+#: Fewest samples while an axle crosses the bridge (a coarser time grid is refused).
+MIN_SAMPLES_ON_BRIDGE = 4
 
 
 class VBIMethod(StrEnum):
@@ -146,6 +150,10 @@ def prepare_crossing(
     delay=0.0,
 ) -> PreparedCrossing:
     """Validate a crossing and precompute its kinematics (see :func:`simulate`)."""
+    if not isinstance(bridge, Bridge):
+        raise InputError(f"bridge must be a bwim.Bridge, got {type(bridge).__name__}")
+    if sensors is None or isinstance(sensors, (str, bytes)):
+        raise InputError(f"sensors must be a sequence of bwim.Sensor, got {sensors!r}")
     fs = require_positive("sampling_rate", sampling_rate)
     settings = SimulationSettings(approach=approach, tail=tail)  # validates both
     approach, tail = settings.approach, settings.tail
@@ -162,6 +170,7 @@ def prepare_crossing(
     if np.any(delays < 0) or not np.all(np.isfinite(delays)):
         raise InputError(f"delay must be >= 0 s, got {delays.tolist()}")
     delays = delays - delays.min()
+    _check_crossing_memory(bridge, vehicles, speeds, fs, approach, tail, delays, sensors)
     sensors = tuple(sensors)
     road = RoadProfile.flat() if road is None else road
     if not isinstance(road, RoadProfile):
@@ -413,3 +422,20 @@ def _static_correction(inf, x, y, on, F, psi, s_modal, modes, is_plate):
     return out
 
 
+def _check_crossing_memory(bridge, vehicles, speeds, fs, approach, tail, delays, sensors):
+    """Refuse a time grid too coarse for the bridge, or one whose (samples × (sensors +
+    modes + vehicle DOF)) would exceed the memory limit, before it is built
+    (``speed = 1e-6``, ``tail = 1e6``...)."""
+    per_crossing = fs * bridge.length / max(speeds)
+    if per_crossing < MIN_SAMPLES_ON_BRIDGE:
+        raise InputError(
+            f"sampling_rate = {fs:g} Hz gives {per_crossing:.3g} samples while an axle "
+            f"crosses the {bridge.length:g} m bridge at {max(speeds):g} m/s; at least "
+            f"{MIN_SAMPLES_ON_BRIDGE} are needed")
+    longest = max(float(getattr(v, "length", 0.0) or 0.0) for v in vehicles)
+    span = approach + bridge.length + longest
+    n_t = fs * (span / min(speeds) + tail + float(np.max(delays)))
+    n_channels = len(tuple(sensors)) + 64 + 16 * len(vehicles)
+    check_memory(n_t * n_channels * 8.0 * 4,
+                 f"a crossing of {n_t:.3g} time steps (approach {approach:g} m, tail "
+                 f"{tail:g} s, sampling rate {fs:g} Hz)")

@@ -44,6 +44,7 @@ from bwim.fe.girder import Girder
 from bwim.fe.mesh import Grid, grid_lines
 from bwim.fe.modal import Modes, lowest_modes
 from bwim.fe.model import FEModel, Supports
+from bwim.limits import check_memory
 from bwim.loads import PointLoad
 from bwim.sensors import Sensor
 
@@ -215,6 +216,7 @@ class Bridge:
         poisson = require_finite("poisson", poisson)
         if not 0.0 <= poisson < 0.5:
             raise InputError(f"poisson must lie in [0, 0.5), got {poisson:g}")
+        _check_mesh_memory(_n_elements("nx", nx, x_lines), _n_elements("ny", ny, y_lines))
         xl = _lines("x_lines", "nx", length, nx, x_lines)
         yl = _lines("y_lines", "ny", width, ny, y_lines)
         if E is not None:
@@ -290,6 +292,7 @@ class Bridge:
         length = require_positive("length", length)
         inertia = require_positive("I", I)
         zb = None if z_bottom is None else require_positive("z_bottom", z_bottom)
+        _check_mesh_memory(_n_elements("n_elements", n_elements, x_lines), None)
         grid = Grid(_lines("x_lines", "n_elements", length, n_elements, x_lines))
         zone_of, n_zones = _zone_map_beam(grid, zones)
         model = FEModel(
@@ -408,6 +411,12 @@ class Bridge:
     # --- analyses ----------------------------------------------------------------------
     def modes(self, n: int = 6) -> Modes:
         """The ``n`` lowest natural modes (mass-normalised, Hz ascending)."""
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+            raise InputError(f"n (number of modes) must be a positive integer, got {n!r}")
+        if n > self.n_free:
+            raise InputError(f"n = {n} modes is more than the model's {self.n_free} degrees "
+                             "of freedom")
+        n = int(n)
         def make() -> Modes:
             return lowest_modes(
                 n, self.stiffness_factor(), self.stiffness_matrix(), self.mass_matrix(),
@@ -453,6 +462,31 @@ class Bridge:
         from bwim.fe.influence import influence_surfaces
 
         return influence_surfaces(self, sensors)
+
+
+def _n_elements(name: str, n: Any, lines: Any) -> int:
+    """Elements along one axis from ``n`` or explicit grid ``lines`` (validated later)."""
+    if lines is not None:
+        try:
+            return max(len(lines) - 1, 1)
+        except TypeError:
+            raise InputError(f"{name}: the grid lines must be a sequence of numbers") from None
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+        raise InputError(f"{name} must be a positive integer, got {n!r}")
+    return int(n)
+
+
+def _check_mesh_memory(n_x: int, n_y: int | None) -> None:
+    """Refuse a mesh whose banded matrices (stiffness, mass, factor) exceed the memory
+    limit, before the grid is built: DOF × band × 8 bytes × 4 arrays."""
+    if n_y is None:  # beam: 2 DOF per node, half-band 4
+        n_dof, band = 2.0 * (n_x + 1), 4.0
+        what = f"a beam of {n_x} elements"
+    else:  # BFS plate: 4 DOF per node; nodes numbered across the shorter side
+        n_dof = 4.0 * (n_x + 1) * (n_y + 1)
+        band = 4.0 * (min(n_x, n_y) + 2)
+        what = f"a {n_x} × {n_y} element plate"
+    check_memory(n_dof * (2 * band + 1) * 8.0 * 4, what)
 
 
 def _lines(

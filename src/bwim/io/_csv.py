@@ -9,6 +9,8 @@ Contract
   one, the line (counted in the file, from 1) and the column: an empty file, a duplicate
   or empty column name, a row with the wrong number of fields, an empty cell, text that is
   not a number, a NaN or infinite sample, and no data rows.
+* The file's size is checked against :func:`bwim.limits.check_memory` before it is read,
+  and a line longer than :data:`MAX_LINE` characters is refused (read line by line).
 * :func:`check_time` validates a time column (s) read from a file: strictly increasing
   always; with a ``tolerance``, also uniformly sampled (no dropped sample, no jitter).
 """
@@ -23,14 +25,32 @@ from pathlib import Path
 import numpy as np
 
 from bwim.errors import InputError
+from bwim.limits import check_memory
 
 __all__ = ["check_time", "read_numeric_csv"]
 
 
+#: Longest line (characters) a numeric CSV file may have: 64 Ki characters hold thousands
+#: of channels; a longer line is a damaged or hostile file.
+MAX_LINE = 65536
+
+#: Bytes of memory per byte of CSV text while it is parsed (lines, floats, the array).
+_BYTES_PER_CHAR = 8
+
+
 def _read_lines(path: Path) -> list[str]:
     try:
+        size = os.stat(path).st_size
+        check_memory(size * _BYTES_PER_CHAR, f"{path}: reading a CSV file of {size} bytes")
+        lines = []
         with open(path, encoding="utf-8-sig", newline="") as f:
-            return f.read().splitlines()
+            while raw := f.readline(MAX_LINE + 2):
+                text = raw.rstrip("\r\n")
+                if len(text) > MAX_LINE:
+                    raise InputError(f"{path}: line {len(lines) + 1} is longer than "
+                                     f"{MAX_LINE} characters")
+                lines.append(text)
+        return lines
     except FileNotFoundError:
         raise InputError(f"{path}: no such file") from None
     except UnicodeDecodeError as exc:

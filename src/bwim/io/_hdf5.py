@@ -7,8 +7,11 @@ Contract
   ``bwim_format_version`` (an integer, :data:`VERSION`).  :func:`h5_reader` refuses a
   missing file, a file that is not HDF5, a file of another format and a newer version,
   each with an :class:`~bwim.errors.InputError` naming the file; a missing dataset inside
-  is reported as a damaged file.
+  is reported as a damaged file, and so is any content of the wrong type, shape or
+  encoding (the reader never lets a TypeError or ValueError escape).
 * :func:`h5_writer` writes atomically (:func:`bwim.io.atomic.atomic_output`).
+* Readers check each dataset's declared shape × item size against
+  :func:`bwim.limits.check_memory` before reading it.
 * Arrays are stored as float64 / int64 / bool datasets and scalars as attributes, so
   every number reads back bit for bit; strings are UTF-8.
 """
@@ -25,6 +28,7 @@ import numpy as np
 
 from bwim.errors import InputError
 from bwim.io.atomic import atomic_output
+from bwim.limits import check_memory
 from bwim.records import Passage
 from bwim.sensors import Sensor
 from bwim.wim.influence_line import Channel
@@ -54,15 +58,25 @@ def h5_reader(path: str | os.PathLike, *fmts: str) -> Iterator[h5py.File]:
         raise InputError(f"{p}: is a folder, not a file")
     try:
         f = h5py.File(p, "r")
-    except OSError:
+    except (OSError, ValueError, RuntimeError):
         raise InputError(f"{p}: not an HDF5 file (or it cannot be read)") from None
     with f:
-        fmt = f.attrs.get("bwim_format")
+        try:
+            fmt = f.attrs.get("bwim_format")
+            raw_version = f.attrs.get("bwim_format_version", 0)
+        except (OSError, ValueError, TypeError, RuntimeError):
+            raise InputError(f"{p}: damaged HDF5 attributes") from None
+        if isinstance(fmt, bytes):
+            fmt = fmt.decode("utf-8", "replace")
         if fmt is None:
             raise InputError(f"{p}: not a bwim file (no bwim_format attribute)")
-        if fmt not in fmts:
-            raise InputError(f"{p}: holds a bwim {fmt}, not a {' or '.join(fmts)}")
-        version = int(f.attrs.get("bwim_format_version", 0))
+        if not isinstance(fmt, str) or fmt not in fmts:
+            shown = fmt if isinstance(fmt, str) else "(not a name)"
+            raise InputError(f"{p}: holds a bwim {shown[:40]}, not a {' or '.join(fmts)}")
+        try:
+            version = int(raw_version)
+        except (TypeError, ValueError, OverflowError):
+            raise InputError(f"{p}: damaged bwim {fmt} file (bad format version)") from None
         if version > VERSION:
             raise InputError(f"{p}: format version {version} is newer than this bwim reads "
                              f"({VERSION}); update bwim")
@@ -73,6 +87,9 @@ def h5_reader(path: str | os.PathLike, *fmts: str) -> Iterator[h5py.File]:
         except KeyError as exc:
             raise InputError(f"{p}: damaged bwim {fmt} file: {exc.args[0] if exc.args else exc}"
                              ) from None
+        except (ValueError, TypeError, AttributeError, IndexError, OSError,
+                RuntimeError) as exc:  # content of the wrong type, shape or encoding
+            raise InputError(f"{p}: damaged bwim {fmt} file ({type(exc).__name__})") from None
 
 
 def need(group: h5py.Group, name: str):
@@ -88,12 +105,24 @@ def attr(group: h5py.Group, name: str):
     return group.attrs[name]
 
 
+def _sized(group: h5py.Group, name: str):
+    """``group[name]`` as a dataset whose declared size fits the memory limit (checked
+    before a byte is read: a small file may declare a huge dataset)."""
+    ds = need(group, name)
+    if not isinstance(ds, h5py.Dataset):
+        raise KeyError(f"{group.name.rstrip('/')}/{name} is not a dataset")
+    n = float(np.prod([float(d) for d in ds.shape])) if ds.shape else 1.0
+    item = ds.dtype.itemsize if ds.dtype.kind not in "OSU" else 256
+    check_memory(n * item, f"the dataset {ds.name} of shape {ds.shape}")
+    return ds
+
+
 def array(group: h5py.Group, name: str) -> np.ndarray:
-    return np.asarray(need(group, name)[()])
+    return np.asarray(_sized(group, name)[()])
 
 
 def strings(group: h5py.Group, name: str) -> list[str]:
-    return [str(s) for s in need(group, name).asstr()[()]]
+    return [str(s) for s in _sized(group, name).asstr()[()]]
 
 
 def put_strings(group: h5py.Group, name: str, values: Sequence[str]) -> None:

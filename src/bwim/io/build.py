@@ -329,15 +329,33 @@ def _road_extent(scenario: Scenario) -> tuple[float, float]:
             scenario.require("bridge").length + vehicle + run_out + margin)
 
 
+def _data_path(scenario: Scenario, name: str, key: str) -> Path:
+    """A data file named in the scenario: relative to the scenario's folder, and inside it
+    (a scenario must not make bwim read files elsewhere, e.g. ``../../etc/passwd``)."""
+    folder = (scenario.folder or Path()).resolve()
+    path = (folder / name).resolve()
+    if not path.is_relative_to(folder):
+        raise InputError(f"{scenario.source}: {key} {name!r} is outside the scenario's "
+                         f"folder {folder}; data files must lie in it or below it")
+    return path
+
+
 def _read_profile(path: Path) -> RoadProfile:
-    names, values, _ = read_numeric_csv(path)
+    # messages never quote the file's content (it may be any file the user can read)
+    try:
+        names, values, _ = read_numeric_csv(path)
+    except InputError as exc:
+        if str(exc).endswith("no such file") or "cannot read" in str(exc):
+            raise
+        raise InputError(f"{path}: not a road profile (a CSV file with the header "
+                         "x, elevation or x, right, left and rows of numbers)") from None
     if names == ["x", "elevation"]:
         elevation = values[:, 1]
     elif names == ["x", "right", "left"]:
         elevation = values[:, 1:]
     else:
         raise InputError(f"{path}: a road profile has the columns x, elevation or x, right, "
-                         f"left; got {', '.join(names)}")
+                         f"left; got {len(names)} other column(s)")
     with _context(f"{path}"):
         return RoadProfile(x=values[:, 0], elevation=elevation)
 
@@ -353,10 +371,7 @@ def build_road(scenario: Scenario) -> RoadProfile:
         return RoadProfile.flat()
     src = scenario.source
     if spec.profile is not None:
-        path = Path(spec.profile)
-        if not path.is_absolute():
-            path = (scenario.folder or Path()) / path
-        road = _read_profile(path)
+        road = _read_profile(_data_path(scenario, spec.profile, "[road] profile"))
     else:
         start, length = spec.start, spec.length
         if start is None or length is None:

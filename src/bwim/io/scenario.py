@@ -85,7 +85,7 @@ Contract
       ``speed``, [``lane``], [``sampling_rate`` = 1000], [``approach`` = 100],
       [``tail`` = 0], [``method`` = "coupled"], [``delay`` = 0], [``n_modes``],
       [``max_frequency``], [``full_system``], [``static_correction``], [``noise`` = 0:
-      noise as a fraction of each channel's peak], [``seed`` = 0: the noise seed].
+      gauge noise, a fraction of the peak strain], [``seed`` = 0: the noise seed].
   ``[identify]``, ``[calibrate]``
       options of :func:`bwim.identify_forces` and ``bwim.calibrate`` (see the classes).
 """
@@ -93,6 +93,7 @@ Contract
 from __future__ import annotations
 
 import dataclasses
+import math
 import os
 import re
 import tomllib
@@ -184,7 +185,57 @@ def _is_number(v: Any) -> bool:
 def _number(v: Any, at: _At) -> float:
     if not _is_number(v):
         raise at.expected("a number", v)
+    if not math.isfinite(v):
+        raise at.expected("a finite number", v)
     return float(v)
+
+
+def _at_least(low: float, *, strict: bool, high: float | None = None) -> Check:
+    """A finite number > low (``strict``) or >= low, and <= high if given."""
+    def check(v: Any, at: _At) -> float:
+        x = _number(v, at)
+        if (x <= low if strict else x < low) or (high is not None and x > high):
+            rng = f"{'>' if strict else '>='} {low:g}" + (
+                f" and <= {high:g}" if high is not None else "")
+            raise at.error(f"must be {rng}, got {_show(v)}")
+        return x
+    return check
+
+
+_positive = _at_least(0.0, strict=True)
+_non_negative = _at_least(0.0, strict=False)
+
+
+def _int_from(low: int) -> Check:
+    def check(v: Any, at: _At) -> int:
+        n = _integer(v, at)
+        if n < low:
+            raise at.error(f"must be an integer >= {low}, got {_show(v)}")
+        return n
+    return check
+
+
+def _int_or_pair_from(low: int) -> Check:
+    def check(v: Any, at: _At) -> int | tuple[int, int]:
+        out = _int_or_pair(v, at)
+        if any(n < low for n in (out if isinstance(out, tuple) else (out,))):
+            raise at.error(f"must be integers >= {low}, got {_show(v)}")
+        return out
+    return check
+
+
+def _jobs(v: Any, at: _At) -> int:
+    n = _integer(v, at)
+    if n < 1 and n != -1:
+        raise at.error(f"must be a positive integer or -1 (all cores), got {_show(v)}")
+    return n
+
+
+def _increasing_pair(v: Any, at: _At) -> tuple[float, float]:
+    lo, hi = _pair(v, at)
+    if not 0.0 < lo < hi:
+        raise at.error(f"must be [low, high] with 0 < low < high, got {_show(v)}")
+    return lo, hi
 
 
 def _integer(v: Any, at: _At) -> int:
@@ -532,16 +583,16 @@ class RoadSpec:
     flat: bool = _opt(_boolean, False)
     roughness: float | str | None = _opt(_number_or_string)
     """G_d(n₀), m³/cycle, or an ISO 8608 class letter."""
-    length: float | None = _opt(_number)
+    length: float | None = _opt(_positive)
     start: float | None = _opt(_number)
     seed: int = _opt(_integer, 0)
-    dx: float | None = _opt(_number)
+    dx: float | None = _opt(_positive)
     track_correlation: float | None = _opt(_number)
     waviness: float | None = _opt(_number)
     band: tuple[float, float] | None = _opt(_pair)
     profile: str | None = _opt(_string)
     """CSV file; relative paths are taken from the scenario's folder."""
-    smoothing: float | None = _opt(_number)
+    smoothing: float | None = _opt(_positive)
     """Tyre-patch moving-average length, m."""
 
 
@@ -549,19 +600,21 @@ class RoadSpec:
 class RunSpec:
     """The ``[run]`` section: a simulated crossing (see :func:`bwim.simulate`)."""
 
-    speed: float = _req(_number)
+    speed: float = _req(_positive)
     lane: float | None = _opt(_number)
-    sampling_rate: float = _opt(_number, DEFAULT_SAMPLING_RATE)
-    approach: float = _opt(_number, DEFAULT_APPROACH)
-    tail: float = _opt(_number, 0.0)
+    sampling_rate: float = _opt(_positive, DEFAULT_SAMPLING_RATE)
+    approach: float = _opt(_non_negative, DEFAULT_APPROACH)
+    tail: float = _opt(_non_negative, 0.0)
     method: str = _opt(_choice(*VBIMethod), VBIMethod.COUPLED.value)
-    delay: float = _opt(_number, 0.0)
-    n_modes: int | None = _opt(_integer)
-    max_frequency: float | None = _opt(_number)
+    delay: float = _opt(_non_negative, 0.0)
+    n_modes: int | None = _opt(_int_from(1))
+    max_frequency: float | None = _opt(_positive)
     full_system: bool = _opt(_boolean, False)
     static_correction: bool = _opt(_boolean, True)
-    noise: float = _opt(_number, 0.0)
-    """Gaussian noise, a fraction of each channel's peak (:meth:`bwim.Record.with_noise`)."""
+    noise: float = _opt(_at_least(0.0, strict=False, high=1.0), 0.0)
+    """Gauge noise: one σ on every channel, a fraction of the record's peak strain
+    (:meth:`bwim.Record.with_noise`; the paper's per-channel model is not a scenario
+    option)."""
     seed: int = _opt(_integer, 0)
     """Seed of the noise."""
 
@@ -589,14 +642,14 @@ class IdentifySpec:
     """The ``[identify]`` section: options of :func:`bwim.identify_forces` (unset: the
     library's default)."""
 
-    n_modes: int | None = _opt(_integer)
+    n_modes: int | None = _opt(_int_from(1))
     lam: float | str | None = _opt(_lam)
     order: str | None = _opt(_choice(*Order))
     unknowns: str | None = _opt(_choice(*ForceUnknowns))
     central: float | None = _opt(_number)
     static_correction: bool | None = _opt(_boolean)
-    lam_range: tuple[float, float] | None = _opt(_pair)
-    n_lam: int | None = _opt(_integer)
+    lam_range: tuple[float, float] | None = _opt(_increasing_pair)
+    n_lam: int | None = _opt(_int_from(2))
 
     def kwargs(self) -> dict[str, Any]:
         """The options that are set, as keyword arguments."""
@@ -611,14 +664,14 @@ class CalibrateSpec:
     seed: int | None = _opt(_integer)
     method: str | None = _opt(_choice(*Method))
     refine: str | None = _opt(_choice(*Refine))
-    population: int | tuple[int, int] | None = _opt(_int_or_pair)
+    population: int | tuple[int, int] | None = _opt(_int_or_pair_from(2))
     elite_fraction: float | None = _opt(_number)
-    convergences: int | None = _opt(_integer)
-    max_evals: int | tuple[int, int] | None = _opt(_int_or_pair)
+    convergences: int | None = _opt(_int_from(0))
+    max_evals: int | tuple[int, int] | None = _opt(_int_or_pair_from(1))
     bounds: tuple[float, float] | None = _opt(_pair)
     substructure: bool | None = _opt(_boolean)
-    n_modes: int | None = _opt(_integer)
-    n_jobs: int | None = _opt(_integer)
+    n_modes: int | None = _opt(_int_from(1))
+    n_jobs: int | None = _opt(_jobs)
 
     def kwargs(self) -> dict[str, Any]:
         """The options that are set, as keyword arguments."""

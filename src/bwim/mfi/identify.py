@@ -23,7 +23,8 @@ import numpy as np
 from bwim.errors import InputError, parse_enum
 from bwim.fe.bridge import Bridge
 from bwim.fe.modal import select_modes
-from bwim.mfi.dp import Solution, sweep
+from bwim.limits import check_memory
+from bwim.mfi.dp import SWEEP_CHUNK_BYTES, Solution, sweep
 from bwim.mfi.lcurve import LCurve, gcv, lcurve_search
 from bwim.mfi.statespace import ForceUnknowns, MFIModel, Order, build_model, force_layout
 from bwim.records import Passage, Record
@@ -131,8 +132,7 @@ def identify_forces(
     central : float
         Fraction of each axle's time on the deck used for its static weight.
     """
-    if not isinstance(record, Record):
-        raise InputError(f"record must be a bwim.Record, got {type(record).__name__}")
+    _check_arguments(bridge, record, n_modes, lam, weights, lam_range, n_lam, central)
     if not record.passages:
         raise InputError("the record has no passage: speed, lane and axle layout are needed "
                          "to place the forces")
@@ -185,6 +185,56 @@ def identify_forces(
     sol = Solution(X=best.X[0], r=best.r[0], residual_norm=float(best.residual_norm[0]),
                    seminorm=float(best.seminorm[0]))
     return _result(model, sol, record, unknowns, order, lam_s, curve, central, bridge.length)
+
+
+def _check_arguments(bridge, record, n_modes, lam, weights, lam_range, n_lam, central):
+    """identify_forces' argument checks (InputError naming the argument) and its memory
+    estimate: the Riccati gains of every step, n_t × (state size)² doubles."""
+    if not isinstance(bridge, Bridge):
+        raise InputError(f"bridge must be a bwim.Bridge, got {type(bridge).__name__}")
+    if not isinstance(record, Record):
+        raise InputError(f"record must be a bwim.Record, got {type(record).__name__}")
+    if n_modes is not None and (isinstance(n_modes, bool)
+                                or not isinstance(n_modes, (int, np.integer)) or n_modes < 1):
+        raise InputError(f"n_modes must be a positive integer, got {n_modes!r}")
+    if lam is None or isinstance(lam, bool) or not isinstance(lam, (str, int, float,
+                                                                     np.number)):
+        raise InputError(f"lam must be 'lcurve', 'gcv' or a positive number, got {lam!r}")
+    if isinstance(lam, str) and lam not in ("lcurve", "gcv"):
+        raise InputError(f"unknown lam {lam!r}; expected 'lcurve', 'gcv' or a number")
+    if isinstance(n_lam, bool) or not isinstance(n_lam, (int, np.integer)) or n_lam < 2:
+        raise InputError(f"n_lam must be an integer >= 2 (points of the L-curve), got "
+                         f"{n_lam!r}")
+    try:
+        lo, hi = (float(v) for v in lam_range)
+    except (TypeError, ValueError):
+        raise InputError(f"lam_range must be (low, high), got {lam_range!r}") from None
+    if not (np.isfinite(lo) and np.isfinite(hi) and 0.0 < lo < hi):
+        raise InputError(f"lam_range must be (low, high) with 0 < low < high, got "
+                         f"{lam_range!r}")
+    if isinstance(central, bool) or not isinstance(central, (int, float, np.number)):
+        raise InputError(f"central must be a number in (0, 1], got {central!r}")
+    if weights is not None:
+        try:
+            w = np.asarray(weights, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError("weights must be an array of numbers, one per sensor") from None
+        n_s = len(record.sensors)
+        if w.shape != (n_s,):
+            raise InputError(f"weights must have one value per sensor ({n_s}), got shape "
+                             f"{w.shape}")
+        if not np.all(np.isfinite(w)) or np.any(w < 0) or not np.any(w > 0):
+            raise InputError("weights must be finite, >= 0 and not all zero")
+    n_f = 2 * sum(p.n_axles for p in record.passages)
+    n_x = 2 * (DEFAULT_MAX_MODES if n_modes is None else int(n_modes)) + n_f
+    n_s = len(record.sensors)
+    n_t = float(record.time.size)
+    if isinstance(lam, str) and lam == "gcv":  # GCV keeps the Riccati gains of every step
+        need = n_t * n_x * n_x * 8.0 * 3
+    else:  # the stacked sweep: model arrays + feedback of one λ chunk (issue 15)
+        need = 8.0 * n_t * (3 * n_x * n_f + 2 * n_s * n_f + 8 * (n_x + n_s)) \
+            + SWEEP_CHUNK_BYTES
+    check_memory(need, f"identifying the forces of a record of {record.time.size} samples")
 
 
 def _result(model: MFIModel, sol: Solution, record: Record, unknowns, order, lam_s, curve,

@@ -114,12 +114,15 @@ def lcurve_search(model: MFIModel, d, weights, lam_range: tuple[float, float], *
     h = (hi - lo) / (n_fine + 1)
     if n_fine and np.min(np.abs(t_f[:, None] - t_c[None, :])) < 1e-3 * h:
         t_f += 0.25 * h  # keep clear of the coarse nodes (the spline needs distinct points)
-    second = sweep(model, d, np.exp(t_f), weights)
+    rho_f = eta_f = np.empty(0)
+    if t_f.size:
+        second = sweep(model, d, np.exp(t_f), weights)
+        rho_f, eta_f = second.residual_norm, second.seminorm
     t = np.concatenate([t_c, t_f])
     order = np.argsort(t)
     t = t[order]
-    rho = np.concatenate([first.residual_norm, second.residual_norm])[order]
-    eta = np.concatenate([first.seminorm, second.seminorm])[order]
+    rho = np.concatenate([first.residual_norm, rho_f])[order]
+    eta = np.concatenate([first.seminorm, eta_f])[order]
     kappa, t_best = _corner(t, rho, eta)
     return _curve(model, np.exp(t), rho, eta, kappa, t_best)
 

@@ -34,6 +34,7 @@ import scipy.linalg
 import scipy.sparse as sp
 
 from bwim.errors import InputError, NumericalError, require_finite, require_positive
+from bwim.limits import check_memory
 from bwim.records import Passage, Record
 from bwim.sensors import Sensor, SensorKind
 
@@ -46,8 +47,11 @@ __all__ = [
     "Channel",
     "InfluenceLine",
     "calibrate_influence_line",
+    "hat_design",
     "model_influence_line",
     "resolve_channels",
+    "smoothing_penalty",
+    "static_axle_loads",
 ]
 
 #: Default smoothing length of the matrix method, m (see :func:`calibrate_influence_line`).
@@ -98,7 +102,11 @@ class Channel:
 
 def read_channels(record: Record, channels: Sequence[Channel]) -> np.ndarray:
     """Readings of several channels, shape (n_t, n_channels)."""
-    return np.stack([c.read(record) for c in channels], axis=1)
+    column = {s.name: i for i, s in enumerate(record.sensors)}
+    if any(s.name not in column for c in channels for s in c.sensors):
+        return np.stack([c.read(record) for c in channels], axis=1)  # names the missing one
+    return np.stack([record.data[:, [column[s.name] for s in c.sensors]].sum(axis=1)
+                     for c in channels], axis=1)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -264,10 +272,14 @@ def resolve_channels(
 
 # --- the matrix method ------------------------------------------------------------------
 
-def _hat_design(positions: np.ndarray, loads: np.ndarray, x0: float, h: float,
-                n: int) -> sp.csr_matrix:
-    """``G[k, j-1] = Σ_i W_i φ_j(p_ki)`` for the interior hat functions j = 1 … n−1 on the
-    nodes ``x0 + j h`` (the end ordinates are zero), shape (n_t, n − 1)."""
+def hat_design(positions: np.ndarray, loads: np.ndarray, x0: float, h: float,
+               n: int) -> sp.csr_matrix:
+    """The matrix method's design matrix: ``G[k, j-1] = Σ_i W_i φ_j(p_ki)`` for the
+    interior hat functions j = 1 … n−1 on the nodes ``x0 + j h`` (the end ordinates are
+    zero), shape (n_t, n − 1), sparse (at most two entries per axle and row).
+
+    ``positions`` (n_t, n_axles) are axle positions, m; ``loads`` (n_axles,) their loads.
+    ``G @ ordinates[1:-1]`` is the static reading ``Σ_i W_i I(p_ki)``."""
     n_t = positions.shape[0]
     u = (positions - x0) / h
     inside = (u > 0.0) & (u < n)
@@ -282,7 +294,19 @@ def _hat_design(positions: np.ndarray, loads: np.ndarray, x0: float, h: float,
     return sp.csr_matrix((v[keep], (r[keep], c[keep] - 1)), shape=(n_t, n - 1))
 
 
-def _static_axle_loads(vehicle: Vehicle | Sequence[float]) -> np.ndarray:
+def smoothing_penalty(n_interior: int, regularization: float, h: float) -> np.ndarray:
+    """The matrix method's smoothing term ``(ℓ / h)⁴ D₂ᵀ D₂`` on ``n_interior`` ordinates
+    spaced ``h`` (end ordinates zero), dense; multiply it by the mean diagonal of ``GᵀG``
+    (see ``regularization`` in :func:`calibrate_influence_line`)."""
+    m = n_interior
+    D = sp.diags([np.ones(m - 1), -2.0 * np.ones(m), np.ones(m - 1)], [-1, 0, 1],
+                 shape=(m, m))
+    return (regularization / h) ** 4 * (D.T @ D).toarray()
+
+
+def static_axle_loads(vehicle: Vehicle | Sequence[float]) -> np.ndarray:
+    """Static axle loads, N, of a vehicle (its ``static_axle_loads``) or of a sequence of
+    loads; raises :class:`InputError` unless they are positive and finite."""
     loads = getattr(vehicle, "static_axle_loads", vehicle)
     try:
         arr = np.array(loads, dtype=float, ndmin=1)
@@ -374,7 +398,7 @@ def calibrate_influence_line(
     InfluenceLine
         ``source="matrix method"``, with the fit's relative residual.
     """
-    loads = _static_axle_loads(vehicle)
+    loads = static_axle_loads(vehicle)
     recs = _check_records(records, loads.size)
     ell = require_finite("regularization", regularization)
     if ell < 0:
@@ -409,14 +433,17 @@ def calibrate_influence_line(
         h_req = max(p.speed / r.sampling_rate for r, p in zip(recs, passages, strict=True))
     else:
         h_req = require_positive("spacing", spacing)
-    n = max(int(np.ceil((x1 - x0) / h_req - 1e-9)), 2)
+    n_ord = (x1 - x0) / h_req
+    check_memory(8.0 * (3 * n_ord * n_ord + 4 * loads.size * sum(r.time.size for r in recs)),
+                 f"an influence line of {n_ord:.3g} ordinates (spacing {h_req:.3g} m)")
+    n = max(int(np.ceil(n_ord - 1e-9)), 2)
     h = (x1 - x0) / n
 
     section = 0.5 * (x0 + x1)
     chans = resolve_channels(recs[0].sensors, channels, section_x=section)
     blocks, data = [], []
     for r, p in zip(recs, passages, strict=True):
-        G = _hat_design(p.axle_x(r.time), loads, x0, h, n)
+        G = hat_design(p.axle_x(r.time), loads, x0, h, n)
         used = np.diff(G.indptr) > 0  # samples with an axle on the support
         if not used.any():
             raise InputError(f"no axle of the record at speed {p.speed:g} m/s is on the "
@@ -429,10 +456,7 @@ def calibrate_influence_line(
     rhs = G.T @ E
     scale = float(np.mean(np.diag(N)))
     if ell > 0:
-        m = n - 1
-        D = sp.diags([np.ones(m - 1), -2.0 * np.ones(m), np.ones(m - 1)], [-1, 0, 1],
-                     shape=(m, m))
-        N += (ell / h) ** 4 * scale * (D.T @ D).toarray()
+        N += scale * smoothing_penalty(n - 1, ell, h)
     try:
         ords = scipy.linalg.solve(N, rhs, assume_a="pos")
     except (np.linalg.LinAlgError, scipy.linalg.LinAlgError):

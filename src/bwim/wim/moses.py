@@ -23,11 +23,20 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bwim.errors import InputError, require_finite
+from bwim.errors import InputError, require_finite, require_positive
 from bwim.records import Passage, Record
 from bwim.wim.influence_line import Channel, InfluenceLine, read_channels
+from bwim.wim.plausibility import Limits, ordered_flags, quality_of, weight_flags
 
-__all__ = ["StaticWeights", "group_axles", "weigh_static"]
+__all__ = ["DEFAULT_MAX_RESIDUAL", "StaticWeights", "group_axles", "group_share",
+           "weigh_static"]
+
+#: Relative residual of Moses' fit above which a weighing is ``residual_high``.  A
+#: vehicle crossing a calibrated line leaves a few per cent to about 15 % (noise, the
+#: bridge's vibration, axle hop; see the simulated crossings of
+#: ``tests/validation/test_static_wim.py``); a wrong time axis, swapped channels or a
+#: second vehicle leave far more.
+DEFAULT_MAX_RESIDUAL = 0.3
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -53,6 +62,13 @@ class StaticWeights:
     groups : tuple of tuple of int
         Axle indices of each group whose axles share the group's weight equally (one
         group per axle when weighed individually).
+    flags : tuple of str
+        Plausibility flags (:mod:`bwim.wim.plausibility`): implausible weights,
+        ``residual_high`` (relative residual above ``max_residual``), ``truncated_start``
+        / ``truncated_end`` (the record does not cover the crossing), ``ill_conditioned``.
+    quality : str
+        ``"reject"``, ``"warning"`` or ``"ok"``
+        (:func:`~bwim.wim.plausibility.quality_of`).
     """
 
     axle_weights: np.ndarray
@@ -64,6 +80,8 @@ class StaticWeights:
     residual: float
     condition: float
     groups: tuple[tuple[int, ...], ...]
+    flags: tuple[str, ...] = ()
+    quality: str = "ok"
 
     @property
     def gvw(self) -> float:
@@ -111,6 +129,20 @@ def group_axles(spacings: Passage | np.ndarray, max_spacing: float = 2.0
     return tuple(tuple(g) for g in groups)
 
 
+def group_share(groups, n_axles: int) -> tuple[tuple[tuple[int, ...], ...], np.ndarray]:
+    """Checked axle groups and the matrix ``S`` (n_axles, n_groups) with axle weights
+    ``S @ group_weights``: the axles of a group share its weight equally.
+
+    ``groups`` None means every axle on its own; otherwise a sequence of sequences of axle
+    indices (from 0) listing every axle once.
+    """
+    out = _check_groups(groups, n_axles)
+    share = np.zeros((n_axles, len(out)))
+    for k, g in enumerate(out):
+        share[list(g), k] = 1.0 / len(g)
+    return out, share
+
+
 def _check_groups(groups, n_axles: int) -> tuple[tuple[int, ...], ...]:
     if groups is None:
         return tuple((i,) for i in range(n_axles))
@@ -133,6 +165,8 @@ def weigh_static(
     passage: Passage | None = None,
     groups: tuple[tuple[int, ...], ...] | None = None,
     lane_tolerance: float = 0.5,
+    limits: Limits | None = None,
+    max_residual: float = DEFAULT_MAX_RESIDUAL,
 ) -> StaticWeights:
     """Static axle weights and GVW of the vehicle in ``record`` (Moses' algorithm).
 
@@ -150,6 +184,12 @@ def weigh_static(
         equally, e.g. ``group_axles(passage)``; default every axle on its own.
     lane_tolerance : float
         The vehicle's lane may differ from the line's by at most this much, m.
+    limits : Limits, optional
+        Plausibility thresholds of the weights (default :class:`Limits`).
+    max_residual : float
+        A relative residual above this is ``residual_high``: the readings are not the
+        passage's vehicle on this line (a wrong passage or time axis, swapped channels,
+        readings in other units, a second vehicle).
 
     Returns
     -------
@@ -178,10 +218,7 @@ def weigh_static(
     lo, hi = influence.support
     used = ((pos > lo) & (pos < hi)).any(axis=1)
     n_ax = passage.n_axles
-    groups = _check_groups(groups, n_ax)
-    share = np.zeros((n_ax, len(groups)))  # axle weight = share @ group weight
-    for k, g in enumerate(groups):
-        share[list(g), k] = 1.0 / len(g)
+    groups, share = group_share(groups, n_ax)  # axle weight = share @ group weight
     n_unknown = len(groups)
     if used.sum() < n_unknown:
         raise InputError(
@@ -204,8 +241,21 @@ def weigh_static(
     fitted = np.einsum("kic,i->kc", M, weights)
     resid = float(np.linalg.norm((fitted - meas) / scale)
                   / max(np.linalg.norm(meas / scale), np.finfo(float).tiny))
+    limits = Limits() if limits is None else limits
+    condition = float(sv[0] / sv[-1])
+    flags = weight_flags(weights, sol, limits)
+    if not resid <= require_positive("max_residual", max_residual):
+        flags.append("residual_high")
+    h = influence.spacing  # an axle within one ordinate of the support's end is out
+    if pos[0, 0] > lo + h:
+        flags.append("truncated_start")
+    if pos[-1, -1] < hi - h:
+        flags.append("truncated_end")
+    if condition > limits.condition:
+        flags.append("ill_conditioned")
+    flags_t = ordered_flags(flags)
     return StaticWeights(
         axle_weights=weights, time=record.time[used], measured=meas, fitted=fitted,
         channels=influence.channels, passage=passage, residual=resid,
-        condition=float(sv[0] / sv[-1]), groups=groups,
+        condition=condition, groups=groups, flags=flags_t, quality=quality_of(flags_t),
     )

@@ -1,0 +1,168 @@
+"""Calibration when the model is not the truth (issue 12): finer-mesh data, gauge noise.
+
+Targets (issue 12, "Paper cases with realistic errors"):
+
+* data from a 24 × 16 mesh of the paper's slab with 2 % gauge noise (one σ = 2 % of the
+  record's peak strain on every channel): the §5.1 parameters of the 12 × 8 model stay
+  within 1 % of the 24 × 16 model's own calibration on the same data;
+* §5.2 at 5 % gauge noise keeps every parameter within 1 %.
+
+And how much the road assumption matters (exact, measured with 1 mm RMS error, flat).
+
+Every calibration here is the §5.1 setup (bwim.paper: the truck at 20 m/s in lane 2 m on
+the paper's road, known exactly; start E_x × 0.8, E_y × 1.2, μ × 1.25) with least
+squares for both stages (``method="lm"``; the stages' optimum, not the optimiser, is
+what is measured) and a 20 m approach.  Beside it, the mesh check of the 12 × 8 model
+(:func:`bwim.fe.convergence.check_mesh`), which explains the misses.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+import bwim
+from benchmarks._timing import print_table
+from bwim import paper
+from bwim.calibration import calibrate, road_sensitivity
+from bwim.fe.convergence import check_mesh
+
+APPROACH = 20.0
+START = {"E_x": 0.8, "E_y": 1.2, "mu": 1.25}
+KEYS = tuple(START)
+
+
+def _record(nx: int, ny: int):
+    truth = paper.slab_bridge(nx=nx, ny=ny)
+    return truth, bwim.simulate(truth, paper.truck(), speed=paper.SPEED, lane=paper.LANE,
+                                sensors=paper.sensors(),
+                                road=paper.road(1, approach=APPROACH), approach=APPROACH)
+
+
+def _calibrate(nx: int, ny: int, rec, *, seed: int = 0, weights=None):
+    b = paper.slab_bridge(nx=nx, ny=ny)
+    b = b.with_params(**{k: b.params[k] * f for k, f in START.items()})
+    return calibrate(b, [rec], paper.truck(), road=paper.road(1, approach=APPROACH),
+                     approach=APPROACH, seed=seed, method="lm", weights=weights)
+
+
+def _pct(cal, truth, which="params"):
+    src = cal.params if which == "params" else cal.two_stage
+    return np.array([(src[k][0] / truth.params[k][0] - 1) * 100 for k in KEYS])
+
+
+def mesh_check():
+    rec = _record(12, 8)[1]
+    k = int(np.argmax(np.abs(rec.data).sum(axis=1)))
+    p = rec.passage
+    x = p.wheel_x(rec.time[k:k + 1])[0]
+    f = paper.truck().model().static_forces
+    loads = [bwim.PointLoad(x=float(a), y=float(b), P=float(c))
+             for a, b, c in zip(x, p.wheel_y, f, strict=True) if 0 < a < paper.SLAB_LENGTH]
+    t0 = time.perf_counter()
+    mc = check_mesh(paper.slab_bridge(), paper.sensors(), loads, tol=0.01)
+    dt = time.perf_counter() - t0
+    rel = mc.relative_error
+    rows = [[f"{nx}x{ny}", f"{rel[i, :9].max() * 100:.2f}", f"{rel[i, 9:].max() * 100:.2f}",
+             mc.sensors[9 + int(np.argmax(rel[i, 9:]))]]
+            for i, (nx, ny) in enumerate(mc.meshes)]
+    return mc, dt, rows
+
+
+def mismatch(noise: float = 0.02):
+    rows, numbers = [], {}
+    for data_mesh, model_mesh in (((24, 16), (12, 8)), ((48, 32), (24, 16))):
+        truth, clean = _record(*data_mesh)
+        rec = clean.with_noise(noise, seed=5)
+        own = _calibrate(*data_mesh, rec)
+        t0 = time.perf_counter()
+        cal = _calibrate(*model_mesh, rec)
+        dt = time.perf_counter() - t0
+        diff = np.array([(cal.params[k][0] / own.params[k][0] - 1) * 100 for k in KEYS])
+        numbers[(data_mesh, model_mesh)] = diff
+        for label, c in ((f"{model_mesh[0]}x{model_mesh[1]}", cal),
+                         (f"{data_mesh[0]}x{data_mesh[1]} (own)", own)):
+            rows.append([f"{data_mesh[0]}x{data_mesh[1]}", label,
+                         *(f"{v:+.2f}" for v in _pct(c, truth, "two")),
+                         *(f"{v:+.2f}" for v in _pct(c, truth)),
+                         f"{dt:.1f}" if c is cal else "", ""])
+        rows[-2][-1] = ("|Δ| ≤ 1 %: " + ("met" if np.abs(diff).max() <= 1.0 else "MISSED")
+                        + " (" + ", ".join(f"{v:+.2f}" for v in diff) + ")")
+    return rows, numbers
+
+
+def noise_5(seeds=(0, 1, 2), weights="noise"):
+    truth, clean = _record(24, 16)
+    rows = []
+    for model_mesh in ((12, 8), (24, 16)):
+        errs, ses = [], []
+        for sd in seeds:
+            rec = clean.with_noise(0.05, seed=1000 + sd)
+            cal = _calibrate(*model_mesh, rec, seed=sd, weights=weights)
+            errs.append(_pct(cal, truth))
+            ses.append([cal.uncertainty[k][0] / truth.params[k][0] * 100 for k in KEYS])
+        e, se = np.array(errs), np.array(ses)
+        rows.append([f"{model_mesh[0]}x{model_mesh[1]}", len(seeds),
+                     *(f"{m:+.2f} ± {s:.2f}" for m, s in zip(e.mean(0), e.std(0),
+                                                             strict=True)),
+                     *(f"{v:.2f}" for v in se.mean(0)),
+                     f"{np.abs(e).max():.2f}",
+                     "met" if np.abs(e).max() <= 1.0 else "MISSED"])
+    return rows
+
+
+def measured_road(road, rms: float = 1e-3, seed: int = 3):
+    """``road`` as a profilometer might give it: plus an error of ``rms`` m RMS, white
+    at the profile's spacing then averaged over the tyre patch (and rescaled to ``rms``)."""
+    rng = np.random.default_rng(seed)
+    noise = bwim.RoadProfile(x=road.x, elevation=rng.standard_normal(road.x.size))
+    e = noise.smoothed(paper.TYRE_PATCH)
+    err = np.interp(road.x, e.x, e.elevation)
+    err *= rms / np.sqrt(np.mean(err**2))
+    return bwim.RoadProfile(x=road.x, elevation=road.elevation + err)
+
+
+def road_effect():
+    truth, clean = _record(24, 16)
+    rec = clean.with_noise(0.02, seed=5)
+    road = paper.road(1, approach=APPROACH)
+    cal = _calibrate(24, 16, rec)
+    t0 = time.perf_counter()
+    rs = road_sensitivity(cal.bridge, [rec], paper.truck(), road,
+                          {"measured, 1 mm RMS error": measured_road(road), "flat": None},
+                          approach=APPROACH)
+    dt = time.perf_counter() - t0
+    rows = [["exact (calibrated)", *(f"{v:+.2f}" for v in _pct(cal, truth))]]
+    for name, d in rs.shifts.items():
+        rows.append([name, *(f"{((1 + v) * cal.params[k][0] / truth.params[k][0] - 1) * 100:+.2f}"
+                            for v, k in zip(d, KEYS, strict=True))])
+    return rows, dt
+
+
+def main() -> None:
+    mc, dt, rows = mesh_check()
+    print_table(f"Mesh check of the paper's 12x8 slab at its 18 sensors (static truck "
+                f"loads where the strains peak; {dt:.1f} s; observed order {mc.order:.2f}): "
+                "largest estimated discretisation error %",
+                ["mesh", "strain_x", "strain_y", "worst strain_y sensor"], rows)
+    rows, _ = mismatch()
+    print_table("§5.1 with finer-mesh data and 2 % gauge noise: parameter error % against "
+                "the true values, two stages then refined; target: the coarse model within "
+                "1 % of the data mesh's own calibration",
+                ["data", "model", "E_x 2-st", "E_y 2-st", "mu 2-st", "E_x", "E_y", "mu",
+                 "time (s)", "target"], rows)
+    print_table("§5.2 at 5 % gauge noise (one σ = 5 % of the peak strain), data from a "
+                "24x16 mesh, channels weighted by their estimated noise: refined error % "
+                "(mean ± std over seeds) and the least-squares standard error %",
+                ["model", "seeds", "E_x", "E_y", "mu", "se E_x", "se E_y", "se mu",
+                 "max |err|", "≤ 1 %"], noise_5())
+    rows, dt = road_effect()
+    print_table("Road assumption (bwim.calibration.road_sensitivity, re-fitted; "
+                f"{dt:.1f} s): 24x16 data and model, 2 % gauge noise, the calibration's "
+                "parameter error % when the dynamic misfit uses each road",
+                ["road in the model", "E_x", "E_y", "mu"], rows)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,309 @@
+"""A B-WIM installation's chain: detect each vehicle, calibrate lines from the calibration
+truck's runs, weigh unknown traffic, and check every weight before it leaves.
+
+Contract
+--------
+* :class:`SiteSetup` is what the installation knows: the axle-detector channels (in the
+  order traffic meets them), their distance (m) and the first detector's position in the
+  influence-line frame (m), and the calibration truck's static axle loads (N) and axle
+  spacings (m).  Without detectors, vehicles are found from the strain alone
+  (:func:`bwim.detect.detect_from_strain`) with the calibrated lines.
+* :func:`calibrate_site` detects the calibration truck in each run (speed, arrival,
+  lateral position; the truck's axle layout is known, so a run whose detected axle count
+  or spacings disagree with it is rejected with its reason) and calibrates the lines of
+  every gauge from the runs stacked (:func:`bwim.wim.calibrate_lines`: per-run scale
+  factors and their trend over clock time, outlier runs rejected with a reason).
+* :func:`weigh_event` detects the vehicles of one event and weighs a single vehicle by
+  :func:`bwim.wim.weigh` (gauges combined by generalised least squares, axle groups as
+  groups).  It never raises on a record it can read: every outcome is an
+  :class:`EventWeighing` whose ``weighed`` says whether weights were produced and whose
+  ``reason`` says why not.  An event with several vehicles on the bridge is flagged
+  ``multiple_presence`` and not weighed as one vehicle; a weighing of quality
+  ``"reject"`` (negative or absurd weights, a fit far worse than the calibration's, a
+  truncated record) gives no weights, only its flags.
+* Units: N, m, s; readings in the logger's units (a scale factor is not needed: the
+  calibration truck fixes it).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from bwim.detect import Detection, detect_axles, detect_from_strain
+from bwim.errors import InputError, require_finite, require_positive
+from bwim.records import Passage, Record
+from bwim.sensors import SensorKind
+from bwim.wim import MultiRunCalibration, Weighing, calibrate_lines, weigh
+from bwim.wim.multirun import RunFit
+from bwim.wim.weigh import HARD_FLAGS
+
+__all__ = ["EventWeighing", "SiteCalibration", "SiteSetup", "calibrate_site", "weigh_event"]
+
+#: A calibration run whose detected axle spacings differ from the truck's by more than
+#: this (m) is rejected: the detection, not the truck, is wrong.
+SPACING_TOLERANCE = 0.3
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class SiteSetup:
+    """What a B-WIM installation knows (see the module docstring).
+
+    Parameters
+    ----------
+    calibration_loads : sequence of float
+        The calibration truck's static axle loads, N.
+    calibration_spacings : sequence of float
+        Its axle spacings, m.
+    detectors : (str, str) or None
+        Axle-detector channel names, in the order traffic meets them; None: detect from
+        the strain alone.
+    distance : float or None
+        Distance between the detectors, m (required with detectors).
+    position : float
+        The first detector's x in the influence-line frame, m (default 0: lines are
+        measured from it).
+    max_spacing : float or None
+        Largest axle spacing within one vehicle, m (default :mod:`bwim.detect`'s).
+    combine : str
+        How the gauges are combined (:func:`bwim.wim.weigh`): ``"auto"`` (default:
+        generalised least squares inside the calibrated lateral range, the gauges' sum
+        outside it), ``"gls"``, ``"blue"`` or ``"sum"``.
+    lateral : str or None
+        ``"linear"``: lines linear in the lateral position; None: one line per gauge.
+    """
+
+    calibration_loads: np.ndarray
+    calibration_spacings: np.ndarray
+    detectors: tuple[str, str] | None = None
+    distance: float | None = None
+    position: float = 0.0
+    max_spacing: float | None = None
+    combine: str = "auto"
+    lateral: str | None = None
+
+    def __post_init__(self) -> None:
+        loads = np.array(self.calibration_loads, dtype=float, ndmin=1)
+        spacings = np.array(self.calibration_spacings, dtype=float, ndmin=1)
+        if loads.ndim != 1 or not np.all(np.isfinite(loads)) or np.any(loads <= 0):
+            raise InputError("calibration_loads must be positive axle loads, N")
+        if spacings.ndim != 1 or spacings.size != loads.size - 1 or np.any(spacings <= 0):
+            raise InputError(f"calibration_spacings must be {loads.size - 1} positive "
+                             f"distances for {loads.size} axle loads, got {spacings.tolist()}")
+        object.__setattr__(self, "calibration_loads", loads)
+        object.__setattr__(self, "calibration_spacings", spacings)
+        if self.detectors is not None:
+            det = tuple(self.detectors)
+            if len(det) != 2 or det[0] == det[1]:
+                raise InputError(f"detectors must be two different channels, got {det}")
+            object.__setattr__(self, "detectors", det)
+            if self.distance is None:
+                raise InputError("two axle detectors need their distance, m")
+            object.__setattr__(self, "distance", require_positive("distance", self.distance))
+        object.__setattr__(self, "position", require_finite("position", self.position))
+        if self.max_spacing is not None:
+            object.__setattr__(self, "max_spacing",
+                               require_positive("max_spacing", self.max_spacing))
+        if self.combine not in ("auto", "gls", "blue", "sum"):
+            raise InputError(f"combine must be auto, gls, blue or sum, got {self.combine!r}")
+        if self.lateral not in (None, "linear"):
+            raise InputError(f"lateral must be None or 'linear', got {self.lateral!r}")
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class SiteCalibration:
+    """Lines of every gauge from the calibration truck's runs (:func:`calibrate_site`).
+
+    Attributes
+    ----------
+    lines : MultiRunCalibration
+        The lines, the runs' residuals, scale factors and rejections.
+    detections : tuple of Detection
+        What detection found in each run (same order as the records).
+    reasons : tuple of str
+        Why each run was left out ("" when it was used): detection or calibration.
+    fits : tuple of (RunFit or None)
+        Each run against the lines (its scale factor and residual); None for a run
+        that detection left out.
+    setup : SiteSetup
+    """
+
+    lines: MultiRunCalibration
+    detections: tuple[Detection, ...]
+    reasons: tuple[str, ...]
+    fits: tuple[RunFit | None, ...]
+    setup: SiteSetup
+
+    @property
+    def n_used(self) -> int:
+        return sum(1 for r in self.reasons if not r)
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class EventWeighing:
+    """The outcome of one event (:func:`weigh_event`); never raised, always returned.
+
+    Attributes
+    ----------
+    weighed : bool
+        True when ``weighing`` holds weights that passed the plausibility checks.
+    reason : str
+        Why the event was not weighed ("" when it was).
+    detection : Detection or None
+        None when detection itself failed (``reason`` says why).
+    weighing : Weighing or None
+        The fit (also for a rejected weighing, for inspection); None if not attempted.
+    flags : tuple of str
+        Detection and weighing flags together.
+    """
+
+    weighed: bool
+    reason: str = ""
+    detection: Detection | None = None
+    weighing: Weighing | None = None
+    flags: tuple[str, ...] = field(default_factory=tuple)
+
+    @property
+    def passage(self) -> Passage | None:
+        """The weighed vehicle's passage (None when no single vehicle was found)."""
+        if self.detection is None or len(self.detection.vehicles) != 1:
+            return None
+        return self.detection.vehicles[0].passage
+
+    @property
+    def axle_weights(self) -> np.ndarray | None:
+        """Static axle weights, N (None unless weighed)."""
+        return self.weighing.axle_weights if self.weighed else None
+
+    @property
+    def gvw(self) -> float | None:
+        """Gross vehicle weight, N (None unless weighed)."""
+        return self.weighing.gvw if self.weighed else None
+
+
+def _gauges(record: Record) -> list[str]:
+    return [s.name for s in record.sensors if s.kind is not SensorKind.AXLE_DETECTOR]
+
+
+def _detect(record: Record, setup: SiteSetup, *, span, line=None,
+            known_spacings=None) -> Detection:
+    options = {} if setup.max_spacing is None else {"max_axle_spacing": setup.max_spacing}
+    if setup.detectors is not None:
+        return detect_axles(record, setup.detectors, setup.distance, position=setup.position,
+                            span=span, gauges=_gauges(record), **options)
+    if line is None:
+        raise InputError("without axle detectors the calibration runs need an influence "
+                         "line to detect the truck from the strain (give [axle_detectors])")
+    return detect_from_strain(record, line, known_spacings=known_spacings, span=span,
+                              gauges=_gauges(record), **options)
+
+
+def _run_reason(det: Detection, setup: SiteSetup) -> str:
+    """Why a calibration run's detection cannot be used ("" if it can)."""
+    if not det.vehicles:
+        return f"no vehicle detected ({det.message or 'no axles'})"
+    if len(det.vehicles) > 1:
+        return f"{len(det.vehicles)} vehicles detected, not one calibration truck"
+    v = det.vehicles[0]
+    if "multiple_presence" in v.flags or "multiple_presence" in det.flags:
+        return "multiple presence"
+    n = setup.calibration_loads.size
+    if v.passage.n_axles != n:
+        return f"{v.passage.n_axles} axles detected, the calibration truck has {n}"
+    dev = np.max(np.abs(v.passage.axle_spacings - setup.calibration_spacings), initial=0.0)
+    if dev > SPACING_TOLERANCE:
+        return (f"detected axle spacings differ from the truck's by {dev:.2f} m "
+                f"(> {SPACING_TOLERANCE} m)")
+    return ""
+
+
+def calibrate_site(records: Sequence[Record], setup: SiteSetup) -> SiteCalibration:
+    """Detect the calibration truck in every run and calibrate the lines of every gauge.
+
+    Parameters
+    ----------
+    records : sequence of Record
+        Runs of the calibration truck (logger events), with clock time.
+    setup : SiteSetup
+
+    Returns
+    -------
+    SiteCalibration
+
+    Raises
+    ------
+    InputError
+        No records, or fewer than two usable runs (the reasons are in the message).
+    """
+    if records is None or len(records) == 0:
+        raise InputError("records: give at least one calibration run")
+    if setup.detectors is None:
+        raise InputError("calibration runs are detected with axle detectors; the "
+                         "scenario needs [axle_detectors] to calibrate lines")
+    detections, reasons, passages, kept = [], [], [], []
+    for k, rec in enumerate(records):
+        det = _detect(rec, setup, span=None)
+        reason = _run_reason(det, setup)
+        detections.append(det)
+        reasons.append(reason)
+        if not reason:
+            v = det.vehicles[0].passage
+            # the truck's layout is known exactly: keep the detected speed, arrival and
+            # lateral position, and the measured spacings of the truck
+            passages.append(Passage(speed=v.speed, lane=v.lane, delay=v.delay,
+                                    axle_spacings=setup.calibration_spacings,
+                                    track_width=v.track_width))
+            kept.append(k)
+    if len(kept) < 2:
+        shown = "; ".join(f"run {k + 1}: {r}" for k, r in enumerate(reasons) if r)
+        raise InputError(f"only {len(kept)} usable calibration run(s) of {len(records)}: "
+                         f"{shown}")
+    lines = calibrate_lines([records[k] for k in kept], passages, setup.calibration_loads,
+                            lateral=setup.lateral)
+    fits: list[RunFit | None] = [None] * len(records)
+    for run in lines.runs:
+        fits[kept[run.index]] = run
+        if run.rejected:
+            reasons[kept[run.index]] = run.reason
+    return SiteCalibration(lines=lines, detections=tuple(detections), reasons=tuple(reasons),
+                           fits=tuple(fits), setup=setup)
+
+
+def weigh_event(record: Record, calibration: SiteCalibration) -> EventWeighing:
+    """Detect and weigh the vehicle of one event (see the module docstring).
+
+    Never raises for a record it can read: detection or weighing failures come back as an
+    :class:`EventWeighing` with ``weighed=False`` and the reason.
+    """
+    setup = calibration.setup
+    lines = calibration.lines
+    try:
+        det = _detect(record, setup, span=lines.support, line=lines.line_at())
+    except InputError as exc:
+        return EventWeighing(weighed=False, reason=f"detection failed: {exc}")
+    if not det.vehicles:
+        return EventWeighing(weighed=False, reason=det.message or "no axle found",
+                             detection=det, flags=det.flags or ("no_axles",))
+    flags = tuple(dict.fromkeys([*det.flags, *(f for v in det.vehicles for f in v.flags)]))
+    if len(det.vehicles) > 1 or "multiple_presence" in flags:
+        return EventWeighing(weighed=False, detection=det, flags=flags,
+                             reason=f"multiple presence: {len(det.vehicles)} vehicles "
+                             "on the bridge, not weighed as one")
+    vehicle = det.vehicles[0]
+    if "axle_count_mismatch" in flags:
+        return EventWeighing(weighed=False, detection=det, flags=flags,
+                             reason="the axle detectors disagree on the number of axles")
+    try:
+        w = weigh(record, vehicle.passage, lines, combine=setup.combine)
+    except InputError as exc:
+        return EventWeighing(weighed=False, detection=det, flags=flags,
+                             reason=f"weighing failed: {exc}")
+    flags = tuple(dict.fromkeys([*flags, *w.flags]))
+    if w.quality == "reject":
+        hard = ", ".join(f for f in w.flags if f in HARD_FLAGS)
+        return EventWeighing(weighed=False, detection=det, weighing=w, flags=flags,
+                             reason=f"implausible weighing ({hard})")
+    return EventWeighing(weighed=True, detection=det, weighing=w, flags=flags)
+

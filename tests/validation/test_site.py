@@ -1,0 +1,169 @@
+"""A real installation end to end, on a small simulated test day (:mod:`bwim.synthetic`).
+
+The day's data come from a 0.5 m plate mesh with 3-D trucks over ISO roads, 2 % absolute
+gauge noise, offsets, baseline drift, per-gauge gains, a drift of the strain-to-load ratio
+over the day and detector pulses of a shape the detection never assumes; the weighing
+knows none of that (no FE model at all: lines calibrated from the calibration truck's
+runs).  References: the simulation's truth (``truth.csv``, ``reference.csv``).
+Targets from issue 11: axle count right, speed within 0.5 %, spacings within 0.1 m.
+"""
+
+import csv
+import shutil
+
+import numpy as np
+import pytest
+
+from bwim.cli import WEIGH_COLUMNS, main
+from bwim.io import load_record, load_scenario
+from bwim.site import SiteSetup, calibrate_site, weigh_event
+from bwim.synthetic import make_test_day
+
+
+@pytest.fixture(scope="module")
+def day(tmp_path_factory):
+    return make_test_day(tmp_path_factory.mktemp("site") / "day", seed=3, n_calibration=6,
+                         n_traffic=10, n_multiple=1, mesh=0.5)
+
+
+def _rows(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def _floats(text):
+    return np.array([float(v) for v in text.split(";")]) if text else np.zeros(0)
+
+
+@pytest.fixture(scope="module")
+def site(day):
+    scenario = load_scenario(day.scenario)
+    truck_loads = [float(v) for v in scenario.vehicle.params["axle_loads"]]
+    setup = SiteSetup(calibration_loads=truck_loads,
+                      calibration_spacings=scenario.vehicle.params["axle_spacings"],
+                      detectors=("ad1", "ad2"), distance=scenario.axle_detectors.distance)
+    runs = [load_record(p, scenario) for p in day.calibration]
+    return scenario, calibrate_site(runs, setup)
+
+
+def test_calibration_runs_are_detected_and_track_the_days_drift(day, site):
+    """Every run is used; the runs' scale factors follow the simulated strain-to-load
+    ratio of the day (truth.csv, sd 3.3 %) up to the truck's own dynamics on these class
+    A–B roads, which scatter each run's factor by about 5 % RMS (measured: 5.3 % on this
+    day, correlation 0.60; 4.5 % and 0.73 on the full 12-run day)."""
+    _, cal = site
+    assert cal.n_used == len(day.calibration)
+    truth = {r["record"]: float(r["strain_factor"]) for r in _rows(day.truth)}
+    true = np.array([truth[p.name] for p in day.calibration])
+    fitted = np.array([f.scale for f in cal.fits])
+    true = true / true.mean()
+    assert np.corrcoef(true, fitted)[0, 1] > 0.35
+    assert np.sqrt(np.mean((fitted - true) ** 2)) < 0.075
+
+
+def test_traffic_detected_and_weighed_against_the_truth(day, site):
+    """Single trucks: axle count right, speed within 0.5 %, spacings within 0.1 m (the
+    issue's targets), GVW within 12 % (the class A–B roads of this day give ±5 % sd on
+    the full day; 12 % is 2.3 sd); the two-truck event is flagged, not weighed."""
+    scenario, cal = site
+    truth = {}
+    for r in _rows(day.truth):
+        truth.setdefault(r["record"], []).append(r)
+    n_single = n_weighed = 0
+    for path in day.traffic:
+        ev = weigh_event(load_record(path, scenario), cal)
+        t = truth[path.name]
+        if len(t) > 1:
+            assert not ev.weighed and "multiple presence" in ev.reason
+            continue
+        t = t[0]
+        n_single += 1
+        p = ev.passage
+        assert p is not None and p.n_axles == int(t["n_axles"]), path.name
+        assert abs(p.speed / float(t["speed_m_s"]) - 1) < 0.005
+        assert np.max(np.abs(p.axle_spacings - _floats(t["axle_spacings_m"]))) < 0.1
+        if t["lane"] != "1" and not ev.weighed:
+            # the calibration truck never drove lane 2: the lines are extrapolated there,
+            # and a fit much worse than the calibration's is refused, not written
+            assert "lateral_extrapolated" in ev.flags and "residual_high" in ev.flags
+            continue
+        assert ev.weighed, (path.name, ev.reason)
+        n_weighed += 1
+        assert abs(ev.gvw / 1e3 / float(t["gvw_kN"]) - 1) < 0.12, path.name
+    assert n_single == 9 and n_weighed >= 7
+
+
+def _weigh(day, out, *extra):
+    return main(["weigh", str(day.scenario), str(day.traffic[0].parent),
+                 "--calibration-records", str(day.calibration[0].parent), "-o", str(out),
+                 *extra])
+
+
+def test_weigh_command_writes_the_contract_summary(day, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert _weigh(day, out) == 0
+    rows = _rows(out / "summary.csv")
+    assert tuple(rows[0]) == WEIGH_COLUMNS
+    assert [r["record"] for r in rows] == [p.name for p in day.traffic]
+    ref = {r["record"]: r for r in _rows(day.reference)}
+    for r in rows:
+        if r["record"] not in ref:  # the two-truck event: a reason, no weights
+            assert r["gvw_kN"] == "" and "multiple_presence" in r["flags"]
+            continue
+        if r["gvw_kN"] == "":  # refused (see the test above): flags and a reason
+            assert r["flags"] and r["reason"] and r["axle_weights_kN"] == ""
+            continue
+        w = _floats(r["axle_weights_kN"])
+        assert w.size == int(r["n_axles"]) == int(ref[r["record"]]["n_axles"])
+        assert float(r["gvw_kN"]) == pytest.approx(w.sum(), abs=0.02)
+    assert (out / "calibration_runs.csv").exists() and (out / "influence_lines.h5").exists()
+    capsys.readouterr()
+    assert main(["accuracy", str(out / "summary.csv"), "--reference", str(day.reference)]) == 0
+    assert "gross weight" in capsys.readouterr().out
+
+
+def _corrupt(src, dst, how):
+    lines = src.read_text().splitlines()
+    if how == "missing_column":
+        lines[40] = "\t".join(lines[40].split("\t")[:-2])
+    elif how == "nan":
+        fields = lines[60].split("\t")
+        fields[5] = "nan"
+        lines[60] = "\t".join(fields)
+    elif how == "backwards_time":
+        lines[70], lines[71] = lines[71], lines[70]
+    elif how == "no_axles":  # detectors silent: nothing crosses them
+        for k in range(1, len(lines)):
+            f = lines[k].split("\t")
+            f[1] = f[2] = "0.0"
+            lines[k] = "\t".join(f)
+    dst.write_text("\n".join(lines) + "\n")
+
+
+def test_a_batch_survives_bad_records(day, tmp_path):
+    """Each bad record gets a summary row with a one-line reason; the good ones are
+    weighed as without them; the exit code says some failed (1)."""
+    traffic = tmp_path / "traffic"
+    shutil.copytree(day.traffic[0].parent, traffic)
+    good = day.traffic[1]
+    for how in ("missing_column", "nan", "backwards_time", "no_axles"):
+        _corrupt(good, traffic / f"bad_{how}.txt", how)
+    out = tmp_path / "out"
+    code = main(["weigh", str(day.scenario), str(traffic), "--calibration-records",
+                 str(day.calibration[0].parent), "-o", str(out)])
+    assert code == 1
+    rows = {r["record"]: r for r in _rows(out / "summary.csv")}
+    for how, needle in (("missing_column", "field"), ("nan", "nan"),
+                        ("backwards_time", "time"), ("no_axles", "axle")):
+        r = rows[f"bad_{how}.txt"]
+        assert r["gvw_kN"] == "" and needle in r["reason"].lower(), (how, r["reason"])
+        assert "\n" not in r["reason"]
+    assert rows[good.name]["gvw_kN"] != ""
+
+
+def test_resume_keeps_what_was_weighed(day, tmp_path):
+    out = tmp_path / "out"
+    assert _weigh(day, out) == 0
+    first = (out / "summary.csv").read_text()
+    assert _weigh(day, out, "--resume") == 0
+    assert (out / "summary.csv").read_text() == first
