@@ -30,7 +30,7 @@ def test_exact_model_round_trip(crossing):
     assert np.all(err.rms_error < 0.05)
     assert abs(err.gvw_error) < 0.02
     assert ident.unknowns.value == "wheel"
-    assert ident.lcurve is not None and ident.lcurve.lam.size == 30
+    assert ident.lcurve is not None and ident.lcurve.lam.size == 16  # 8 coarse + 8 fine (issue 15)
     # the model reproduces the readings
     assert np.abs(ident.fitted - rec.data).max() < 0.02 * np.abs(rec.data).max()
 

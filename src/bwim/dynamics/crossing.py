@@ -256,9 +256,7 @@ def run_crossing(
     else:
         modes = select_modes(bridge, n_modes=n_modes, max_frequency=max_frequency,
                              sampling_rate=fs)
-        phi = modes.shapes
-        psi = np.einsum("kcj,kcjm->kmc", rows.vals, phi[rows.dofs])
-        psi_x = np.einsum("kcj,kcjm->kmc", rows.slopes, phi[rows.dofs]) * c_speed
+        psi, psi_x = _contact_modes(rows, crossing.on, modes.shapes, c_speed)
         rep = ModalBridge(omega=modes.omega, zeta=bridge.rayleigh.ratio(modes.omega),
                           psi=psi, psi_x=psi_x)
 
@@ -395,14 +393,33 @@ def _contact_rows(bridge: Bridge, x, y, on):
     return PointRows(dofs=dofs, vals=vals, slopes=slopes)
 
 
-def _static_correction(inf, x, y, on, F, psi, s_modal, modes, is_plate):
-    """Quasi-static response of the truncated modes (mode-acceleration correction)."""
-    g = np.zeros((*x.shape, len(inf.sensors)))
+def _contact_modes(rows, on, phi, c_speed):
+    """``psi[k, :, c] = Φᵀ N`` and ``psi_x`` (with the speed) at every step, gathered only
+    where the contact is on the deck (zeros elsewhere)."""
+    n_t, n_c = on.shape
+    psi = np.zeros((n_t, n_c, phi.shape[1]))
+    psi_x = np.zeros_like(psi)
     if on.any():
-        yy = np.broadcast_to(y, x.shape)[on] if is_plate else None
-        g[on] = inf.at(x[on], yy)
-    modal_static = np.einsum("sm,m,kmc->kcs", s_modal, 1.0 / modes.omega**2, psi)
-    return np.einsum("kc,kcs->ks", np.where(on, F, 0.0), g - modal_static)
+        ph = phi[rows.dofs[on]]  # (n_on, k, n_m)
+        psi[on] = np.einsum("pj,pjm->pm", rows.vals[on], ph)
+        psi_x[on] = np.einsum("pj,pjm->pm", rows.slopes[on], ph) * np.broadcast_to(
+            c_speed, on.shape)[on][:, None]
+    return psi.transpose(0, 2, 1), psi_x.transpose(0, 2, 1)
+
+
+def _static_correction(inf, x, y, on, F, psi, s_modal, modes, is_plate):
+    """Quasi-static response of the truncated modes (mode-acceleration correction), built
+    from the steps with the contact on the deck only (the force is zero elsewhere)."""
+    out = np.zeros((x.shape[0], len(inf.sensors)))
+    if not on.any():
+        return out
+    yy = np.broadcast_to(y, x.shape)[on] if is_plate else None
+    g = inf.at(x[on], yy)  # (n_on, n_s)
+    k_on, c_on = np.nonzero(on)
+    modal_static = np.einsum("sm,m,pm->ps", s_modal, 1.0 / modes.omega**2,
+                             psi[k_on, :, c_on])
+    np.add.at(out, k_on, F[k_on, c_on][:, None] * (g - modal_static))
+    return out
 
 
 def _check_crossing_memory(bridge, vehicles, speeds, fs, approach, tail, delays, sensors):

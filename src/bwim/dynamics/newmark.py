@@ -20,6 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import signal
 
 from bwim.errors import InputError, require_positive
 
@@ -69,6 +70,11 @@ class Newmark:
     def a5(self) -> float:
         """Coefficient of a in C's history."""
         return self.dt * (0.5 * self.gamma / self.beta - 1.0)
+
+    @property
+    def is_average_acceleration(self) -> bool:
+        """β = 1/4, γ = 1/2 (the default rule)."""
+        return self.beta == 0.25 and self.gamma == 0.5
 
     def effective(self, M, C, K):
         """Effective stiffness ``K + a1 C + a0 M``."""
@@ -136,14 +142,26 @@ def integrate(
     V = np.empty((n_t, n))
     A = np.empty((n_t, n))
     if diag:
+        M, C, K = (np.broadcast_to(np.asarray(x, dtype=float), (n,)) for x in (M, C, K))
         a = (f[0] - C * v - K * u) / M if a0 is None else np.asarray(a0, dtype=float).copy()
+        start = 0
+        if not (u.any() or v.any() or a.any()):
+            # at rest under no load until the first load: nothing moves (exact zeros)
+            loaded = np.flatnonzero(f.any(axis=1))
+            start = max(int(loaded[0]) - 1, 0) if loaded.size else n_t - 1
+            U[:start], V[:start], A[:start] = 0.0, 0.0, 0.0
         keff = scheme.effective(M, C, K)
-        U[0], V[0], A[0] = u, v, a
-        for k in range(1, n_t):
+        U[start], V[start], A[start] = u, v, a
+        # two steps by the stepping rule, then (average acceleration) the same recursion
+        # as a linear filter of the loads (:func:`_filter_modes`)
+        explicit = n_t if not scheme.is_average_acceleration else min(start + 3, n_t)
+        for k in range(start + 1, explicit):
             u_new = (f[k] + scheme.history(M, C, u, v, a)) / keff
             v, a = scheme.update(u_new, u, v, a)
             u = u_new
             U[k], V[k], A[k] = u, v, a
+        if explicit < n_t:
+            _filter_modes(M, C, K, f, scheme.dt, explicit, (U, V, A))
         return NewmarkResult(u=U, v=V, a=A)
     a = np.linalg.solve(M, f[0] - C @ v - K @ u) if a0 is None else np.asarray(a0, float).copy()
     # step operator: z_{k+1} = Tz z_k + Tf f_{k+1}, z = [u; v; a]
@@ -166,7 +184,84 @@ def integrate(
     Z[0] = np.concatenate([u, v, a])
     forced = Tf @ f.T  # (3n, n_t)
     z = Z[0]
-    for k in range(1, n_t):
+    explicit = min(3, n_t) if scheme.is_average_acceleration else n_t
+    for k in range(1, explicit):
         z = Tz @ z + forced[:, k]
         Z[k] = z
-    return NewmarkResult(u=Z[:, :n], v=Z[:, n:2 * n], a=Z[:, 2 * n:])
+    res = NewmarkResult(u=Z[:, :n], v=Z[:, n:2 * n], a=Z[:, 2 * n:])
+    if explicit < n_t and not _filter_coupled(M, C, K, f, scheme.dt, explicit,
+                                              (res.u, res.v, res.a)):
+        for k in range(explicit, n_t):  # an eigenbasis too ill-conditioned: keep stepping
+            z = Tz @ z + forced[:, k]
+            Z[k] = z
+    return res
+
+
+def _filter_modes(M, C, K, f, dt, k0, out) -> None:
+    """Continue the average-acceleration recursion of uncoupled modes from step ``k0`` as
+    a linear recursive filter of the loads (scipy.signal.lfilter), filling ``out`` =
+    (U, V, A) in place from row ``k0`` (rows ``k0 − 2`` and ``k0 − 1`` must be filled).
+
+    Eliminating v and a from the Newmark relations (β = 1/4, γ = 1/2) and the equations of
+    motion at three consecutive steps gives, per mode, with h = Δt and D(z) =
+    (m + h c/2 + h² k/4) z² + (h² k/2 − 2 m) z + (m − h c/2 + h² k/4)::
+
+        U = (h²/4)(z + 1)² F / D,   V = (h/2)(z² − 1) F / D,   A = (z − 1)² F / D
+
+    (the trapezoid rule links them: (z − 1) U = (h/2)(z + 1) V, (z − 1) V = (h/2)(z + 1) A).
+    The filters' initial conditions come from the two previous steps (lfiltic).  Equal
+    to the stepping up to round-off.
+    """
+    h = dt
+    nums = (h * h / 4 * np.array([1.0, 2.0, 1.0]), h / 2 * np.array([1.0, 0.0, -1.0]),
+            np.array([1.0, -2.0, 1.0]))
+    x_past = f[k0 - 1::-1][:2] if k0 >= 2 else None
+    for m in range(f.shape[1]):
+        den = np.array([M[m] + h * C[m] / 2 + h * h * K[m] / 4, h * h * K[m] / 2 - 2 * M[m],
+                        M[m] - h * C[m] / 2 + h * h * K[m] / 4])
+        x = f[k0:, m]
+        for b, Y in zip(nums, out, strict=True):
+            zi = signal.lfiltic(b, den, Y[k0 - 1::-1, m][:2], x_past[:, m])
+            Y[k0:, m] = signal.lfilter(b, den, x, zi=zi)[0]
+
+
+#: Largest condition number of the eigenvector basis :func:`_filter_coupled` accepts.
+MAX_EIGENBASIS_CONDITION = 1e6
+
+
+def _filter_coupled(M, C, K, f, dt, k0, out) -> bool:
+    """The coupled (full-matrix) twin of :func:`_filter_modes`: continue the
+    average-acceleration recursion from step ``k0`` as first-order complex filters.
+
+    With ``K_e = M + h C/2 + h² K/4``, ``D₁ = h² K/2 − 2 M``, ``D₂ = M − h C/2 + h² K/4``,
+    each of u, v, a obeys ``K_e y_{k+1} + D₁ y_k + D₂ y_{k−1} = N_{k+1}`` with
+    ``N = (h²/4)(f_{k+1} + 2 f_k + f_{k−1})``, ``(h/2)(f_{k+1} − f_{k−1})`` and
+    ``f_{k+1} − 2 f_k + f_{k−1}`` respectively.  In companion form ``w = [y_k; y_{k−1}]``,
+    ``w_{k+1} = A w_k + B N_{k+1}``; in A's eigenbasis every coordinate is a first-order
+    recursion (lfilter).  Returns False (and leaves ``out`` alone) when the eigenbasis
+    is ill-conditioned (near-defective A)."""
+    n = M.shape[0]
+    h = dt
+    Ke = M + h / 2 * C + h * h / 4 * K
+    Ki = np.linalg.inv(Ke)
+    A = np.zeros((2 * n, 2 * n))
+    A[:n, :n] = -Ki @ (h * h / 2 * K - 2 * M)
+    A[:n, n:] = -Ki @ (M - h / 2 * C + h * h / 4 * K)
+    A[n:, :n] = np.eye(n)
+    lam, V = np.linalg.eig(A)
+    if np.linalg.cond(V) > MAX_EIGENBASIS_CONDITION:
+        return False
+    Vi = np.linalg.inv(V)
+    ViB = Vi[:, :n] @ Ki  # V⁻¹ B, (2n, n)
+    fk1, fk, fkm1 = f[k0:], f[k0 - 1:-1], f[k0 - 2:-2]
+    forcing = (h * h / 4 * (fk1 + 2 * fk + fkm1), h / 2 * (fk1 - fkm1), fk1 - 2 * fk + fkm1)
+    # u, v and a side by side: (n_t − k0, 2n, 3) forcings in the eigenbasis
+    e = np.stack([N @ ViB.T for N in forcing], axis=2)
+    xi0 = Vi @ np.stack([np.concatenate([Y[k0 - 1], Y[k0 - 2]]) for Y in out], axis=1)
+    xi = np.empty_like(e)
+    for j in range(2 * n):
+        xi[:, j] = signal.lfilter([1.0], [1.0, -lam[j]], e[:, j], axis=0,
+                                  zi=lam[j] * xi0[j][None, :])[0]
+    for i, Y in enumerate(out):
+        Y[k0:] = (xi[:, :, i] @ V[:n].T).real
+    return True

@@ -226,11 +226,23 @@ def solve_iterative(
     it = 0
     state = None
     F = None
+    # before the first contact reaches the deck the deflection under the contacts is 0 in
+    # every iteration: the vehicles' approach is integrated once
+    pre = approach_phase(crossing, scheme) if veh.n_dof else None
+
+    def vehicle(g, g_dot):
+        if pre is None or pre.start == 0:
+            return _vehicle_on_ground(veh, g, g_dot, scheme, y0=_static_on_ground(veh, g[0]))
+        s = pre.start
+        rest = _vehicle_on_ground(veh, g[s:], g_dot[s:], scheme, y0=pre.Y[s], v0=pre.YV[s],
+                                  a0=pre.YA[s])
+        return NewmarkResult(u=np.concatenate([pre.Y[:s], rest.u]),
+                             v=np.concatenate([pre.YV[:s], rest.v]),
+                             a=np.concatenate([pre.YA[:s], rest.a]))
+
     for it in range(1, max_iter + 1):  # noqa: B007 - reported below
         g, g_dot = w - crossing.r, w_dot - crossing.r_dot
-        ys = None
-        if veh.n_dof:
-            ys = _vehicle_on_ground(veh, g, g_dot, scheme, y0=_static_on_ground(veh, g[0]))
+        ys = vehicle(g, g_dot) if veh.n_dof else None
         F = _forces(veh, ys, g, g_dot)
         state = bridge.forced(np.where(crossing.on, F, 0.0), scheme)
         w_new, w_dot_new = bridge.under(state)
@@ -241,9 +253,7 @@ def solve_iterative(
             break
     # forces consistent with the final deflection
     g, g_dot = w - crossing.r, w_dot - crossing.r_dot
-    ys = None
-    if veh.n_dof:
-        ys = _vehicle_on_ground(veh, g, g_dot, scheme, y0=_static_on_ground(veh, g[0]))
+    ys = vehicle(g, g_dot) if veh.n_dof else None
     F = _forces(veh, ys, g, g_dot)
     return Solution(state=state, forces=F, iterations=it, change=0.0 if veh.n_dof == 0
                     else change)
@@ -366,16 +376,8 @@ def _modal_steps(crossing, bridge: ModalBridge, scheme, start, k_out, y_state, v
         C[:, n_m:, n_m:] = veh.damping
         K[:, n_m:, n_m:] = veh.stiffness
         f[:, n_m:] = -(kt * r + ct * rd) @ E.T
-    Keff = scheme.effective(Mfull, C, K)
-    Z = np.empty((n_w, n))
-    ZV = np.empty((n_w, n))
-    ZA = np.empty((n_w, n))
-    for i in range(n_w):
-        rhs = f[i] + scheme.history(Mfull, C[i], z, zv, za)
-        z_new = np.linalg.solve(Keff[i], rhs)
-        zv, za = scheme.update(z_new, z, zv, za)
-        z = z_new
-        Z[i], ZV[i], ZA[i] = z, zv, za
+    S = _stepped(scheme, Mfull, C, K, f, np.concatenate([z, zv, za]))
+    Z, ZV, ZA = S[:, :n], S[:, n:2 * n], S[:, 2 * n:]
     U[win], V[win], A[win] = Z[:, :n_m], ZV[:, :n_m], ZA[:, :n_m]
     q, qv = Z[:, :n_m], ZV[:, :n_m]
     delta = -np.einsum("wmc,wm->wc", P, q) + r
@@ -388,6 +390,50 @@ def _modal_steps(crossing, bridge: ModalBridge, scheme, start, k_out, y_state, v
     state = NewmarkResult(u=U, v=V, a=A)
     _finish(crossing, bridge, scheme, k_out, state, vstate, F, veh)
     return state, F
+
+
+#: Steps whose step matrices are built at once by :func:`_stepped` (bounds its memory).
+STEP_CHUNK = 256
+
+
+def _stepped(scheme: Newmark, M, C, K, f, s0) -> np.ndarray:
+    """Newmark steps of ``M ü + C_i u̇ + K_i u = f_i`` (C, K, f given per step) from the
+    state ``s0 = [u; v; a]``; returns the states after each step, shape (n_w, 3 n).
+
+    The step ``s_{i+1} = T_i s_i + b_i`` (the same algebra as :func:`integrate`'s step
+    operator: ``u_new = K_eff⁻¹ (f + M(a0 u + a2 v + a3 a) + C(a1 u + a4 v + a5 a))``, then
+    the velocity and acceleration updates) is built for a chunk of steps with batched
+    inverses, so that the loop over time is one small matrix product per step."""
+    n_w, n = f.shape
+    g, dt = scheme.gamma, scheme.dt
+    a0, a1, a2, a3, a4, a5 = (scheme.a0, scheme.a1, scheme.a2, scheme.a3, scheme.a4,
+                              scheme.a5)
+    eye = np.eye(n)
+    # augmented state [s; 1]: the constant term rides in T's last column, one product
+    # per step
+    out = np.empty((n_w + 1, 3 * n + 1))
+    out[0, :-1], out[:, -1] = s0, 1.0
+    for lo in range(0, n_w, STEP_CHUNK):
+        hi = min(lo + STEP_CHUNK, n_w)
+        Ci, Ki = C[lo:hi], K[lo:hi]
+        kinv = np.linalg.inv(scheme.effective(M, Ci, Ki))
+        hu = kinv @ (a0 * M + a1 * Ci)
+        hv = kinv @ (a2 * M + a4 * Ci)
+        ha = kinv @ (a3 * M + a5 * Ci)
+        au = a0 * (hu - eye)
+        av = a0 * hv - a2 * eye
+        aa = a0 * ha - a3 * eye
+        T = np.zeros((hi - lo, 3 * n + 1, 3 * n + 1))
+        T[:, :n, :-1] = np.concatenate([hu, hv, ha], axis=2)
+        T[:, n:2 * n, :-1] = np.concatenate([dt * g * au, eye + dt * g * av,
+                                             dt * ((1 - g) * eye + g * aa)], axis=2)
+        T[:, 2 * n:-1, :-1] = np.concatenate([au, av, aa], axis=2)
+        u_f = (kinv @ f[lo:hi, :, None])[:, :, 0]
+        T[:, :-1, -1] = np.concatenate([u_f, dt * g * a0 * u_f, a0 * u_f], axis=1)
+        T[:, -1, -1] = 1.0
+        for i in range(lo, hi):
+            np.matmul(T[i - lo], out[i], out=out[i + 1])
+    return out[1:, :-1]
 
 
 def _slice_result(Y, YV, n):

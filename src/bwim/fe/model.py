@@ -131,6 +131,8 @@ class FEModel:
     girders: tuple[Girder, ...] = ()
     assembler: Assembler = field(init=False, repr=False)
     girder_lines: tuple[int, ...] = field(init=False)
+    # sensor rows already built (a sensor's row depends only on this model's geometry)
+    _sensor_rows: dict = field(init=False, repr=False, default_factory=dict)
 
     def __post_init__(self) -> None:
         lines = []
@@ -366,12 +368,19 @@ class FEModel:
         sensors = list(sensors)
         if not sensors:
             raise InputError("at least one sensor is needed")
+        rows = []
         for k, s in enumerate(sensors):
             if not isinstance(s, Sensor):
                 raise InputError(f"sensors[{k}] must be a bwim.Sensor, got {type(s).__name__}")
-            _require_fe_sensor(s)
-            self.check_on_deck(f"sensor {s.name!r}", np.array([s.x]), np.array([s.y]))
-        return np.stack([self.sensor_row(s) for s in sensors])
+            row = self._sensor_rows.get(s)
+            if row is None:
+                _require_fe_sensor(s)
+                self.check_on_deck(f"sensor {s.name!r}", np.array([s.x]), np.array([s.y]))
+                row = self.sensor_row(s)
+                row.flags.writeable = False
+                self._sensor_rows[s] = row
+            rows.append(row)
+        return np.stack(rows)
 
     @property
     def deflection_dofs(self) -> np.ndarray:

@@ -29,7 +29,8 @@ import numpy as np
 from bwim.errors import InputError
 from bwim.mfi.statespace import MFIModel
 
-__all__ = ["DPGains", "Solution", "dp_gains", "solve_batch", "solve_dp", "solve_with_gains"]
+__all__ = ["DPGains", "Solution", "Sweep", "dp_gains", "solve_batch", "solve_dp",
+           "solve_with_gains", "sweep"]
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -171,3 +172,202 @@ def solve_batch(
         X[k + 1] = model.H(k) @ X[k]
         X[k + 1, nz:] += r[k]
     return _finish(model, X, r, d, W)
+
+
+# --------------------------------------------------------------------------------------
+# All λ in one stacked pass (issue 15)
+# --------------------------------------------------------------------------------------
+
+#: Bytes of stored feedback (K, g and the trajectories) per chunk of λ in :func:`sweep`.
+SWEEP_CHUNK_BYTES = 48 * 2**20
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Sweep:
+    """Solutions of one data vector for several λ (scaled units).
+
+    Attributes
+    ----------
+    lam : ndarray (n_lam,)
+    residual_norm, seminorm : ndarray (n_lam,)
+        ρ = ‖W^{1/2}(d − Q X)‖ and η = ‖r‖ for each λ.
+    X : ndarray (n_lam, N, n_x) or None
+        The trajectories when asked for (``keep=True``).
+    r : ndarray (n_lam, N − 1, n_f) or None
+    """
+
+    lam: np.ndarray
+    residual_norm: np.ndarray
+    seminorm: np.ndarray
+    X: np.ndarray | None
+    r: np.ndarray | None
+
+
+class _PBlocks:
+    """Products with the modal transition ``P = [[diag a, diag b], [diag c, diag d]]`` (one
+    2 × 2 block per mode, states ordered [q; q̇]) by scaling rows/columns; a dense
+    product when P has another structure."""
+
+    def __init__(self, P: np.ndarray, rows: int):
+        nz = P.shape[0]
+        self.P, self.m = P, nz // 2
+        m = self.m
+        self.blocks = None
+        if nz % 2 == 0:
+            blocks = [np.diag(P[i:i + m, j:j + m]).copy() for i in (0, m) for j in (0, m)]
+            rebuilt = np.block([[np.diag(blocks[0]), np.diag(blocks[1])],
+                                [np.diag(blocks[2]), np.diag(blocks[3])]])
+            if np.array_equal(rebuilt, P):
+                self.blocks = blocks
+        self._tmp = np.empty(rows * m)
+
+    def right(self, Y: np.ndarray, out: np.ndarray, transpose: bool = False) -> np.ndarray:
+        """out = Y @ P (or Y @ Pᵀ) for Y (..., n_z)."""
+        if self.blocks is None:
+            return np.matmul(Y, self.P.T if transpose else self.P, out=out)
+        a, b, c, d = self.blocks
+        if transpose:
+            b, c = c, b
+        m = self.m
+        y1, y2 = Y[..., :m], Y[..., m:]
+        t = self._tmp[: y1.size].reshape(y1.shape)
+        np.multiply(y1, a, out=out[..., :m])
+        np.multiply(y2, c, out=t)
+        out[..., :m] += t
+        np.multiply(y1, b, out=out[..., m:])
+        np.multiply(y2, d, out=t)
+        out[..., m:] += t
+        return out
+
+    def left_t(self, Y: np.ndarray, out: np.ndarray) -> np.ndarray:
+        """out = Pᵀ @ Y for Y (L, n_z, n)."""
+        if self.blocks is None:
+            return np.matmul(self.P.T, Y, out=out)
+        a, b, c, d = (v[:, None] for v in self.blocks)
+        m = self.m
+        y1, y2 = Y[:, :m], Y[:, m:]
+        t = self._tmp[: y1.size].reshape(y1.shape)
+        np.multiply(y1, a, out=out[:, :m])
+        np.multiply(y2, c, out=t)
+        out[:, :m] += t
+        np.multiply(y1, b, out=out[:, m:])
+        np.multiply(y2, d, out=t)
+        out[:, m:] += t
+        return out
+
+
+def _sweep_chunk(model: MFIModel, lams: np.ndarray, d: np.ndarray, W: np.ndarray,
+                 keep: bool):
+    N, nz, nf, nx = model.n_steps, model.n_z, model.n_f, model.n_x
+    L = lams.size
+    c = model.f_carry
+    pb = _PBlocks(model.P, L * nx)
+    gam = model.gamma
+    gamT = np.ascontiguousarray(gam.transpose(0, 2, 1))
+    Qz = model.Qz
+    WQz = W[:, None] * Qz
+    qzz = Qz.T @ WQz
+    cross = np.einsum("sz,ksf->kzf", WQz, model.D)  # (N, nz, nf)
+    crossT = np.ascontiguousarray(cross.transpose(0, 2, 1))
+    qff = np.einsum("ksf,s,ksg->kfg", model.D, W, model.D)
+    QWd = model.qwd(W, d)
+    lam_eye = lams[:, None, None] * np.eye(nf)
+    K = np.empty((N - 1, L, nf, nx))
+    g = np.empty((N - 1, L, nf))
+    R = np.empty((L, nx, nx))
+    R[:, :nz, :nz] = qzz
+    R[:, :nz, nz:] = cross[N - 1]
+    R[:, nz:, :nz] = crossT[N - 1]
+    R[:, nz:, nz:] = qff[N - 1]
+    s = np.broadcast_to(-QWd[N - 1], (L, nx)).copy()
+    RH = np.empty((L, nx, nx))
+    Rn = np.empty((L, nx, nx))
+    MK = np.empty((L, nx, nx))
+    sn = np.empty((L, nx))
+    for k in range(N - 2, -1, -1):
+        # R H with H = [[P, Γ], [0, c I]]
+        pb.right(R[:, :, :nz], RH[:, :, :nz])
+        np.matmul(R[:, :, :nz], gam[k], out=RH[:, :, nz:])
+        if c:
+            RH[:, :, nz:] += R[:, :, nz:]
+        M = RH[:, nz:, :]  # Tᵀ R H
+        Gk = np.linalg.inv(lam_eye + R[:, nz:, nz:])
+        Kk = np.matmul(Gk, M, out=K[k])
+        sf = s[:, nz:]
+        np.matmul(Gk, sf[:, :, None], out=g[k][:, :, None])
+        # R_k = Hᵀ R H − Mᵀ G M + QᵀWQ, symmetrised
+        pb.left_t(RH[:, :nz, :], Rn[:, :nz, :])
+        np.matmul(gamT[k], RH[:, :nz, :], out=Rn[:, nz:, :])
+        if c:
+            Rn[:, nz:, :] += M
+        np.matmul(np.swapaxes(M, 1, 2), Kk, out=MK)
+        Rn -= MK
+        np.add(Rn, np.swapaxes(Rn, 1, 2), out=R)
+        R *= 0.5
+        R[:, :nz, :nz] += qzz
+        R[:, :nz, nz:] += cross[k]
+        R[:, nz:, :nz] += crossT[k]
+        R[:, nz:, nz:] += qff[k]
+        # s_k = Aᵀ s − QᵀW d with A = H − T K
+        sz = s[:, :nz]
+        pb.right(sz, sn[:, :nz])
+        np.matmul(sz, gam[k], out=sn[:, nz:])
+        if c:
+            sn[:, nz:] += sf
+        sn -= (sf[:, None, :] @ Kk)[:, 0, :]
+        sn -= QWd[k]
+        s, sn = sn, s
+    initial = lams if c == 0.0 else np.zeros(L)  # zeroth order penalises f_0 too
+    R0_inv = np.linalg.pinv(R[:, nz:, nz:] + initial[:, None, None] * np.eye(nf),
+                            rcond=1e-12, hermitian=True)
+    X = np.empty((N, L, nx))
+    X[0, :, :nz] = 0.0
+    X[0, :, nz:] = -(R0_inv @ s[:, nz:, None])[:, :, 0]
+    r = np.empty((N - 1, L, nf))
+    for k in range(N - 1):
+        xk = X[k]
+        rk = r[k]
+        np.matmul(K[k], xk[:, :, None], out=rk[:, :, None])
+        rk += g[k]
+        np.negative(rk, out=rk)
+        nxt = X[k + 1]
+        pb.right(xk[:, :nz], nxt[:, :nz], transpose=True)
+        nxt[:, :nz] += xk[:, nz:] @ gamT[k]
+        if c:
+            np.add(xk[:, nz:], rk, out=nxt[:, nz:])
+        else:
+            nxt[:, nz:] = rk
+    fit = X[:, :, :nz] @ Qz.T + np.einsum("ksf,klf->kls", model.D, X[:, :, nz:])
+    res = np.sqrt(np.einsum("kls,s->l", (d[:, None, :] - fit) ** 2, W))
+    eta = np.sqrt(np.einsum("klf,klf->l", r, r))
+    if keep:
+        return res, eta, X.transpose(1, 0, 2).copy(), r.transpose(1, 0, 2).copy()
+    return res, eta, None, None
+
+
+def sweep(model: MFIModel, d: np.ndarray, lams, weights: np.ndarray | None = None, *,
+          keep: bool = False) -> Sweep:
+    """Solve for every λ in ``lams`` (scaled) in one stacked pass of the recursion.
+
+    The Riccati recursion, the data pass and the forward pass run once over the time axis
+    with the λ axis batched; products with the modal transition use its per-mode 2 × 2
+    blocks, and ``Q_kᵀ W Q_k`` is assembled per step from its constant modal block and
+    the small static-correction blocks.  Memory is O(N n_λ n_f n_x), bounded by splitting
+    λ into chunks of :data:`SWEEP_CHUNK_BYTES`.  Same minimiser as :func:`solve_dp`
+    (they agree to round-off)."""
+    d, W = _check(model, d, weights)
+    lams = np.atleast_1d(np.asarray(lams, dtype=float))
+    if lams.ndim != 1 or lams.size == 0 or not np.all(np.isfinite(lams)) or np.any(lams <= 0):
+        raise InputError("lams must be a non-empty 1-D array of positive numbers")
+    per_lam = 8 * model.n_steps * (model.n_f * model.n_x + model.n_f
+                                   + (model.n_x + model.n_f if keep else 0)
+                                   + 2 * model.n_x + 2 * model.n_s)
+    step = max(1, int(SWEEP_CHUNK_BYTES // per_lam))
+    parts = [_sweep_chunk(model, lams[i:i + step], d, W, keep)
+             for i in range(0, lams.size, step)]
+    return Sweep(
+        lam=lams.copy(), residual_norm=np.concatenate([p[0] for p in parts]),
+        seminorm=np.concatenate([p[1] for p in parts]),
+        X=np.concatenate([p[2] for p in parts]) if keep else None,
+        r=np.concatenate([p[3] for p in parts]) if keep else None,
+    )

@@ -24,8 +24,8 @@ from bwim.errors import InputError, parse_enum
 from bwim.fe.bridge import Bridge
 from bwim.fe.modal import select_modes
 from bwim.limits import check_memory
-from bwim.mfi.dp import Solution, solve_dp
-from bwim.mfi.lcurve import LCurve, gcv, lcurve
+from bwim.mfi.dp import SWEEP_CHUNK_BYTES, Solution, sweep
+from bwim.mfi.lcurve import LCurve, gcv, lcurve_search
 from bwim.mfi.statespace import ForceUnknowns, MFIModel, Order, build_model, force_layout
 from bwim.records import Passage, Record
 
@@ -103,7 +103,7 @@ def identify_forces(
     weights: np.ndarray | None = None,
     static_correction: bool = True,
     lam_range: tuple[float, float] = (1e-6, 1e3),
-    n_lam: int = 30,
+    n_lam: int = 16,
     central: float = 0.8,
 ) -> ForceIdentification:
     """Identify the moving forces of a record (see module docstring).
@@ -126,7 +126,9 @@ def identify_forces(
     static_correction : bool
         Include the truncated modes' static response in the readings model.
     lam_range, n_lam
-        Scaled λ grid of the L-curve (and the GCV search interval).
+        Scaled λ range of the L-curve (and the GCV search interval), and the number of λ
+        solved for the L-curve: half on a coarse log grid over the range, half within one
+        coarse spacing of its corner (:func:`bwim.mfi.lcurve.lcurve_search`).
     central : float
         Fraction of each axle's time on the deck used for its static weight.
     """
@@ -166,9 +168,10 @@ def identify_forces(
     W = np.ones(model.n_s) if w is None else w
     curve = None
     if isinstance(lam, str):
-        grid = np.geomspace(lam_range[0], lam_range[1], n_lam)
         if lam == "lcurve":
-            curve = lcurve(model, d_scaled, W, grid)
+            n_coarse = max(4, n_lam // 2)
+            curve = lcurve_search(model, d_scaled, W, lam_range, n_coarse=n_coarse,
+                                  n_fine=max(n_lam - n_coarse, 0))
             lam_s = curve.corner_scaled
         elif lam == "gcv":
             lam_s = gcv(model, d_scaled, W, lam_range)
@@ -178,7 +181,9 @@ def identify_forces(
         if not np.isfinite(lam) or lam <= 0:
             raise InputError(f"lam must be positive, got {lam!r}")
         lam_s = model.lam_scaled(float(lam))
-    sol = solve_dp(model, d_scaled, lam_s, W)
+    best = sweep(model, d_scaled, [lam_s], W, keep=True)
+    sol = Solution(X=best.X[0], r=best.r[0], residual_norm=float(best.residual_norm[0]),
+                   seminorm=float(best.seminorm[0]))
     return _result(model, sol, record, unknowns, order, lam_s, curve, central, bridge.length)
 
 
@@ -221,9 +226,15 @@ def _check_arguments(bridge, record, n_modes, lam, weights, lam_range, n_lam, ce
         if not np.all(np.isfinite(w)) or np.any(w < 0) or not np.any(w > 0):
             raise InputError("weights must be finite, >= 0 and not all zero")
     n_f = 2 * sum(p.n_axles for p in record.passages)
-    n_state = 2 * (DEFAULT_MAX_MODES if n_modes is None else int(n_modes)) + 2 * n_f
-    check_memory(float(record.time.size) * n_state * n_state * 8.0 * 3,
-                 f"identifying the forces of a record of {record.time.size} samples")
+    n_x = 2 * (DEFAULT_MAX_MODES if n_modes is None else int(n_modes)) + n_f
+    n_s = len(record.sensors)
+    n_t = float(record.time.size)
+    if isinstance(lam, str) and lam == "gcv":  # GCV keeps the Riccati gains of every step
+        need = n_t * n_x * n_x * 8.0 * 3
+    else:  # the stacked sweep: model arrays + feedback of one λ chunk (issue 15)
+        need = 8.0 * n_t * (3 * n_x * n_f + 2 * n_s * n_f + 8 * (n_x + n_s)) \
+            + SWEEP_CHUNK_BYTES
+    check_memory(need, f"identifying the forces of a record of {record.time.size} samples")
 
 
 def _result(model: MFIModel, sol: Solution, record: Record, unknowns, order, lam_s, curve,

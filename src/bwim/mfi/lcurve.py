@@ -3,7 +3,10 @@
 Contract
 --------
 * :func:`lcurve` solves on a log grid of λ and returns the residual norms ρ(λ) and the
-  seminorms η(λ) (scaled units).  The corner is the maximum curvature of
+  seminorms η(λ) (scaled units); all λ of the grid go through one stacked pass of the
+  recursion (:func:`bwim.mfi.dp.sweep`).  :func:`lcurve_search` is coarse-to-fine: a coarse
+  grid over the whole range, then a fine grid within one coarse spacing of its corner,
+  the corner being located again on the union of both grids.  The corner is the maximum curvature of
   ``(log ρ, log η)`` parametrised by ``log λ`` (Hansen 1992; the paper uses Busby &
   Trujillo's definition, the same curvature), found on a cubic-spline interpolant of the
   two curves so that it is not tied to the grid.
@@ -20,10 +23,10 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 from scipy.optimize import minimize_scalar
 
-from bwim.mfi.dp import dp_gains, solve_with_gains
+from bwim.mfi.dp import dp_gains, solve_with_gains, sweep
 from bwim.mfi.statespace import MFIModel
 
-__all__ = ["LCurve", "gcv", "lcurve"]
+__all__ = ["LCurve", "gcv", "lcurve", "lcurve_search"]
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -66,14 +69,8 @@ def _curvature(t, a, b):
     return (da * d2b - d2a * db) / np.maximum((da**2 + db**2) ** 1.5, 1e-300), sa, sb
 
 
-def lcurve(model: MFIModel, d, weights, lam_grid_scaled: np.ndarray) -> LCurve:
-    """Solve on the grid and locate the corner (maximum positive curvature)."""
-    rho = np.empty(lam_grid_scaled.size)
-    eta = np.empty(lam_grid_scaled.size)
-    for i, lam in enumerate(lam_grid_scaled):
-        sol = solve_with_gains(model, dp_gains(model, float(lam), weights), d, weights)
-        rho[i], eta[i] = sol.residual_norm, sol.seminorm
-    t = np.log(lam_grid_scaled)
+def _corner(t, rho, eta):
+    """Curvature at the grid points and the log λ of maximum spline curvature (interior)."""
     a = np.log(np.maximum(rho, 1e-300))
     b = np.log(np.maximum(eta, 1e-300))
     kappa, sa, sb = _curvature(t, a, b)
@@ -81,13 +78,53 @@ def lcurve(model: MFIModel, d, weights, lam_grid_scaled: np.ndarray) -> LCurve:
     fine = np.linspace(t[1], t[-2], 40 * t.size)
     da, db, d2a, d2b = sa(fine, 1), sb(fine, 1), sa(fine, 2), sb(fine, 2)
     kf = (da * d2b - d2a * db) / np.maximum((da**2 + db**2) ** 1.5, 1e-300)
-    t_best = fine[int(np.argmax(kf))]
+    return kappa, fine[int(np.argmax(kf))]
+
+
+def _curve(model, lam_s, rho, eta, kappa, t_best) -> LCurve:
     corner_scaled = float(np.exp(t_best))
     return LCurve(
-        lam=np.array([model.lam_physical(v) for v in lam_grid_scaled]),
-        lam_scaled=lam_grid_scaled.copy(), residual_norm=rho, seminorm=eta, curvature=kappa,
+        lam=np.array([model.lam_physical(v) for v in lam_s]),
+        lam_scaled=lam_s.copy(), residual_norm=rho, seminorm=eta, curvature=kappa,
         corner=model.lam_physical(corner_scaled), corner_scaled=corner_scaled,
     )
+
+
+def lcurve(model: MFIModel, d, weights, lam_grid_scaled: np.ndarray) -> LCurve:
+    """Solve on the grid and locate the corner (maximum positive curvature)."""
+    lam_grid_scaled = np.asarray(lam_grid_scaled, dtype=float)
+    sw = sweep(model, d, lam_grid_scaled, weights)
+    rho, eta = sw.residual_norm, sw.seminorm
+    kappa, t_best = _corner(np.log(lam_grid_scaled), rho, eta)
+    return _curve(model, lam_grid_scaled, rho, eta, kappa, t_best)
+
+
+def lcurve_search(model: MFIModel, d, weights, lam_range: tuple[float, float], *,
+                  n_coarse: int = 8, n_fine: int = 8) -> LCurve:
+    """Coarse-to-fine L-curve: ``n_coarse`` log-spaced λ over ``lam_range`` (scaled),
+    then ``n_fine`` more strictly within one coarse spacing either side of the coarse
+    corner; the corner is located on the union of both grids."""
+    coarse = np.geomspace(lam_range[0], lam_range[1], n_coarse)
+    first = sweep(model, d, coarse, weights)
+    t_c = np.log(coarse)
+    _, t0 = _corner(t_c, first.residual_norm, first.seminorm)
+    step = t_c[1] - t_c[0]
+    lo, hi = max(t0 - step, t_c[0]), min(t0 + step, t_c[-1])
+    t_f = np.linspace(lo, hi, n_fine + 2)[1:-1]
+    h = (hi - lo) / (n_fine + 1)
+    if n_fine and np.min(np.abs(t_f[:, None] - t_c[None, :])) < 1e-3 * h:
+        t_f += 0.25 * h  # keep clear of the coarse nodes (the spline needs distinct points)
+    rho_f = eta_f = np.empty(0)
+    if t_f.size:
+        second = sweep(model, d, np.exp(t_f), weights)
+        rho_f, eta_f = second.residual_norm, second.seminorm
+    t = np.concatenate([t_c, t_f])
+    order = np.argsort(t)
+    t = t[order]
+    rho = np.concatenate([first.residual_norm, rho_f])[order]
+    eta = np.concatenate([first.seminorm, eta_f])[order]
+    kappa, t_best = _corner(t, rho, eta)
+    return _curve(model, np.exp(t), rho, eta, kappa, t_best)
 
 
 def gcv(model: MFIModel, d, weights, bounds_scaled: tuple[float, float], *, probes: int = 8,
