@@ -319,12 +319,17 @@ def _name(path: Path) -> str:
 
 
 def _identify_rows(path: Path, ident) -> list[list]:
+    """One row per vehicle; a vehicle whose weights fail the plausibility checks gets its
+    flags and no weights."""
     rows, a0 = [], 0
-    for v, p in enumerate(ident.passages):
+    for v, (p, flags, quality) in enumerate(zip(ident.passages, ident.vehicle_flags,
+                                                ident.vehicle_quality, strict=True)):
         w = ident.axle_weights[a0:a0 + p.n_axles]
         a0 += p.n_axles
-        rows.append([_name(path), v + 1, p.n_axles, format_kn_each(w), format_kn(ident.gvw[v], 2),
-                     f"{ident.lam:.4g}"])
+        ok = quality != "reject"
+        rows.append([_name(path), v + 1, p.n_axles, format_kn_each(w) if ok else [],
+                     format_kn(ident.gvw[v], 2) if ok else "", f"{ident.lam:.4g}",
+                     ";".join(flags)])
     return rows
 
 
@@ -391,7 +396,7 @@ def _identify(args: argparse.Namespace) -> int:
                 bar.update()
         _write_identify_summary(summary, paths, outcome)
     failed = [(_name(paths[i]), outcome[i][1]) for i in sorted(outcome) if outcome[i][1]]
-    shown = [(r[0], r[1], ", ".join(r[3]), r[4], r[5])
+    shown = [(r[0], r[1], ", ".join(r[3]) or (r[6] if len(r) > 6 else ""), r[4], r[5])
              for i in sorted(outcome) for r in outcome[i][0]]
     print(Table(f"Moving force identification, {len(paths)} record(s)"
                 f"{f' ({skipped} done before)' if skipped else ''}, "
@@ -412,14 +417,15 @@ def _write_identify_summary(summary: Path, paths: Sequence[Path], outcome: dict)
     (with its reason in the ``error`` column)."""
     n_max = max((r[2] for rows, _ in outcome.values() for r in rows), default=0)
     header = ["record", "vehicle", "axles", *(f"axle_{i + 1}_kN" for i in range(n_max)),
-              "gvw_kN", "lambda", "error"]
+              "gvw_kN", "lambda", "flags", "error"]
     out = []
     for i in sorted(outcome):
         rows, error = outcome[i]
         if error is not None:
-            out.append([_name(paths[i]), "", "", *[""] * n_max, "", "", error])
-        for name, v, n_axles, cells, gvw, lam in rows:
-            out.append([name, v, n_axles, *cells, *[""] * (n_max - len(cells)), gvw, lam, ""])
+            out.append([_name(paths[i]), "", "", *[""] * n_max, "", "", "", error])
+        for name, v, n_axles, cells, gvw, lam, *flags in rows:
+            out.append([name, v, n_axles, *cells, *[""] * (n_max - len(cells)), gvw, lam,
+                        flags[0] if flags else "", ""])
     _write_csv(summary, header, out)
 
 

@@ -67,6 +67,7 @@ def write_identification(ident: ForceIdentification, path: str | os.PathLike) ->
         f.attrs["lam_scaled"] = float(ident.lam_scaled)
         f.attrs["unknowns"] = ForceUnknowns(ident.unknowns).value
         f.attrs["order"] = Order(ident.order).value
+        f.attrs["residual"] = float(ident.residual)
         h5.put_list(f, "passages", ident.passages, h5.put_passage)
         if ident.lcurve is not None:
             g = f.create_group("lcurve")
@@ -91,6 +92,7 @@ def read_identification(path: str | os.PathLike) -> ForceIdentification:
             lcurve=curve, passages=h5.get_list(f, "passages", h5.get_passage),
             unknowns=ForceUnknowns(str(h5.attr(f, "unknowns"))),
             order=Order(str(h5.attr(f, "order"))),
+            residual=float(f.attrs.get("residual", np.nan)),
         )
 
 

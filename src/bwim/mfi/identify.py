@@ -27,9 +27,15 @@ from bwim.limits import check_memory
 from bwim.mfi.dp import SWEEP_CHUNK_BYTES, Solution, sweep
 from bwim.mfi.lcurve import LCurve, gcv, lcurve_search
 from bwim.mfi.statespace import ForceUnknowns, MFIModel, Order, build_model, force_layout
+from bwim.plausibility import Limits, ordered_flags, quality_of, weight_flags
 from bwim.records import Passage, Record
 
-__all__ = ["DEFAULT_MAX_MODES", "ForceIdentification", "identify_forces"]
+__all__ = ["DEFAULT_MAX_MODES", "MAX_RESIDUAL", "ForceIdentification", "identify_forces"]
+
+#: Relative residual of the identified forces' readings above which a vehicle's weights
+#: are ``residual_high``: MFI reproduces a crossing of the model's own bridge to the noise
+#: level (a few per cent); a wrong model, passage or channel leaves far more.
+MAX_RESIDUAL = 0.3
 
 #: Default cap on the number of modes (with the static correction more add little).
 DEFAULT_MAX_MODES = 20
@@ -61,6 +67,9 @@ class ForceIdentification:
         Time window used for each static weight, s.
     unknowns : ForceUnknowns
     order : Order
+    residual : float
+        Relative residual ‖fitted − measured‖ / ‖measured‖ over all samples and sensors
+        (NaN when unknown, e.g. read from an older file).
     """
 
     time: np.ndarray
@@ -76,6 +85,36 @@ class ForceIdentification:
     axle_windows: np.ndarray
     unknowns: ForceUnknowns
     order: Order
+    residual: float = float("nan")
+
+    @property
+    def vehicle_flags(self) -> tuple[tuple[str, ...], ...]:
+        """Plausibility flags of each vehicle's weights (:mod:`bwim.plausibility`):
+        implausible axle weights or GVW; ``negative_force`` (an axle pushing up by more
+        than 10 % of its weight, or 1 kN, while weighed); ``residual_high`` (the forces
+        reproduce the readings worse than :data:`MAX_RESIDUAL`)."""
+        out, a0 = [], 0
+        t = self.time
+        for p in self.passages:
+            axles = range(a0, a0 + p.n_axles)
+            a0 += p.n_axles
+            w = self.axle_weights[list(axles)]
+            flags = weight_flags(w, w, Limits())
+            for a in axles:
+                inside = (t >= self.axle_windows[a, 0]) & (t <= self.axle_windows[a, 1])
+                floor = -max(0.1 * abs(self.axle_weights[a]), 1e3)
+                if inside.any() and self.axle_forces[inside, a].min() < floor:
+                    flags.append("negative_force")
+                    break
+            if not self.residual <= MAX_RESIDUAL and np.isfinite(self.residual):
+                flags.append("residual_high")
+            out.append(ordered_flags(flags))
+        return tuple(out)
+
+    @property
+    def vehicle_quality(self) -> tuple[str, ...]:
+        """``"reject"``, ``"warning"`` or ``"ok"`` per vehicle (see :attr:`vehicle_flags`)."""
+        return tuple(quality_of(f) for f in self.vehicle_flags)
 
     def plot(self, truth=None, ax=None, **kw):
         """Forces against the truth if known (see :func:`bwim.plots.mfi.plot_forces`;
@@ -276,8 +315,12 @@ def _result(model: MFIModel, sol: Solution, record: Record, unknowns, order, lam
     nz = model.n_z
     fitted = (sol.X[:, :nz] @ model.Qz.T + np.einsum("ksf,kf->ks", model.D, sol.X[:, nz:])
               ) * model.d_scale
+    measured = record.data
+    den = float(np.linalg.norm(measured))
+    residual = float(np.linalg.norm(fitted - measured)) / den if den > 0 else float("nan")
     return ForceIdentification(
         time=t.copy(), wheel_forces=wheels, axle_forces=axles, axle_weights=weights, gvw=gvw,
         lam=model.lam_physical(lam_s), lam_scaled=lam_s, lcurve=curve, fitted=fitted,
         passages=tuple(passages), axle_windows=windows, unknowns=unknowns, order=order,
+        residual=residual,
     )

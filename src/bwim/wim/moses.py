@@ -24,9 +24,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from bwim.errors import InputError, require_finite, require_positive
+from bwim.plausibility import Limits, ordered_flags, quality_of, weight_flags
 from bwim.records import Passage, Record
 from bwim.wim.influence_line import Channel, InfluenceLine, read_channels
-from bwim.wim.plausibility import Limits, ordered_flags, quality_of, weight_flags
 
 __all__ = ["DEFAULT_MAX_RESIDUAL", "StaticWeights", "group_axles", "group_share",
            "weigh_static"]
@@ -63,12 +63,12 @@ class StaticWeights:
         Axle indices of each group whose axles share the group's weight equally (one
         group per axle when weighed individually).
     flags : tuple of str
-        Plausibility flags (:mod:`bwim.wim.plausibility`): implausible weights,
+        Plausibility flags (:mod:`bwim.plausibility`): implausible weights,
         ``residual_high`` (relative residual above ``max_residual``), ``truncated_start``
         / ``truncated_end`` (the record does not cover the crossing), ``ill_conditioned``.
     quality : str
         ``"reject"``, ``"warning"`` or ``"ok"``
-        (:func:`~bwim.wim.plausibility.quality_of`).
+        (:func:`~bwim.plausibility.quality_of`).
     """
 
     axle_weights: np.ndarray

@@ -73,11 +73,7 @@ import numpy as np
 import scipy.linalg
 
 from bwim.errors import InputError, require_finite
-from bwim.records import Passage, Record
-from bwim.wim.influence_line import Channel, hat_design, read_channels
-from bwim.wim.moses import group_axles, group_share
-from bwim.wim.multirun import MultiRunCalibration
-from bwim.wim.plausibility import (
+from bwim.plausibility import (
     HARD_FLAGS,
     SOFT_FLAGS,
     Limits,
@@ -85,6 +81,10 @@ from bwim.wim.plausibility import (
     quality_of,
     weight_flags,
 )
+from bwim.records import Passage, Record
+from bwim.wim.influence_line import Channel, hat_design, read_channels
+from bwim.wim.moses import group_axles, group_share
+from bwim.wim.multirun import MultiRunCalibration
 
 __all__ = ["HARD_FLAGS", "SOFT_FLAGS", "Limits", "Weighing", "weigh"]
 
