@@ -16,6 +16,7 @@ from benchmarks import (  # noqa: E402
     bench_mismatch,
     bench_multirun,
     bench_optimize,
+    bench_site,
     bench_testday,
     bench_vbi,
     bench_wim,
@@ -31,6 +32,7 @@ def main() -> None:
     bench_multirun.main()
     bench_optimize.main()
     bench_testday.main()
+    bench_site.main()
     bench_mismatch.main()
 
 
