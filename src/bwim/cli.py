@@ -433,7 +433,7 @@ def _write_identify_summary(summary: Path, paths: Sequence[Path], outcome: dict)
 #: summary.csv of ``bwim weigh``: the contract's columns first, then bwim's extras.
 WEIGH_COLUMNS = ("record", "n_axles", "speed_m_s", "axle_spacings_m", "axle_weights_kN",
                  "gvw_kN", "flags", "group_weights_kN", "lateral", "confidence", "residual",
-                 "quality", "reason")
+                 "quality", "method", "reason")
 
 
 def _joined(values, fmt: str) -> str:
@@ -441,7 +441,8 @@ def _joined(values, fmt: str) -> str:
 
 
 def _weigh_row(name: str, *, passage=None, weights=None, gvw=None, groups=None, flags=(),
-               lateral=None, confidence=None, residual=None, quality="", reason="") -> list:
+               lateral=None, confidence=None, residual=None, quality="", method="",
+               reason="") -> list:
     """One summary row; weights are written only when given (a weighed vehicle)."""
     import numpy as np
 
@@ -457,7 +458,7 @@ def _weigh_row(name: str, *, passage=None, weights=None, gvw=None, groups=None, 
             ";".join(flags),
             "" if groups is None else _joined(np.asarray(groups) / 1e3, ".2f"),
             num(lateral, ".3f"), num(confidence, ".3f"), num(residual, ".4g"), quality,
-            " ".join(str(reason).split())]
+            method, " ".join(str(reason).split())]
 
 
 def _done_rows(summary: Path, resume: bool) -> dict[str, list[str]]:
@@ -535,6 +536,12 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path) -> int:
     if not args.resume:
         refuse_existing(summary, force=args.force)
     done = _done_rows(summary, args.resume)
+    bridge = options = None
+    if args.bridge:
+        from bwim.io import load_bridge
+
+        bridge = load_bridge(args.bridge)
+        options = scenario.identify.kwargs() if scenario.identify is not None else {}
     site = _calibrate_site(cal_paths, scenario, folder)
     rows: list[list] = []
     n_failed = n_weighed = 0
@@ -553,18 +560,21 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path) -> int:
                     rows.append(_weigh_row(p.name, reason=str(exc)))
                     n_failed += 1
                     continue
-                ev = weigh_event(rec, site)
+                ev = weigh_event(rec, site, bridge=bridge, identify_options=options)
                 det = ev.detection
                 v = det.vehicles[0] if det is not None and len(det.vehicles) == 1 else None
-                w = ev.weighing
+                w, ident = ev.weighing, ev.identification
                 rows.append(_weigh_row(
                     p.name, passage=None if v is None else v.passage,
                     weights=ev.axle_weights, gvw=ev.gvw,
-                    groups=w.group_weights if ev.weighed else None, flags=ev.flags,
-                    lateral=None if v is None else v.lateral,
+                    groups=w.group_weights if ev.weighed and w is not None else None,
+                    flags=ev.flags, lateral=None if v is None else v.lateral,
                     confidence=None if v is None else v.confidence,
-                    residual=None if w is None else w.residual,
-                    quality="" if w is None else w.quality, reason=ev.reason))
+                    residual=(w.residual if w is not None else
+                              ident.residual if ident is not None else None),
+                    quality=(w.quality if w is not None else
+                             ident.vehicle_quality[0] if ident is not None else ""),
+                    method=ev.method if v is not None else "", reason=ev.reason))
                 n_weighed += ev.weighed
     finally:  # an interrupted run keeps what it weighed (rerun with --resume)
         _write_csv(summary, WEIGH_COLUMNS, rows)
@@ -572,8 +582,9 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path) -> int:
     n_flagged = len(paths) - n_weighed - n_failed
     print(f"{len(paths)} event(s) in {elapsed:.1f} s: {n_weighed} weighed, {n_flagged} "
           f"not weighed (flagged), {n_failed} failed")
-    shown = [(r[0], r[1], r[4].replace(";", ", "), r[5], r[6] or r[12]) for r in rows[:20]]
-    print(Table("Static weights (multi-run influence lines, gauges combined):",
+    shown = [(r[0], r[1], r[4].replace(";", ", "), r[5], r[6] or r[13]) for r in rows[:20]]
+    print(Table("Static weights (moving force identification with the FE model):" if bridge
+                else "Static weights (multi-run influence lines, gauges combined):",
                 ("record", "axles", "axle weights (kN)", "GVW (kN)", "flags / reason"),
                 shown).render())
     if len(rows) > 20:
@@ -605,6 +616,9 @@ def _weigh_moses(args: argparse.Namespace, scenario, folder: Path) -> int:
     from bwim.io.batch import refuse_existing, refuse_input_overwrite
     from bwim.wim import calibrate_influence_line, weigh_static
 
+    if args.bridge:
+        raise InputError("--bridge weighs logger files by MFI (a scenario with [logger]); "
+                         "for records with their passages use bwim identify")
     paths = _record_paths(args.records)
     cal_paths = _record_paths(args.calibration_records) if args.calibration_records else []
     summary = folder / "summary.csv"
@@ -651,7 +665,7 @@ def _weigh_moses(args: argparse.Namespace, scenario, folder: Path) -> int:
                 rows.append(_weigh_row(
                     path.name, passage=w.passage, weights=w.axle_weights if ok else None,
                     gvw=w.gvw if ok else None, groups=w.group_weights if ok else None,
-                    flags=flags, residual=w.residual, quality=w.quality,
+                    flags=flags, residual=w.residual, quality=w.quality, method="moses",
                     reason="" if ok else f"implausible weighing ({';'.join(flags)})"))
                 shown.append((path.name, ", ".join(format_kn_each(w.axle_weights)) if ok
                               else "-", format_kn(w.gvw) if ok else "-",
@@ -938,6 +952,10 @@ COMMANDS: tuple[Command, ...] = (
          arg("--resume", action="store_true",
              help="keep the records already weighed in the folder's summary.csv and weigh "
              "only the others"),
+         arg("--bridge", metavar="MODEL.toml",
+             help="logger files only: weigh each detected vehicle by moving force "
+             "identification with this (calibrated) bridge model instead of Moses; the "
+             "gauges need x and y, and the first detector's position its x on the bridge"),
          _FORCE)),
     Command(
         "accuracy", _accuracy,

@@ -27,18 +27,22 @@ Contract
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import dataclasses
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from bwim.detect import Detection, detect_axles, detect_from_strain
 from bwim.errors import InputError, require_finite, require_positive
+from bwim.fe.bridge import Bridge
+from bwim.mfi import ForceIdentification, identify_forces
+from bwim.plausibility import HARD_FLAGS
 from bwim.records import Passage, Record
 from bwim.sensors import SensorKind
 from bwim.wim import MultiRunCalibration, Weighing, calibrate_lines, weigh
 from bwim.wim.multirun import RunFit
-from bwim.wim.weigh import HARD_FLAGS
 
 __all__ = ["EventWeighing", "SiteCalibration", "SiteSetup", "calibrate_site", "weigh_event"]
 
@@ -157,6 +161,8 @@ class EventWeighing:
         The fit (also for a rejected weighing, for inspection); None if not attempted.
     flags : tuple of str
         Detection and weighing flags together.
+    identification : ForceIdentification or None
+        The moving force identification, when weighed by MFI with an FE model.
     """
 
     weighed: bool
@@ -164,6 +170,12 @@ class EventWeighing:
     detection: Detection | None = None
     weighing: Weighing | None = None
     flags: tuple[str, ...] = field(default_factory=tuple)
+    identification: ForceIdentification | None = None
+
+    @property
+    def method(self) -> str:
+        """``"mfi"`` (identified with an FE model) or ``"moses"`` (influence lines)."""
+        return "mfi" if self.identification is not None else "moses"
 
     @property
     def passage(self) -> Passage | None:
@@ -175,12 +187,20 @@ class EventWeighing:
     @property
     def axle_weights(self) -> np.ndarray | None:
         """Static axle weights, N (None unless weighed)."""
-        return self.weighing.axle_weights if self.weighed else None
+        if not self.weighed:
+            return None
+        if self.identification is not None:
+            return self.identification.axle_weights
+        return self.weighing.axle_weights
 
     @property
     def gvw(self) -> float | None:
         """Gross vehicle weight, N (None unless weighed)."""
-        return self.weighing.gvw if self.weighed else None
+        if not self.weighed:
+            return None
+        if self.identification is not None:
+            return float(self.identification.gvw[0])
+        return self.weighing.gvw
 
 
 def _gauges(record: Record) -> list[str]:
@@ -271,8 +291,16 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup) -> SiteCalibrati
                            fits=tuple(fits), setup=setup)
 
 
-def weigh_event(record: Record, calibration: SiteCalibration) -> EventWeighing:
+def weigh_event(record: Record, calibration: SiteCalibration, *, bridge: Bridge | None = None,
+                identify_options: Mapping[str, Any] | None = None) -> EventWeighing:
     """Detect and weigh the vehicle of one event (see the module docstring).
+
+    With ``bridge`` (a calibrated FE model), the detected vehicle is weighed by moving
+    force identification (:func:`bwim.identify_forces` with ``identify_options``) instead
+    of Moses: the gauges then need their positions (x, y) in the model's frame, the first
+    axle detector's ``position`` is its x on the bridge, and the readings are strain
+    (``[logger] scale``); the calibration runs' scale trend corrects the day's drift of
+    the strain-to-load ratio as it does for Moses.
 
     Never raises for a record it can read: detection or weighing failures come back as an
     :class:`EventWeighing` with ``weighed=False`` and the reason.
@@ -295,6 +323,8 @@ def weigh_event(record: Record, calibration: SiteCalibration) -> EventWeighing:
     if "axle_count_mismatch" in flags:
         return EventWeighing(weighed=False, detection=det, flags=flags,
                              reason="the axle detectors disagree on the number of axles")
+    if bridge is not None:
+        return _weigh_mfi(record, det, flags, calibration, bridge, identify_options or {})
     try:
         w = weigh(record, vehicle.passage, lines, combine=setup.combine)
     except InputError as exc:
@@ -307,3 +337,41 @@ def weigh_event(record: Record, calibration: SiteCalibration) -> EventWeighing:
                              reason=f"implausible weighing ({hard})")
     return EventWeighing(weighed=True, detection=det, weighing=w, flags=flags)
 
+
+def _weigh_mfi(record: Record, det: Detection, flags: tuple[str, ...],
+               calibration: SiteCalibration, bridge: Bridge,
+               options: Mapping[str, Any]) -> EventWeighing:
+    """The detected vehicle weighed by moving force identification with ``bridge``."""
+    vehicle = det.vehicles[0]
+
+    def refused(reason: str) -> EventWeighing:
+        return EventWeighing(weighed=False, detection=det, flags=flags, reason=reason)
+
+    gauges = [s for s in record.sensors if s.kind is not SensorKind.AXLE_DETECTOR]
+    if any(s.x is None or s.y is None for s in gauges):
+        return refused("weighing by MFI needs every gauge's position (x, y) in the scenario")
+    if vehicle.lateral_unit != "m" or not np.isfinite(vehicle.lateral):
+        return refused("weighing by MFI needs the vehicle's lane in metres (gauge y positions)")
+    trend = calibration.lines.scale_trend
+    factor = float(trend(float(record.time[0]))) if trend is not None else 1.0
+    rec = record.channels(gauges)
+    # the model's bridge is at rest before the first axle arrives: the logger's offsets
+    # are the readings' mean until then (the pre-trigger)
+    before = vehicle.passage.axle_x(rec.time)[:, 0] < 0.0
+    if np.count_nonzero(before) < 8:
+        return refused("weighing by MFI needs readings before the first axle reaches the "
+                       "bridge (a pre-trigger) to zero the gauges")
+    data = (rec.data - rec.data[before].mean(axis=0)) / factor
+    rec = dataclasses.replace(rec, data=data, passages=(vehicle.passage,))
+    try:
+        ident = identify_forces(bridge, rec, **options)
+    except InputError as exc:
+        return refused(f"weighing by MFI failed: {exc}")
+    extra = [] if trend is None or trend.covers(float(record.time[0])) else [
+        "outside_calibration_time"]
+    flags = tuple(dict.fromkeys([*flags, *ident.vehicle_flags[0], *extra]))
+    if ident.vehicle_quality[0] == "reject":
+        hard = ", ".join(f for f in ident.vehicle_flags[0] if f in HARD_FLAGS)
+        return EventWeighing(weighed=False, detection=det, flags=flags, identification=ident,
+                             reason=f"implausible weighing ({hard})")
+    return EventWeighing(weighed=True, detection=det, flags=flags, identification=ident)
