@@ -129,6 +129,35 @@ def test_csv_bad_input(tmp_path, text, message):
         io.read_csv_record(p, SENSORS[:2])
 
 
+@pytest.mark.parametrize(("change", "message"), [
+    ("drop", "dropped"),       # a sample missing: a step of 2 ms in a 1 kHz record
+    ("jitter", "step"),        # one sample 0.3 ms late
+])
+def test_csv_non_uniform_time_is_refused(tmp_path, change, message):
+    """Issue 14: dropped samples or jittered time put axles in the wrong place (+53 % on
+    one axle); a record's time must be uniform within 1 % of its step."""
+    t = np.arange(50) * 1e-3
+    if change == "drop":
+        t = np.delete(t, 20)
+    else:
+        t[20] += 3e-4
+    rows = "\n".join(f"{v:.6f},1,2" for v in t)
+    p = tmp_path / "rec.csv"
+    p.write_text(f"time,a,b\n{rows}\n")
+    with pytest.raises(InputError, match=message):
+        io.read_csv_record(p, SENSORS[:2])
+
+
+def test_csv_time_written_coarsely_is_uniform(tmp_path):
+    """512 Hz written with 4 decimals: the steps differ by up to 1e-4 s from rounding,
+    more than 1 % of the step, yet the clock is uniform and the record is read."""
+    t = np.round(np.arange(100) / 512.0, 4)
+    p = tmp_path / "rec.csv"
+    p.write_text("time,a,b\n" + "\n".join(f"{v:.4f},1,2" for v in t) + "\n")
+    rec = io.read_csv_record(p, SENSORS[:2])
+    assert rec.time.size == 100
+
+
 def test_csv_missing_file_and_sensor_name_clash(tmp_path):
     with raises(f"{tmp_path / 'no.csv'}: no such file"):
         io.read_csv_record(tmp_path / "no.csv", SENSORS)

@@ -27,7 +27,7 @@ import numpy as np
 from bwim.errors import InputError
 from bwim.limits import check_memory
 
-__all__ = ["check_time", "read_numeric_csv"]
+__all__ = ["check_time", "decimal_resolution", "read_numeric_csv"]
 
 
 #: Longest line (characters) a numeric CSV file may have: 64 Ki characters hold thousands
@@ -193,3 +193,15 @@ def check_time(
                          f"the median step {h:g} s by more than {tolerance:.3g} of it "
                          "(non-uniform sampling)")
     return h
+
+
+def decimal_resolution(time: np.ndarray, *, max_decimals: int = 12) -> float:
+    """How finely ``time`` was written, s: ``10**-d`` for the fewest decimals ``d`` that
+    hold every value (to 1e-9 of a unit in that decimal); 0 when none up to
+    ``max_decimals`` does (full precision)."""
+    t = np.asarray(time, dtype=float)
+    for d in range(max_decimals + 1):
+        unit = 10.0 ** -d
+        if np.all(np.abs(t / unit - np.round(t / unit)) < 1e-6):
+            return unit
+    return 0.0

@@ -43,7 +43,7 @@ import numpy as np
 
 from bwim.errors import InputError
 from bwim.io import _hdf5 as h5
-from bwim.io._csv import check_time, read_numeric_csv
+from bwim.io._csv import check_time, decimal_resolution, read_numeric_csv
 from bwim.io.atomic import atomic_open
 from bwim.records import Passage, Record, SimulationSettings, Truth, VBIConvergence
 from bwim.sensors import Sensor
@@ -119,7 +119,13 @@ def read_csv_record(
     t = values[:, names.index(time_column)]
     if t.size < 2:
         raise InputError(f"{p}: a record needs at least two samples, got {t.size}")
-    check_time(t, lines, where=p)
+    # uniform sampling within 1 % of the step (plus how finely the file writes time):
+    # dropped samples or a jittered clock would put every axle in the wrong place
+    # (a clock on a coarse decimal grid is exact: the rounding allowance is capped at a
+    # tenth of the step, so a dropped sample is never taken for rounding)
+    step = float(np.median(np.diff(t)))
+    check_time(t, lines, where=p, tolerance=0.01,
+               resolution=min(decimal_resolution(t), 0.1 * abs(step)))
     data = values[:, [names.index(n) for n in wanted]] * scale
     if passage is None:
         passages: tuple[Passage, ...] = ()
