@@ -102,12 +102,17 @@ def _number(t: _Table, line: int, column: str, text: str, *, optional: bool) -> 
         if optional:
             return None
         raise InputError(f"{t.where(line, column)}: empty cell")
+    return _finite(t.where(line, column), text)
+
+
+def _finite(where: str, text: str) -> float:
+    """``float(text)``; raises :class:`InputError` (at ``where``) unless a finite number."""
     try:
         v = float(text)
     except ValueError:
-        raise InputError(f"{t.where(line, column)}: {text!r} is not a number") from None
+        raise InputError(f"{where}: {text!r} is not a number") from None
     if not math.isfinite(v):
-        raise InputError(f"{t.where(line, column)}: {text!r} is not finite")
+        raise InputError(f"{where}: {text!r} is not finite")
     return v
 
 
@@ -130,16 +135,7 @@ def _numbers(t: _Table, line: int, column: str, text: str, *, optional: bool
         if optional:
             return None
         raise InputError(f"{t.where(line, column)}: {text!r} has an empty or NaN value")
-    out = []
-    for p in parts:
-        try:
-            v = float(p)
-        except ValueError:
-            raise InputError(f"{t.where(line, column)}: {p!r} is not a number") from None
-        if not math.isfinite(v):
-            raise InputError(f"{t.where(line, column)}: {p!r} is not finite")
-        out.append(v)
-    return tuple(out)
+    return tuple(_finite(t.where(line, column), p) for p in parts)
 
 
 def _record(t: _Table, line: int, text: str, seen: dict[str, int]) -> str:
@@ -177,38 +173,40 @@ def _speed(t: _Table, line: int, row: dict[str, str]) -> float | None:
 
 def read_summary(path: str | os.PathLike) -> tuple[SummaryRow, ...]:
     """The rows of a ``summary.csv`` written by ``bwim weigh`` (weights in N)."""
-    t = _Table(Path(path), _SUMMARY_COLUMNS)
-    seen: dict[str, int] = {}
-    out = []
-    for k, row in t.rows:
-        name = _record(t, k, row["record"], seen)
-        n_axles, weights, spacings = _axles(t, k, row, optional=True)
-        gvw = _number(t, k, "gvw_kN", row["gvw_kN"], optional=True)
-        speed = _speed(t, k, row)
-        flags = tuple(f.strip() for f in row.get("flags", "").split(";") if f.strip())
-        out.append(SummaryRow(
-            record=name, gvw=None if gvw is None else gvw * _KN,
-            axle_weights=tuple(w * _KN for w in weights or ()),
-            axle_spacings=spacings or (), n_axles=n_axles, speed=speed, flags=flags))
-    return tuple(out)
+    return _read(path, _SUMMARY_COLUMNS, _summary_row)
 
 
 def read_reference(path: str | os.PathLike) -> tuple[ReferenceRow, ...]:
     """The statically weighed vehicles of a reference CSV (weights in N)."""
-    t = _Table(Path(path), _REFERENCE_COLUMNS)
+    return _read(path, _REFERENCE_COLUMNS, _reference_row)
+
+
+def _read(path: str | os.PathLike, columns, parse_row) -> tuple:
+    """``parse_row(table, line, record, row)`` of every row of the CSV at ``path``, the
+    record names checked (non-empty, unique)."""
+    t = _Table(Path(path), columns)
     seen: dict[str, int] = {}
-    out = []
-    for k, row in t.rows:
-        name = _record(t, k, row["record"], seen)
-        _, weights, spacings = _axles(t, k, row, optional=False)
-        for column, values in (("axle_weights_kN", weights), ("axle_spacings_m", spacings)):
-            if any(v <= 0.0 for v in values):
-                raise InputError(f"{t.where(k, column)}: values must be positive")
-        gvw = _number(t, k, "gvw_kN", row["gvw_kN"], optional=False)
-        if gvw <= 0.0:
-            raise InputError(f"{t.where(k, 'gvw_kN')}: must be positive")
-        speed = _speed(t, k, row)
-        out.append(ReferenceRow(record=name, gvw=gvw * _KN,
-                                axle_weights=tuple(w * _KN for w in weights),
-                                axle_spacings=spacings, speed=speed))
-    return tuple(out)
+    return tuple(parse_row(t, k, _record(t, k, row["record"], seen), row) for k, row in t.rows)
+
+
+def _summary_row(t: _Table, k: int, name: str, row: dict[str, str]) -> SummaryRow:
+    n_axles, weights, spacings = _axles(t, k, row, optional=True)
+    gvw = _number(t, k, "gvw_kN", row["gvw_kN"], optional=True)
+    speed = _speed(t, k, row)
+    flags = tuple(f.strip() for f in row.get("flags", "").split(";") if f.strip())
+    return SummaryRow(
+        record=name, gvw=None if gvw is None else gvw * _KN,
+        axle_weights=tuple(w * _KN for w in weights or ()),
+        axle_spacings=spacings or (), n_axles=n_axles, speed=speed, flags=flags)
+
+
+def _reference_row(t: _Table, k: int, name: str, row: dict[str, str]) -> ReferenceRow:
+    _, weights, spacings = _axles(t, k, row, optional=False)
+    for column, values in (("axle_weights_kN", weights), ("axle_spacings_m", spacings)):
+        if any(v <= 0.0 for v in values):
+            raise InputError(f"{t.where(k, column)}: values must be positive")
+    gvw = _number(t, k, "gvw_kN", row["gvw_kN"], optional=False)
+    if gvw <= 0.0:
+        raise InputError(f"{t.where(k, 'gvw_kN')}: must be positive")
+    return ReferenceRow(record=name, gvw=gvw * _KN, axle_weights=tuple(w * _KN for w in weights),
+                        axle_spacings=spacings, speed=_speed(t, k, row))
