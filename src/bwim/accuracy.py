@@ -64,7 +64,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize, stats
 
-from bwim.errors import InputError, require_choice, require_positive
+from bwim.errors import InputError, require_choice, require_finite, require_positive
 from bwim.tables import Table
 from bwim.wim.moses import group_axles
 
@@ -244,25 +244,15 @@ def confidence_level(delta: float, mean: float, std: float, n: int) -> float:
     and ``std`` in per cent; ``std`` ≥ 0 (0 gives the limit s → 0⁺).
     """
     n = _sample_size(n)
-    d = _finite("delta", delta)
-    m = _finite("mean", mean)
-    s = _finite("std", std)
+    d = require_finite("delta", delta)
+    m = require_finite("mean", mean)
+    s = require_finite("std", std)
     if d < 0.0 or s < 0.0:
         raise InputError(f"delta and std must be non-negative, got {d:g} and {s:g}")
     c = _t975(n) / math.sqrt(n)
     dof = n - 1
     return float(1.0 - stats.t.sf(_ratio(d - m, s) - c, dof)
                  - stats.t.sf(_ratio(d + m, s) - c, dof))
-
-
-def _finite(name: str, value: float) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{name} must be a number, got {value!r}") from None
-    if not math.isfinite(v):
-        raise InputError(f"{name} must be finite, got {value!r}")
-    return v
 
 
 def _delta_min(mean: float, std: float, n: int, pi0: float) -> float:
@@ -331,8 +321,8 @@ def classify_statistics(*, n: int, mean: float, std: float, criterion: str,
     rep = _repeatability(repeatability)
     env = _environment(environment)
     n = _sample_size(n)
-    m = _finite("mean", mean)
-    s = _finite("std", std)
+    m = require_finite("mean", mean)
+    s = require_finite("std", std)
     if s < 0.0:
         raise InputError(f"std must be non-negative, got {s:g}")
     pi0 = min_confidence(n, rep, env)
@@ -436,7 +426,7 @@ class SummaryRow:
         set_ = object.__setattr__
         set_(self, "record", _record_name(self.record))
         if self.gvw is not None:
-            set_(self, "gvw", _finite("gvw", self.gvw))
+            set_(self, "gvw", require_finite("gvw", self.gvw))
         set_(self, "axle_weights", _float_tuple("axle_weights", self.axle_weights,
                                                 positive=False))
         set_(self, "axle_spacings", _float_tuple("axle_spacings", self.axle_spacings,
@@ -444,7 +434,7 @@ class SummaryRow:
         if self.n_axles is not None:
             set_(self, "n_axles", _count("n_axles", self.n_axles))
         if self.speed is not None:
-            set_(self, "speed", _finite("speed", self.speed))
+            set_(self, "speed", require_finite("speed", self.speed))
         set_(self, "flags", tuple(str(f) for f in self.flags))
 
 
@@ -487,7 +477,7 @@ class ReferenceRow:
                 f"record {self.record}: {len(self.axle_weights)} axle weights need "
                 f"{len(self.axle_weights) - 1} axle spacings, got {len(self.axle_spacings)}")
         if self.speed is not None:
-            set_(self, "speed", _finite("speed", self.speed))
+            set_(self, "speed", require_finite("speed", self.speed))
 
     @property
     def n_axles(self) -> int:

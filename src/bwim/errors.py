@@ -26,6 +26,7 @@ __all__ = [
     "parse_enum",
     "require_choice",
     "require_finite",
+    "require_instance",
     "require_positive",
     "require_range",
 ]
@@ -88,6 +89,17 @@ def require_choice(name: str, value: object, choices: Iterable[str]) -> str:
     options = list(choices)
     if not isinstance(value, str) or value not in options:
         raise InputError(f"unknown {name} {_fmt(value)}; expected one of {', '.join(options)}")
+    return value
+
+
+T = TypeVar("T")
+
+
+def require_instance(name: str, value: object, cls: type[T]) -> T:
+    """Return ``value`` if it is a ``cls`` or raise :class:`InputError` ("``name`` must be
+    a bwim ``cls``")."""
+    if not isinstance(value, cls):
+        raise InputError(f"{name} must be a bwim {cls.__name__}, got {type(value).__name__}")
     return value
 
 

@@ -34,7 +34,7 @@ from bwim.errors import InputError, require_finite, require_positive
 from bwim.sensors import Sensor
 
 __all__ = ["AxleLayout", "Passage", "Record", "SimulationSettings", "Truth", "VBIConvergence",
-           "axle_offsets", "noise_sigma"]
+           "axle_offsets", "noise_sigma", "record_list"]
 
 
 def axle_offsets(spacings: np.ndarray) -> np.ndarray:
@@ -352,3 +352,22 @@ def noise_sigma(record: Record, fraction: float | None = None, *, sigma: float |
         group = units == unit
         out[group] = fraction * peak[group].max()
     return out
+
+
+def record_list(records: Record | Sequence[Record], *, needs: str) -> list[Record]:
+    """A record or a sequence of records as a list; raises :class:`InputError` unless it is
+    a non-empty sequence of :class:`Record` (``needs``: why it cannot be empty, for the
+    message, e.g. ``"calibration needs at least one run"``)."""
+    if isinstance(records, Record):
+        records = [records]
+    try:
+        recs = list(records)
+    except TypeError:
+        raise InputError(f"records must be a sequence of Record, got "
+                         f"{type(records).__name__}") from None
+    if not recs:
+        raise InputError(f"records is empty: {needs}")
+    for k, r in enumerate(recs):
+        if not isinstance(r, Record):
+            raise InputError(f"records[{k}] is a {type(r).__name__}, not a bwim Record")
+    return recs

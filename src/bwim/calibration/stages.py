@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from enum import StrEnum
 
 import numpy as np
@@ -70,8 +70,25 @@ class Method(StrEnum):
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class StageResult:
-    """One calibration stage (see module docstring).
+class _Outcome:
+    """What an optimiser's loop returns to :func:`run_stage` (which adds the stage's name,
+    labels, start and wall time: :class:`StageResult`)."""
+
+    x: np.ndarray
+    fun: float
+    nfev: int
+    nit: int
+    success: bool
+    message: str
+    uncertainty: np.ndarray
+    history: object
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class StageResult(_Outcome):
+    """One calibration stage (see module docstring): the optimiser's ``x, fun, nfev, nit,
+    success, message, uncertainty, history`` and the stage's ``name, labels, start,
+    wall_time``.
 
     ``history`` is the optimiser's per-iteration record: a
     :class:`~bwim.optimize.ce.CEHistory` for CE, the best objective after each
@@ -81,14 +98,6 @@ class StageResult:
     name: str
     labels: tuple[str, ...]
     start: np.ndarray
-    x: np.ndarray
-    fun: float
-    nfev: int
-    nit: int
-    success: bool
-    message: str
-    uncertainty: np.ndarray
-    history: object
     wall_time: float
 
     def plot(self, ax=None, **kw):
@@ -98,20 +107,6 @@ class StageResult:
         from bwim.plots.calibration import plot_ce_convergence
 
         return plot_ce_convergence(self, ax=ax, **kw)
-
-
-@dataclass(frozen=True, kw_only=True, eq=False)
-class _Outcome:
-    """What an optimiser's loop returns to :func:`run_stage`."""
-
-    x: np.ndarray
-    fun: float
-    nfev: int
-    nit: int
-    success: bool
-    message: str
-    uncertainty: np.ndarray
-    history: object
 
 
 def run_stage(
@@ -196,10 +191,9 @@ def run_stage(
         out = _cma(name, objective, x0, box, seed=seed, population=population,
                    max_evals=max_evals, n_jobs=n_jobs, client=client, callback=callback,
                    stop=stop, options=options)
-    return StageResult(name=name, labels=tuple(space.labels()), start=x0, x=out.x,
-                       fun=out.fun, nfev=out.nfev, nit=out.nit, success=out.success,
-                       message=out.message, uncertainty=out.uncertainty,
-                       history=out.history, wall_time=time.perf_counter() - t)
+    return StageResult(name=name, labels=tuple(space.labels()), start=x0,
+                       wall_time=time.perf_counter() - t,
+                       **{f.name: getattr(out, f.name) for f in fields(_Outcome)})
 
 
 def _ce(name, objective, x0, box, *, seed, population, elite_fraction, convergences,

@@ -46,7 +46,7 @@ from typing import Any
 import numpy as np
 from scipy.signal import find_peaks
 
-from bwim.errors import InputError, require_finite, require_positive
+from bwim.errors import InputError, require_finite, require_instance, require_positive
 from bwim.records import Record
 from bwim.wim import InfluenceLine
 
@@ -242,8 +242,7 @@ def detect_axles(
         ``method="axle detectors"``; no vehicles (flag ``no_axles``, reason in
         ``message``) when no axle pair was found.  Confidence: see the module docstring.
     """
-    if not isinstance(record, Record):
-        raise InputError(f"record must be a bwim Record, got {type(record).__name__}")
+    require_instance("record", record, Record)
     if isinstance(detectors, str) or len(detectors) != 2 or detectors[0] == detectors[1]:
         raise InputError(f"detectors must name two different channels, got {detectors!r}")
     names = [s.name for s in record.sensors]

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bwim.errors import InputError
+from bwim.errors import InputError, require_instance
 from bwim.records import Passage, Record
 
 __all__ = [
@@ -113,8 +113,7 @@ class VehicleDetection:
     detector_times: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
 
     def __post_init__(self) -> None:
-        if not isinstance(self.passage, Passage):
-            raise InputError(f"passage must be a bwim Passage, got {type(self.passage).__name__}")
+        require_instance("passage", self.passage, Passage)
         c = float(self.confidence)
         if not 0.0 <= c <= 1.0:
             raise InputError(f"confidence must lie in [0, 1], got {c!r}")
@@ -190,6 +189,5 @@ class Detection:
 
     def annotate(self, record: Record) -> Record:
         """A copy of ``record`` whose passages are the detected ones."""
-        if not isinstance(record, Record):
-            raise InputError(f"record must be a bwim Record, got {type(record).__name__}")
+        require_instance("record", record, Record)
         return dataclasses.replace(record, passages=self.passages)

@@ -50,7 +50,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares, nnls
 
-from bwim.errors import InputError, require_positive
+from bwim.errors import InputError, require_instance, require_positive
 from bwim.records import Record
 from bwim.wim import InfluenceLine
 
@@ -349,11 +349,8 @@ def detect_from_strain(
     Detection
         ``method="strain"``; confidence as in the module docstring.
     """
-    if not isinstance(record, Record):
-        raise InputError(f"record must be a bwim Record, got {type(record).__name__}")
-    if not isinstance(influence_line, InfluenceLine):
-        raise InputError("influence_line must be a bwim InfluenceLine, got "
-                         f"{type(influence_line).__name__}")
+    require_instance("record", record, Record)
+    require_instance("influence_line", influence_line, InfluenceLine)
     il = influence_line
     if channels is None:
         idx = list(range(len(il.channels)))

@@ -102,12 +102,17 @@ def _number(t: _Table, line: int, column: str, text: str, *, optional: bool) -> 
         if optional:
             return None
         raise InputError(f"{t.where(line, column)}: empty cell")
+    return _finite(t.where(line, column), text)
+
+
+def _finite(where: str, text: str) -> float:
+    """``float(text)``; raises :class:`InputError` (at ``where``) unless a finite number."""
     try:
         v = float(text)
     except ValueError:
-        raise InputError(f"{t.where(line, column)}: {text!r} is not a number") from None
+        raise InputError(f"{where}: {text!r} is not a number") from None
     if not math.isfinite(v):
-        raise InputError(f"{t.where(line, column)}: {text!r} is not finite")
+        raise InputError(f"{where}: {text!r} is not finite")
     return v
 
 
@@ -130,16 +135,7 @@ def _numbers(t: _Table, line: int, column: str, text: str, *, optional: bool
         if optional:
             return None
         raise InputError(f"{t.where(line, column)}: {text!r} has an empty or NaN value")
-    out = []
-    for p in parts:
-        try:
-            v = float(p)
-        except ValueError:
-            raise InputError(f"{t.where(line, column)}: {p!r} is not a number") from None
-        if not math.isfinite(v):
-            raise InputError(f"{t.where(line, column)}: {p!r} is not finite")
-        out.append(v)
-    return tuple(out)
+    return tuple(_finite(t.where(line, column), p) for p in parts)
 
 
 def _record(t: _Table, line: int, text: str, seen: dict[str, int]) -> str:
@@ -152,58 +148,65 @@ def _record(t: _Table, line: int, text: str, seen: dict[str, int]) -> str:
     return text
 
 
+def _axles(t: _Table, line: int, row: dict[str, str], *, optional: bool
+           ) -> tuple[int | None, tuple[float, ...] | None, tuple[float, ...] | None]:
+    """``n_axles`` and the axle weights (kN) and spacings (m) of a row, the list lengths
+    checked against ``n_axles``; an optional row may leave any of them empty or unknown."""
+    n_axles = _integer(t, line, "n_axles", row["n_axles"], optional=optional)
+    weights = _numbers(t, line, "axle_weights_kN", row["axle_weights_kN"], optional=optional)
+    spacings = _numbers(t, line, "axle_spacings_m", row["axle_spacings_m"], optional=optional)
+    if n_axles is not None:
+        for column, values, expected in (("axle_weights_kN", weights, n_axles),
+                                         ("axle_spacings_m", spacings, n_axles - 1)):
+            if (values or not optional) and len(values) != expected:
+                raise InputError(f"{t.where(line, column)}: {len(values)} values for "
+                                 f"n_axles = {n_axles}")
+    return n_axles, weights, spacings
+
+
+def _speed(t: _Table, line: int, row: dict[str, str]) -> float | None:
+    """The optional ``speed_m_s`` column of a row, m/s (None if absent or empty)."""
+    if "speed_m_s" not in row:
+        return None
+    return _number(t, line, "speed_m_s", row["speed_m_s"], optional=True)
+
+
 def read_summary(path: str | os.PathLike) -> tuple[SummaryRow, ...]:
     """The rows of a ``summary.csv`` written by ``bwim weigh`` (weights in N)."""
-    t = _Table(Path(path), _SUMMARY_COLUMNS)
-    seen: dict[str, int] = {}
-    out = []
-    for k, row in t.rows:
-        name = _record(t, k, row["record"], seen)
-        n_axles = _integer(t, k, "n_axles", row["n_axles"], optional=True)
-        weights = _numbers(t, k, "axle_weights_kN", row["axle_weights_kN"], optional=True)
-        spacings = _numbers(t, k, "axle_spacings_m", row["axle_spacings_m"], optional=True)
-        if n_axles is not None and weights and len(weights) != n_axles:
-            raise InputError(f"{t.where(k, 'axle_weights_kN')}: {len(weights)} values for "
-                             f"n_axles = {n_axles}")
-        if n_axles is not None and spacings and len(spacings) != n_axles - 1:
-            raise InputError(f"{t.where(k, 'axle_spacings_m')}: {len(spacings)} values for "
-                             f"n_axles = {n_axles}")
-        gvw = _number(t, k, "gvw_kN", row["gvw_kN"], optional=True)
-        speed = (_number(t, k, "speed_m_s", row["speed_m_s"], optional=True)
-                 if "speed_m_s" in row else None)
-        flags = tuple(f.strip() for f in row.get("flags", "").split(";") if f.strip())
-        out.append(SummaryRow(
-            record=name, gvw=None if gvw is None else gvw * _KN,
-            axle_weights=tuple(w * _KN for w in weights or ()),
-            axle_spacings=spacings or (), n_axles=n_axles, speed=speed, flags=flags))
-    return tuple(out)
+    return _read(path, _SUMMARY_COLUMNS, _summary_row)
 
 
 def read_reference(path: str | os.PathLike) -> tuple[ReferenceRow, ...]:
     """The statically weighed vehicles of a reference CSV (weights in N)."""
-    t = _Table(Path(path), _REFERENCE_COLUMNS)
+    return _read(path, _REFERENCE_COLUMNS, _reference_row)
+
+
+def _read(path: str | os.PathLike, columns, parse_row) -> tuple:
+    """``parse_row(table, line, record, row)`` of every row of the CSV at ``path``, the
+    record names checked (non-empty, unique)."""
+    t = _Table(Path(path), columns)
     seen: dict[str, int] = {}
-    out = []
-    for k, row in t.rows:
-        name = _record(t, k, row["record"], seen)
-        n_axles = _integer(t, k, "n_axles", row["n_axles"], optional=False)
-        weights = _numbers(t, k, "axle_weights_kN", row["axle_weights_kN"], optional=False)
-        spacings = _numbers(t, k, "axle_spacings_m", row["axle_spacings_m"], optional=False)
-        if len(weights) != n_axles:
-            raise InputError(f"{t.where(k, 'axle_weights_kN')}: {len(weights)} values for "
-                             f"n_axles = {n_axles}")
-        if len(spacings) != n_axles - 1:
-            raise InputError(f"{t.where(k, 'axle_spacings_m')}: {len(spacings)} values for "
-                             f"n_axles = {n_axles}")
-        for column, values in (("axle_weights_kN", weights), ("axle_spacings_m", spacings)):
-            if any(v <= 0.0 for v in values):
-                raise InputError(f"{t.where(k, column)}: values must be positive")
-        gvw = _number(t, k, "gvw_kN", row["gvw_kN"], optional=False)
-        if gvw <= 0.0:
-            raise InputError(f"{t.where(k, 'gvw_kN')}: must be positive")
-        speed = (_number(t, k, "speed_m_s", row["speed_m_s"], optional=True)
-                 if "speed_m_s" in row else None)
-        out.append(ReferenceRow(record=name, gvw=gvw * _KN,
-                                axle_weights=tuple(w * _KN for w in weights),
-                                axle_spacings=spacings, speed=speed))
-    return tuple(out)
+    return tuple(parse_row(t, k, _record(t, k, row["record"], seen), row) for k, row in t.rows)
+
+
+def _summary_row(t: _Table, k: int, name: str, row: dict[str, str]) -> SummaryRow:
+    n_axles, weights, spacings = _axles(t, k, row, optional=True)
+    gvw = _number(t, k, "gvw_kN", row["gvw_kN"], optional=True)
+    speed = _speed(t, k, row)
+    flags = tuple(f.strip() for f in row.get("flags", "").split(";") if f.strip())
+    return SummaryRow(
+        record=name, gvw=None if gvw is None else gvw * _KN,
+        axle_weights=tuple(w * _KN for w in weights or ()),
+        axle_spacings=spacings or (), n_axles=n_axles, speed=speed, flags=flags)
+
+
+def _reference_row(t: _Table, k: int, name: str, row: dict[str, str]) -> ReferenceRow:
+    _, weights, spacings = _axles(t, k, row, optional=False)
+    for column, values in (("axle_weights_kN", weights), ("axle_spacings_m", spacings)):
+        if any(v <= 0.0 for v in values):
+            raise InputError(f"{t.where(k, column)}: values must be positive")
+    gvw = _number(t, k, "gvw_kN", row["gvw_kN"], optional=False)
+    if gvw <= 0.0:
+        raise InputError(f"{t.where(k, 'gvw_kN')}: must be positive")
+    return ReferenceRow(record=name, gvw=gvw * _KN, axle_weights=tuple(w * _KN for w in weights),
+                        axle_spacings=spacings, speed=_speed(t, k, row))

@@ -33,9 +33,15 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse as sp
 
-from bwim.errors import InputError, NumericalError, require_finite, require_positive
+from bwim.errors import (
+    InputError,
+    NumericalError,
+    require_finite,
+    require_instance,
+    require_positive,
+)
 from bwim.limits import check_memory
-from bwim.records import Passage, Record
+from bwim.records import Passage, Record, record_list
 from bwim.sensors import Sensor, SensorKind
 
 if TYPE_CHECKING:
@@ -321,18 +327,8 @@ def static_axle_loads(vehicle: Vehicle | Sequence[float]) -> np.ndarray:
 
 
 def _check_records(records: Any, n_axles: int | None) -> list[Record]:
-    if isinstance(records, Record):
-        records = [records]
-    try:
-        recs = list(records)
-    except TypeError:
-        raise InputError(f"records must be a sequence of Record, got "
-                         f"{type(records).__name__}") from None
-    if not recs:
-        raise InputError("records is empty: calibration needs at least one crossing")
+    recs = record_list(records, needs="calibration needs at least one crossing")
     for k, r in enumerate(recs):
-        if not isinstance(r, Record):
-            raise InputError(f"records[{k}] is a {type(r).__name__}, not a bwim Record")
         if len(r.passages) != 1:
             raise InputError(
                 f"records[{k}] has {len(r.passages)} passages; the matrix method needs "
@@ -512,8 +508,7 @@ def model_influence_line(
     """
     from bwim.fe.bridge import Bridge
 
-    if not isinstance(bridge, Bridge):
-        raise InputError(f"bridge must be a bwim Bridge, got {type(bridge).__name__}")
+    require_instance("bridge", bridge, Bridge)
     if like is not None:
         if sensors is not None or lane is not None or track_width is not None:
             raise InputError("give either like= or sensors/lane/track_width, not both")

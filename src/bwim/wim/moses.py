@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bwim.errors import InputError, require_finite, require_positive
+from bwim.errors import InputError, require_finite, require_instance, require_positive
 from bwim.plausibility import Limits, ordered_flags, quality_of, weight_flags
 from bwim.records import Passage, Record
 from bwim.wim.influence_line import Channel, InfluenceLine, read_channels
@@ -195,8 +195,7 @@ def weigh_static(
     -------
     StaticWeights
     """
-    if not isinstance(record, Record):
-        raise InputError(f"record must be a bwim Record, got {type(record).__name__}")
+    require_instance("record", record, Record)
     if not isinstance(influence, InfluenceLine):
         raise InputError(f"influence must be an InfluenceLine, got {type(influence).__name__}")
     if passage is None:
@@ -205,8 +204,8 @@ def weigh_static(
                 f"the record has {len(record.passages)} passages; Moses' algorithm needs the "
                 "passage (speed, axle spacings) of one vehicle: pass passage=")
         passage = record.passage
-    elif not isinstance(passage, Passage):
-        raise InputError(f"passage must be a bwim Passage, got {type(passage).__name__}")
+    else:
+        require_instance("passage", passage, Passage)
     tol = require_finite("lane_tolerance", lane_tolerance)
     if abs(passage.lane - influence.lane) > tol:
         raise InputError(

@@ -56,7 +56,7 @@ import numpy as np
 import scipy.linalg
 
 from bwim.errors import InputError, NumericalError, require_finite, require_positive
-from bwim.records import Passage, Record
+from bwim.records import Passage, Record, record_list
 from bwim.sensors import SensorKind
 from bwim.wim.influence_line import (
     DEFAULT_SMOOTHING,
@@ -455,18 +455,7 @@ def structural_sensors(record: Record) -> tuple:
 
 
 def _runs(records, passages) -> tuple[list[Record], list[Passage]]:
-    if isinstance(records, Record):
-        records = [records]
-    try:
-        recs = list(records)
-    except TypeError:
-        raise InputError(f"records must be a sequence of Record, got "
-                         f"{type(records).__name__}") from None
-    if not recs:
-        raise InputError("records is empty: calibration needs at least one run")
-    for k, r in enumerate(recs):
-        if not isinstance(r, Record):
-            raise InputError(f"records[{k}] is a {type(r).__name__}, not a bwim Record")
+    recs = record_list(records, needs="calibration needs at least one run")
     if passages is None:
         for k, r in enumerate(recs):
             if len(r.passages) != 1:

@@ -72,7 +72,7 @@ from typing import Any
 import numpy as np
 import scipy.linalg
 
-from bwim.errors import InputError, require_finite
+from bwim.errors import InputError, require_finite, require_instance
 from bwim.plausibility import (
     HARD_FLAGS,
     SOFT_FLAGS,
@@ -256,8 +256,7 @@ def weigh(
     -------
     Weighing
     """
-    if not isinstance(record, Record):
-        raise InputError(f"record must be a bwim Record, got {type(record).__name__}")
+    require_instance("record", record, Record)
     if not isinstance(calibration, MultiRunCalibration):
         raise InputError(f"calibration must be a MultiRunCalibration, got "
                          f"{type(calibration).__name__}")
@@ -265,8 +264,8 @@ def weigh(
         if len(record.passages) != 1:
             raise InputError(f"the record has {len(record.passages)} passages; give passage=")
         passage = record.passage
-    elif not isinstance(passage, Passage):
-        raise InputError(f"passage must be a bwim Passage, got {type(passage).__name__}")
+    else:
+        require_instance("passage", passage, Passage)
     if combine not in _COMBINE:
         raise InputError(f"combine must be one of {', '.join(_COMBINE)}, got {combine!r}")
     if baseline not in _BASELINE:
