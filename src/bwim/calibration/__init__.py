@@ -10,6 +10,12 @@ from bwim.calibration.problem import (
     noise_weights,
     peak_weights,
 )
+from bwim.calibration.quasistatic import (
+    MassFit,
+    QuasiStaticCalibration,
+    calibrate_quasistatic,
+    fit_mass,
+)
 from bwim.calibration.sensitivity import (
     Identifiability,
     RoadSensitivity,
@@ -22,14 +28,18 @@ __all__ = [
     "Calibration",
     "DynamicObjective",
     "Identifiability",
+    "MassFit",
     "Method",
     "ParameterSpace",
+    "QuasiStaticCalibration",
     "Refine",
     "RoadSensitivity",
     "StageResult",
     "StaticObjective",
     "calibrate",
+    "calibrate_quasistatic",
     "estimate_noise",
+    "fit_mass",
     "identifiability",
     "neighbour_map",
     "noise_weights",

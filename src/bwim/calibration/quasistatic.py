@@ -1,0 +1,439 @@
+"""Road-free calibration: stiffness from the quasi-static part of the strains, mass from
+the bridge's free vibration.  No road profile is needed (issue 12).
+
+Why
+---
+The paper's procedure (THEORY §7) needs the road the truck drove on: its dynamic stage
+re-simulates the crossing, and even its pseudo-static stage is biased by the truck's
+dynamic axle forces, which the road drives.  Measured on 24 × 16 data and model with 2 %
+gauge noise (``benchmarks/bench_mismatch.py``), a road known to 1 mm RMS moves E_y by
+≈ 19 %.  Here the road never enters.
+
+Model
+-----
+The measured strain at sensor ``s`` is (THEORY §1.5, §3)
+
+    ε_s(t) = Σ_j G_s(x_j(t), y_j) F_j(t) + v_s(t) + noise,
+
+``G_s`` the sensor's static influence surface, ``F_j`` the (unknown) contact force of
+wheel ``j`` and ``v_s`` the bridge's vibration, which lives at and above the first natural
+frequency ``f₁``.  With a zero-phase low-pass filter ``𝓛`` (Butterworth, forward and
+backward) whose cut-off is below ``f₁``, ``𝓛 v ≈ 0``; and the forces are written
+
+    F_j(t) = P_j (1 + Σ_k c_{a(j),k} φ_{a(j),k}(t)),
+
+``P_j`` the static wheel load (known), ``a(j)`` its axle (or the wheel itself with
+``per_wheel=True``), ``φ_{a,k} = P_k(u)`` Legendre polynomials k = 1..K of the axle's
+time on the span mapped to u ∈ [−1, 1] (zero outside).  These carry the slow force
+variations (body bounce); they have **zero mean over the axle's time on the span**, which
+is what pins the overall stiffness scale: a force scaled by α and a stiffness scaled by α
+give the same strains, so without this constraint only stiffness *ratios* would be
+identifiable (E_y/E_x from the transverse/longitudinal strain ratios).  The scale comes
+from the known static loads, and its error is the mean dynamic force over the crossing,
+which averages down over several runs.
+
+For trial stiffness θ the filtered prediction is linear in the nuisance c:
+``𝓛ε̂ = b(θ) + A(θ) c``.  Variable projection (Golub & Pereyra): c(θ) is the weighted
+linear least-squares solution, and θ minimises the projected residual
+``‖W^{1/2}(𝓛ε − b − A c(θ))‖²`` (``scipy.optimize.least_squares``, finite-difference
+Jacobian, θ in log space).  Each record has its own nuisance; records share θ.
+
+Mass: after the last axle leaves, the strains are the bridge's free vibration,
+``Σ_m e^{−ζ_m ω_m t}(a_{s,m} cos ω_d t + b_{s,m} sin ω_d t)``.  With the stiffness fixed,
+a uniform scale of the mass scales every ω_m by ``√(μ₀/μ)``; μ (one scale for every mass
+family) minimises the projected residual of that fit (amplitudes linear, a grid then a
+bounded scalar search).  ζ_m is the model's Rayleigh damping.  Needs at least
+``min_free_periods`` periods of the first mode after exit (record a ``tail``).
+
+Contract
+--------
+* SI units; θ in Pa, μ in kg/m² (kg/m for girders); strain dimensionless; time s.
+* ``records``: single-passage :class:`~bwim.records.Record` of the calibration vehicle,
+  passage (speed, lane, delay) known; any number.
+* The result's ``force_factors[r]`` has shape (n_t, n_groups): the identified
+  ``1 + Σ c φ`` of record r (1 off the span).
+* ``uncertainty`` is the standard error from the raw channels' noise
+  (:func:`~bwim.calibration.problem.estimate_noise`) through ``(JᵀWJ)⁻¹`` of the filtered
+  fit (the filtered noise's correlation is accounted for by using the *raw* σ: the
+  Jacobian is band-limited to the filter's pass band, where the filter's gain is 1).  It
+  does not include the error of the zero-mean force assumption; ``scale_bias`` gives the
+  identified force variations' mean, RMS-weighted (a diagnostic of that error).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.optimize as so
+import scipy.signal as ss
+from numpy.polynomial import legendre
+
+from bwim.calibration.problem import ParameterSpace, estimate_noise
+from bwim.errors import InputError, NumericalError
+from bwim.fe.bridge import Bridge
+from bwim.fe.influence import influence_surfaces
+from bwim.records import Record
+from bwim.vehicles import Vehicle
+
+__all__ = ["MassFit", "QuasiStaticCalibration", "calibrate_quasistatic", "fit_mass"]
+
+#: Default cut-off as a fraction of the starting model's first natural frequency.
+DEFAULT_CUTOFF_FRACTION = 0.6
+_STIFFNESS = ("E_x", "E_y", "E_girder")
+_MASS = ("mu", "mu_girder")
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class MassFit:
+    """The mass scale from the free vibration after the vehicle leaves.
+
+    Attributes
+    ----------
+    x : float
+        Mass scale relative to the model it was fitted on (μ = x μ₀).
+    fun : float
+        Weighted squared residual of the free-vibration fit at x.
+    frequencies : ndarray
+        The fitted model's natural frequencies used, Hz.
+    n_samples : int
+        Free-vibration samples used (over all records and channels).
+    success : bool
+    message : str
+    """
+
+    x: float
+    fun: float
+    frequencies: np.ndarray
+    n_samples: int
+    success: bool
+    message: str
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class QuasiStaticCalibration:
+    """Result of :func:`calibrate_quasistatic` (scipy.optimize vocabulary for the fit).
+
+    Attributes
+    ----------
+    bridge : Bridge
+        The calibrated model (stiffness, and mass when it was fitted).
+    params, uncertainty : dict of str to ndarray
+        Calibrated families and their standard errors (see module docstring).
+    x : ndarray
+        The stiffness vector θ (Pa), ParameterSpace order.
+    fun : float
+        Weighted squared filtered residual at x.
+    nfev, nit : int
+    success : bool
+    message : str
+    cutoff : float
+        Low-pass cut-off used, Hz.
+    force_factors : tuple of ndarray
+        Per record, (n_t, n_groups) identified force factor ``1 + Σ c φ``.
+    scale_bias : float
+        RMS over groups and records of the mean of ``Σ c φ`` weighted by the group's
+        static strain energy at the sensors; ≈ 0 by construction of the basis; kept as
+        a diagnostic (non-zero when axles share little time on the span).
+    mass : MassFit or None
+        The mass fit, or None when not asked for / no free vibration.
+    """
+
+    bridge: Bridge
+    params: dict
+    uncertainty: dict
+    x: np.ndarray
+    fun: float
+    nfev: int
+    nit: int
+    success: bool
+    message: str
+    cutoff: float
+    force_factors: tuple
+    scale_bias: float
+    mass: MassFit | None
+
+
+def _lowpass(cutoff: float, fs: float, order: int):
+    if not 0 < cutoff < 0.5 * fs:
+        raise InputError(f"cutoff must be in (0, {0.5 * fs:g}) Hz, got {cutoff!r}")
+    return ss.butter(order, cutoff, fs=fs, output="sos")
+
+
+class _Record:
+    """One record's fixed data: filtered measurements, wheel positions, nuisance basis."""
+
+    def __init__(self, rec: Record, static_wheels, n_basis, per_wheel, sos, length, w):
+        p = rec.passage
+        self.t = rec.time
+        self.x = p.wheel_x(rec.time)
+        self.y = np.broadcast_to(p.wheel_y, self.x.shape)
+        self.P = static_wheels
+        self.group = np.arange(self.P.size) if per_wheel else p.wheel_axle
+        self.n_groups = int(self.group.max()) + 1
+        on = p.axle_times_on(length)
+        span = on[p.wheel_axle] if per_wheel else on
+        basis = np.zeros((self.t.size, self.n_groups, n_basis))
+        for g in range(self.n_groups):
+            t0, t1 = span[g]
+            inside = (self.t >= t0) & (self.t <= t1)
+            u = 2 * (self.t[inside] - t0) / (t1 - t0) - 1
+            for k in range(n_basis):
+                coef = np.zeros(k + 2)
+                coef[k + 1] = 1.0
+                basis[inside, g, k] = legendre.legval(u, coef)
+        self.basis = basis
+        self.sos = sos
+        self.fs = rec.sampling_rate
+        self.sqrt_w = np.sqrt(w)
+        self.data = ss.sosfiltfilt(sos, rec.data, axis=0) * self.sqrt_w
+        self.sensors = rec.sensors
+
+    def design(self, bridge: Bridge, n_modes: int) -> tuple[np.ndarray, np.ndarray]:
+        """b (n_t·n_s,) and A (n_t·n_s, n_groups·K), filtered and weighted.
+
+        The unfiltered response to moving forces is the static one plus, for each of the
+        lowest ``n_modes`` modes, its dynamic correction ``ε_m (q_m − f_m/ω_m²)`` (mode
+        acceleration method): below f₁ the bridge is not static, a crossing's slow
+        loading is amplified by ≈ 1/(1 − (f/f₁)²).
+        """
+        ins = influence_surfaces(bridge, self.sensors)
+        n_t, n_w = self.x.shape
+        G = ins.at(self.x.ravel(), self.y.ravel()).reshape(n_t, n_w, -1) * self.P[None, :,
+                                                                                   None]
+        R = np.zeros((n_t, self.n_groups, G.shape[2]))
+        np.add.at(R, (slice(None), self.group), G)
+        K = self.basis.shape[2]
+        # force time functions of every column: base (1) then basis k, per group
+        fun = np.concatenate([np.ones((n_t, self.n_groups, 1)), self.basis], axis=2)
+        cols = R[:, :, None, :] * fun[:, :, :, None]  # (t, g, 1+K, s)
+        if n_modes:
+            model = bridge.model
+            modes = bridge.modes(n_modes)
+            xs, ys = self.x.ravel(), self.y.ravel()
+            on = model.grid.contains(xs, ys if bridge.is_plate else None)
+            phi_w = np.zeros((xs.size, modes.n))
+            if np.any(on):
+                rows = model.point_rows(xs[on], ys[on] if bridge.is_plate else None)
+                phi_w[on] = np.einsum("pk,pkm->pm", rows.vals, modes.shapes[rows.dofs])
+            phi_w = phi_w.reshape(n_t, n_w, modes.n) * self.P[None, :, None]
+            fm = np.zeros((n_t, self.n_groups, modes.n))
+            np.add.at(fm, (slice(None), self.group), phi_w)
+            eps = bridge.sensor_matrix(self.sensors) @ modes.shapes  # (s, m)
+            zeta = bridge.rayleigh.ratio(modes.omega)
+            for m in range(modes.n):
+                om, z = modes.omega[m], zeta[m]
+                num, den = ss.bilinear([1.0], [1.0, 2 * z * om, om * om], fs=self.fs)
+                f = fm[:, :, m, None] * fun  # (t, g, 1+K)
+                q = ss.lfilter(num, den, f, axis=0) - f / om**2
+                cols += q[:, :, :, None] * eps[None, None, None, :, m]
+        b = ss.sosfiltfilt(self.sos, cols[:, :, 0].sum(axis=1), axis=0) * self.sqrt_w
+        A = ss.sosfiltfilt(self.sos, cols[:, :, 1:], axis=0) * self.sqrt_w
+        A = A.transpose(0, 3, 1, 2).reshape(n_t * G.shape[2], self.n_groups * K)
+        return b.ravel(), A
+
+
+def calibrate_quasistatic(
+    start_bridge: Bridge,
+    records: Record | Sequence[Record],
+    vehicle: Vehicle,
+    *,
+    unknowns: Sequence[str] | None = None,
+    cutoff: float | None = None,
+    n_basis: int = 4,
+    per_wheel: bool = False,
+    filter_order: int = 4,
+    weights: str | None = "noise",
+    mass: bool = True,
+    n_free_modes: int = 3,
+    min_free_periods: float = 3.0,
+    inertia_modes: int = 3,
+    n_rounds: int = 3,
+) -> QuasiStaticCalibration:
+    """Calibrate the stiffness without a road profile (and the mass from free vibration).
+
+    Parameters
+    ----------
+    start_bridge : Bridge
+        Starting model (also the initial stiffness guess).
+    records : Record or sequence of Record
+        Crossings of ``vehicle`` (one passage each); they stack.
+    vehicle : Vehicle
+        The calibration vehicle (its static wheel loads are used; its dynamics are not).
+    unknowns : sequence of str, optional
+        Stiffness families to fit; default those of E_x, E_y, E_girder the bridge has.
+    cutoff : float, optional
+        Low-pass cut-off, Hz; default 0.6 × the starting model's first frequency.
+    n_basis : int
+        Legendre terms (degrees 1..n_basis) per axle force (0: forces = static loads).
+    per_wheel : bool
+        One nuisance function per wheel instead of per axle (lets the body roll).
+    weights : "noise" or None
+        Channel weights 1/σ̂² from each record's estimated noise, or none.
+    mass : bool
+        Fit the mass scale from the free vibration after exit (:func:`fit_mass`).
+    inertia_modes : int
+        Modes whose dynamic correction is added to the static response (0: static only).
+    n_rounds : int
+        Stiffness/mass alternations (with ``mass`` and ``inertia_modes``).
+    """
+    if not isinstance(start_bridge, Bridge):
+        raise InputError(f"start_bridge must be a Bridge, got {type(start_bridge).__name__}")
+    records = list(records) if isinstance(records, (list, tuple)) else [records]
+    if not records or not all(isinstance(r, Record) and len(r.passages) == 1
+                              for r in records):
+        raise InputError("records must be one or more single-passage bwim.Record")
+    if not isinstance(n_basis, (int, np.integer)) or n_basis < 0:
+        raise InputError(f"n_basis must be a non-negative integer, got {n_basis!r}")
+    if weights not in ("noise", None):
+        raise InputError(f"weights must be 'noise' or None, got {weights!r}")
+    static_wheels = vehicle.model().static_forces
+    for k, r in enumerate(records):
+        p = r.passage
+        if p.n_axles * p.wheels_per_axle != static_wheels.size:
+            raise InputError(f"records[{k}] wheel layout does not match the vehicle")
+    names = tuple(unknowns) if unknowns is not None else tuple(
+        n for n in _STIFFNESS if n in start_bridge.params)
+    if any(n not in _STIFFNESS for n in names):
+        raise InputError(f"unknowns must be stiffness families {_STIFFNESS}, got {names}")
+    space = ParameterSpace(start_bridge, names)
+    f1 = float(start_bridge.modes(1).frequencies[0])
+    fc = DEFAULT_CUTOFF_FRACTION * f1 if cutoff is None else float(cutoff)
+    fs = records[0].sampling_rate
+    sos = _lowpass(fc, fs, filter_order)
+    sig = estimate_noise(records)
+    if weights == "noise":
+        top = max(float(s.max()) for s in sig)
+        var = [np.maximum(s, 1e-3 * top) ** 2 for s in sig]
+        mean_inv = float(np.mean(np.concatenate([1 / v for v in var])))
+        w = [1 / v / mean_inv for v in var]
+    else:
+        w = [np.ones(r.data.shape[1]) for r in records]
+    # residuals in units of the raw noise σ (so the optimiser's tolerances are meaningful)
+    sig2 = 1.0 / np.mean(np.concatenate([1 / np.maximum(s, 1e-30) ** 2 for s in sig]))
+    scale = sig2 if weights == "noise" else float(np.mean(np.concatenate(sig) ** 2))
+    parts = [_Record(r, static_wheels, int(n_basis), per_wheel, sos, start_bridge.length,
+                     wk / scale) for r, wk in zip(records, w, strict=True)]
+    theta0 = space.vector()
+    base = start_bridge
+    n_inertia = int(inertia_modes)
+
+    def solve(z, base):
+        bridge = space.bridge(theta0 * np.exp(z), base)
+        res, coefs = [], []
+        for part in parts:
+            b, A = part.design(bridge, n_inertia)
+            r = part.data.ravel() - b
+            if A.shape[1]:
+                c = np.linalg.lstsq(A, r, rcond=None)[0]
+                r = r - A @ c
+            else:
+                c = np.zeros(0)
+            res.append(r)
+            coefs.append(c)
+        return np.concatenate(res), coefs
+
+    # alternate: stiffness (mass fixed) then mass (stiffness fixed); the inertia
+    # correction is what couples them, weakly
+    z, nfev, nit, mfit = np.zeros(theta0.size), 0, 0, None
+    for _ in range(max(1, int(n_rounds)) if (mass and n_inertia) else 1):
+        try:
+            opt = so.least_squares(lambda z, base=base: solve(z, base)[0], z,
+                                   method="trf", diff_step=1e-4,
+                                   bounds=(np.log(0.2), np.log(5.0)))
+        except np.linalg.LinAlgError:
+            raise NumericalError("trial stiffness is not positive definite") from None
+        z, nfev, nit = opt.x, nfev + int(opt.nfev), nit + int(opt.njev or 0)
+        bridge = space.bridge(theta0 * np.exp(z), base)
+        if mass:
+            mfit = fit_mass(bridge, records, n_modes=n_free_modes,
+                            min_periods=min_free_periods, weights=w)
+            if not mfit.success:
+                break
+            base = bridge.with_params(**{n: bridge.params[n] * mfit.x
+                                         for n in _MASS if n in bridge.params})
+    theta = theta0 * np.exp(z)
+    bridge = space.bridge(theta, base)
+    _, coefs = solve(z, base)
+    factors, biases = [], []
+    for part, c in zip(parts, coefs, strict=True):
+        d = (np.einsum("tgk,gk->tg", part.basis, c.reshape(part.n_groups, -1))
+             if c.size else np.zeros((part.t.size, part.n_groups)))
+        factors.append(1 + d)
+        on = part.basis[:, :, 0] != 0 if part.basis.shape[2] else np.zeros_like(d, bool)
+        biases += [float(d[on[:, g], g].mean()) if on[:, g].any() else 0.0
+                   for g in range(part.n_groups)]
+    # standard error: residuals are in units of σ, so cov = (JᵀJ)⁻¹ (J in θ, not log θ)
+    J = opt.jac / theta[None, :]
+    try:
+        cov = np.linalg.inv(J.T @ J)
+        se = np.sqrt(np.clip(np.diag(cov), 0, None))
+    except np.linalg.LinAlgError:
+        se = np.full(theta.size, np.nan)
+    params = space.split(theta)
+    unc = space.split(se)
+    if mfit is not None and mfit.success:
+        params.update({n: bridge.params[n] for n in _MASS if n in bridge.params})
+    return QuasiStaticCalibration(
+        bridge=bridge, params=params, uncertainty=unc, x=theta, fun=float(2 * opt.cost * scale),
+        nfev=nfev, nit=nit, success=bool(opt.success),
+        message=str(opt.message), cutoff=fc, force_factors=tuple(factors),
+        scale_bias=float(np.sqrt(np.mean(np.square(biases)))) if biases else 0.0,
+        mass=mfit)
+
+
+def fit_mass(
+    bridge: Bridge,
+    records: Record | Sequence[Record],
+    *,
+    n_modes: int = 3,
+    min_periods: float = 3.0,
+    bounds: tuple[float, float] = (0.4, 2.5),
+    weights: Sequence[np.ndarray] | None = None,
+) -> MassFit:
+    """The mass scale x (μ = x μ₀ for every mass family of ``bridge``) from the free
+    vibration after the last axle leaves (see module docstring).  No road needed."""
+    records = list(records) if isinstance(records, (list, tuple)) else [records]
+    if not 0 < bounds[0] < 1 < bounds[1]:
+        raise InputError(f"bounds must bracket 1, got {bounds!r}")
+    modes = bridge.modes(n_modes)
+    om0 = modes.omega
+    ratio = bridge.rayleigh.ratio
+    segs = []
+    for k, rec in enumerate(records):
+        t_exit = max(p.axle_times_on(bridge.length)[-1, 1] for p in rec.passages)
+        sel = rec.time > t_exit + 1.0 / rec.sampling_rate
+        if rec.time[sel].size < 2:
+            continue
+        tau = rec.time[sel] - rec.time[sel][0]
+        if tau[-1] * modes.frequencies[0] / np.sqrt(bounds[0]) < min_periods:
+            continue
+        sw = np.ones(rec.data.shape[1]) if weights is None else np.sqrt(weights[k])
+        segs.append((tau, rec.data[sel] * sw))
+    if not segs:
+        return MassFit(x=np.nan, fun=np.nan, frequencies=modes.frequencies, n_samples=0,
+                       success=False, message="no free vibration after exit (record a "
+                                              f"tail of ≥ {min_periods} periods)")
+
+    def cost(s):
+        om = om0 / np.sqrt(s)
+        zeta = ratio(om)
+        wd = om * np.sqrt(1 - np.minimum(zeta, 0.99) ** 2)
+        total = 0.0
+        for tau, d in segs:
+            env = np.exp(-np.outer(tau, zeta * om))
+            B = np.hstack([env * np.cos(np.outer(tau, wd)), env * np.sin(np.outer(tau, wd))])
+            c = np.linalg.lstsq(B, d, rcond=None)[0]
+            total += float(((d - B @ c) ** 2).sum())
+        return total
+
+    grid = np.exp(np.linspace(np.log(bounds[0]), np.log(bounds[1]), 241))
+    vals = np.array([cost(s) for s in grid])
+    i = int(np.argmin(vals))
+    lo, hi = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
+    r = so.minimize_scalar(cost, bounds=(lo, hi), method="bounded",
+                           options={"xatol": 1e-6})
+    n = sum(d.size for _, d in segs)
+    return MassFit(x=float(r.x), fun=float(r.fun), frequencies=om0 / np.sqrt(r.x) / 2 / np.pi,
+                   n_samples=n, success=bool(r.success), message=str(r.message))
