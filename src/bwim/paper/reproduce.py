@@ -282,7 +282,8 @@ def case_5_4(*, quick: bool = False, seed: int = 0, method: str = "ce", n_jobs: 
 
 def case_5_3(*, quick: bool = False, seed: int = 0, bridges: Sequence[int] | None = None,
              n_jobs: int = 1, callback=None, budgets: tuple[int, int] | None = None,
-             population: tuple[int, int] | None = None, refine: str = "lm") -> CaseReport:
+             population: tuple[int, int] | None = None, refine: str = "lm",
+             method: str = "ce") -> CaseReport:
     """§5.3: six zoned bridges; 48 unknowns (sub-structured CE) against one zone (3).
 
     Calibrated from two crossings of the paper truck (20 and 24 m/s; the paper: 20–25),
@@ -290,7 +291,9 @@ def case_5_3(*, quick: bool = False, seed: int = 0, bridges: Sequence[int] | Non
     paper's Table 1 measure, Σ (identified − true wheel force)² over the central 80 %
     (kN², units not stated by the paper), averaged over the four wheels, with the RMS %
     beside it.  ``budgets`` (evaluations of the two stages) and ``population`` override the
-    run sizes, and ``refine="none"`` skips the joint refinement (smaller runs).
+    run sizes, ``refine="none"`` skips the joint refinement and ``method`` chooses the
+    optimiser of the two stages (:func:`~bwim.calibration.calibrate`'s; ``"lm"`` makes
+    small runs).
     """
     t0 = time.perf_counter()
     s = _settings(quick, population=population)
@@ -308,9 +311,9 @@ def case_5_3(*, quick: bool = False, seed: int = 0, bridges: Sequence[int] | Non
         recs = [_crossing(truth, paper.sensors(), seed=road_seed, approach=approach, speed=v)
                 for v in (20.0, 24.0)]
         cal48 = _calibrate_runs(truth, recs, (4, 4), approach, road_seed, seed, s, budgets,
-                                n_jobs, callback, population, refine)
+                                n_jobs, callback, population, refine, method)
         cal3 = _calibrate_runs(truth, recs, (1, 1), approach, road_seed, seed, s, budgets,
-                               n_jobs, callback, population, refine)
+                               n_jobs, callback, population, refine, method)
         row = [f"#{b + 1}", f"{paper.ZONE_SPREADS[b] * 100:g}"]
         for label, cal in (("48", cal48), ("3", cal3)):
             ident = _mfi(cal.bridge, recs[0])
@@ -345,7 +348,7 @@ def case_5_3(*, quick: bool = False, seed: int = 0, bridges: Sequence[int] | Non
 
 
 def _calibrate_runs(truth, recs, zones, approach, road_seed, seed, s, budgets, n_jobs,
-                    callback, population=None, refine="lm") -> Calibration:
+                    callback, population=None, refine="lm", method="ce") -> Calibration:
     nzx, nzy = zones
     start = paper.slab_bridge(zones=zones)
     start = _start(start, ("E_x", "E_y", "mu"))
@@ -355,7 +358,7 @@ def _calibrate_runs(truth, recs, zones, approach, road_seed, seed, s, budgets, n
                          s["population"][0],
                          min(100, 10 * nzx * nzy) if nzx * nzy > 1 else s["population"][1]),
                      convergences=s["convergences"], max_evals=budgets, n_jobs=n_jobs,
-                     callback=callback, refine=refine)
+                     callback=callback, refine=refine, method=method)
 
 
 def compare_methods(*, quick: bool = False, seed: int = 0, budget: int | None = None,
