@@ -11,7 +11,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 import bwim
@@ -146,6 +146,7 @@ def test_hdf5_record_structure_fuzzed(record_file, data):
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(pos=st.lists(st.integers(0, 10**6), min_size=1, max_size=8),
        byte=st.integers(0, 255))
+@example(pos=[112], byte=0)  # found by this test: a damaged object header (KeyError)
 def test_hdf5_record_bytes_fuzzed(record_file, pos, byte):
     """Bytes of the file overwritten (a damaged disk or transfer)."""
     raw = bytearray(record_file.read_bytes())

@@ -58,13 +58,13 @@ def h5_reader(path: str | os.PathLike, *fmts: str) -> Iterator[h5py.File]:
         raise InputError(f"{p}: is a folder, not a file")
     try:
         f = h5py.File(p, "r")
-    except (OSError, ValueError, RuntimeError):
+    except (OSError, ValueError, RuntimeError, KeyError):
         raise InputError(f"{p}: not an HDF5 file (or it cannot be read)") from None
     with f:
         try:
             fmt = f.attrs.get("bwim_format")
             raw_version = f.attrs.get("bwim_format_version", 0)
-        except (OSError, ValueError, TypeError, RuntimeError):
+        except (OSError, ValueError, TypeError, RuntimeError, KeyError):
             raise InputError(f"{p}: damaged HDF5 attributes") from None
         if isinstance(fmt, bytes):
             fmt = fmt.decode("utf-8", "replace")
