@@ -6,8 +6,24 @@ The public API is listed in ``__all__``; units, axes and signs are in
 
 from importlib.metadata import PackageNotFoundError, version
 
-from bwim import conventions, dynamics, errors, fe, mfi, optimize, paper, vehicles, wim
+from bwim import (
+    accuracy,
+    conventions,
+    detect,
+    dynamics,
+    errors,
+    fe,
+    mfi,
+    optimize,
+    paper,
+    plausibility,
+    site,
+    vehicles,
+    wim,
+)
+from bwim.accuracy import assess
 from bwim.calibration import Calibration, calibrate
+from bwim.detect import Detection, detect_axles, detect_from_strain
 from bwim.dynamics import simulate
 from bwim.errors import BwimError, InputError, NumericalError
 from bwim.fe import Bridge, Girder, Modes, Supports, composite_section, grid_lines
@@ -16,12 +32,17 @@ from bwim.mfi import ForceIdentification, force_errors, identify_forces
 from bwim.records import Passage, Record, SimulationSettings, Truth
 from bwim.road import RoadProfile
 from bwim.sensors import Sensor, SensorKind
+from bwim.site import EventWeighing, SiteCalibration, SiteSetup, calibrate_site, weigh_event
 from bwim.vehicles import HalfCar, MovingForces, SprungMass, TractorSemitrailer, Truck3D
 from bwim.wim import (
     InfluenceLine,
+    MultiRunCalibration,
     StaticWeights,
+    Weighing,
     calibrate_influence_line,
+    calibrate_lines,
     model_influence_line,
+    weigh,
     weigh_static,
 )
 
@@ -34,6 +55,8 @@ __all__ = [
     "Bridge",
     "BwimError",
     "Calibration",
+    "Detection",
+    "EventWeighing",
     "ForceIdentification",
     "Girder",
     "HalfCar",
@@ -41,6 +64,7 @@ __all__ = [
     "InputError",
     "Modes",
     "MovingForces",
+    "MultiRunCalibration",
     "NumericalError",
     "Passage",
     "PointLoad",
@@ -49,17 +73,27 @@ __all__ = [
     "Sensor",
     "SensorKind",
     "SimulationSettings",
+    "SiteCalibration",
+    "SiteSetup",
     "SprungMass",
     "StaticWeights",
     "Supports",
     "TractorSemitrailer",
     "Truck3D",
     "Truth",
+    "Weighing",
     "__version__",
+    "accuracy",
+    "assess",
     "calibrate",
     "calibrate_influence_line",
+    "calibrate_lines",
+    "calibrate_site",
     "composite_section",
     "conventions",
+    "detect",
+    "detect_axles",
+    "detect_from_strain",
     "dynamics",
     "errors",
     "fe",
@@ -70,8 +104,12 @@ __all__ = [
     "model_influence_line",
     "optimize",
     "paper",
+    "plausibility",
     "simulate",
+    "site",
     "vehicles",
+    "weigh",
+    "weigh_event",
     "weigh_static",
     "wim",
 ]
