@@ -11,6 +11,10 @@ Contract
   sensor, §1.5), against the measured (dynamic) strains.
 * :class:`DynamicObjective` (step 2) simulates the calibration crossing on the trial
   bridge (vehicle–bridge interaction over the given road) and compares total strains.
+  A trial whose stiffness equals a recent trial's and whose masses are all that trial's
+  times one factor c (e.g. a single μ zone) reuses its modes, scaled exactly
+  (:func:`bwim.fe.modal.scaled_modes`: ω × c^(−½), shapes × c^(−½)); otherwise the
+  modes are solved for.
 * :meth:`StaticObjective.jacobian` is the residuals' Jacobian by the adjoint method
   (THEORY §1.5).
 * Both return, per trial, the squared misfit of each **part**: the channels of one
@@ -36,7 +40,7 @@ from bwim.dynamics.crossing import DEFAULT_APPROACH, prepare_crossing, run_cross
 from bwim.errors import InputError, NumericalError
 from bwim.fe.bridge import Bridge
 from bwim.fe.influence import static_sensitivities
-from bwim.fe.modal import select_modes
+from bwim.fe.modal import Modes, scaled_modes, select_modes
 from bwim.records import Record, SimulationSettings
 from bwim.road import RoadProfile
 from bwim.vehicles import Vehicle
@@ -331,6 +335,10 @@ class StaticObjective:
         return self.parts(theta)
 
 
+#: Stiffnesses whose modes a :class:`DynamicObjective` remembers for mass-only trials.
+MODE_CACHE = 4
+
+
 class DynamicObjective:
     """Dynamic misfit of trial parameters: the calibration crossings re-simulated
     (channel ``weights`` as in :class:`StaticObjective`).
@@ -371,13 +379,31 @@ class DynamicObjective:
         # K fixed (mass stage): the influence surfaces are computed once
         self._influence = (None if stiff else
                            [base.influence(rec.sensors) for rec in self.records])
+        self._modes: list[tuple[np.ndarray, np.ndarray, Modes]] = []
+
+    def modes(self, bridge: Bridge) -> Modes:
+        """The trial's ``n_modes`` modes: a recent trial's scaled when only a uniform mass
+        factor separates them (see module docstring), else solved (and remembered)."""
+        params = bridge.params
+        k = np.concatenate([params[n] for n in Bridge.STIFFNESS_FAMILIES if n in params])
+        m = np.concatenate([params[n] for n in Bridge.MASS_FAMILIES if n in params])
+        for i, (k_ref, m_ref, modes) in enumerate(self._modes):
+            if np.array_equal(k, k_ref):
+                c = float(m[0] / m_ref[0])
+                if np.allclose(m, c * m_ref, rtol=4 * np.finfo(float).eps, atol=0.0):
+                    self._modes.insert(0, self._modes.pop(i))
+                    return modes if c == 1.0 else scaled_modes(modes, c)
+        modes = bridge.modes(self.n_modes)
+        self._modes = [(k, m, modes), *self._modes[:MODE_CACHE - 1]]
+        return modes
 
     def predicted(self, theta: np.ndarray) -> list[np.ndarray]:
         bridge = self.space.bridge(theta, self.base)
+        modes = self.modes(bridge)
         out = []
         for k, (prep, rec) in enumerate(zip(self._prepared, self.records, strict=True)):
             inf = None if self._influence is None else self._influence[k]
-            sim = run_crossing(prep, bridge, n_modes=self.n_modes, influence=inf, warn=False)
+            sim = run_crossing(prep, bridge, modes=modes, influence=inf, warn=False)
             out.append(_on_times(sim, rec.time))
         return out
 
