@@ -238,6 +238,91 @@ def _channel_weights(weights, records) -> list[np.ndarray]:
     return out
 
 
+def _factored_loads(dofs, vals, t_idx, shape) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+    """The load matrix ``L`` (rows: time steps; a wheel at step ``t_idx[p]`` loads
+    ``dofs[p]`` with ``vals[p]``) as ``A @ R``, fewer non-zeros for the same product.
+
+    The wheels that load the same DOF set (one element, one wheel line) have shape-function
+    rows in a space of low dimension (a wheel line crosses a bicubic element along a
+    cubic); an SVD of each such group gives ``R``'s rows and ``A``'s coefficients,
+    exact to round-off (singular values below ``k ε σ₁`` are dropped: checked).  ``L @ g``
+    then costs the non-zeros of ``A`` and ``R`` instead of those of ``L``.
+    """
+    k = dofs.shape[1]
+    L = sp.csr_matrix((vals.ravel(), (np.repeat(t_idx, k), dofs.ravel())), shape=shape)
+    if t_idx.size == 0:
+        return sp.identity(shape[0], format="csr"), L
+    uniq, inv = np.unique(dofs, axis=0, return_inverse=True)
+    inv = inv.ravel()
+    order = np.argsort(inv, kind="stable")
+    bounds = np.searchsorted(inv[order], np.arange(uniq.shape[0] + 1))
+    a_r, a_c, a_v, r_r, r_c, r_v = [], [], [], [], [], []
+    n_r = 0
+    for g in range(uniq.shape[0]):
+        sel = order[bounds[g]:bounds[g + 1]]
+        u, sv, vt = np.linalg.svd(vals[sel], full_matrices=False)
+        r = max(int(np.count_nonzero(sv > k * np.finfo(float).eps * sv[0])), 1)
+        a_r.append(np.repeat(t_idx[sel], r))
+        a_c.append(np.tile(np.arange(n_r, n_r + r), sel.size))
+        a_v.append((u[:, :r] * sv[:r]).ravel())
+        r_r.append(np.repeat(np.arange(n_r, n_r + r), k))
+        r_c.append(np.tile(uniq[g], r))
+        r_v.append(vt[:r].ravel())
+        n_r += r
+    cat = np.concatenate
+    A = sp.csr_matrix((cat(a_v), (cat(a_r), cat(a_c))), shape=(shape[0], n_r))
+    R = sp.csr_matrix((cat(r_v), (cat(r_r), cat(r_c))), shape=(n_r, shape[1]))
+    scale = max(abs(L).max(), np.finfo(float).tiny)
+    if A.nnz + R.nnz >= L.nnz or abs(A @ R - L).max() > 1e-12 * scale:
+        return sp.identity(shape[0], format="csr"), L
+    return A, R
+
+
+def _stiffness_units(bridge: Bridge) -> tuple[np.ndarray, np.ndarray] | None:
+    """Banded K as a combination of a few constant matrices: the stiffness coefficients
+    (set, part, element) that are equal for every parameter value (e.g. the elements of
+    one zone) form a group G, and ``K = Σ_G c_G K_G`` with ``K_G`` assembled once.
+
+    Groups are the coefficient entries equal at the start and at two random draws of
+    every stiffness parameter; a third draw checks ``Σ_G c_G K_G`` against the assembler
+    (relative 1e-12), else None (assemble every trial).  Returns (one entry index per
+    group, the stacked ``K_G``).
+    """
+    model = bridge.model
+    p0 = bridge.params
+    rng = np.random.default_rng(0)
+
+    def draw():
+        return {**p0, **{n: v * rng.uniform(0.5, 2.0, v.shape) for n, v in p0.items()
+                         if n in Bridge.STIFFNESS_FAMILIES}}
+
+    def flat(params):
+        return np.concatenate([c.ravel() for c in model.stiffness_coefficients(params)])
+
+    samples = np.stack([flat(p0), flat(draw()), flat(draw())], axis=1)
+    _, first, inv = np.unique(samples, axis=0, return_index=True, return_inverse=True)
+    inv = inv.ravel()
+    if first.size > 64:
+        return None
+    shapes = [c.shape for c in model.stiffness_coefficients(p0)]
+    units = []
+    for g in range(first.size):
+        ind = (inv == g).astype(float)
+        parts, i = [], 0
+        for shp in shapes:
+            k = int(np.prod(shp))
+            parts.append(ind[i:i + k].reshape(shp))
+            i += k
+        units.append(model.assembler.stiffness_banded(parts))
+    units = np.stack(units)
+    check = draw()
+    ref = model.assembler.stiffness_banded(model.stiffness_coefficients(check))
+    got = np.tensordot(flat(check)[first], units, 1)
+    if np.abs(got - ref).max() > 1e-12 * np.abs(ref).max():
+        return None
+    return first, units
+
+
 class StaticObjective:
     """Pseudo-static misfit of trial stiffness parameters (see module docstring).
 
@@ -269,30 +354,40 @@ class StaticObjective:
             t_idx = np.repeat(np.arange(x.shape[0]), x.shape[1])[on]
             P = np.tile(static_wheels, x.shape[0])[on]
             rows = model.point_rows(x.ravel()[on], None if y is None else y.ravel()[on])
-            L = sp.csr_matrix(
-                ((rows.vals * P[:, None]).ravel(),
-                 (np.repeat(t_idx, rows.dofs.shape[1]), rows.dofs.ravel())),
-                shape=(x.shape[0], self.base.n_free),
-            )
             self._sensor_rows.append(S)
-            self._loads.append(L)
+            self._loads.append(_factored_loads(rows.dofs, rows.vals * P[:, None], t_idx,
+                                               (x.shape[0], self.base.n_free)))
             self._data.append(rec.data)
             self._parts.append(measurement_points(rec.sensors)[0])
         self.n_parts = max(int(p.max()) for p in self._parts) + 1
+        self._params0 = self.base.params
+        self._units = _stiffness_units(self.base)
+
+    def _stiffness_banded(self, theta: np.ndarray) -> np.ndarray:
+        """Lower-banded K of a trial: ``Σ_G c_G K_G`` over the coefficient groups when
+        :func:`_stiffness_units` found them, else the assembler's."""
+        theta = np.asarray(theta, dtype=float)
+        if theta.shape != (self.space.n,) or not (np.all(np.isfinite(theta))
+                                                  and np.all(theta > 0)):
+            self.space.bridge(theta, self.base)  # raises the bridge's own InputError
+        model = self.base.model
+        coefs = model.stiffness_coefficients({**self._params0, **self.space.split(theta)})
+        if self._units is None:
+            return model.assembler.stiffness_banded(coefs)
+        first, units = self._units
+        return np.tensordot(np.concatenate([c.ravel() for c in coefs])[first], units, 1)
 
     def predicted(self, theta: np.ndarray) -> list[np.ndarray]:
         """Static readings of the trial model for each record, each (n_t, n_s)."""
-        bridge = self.space.bridge(theta, self.base)
-        model = bridge.model
-        ab = model.assembler.stiffness_banded(model.stiffness_coefficients(bridge.params))
+        ab = self._stiffness_banded(theta)
         try:
             c = sla.cholesky_banded(ab, lower=True, check_finite=False)
         except np.linalg.LinAlgError:
             raise NumericalError("trial stiffness is not positive definite") from None
         out = []
-        for S, L in zip(self._sensor_rows, self._loads, strict=True):
+        for S, (A, R) in zip(self._sensor_rows, self._loads, strict=True):
             g = sla.cho_solve_banded((c, True), S.T, check_finite=False)
-            out.append(np.asarray(L @ g))
+            out.append(A @ (R @ g))
         return out
 
     def parts(self, theta: np.ndarray) -> np.ndarray:
