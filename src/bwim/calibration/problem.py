@@ -375,7 +375,8 @@ class StaticObjective:
         if self._units is None:
             return model.assembler.stiffness_banded(coefs)
         first, units = self._units
-        return np.tensordot(np.concatenate([c.ravel() for c in coefs])[first], units, 1)
+        flat = np.concatenate([c.ravel() for c in coefs])[first]
+        return (flat @ units.reshape(first.size, -1)).reshape(units.shape[1:])
 
     def predicted(self, theta: np.ndarray) -> list[np.ndarray]:
         """Static readings of the trial model for each record, each (n_t, n_s)."""
@@ -395,7 +396,9 @@ class StaticObjective:
         out = np.zeros(self.n_parts)
         for pred, d, part, w in zip(self.predicted(theta), self._data, self._parts,
                                     self.weights, strict=True):
-            np.add.at(out, part, w * ((pred - d) ** 2).sum(axis=0))
+            r = pred - d
+            out += np.bincount(part, weights=w * np.einsum("ts,ts->s", r, r),
+                               minlength=self.n_parts)
         return out
 
     def residuals(self, theta: np.ndarray) -> np.ndarray:
