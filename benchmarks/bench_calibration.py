@@ -26,6 +26,7 @@ from benchmarks._timing import print_table
 from bwim import paper
 from bwim.calibration.problem import DynamicObjective, ParameterSpace, StaticObjective
 from bwim.dynamics import simulate
+from bwim.dynamics.crossing import prepare_crossing, run_crossing
 
 TARGET_STATIC = 1.3  #: × the floor
 TARGET_DYNAMIC = 0.025  #: s per evaluation
@@ -75,8 +76,9 @@ def _setup(approach: float = paper.APPROACH):
     return truth, start, rec, road
 
 
-def run_objectives(*, repeat: int = 7):
-    _, start, rec, road = _setup()
+def run_objectives(*, approach: float = paper.APPROACH, repeat: int = 7,
+                   number: int = 200):
+    _, start, rec, road = _setup(approach)
     rng = np.random.default_rng(0)
     rows = []
 
@@ -94,7 +96,7 @@ def run_objectives(*, repeat: int = 7):
         return sla.cho_solve_banded((c, True), St, check_finite=False)
 
     t_obj, t_floor = _interleaved(
-        [lambda: static(thetas[next(it) % 16]), floor_static], repeat=repeat, number=200)
+        [lambda: static(thetas[next(it) % 16]), floor_static], repeat=repeat, number=number)
     ratio = float(np.median(np.array(t_obj) / np.array(t_floor)))
     rows.append(["static (E_x, E_y)", f"{np.median(t_obj) * 1e3:.3f}",
                  f"Cholesky + 18 solves {np.median(t_floor) * 1e3:.3f}", f"{ratio:.2f}",
@@ -104,12 +106,19 @@ def run_objectives(*, repeat: int = 7):
     for names, label in ((("mu",), "dynamic, mass stage (μ)"),
                          (("E_x", "E_y", "mu"), "dynamic, joint (E_x, E_y, μ)")):
         space = ParameterSpace(start, names)
-        dyn = DynamicObjective(space, [rec], paper.truck(), road, start,
-                               approach=paper.APPROACH)
+        dyn = DynamicObjective(space, [rec], paper.truck(), road, start, approach=approach)
         thetas = [space.vector() * rng.uniform(0.8, 1.2, space.n) for _ in range(8)]
+        # the fast path (modes scaled from the previous trial) against a plain simulation
+        dyn(thetas[1])
+        prep = prepare_crossing(start, paper.truck(), speed=paper.SPEED, lane=paper.LANE,
+                                sensors=paper.sensors(), road=road, approach=approach,
+                                sampling_rate=rec.sampling_rate, tail=rec.settings.tail)
+        ref = run_crossing(prep, space.bridge(thetas[0], start), n_modes=dyn.n_modes).data
+        err = np.abs(dyn.predicted(thetas[0])[0] - ref).max() / np.abs(ref).max()
+        assert err < 1e-12, f"objective and simulation differ by {err:.1e}"
         trial = space.bridge(thetas[0], start)
         modes = trial.modes(dyn.n_modes)
-        n_t = round((paper.APPROACH + start.length + paper.truck().length) / paper.SPEED
+        n_t = round((approach + start.length + paper.truck().length) / paper.SPEED
                     * 1000) + 1
         f = np.random.default_rng(1).standard_normal((n_t, modes.n))
         zeta = start.rayleigh.ratio(modes.omega)
