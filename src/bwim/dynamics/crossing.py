@@ -145,13 +145,14 @@ class PreparedCrossing:
     def influence_on_deck(self, inf: InfluenceSurfaces) -> np.ndarray:
         """``inf`` at every on-deck contact (the steps and contacts of ``crossing.on``
         in C order), shape (n_on, n_sensors); the last surfaces' values are kept."""
-        memo = self._on_deck
-        if memo.get("inf") is not inf:
-            c = self.crossing
-            yy = np.broadcast_to(c.y, c.x.shape)[c.on] if self.structure.is_plate else None
-            memo.clear()
-            memo["inf"], memo["g"] = inf, inf.at(c.x[c.on], yy)
-        return memo["g"]
+        last = self._on_deck.get("last")  # one (surfaces, values) pair, replaced whole
+        if last is not None and last[0] is inf:
+            return last[1]
+        c = self.crossing
+        yy = np.broadcast_to(c.y, c.x.shape)[c.on] if self.structure.is_plate else None
+        g = inf.at(c.x[c.on], yy)
+        self._on_deck["last"] = (inf, g)
+        return g
 
 
 def prepare_crossing(
