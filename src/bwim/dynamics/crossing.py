@@ -454,8 +454,7 @@ def _static_correction(g, on, F, psi, s_modal, modes):
     if not on.any():
         return out
     k_on, c_on = np.nonzero(on)
-    modal_static = np.einsum("sm,m,pm->ps", s_modal, 1.0 / modes.omega**2,
-                             psi[k_on, :, c_on])
+    modal_static = psi[k_on, :, c_on] @ (s_modal / modes.omega**2).T
     term = F[k_on, c_on][:, None] * (g - modal_static)
     for c in range(on.shape[1]):  # each step once per contact: contacts added in order
         sel = c_on == c
