@@ -11,6 +11,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from benchmarks import (  # noqa: E402
+    bench_calibration,
     bench_fe,
     bench_mfi,
     bench_mismatch,
@@ -31,6 +32,7 @@ def main() -> None:
     bench_wim.main()
     bench_multirun.main()
     bench_optimize.main()
+    bench_calibration.main()
     bench_testday.main()
     bench_site.main()
     bench_mismatch.main()

@@ -21,3 +21,12 @@ def test_mfi_benchmark_smoke():
 
     rows = bench_mfi.run(durations=(0.3,), batch_durations=(0.02,), repeat=1)
     assert len(rows) == 2 and rows[1][5].endswith("×")
+
+
+def test_calibration_benchmark_smoke():
+    """The calibration benchmark runs; it checks the dynamic objective (scaled modes)
+    against a plain simulation of the same trial before timing."""
+    from benchmarks import bench_calibration
+
+    rows = bench_calibration.run_objectives(approach=5.0, repeat=1, number=2)
+    assert [r[0].split()[0] for r in rows] == ["static", "dynamic,", "dynamic,"]

@@ -94,3 +94,31 @@ def test_dynamic_objective_takes_the_records_settings(record):
     assert np.abs(ref).max() > 0
     np.testing.assert_array_equal(given.residuals(theta), ref)
     np.testing.assert_array_equal(derived.residuals(theta), ref)
+
+
+def test_dynamic_objective_reuses_modes_only_for_a_uniform_mass_factor():
+    """Reference: the same crossing simulated on each trial bridge with its own modes
+    (eigsh, ``bwim.simulate``'s path).  One μ zone: trials after the first scale the first
+    trial's modes (fe/modal.py derivation), equal to round-off; two μ zones with unequal
+    factors must not be scaled (they would differ by percents)."""
+    from bwim.dynamics.crossing import prepare_crossing, run_crossing
+
+    for zones, factors in (((1, 1), [(1.1,), (0.8,), (1.3,)]),
+                           ((2, 1), [(1.1, 1.1), (0.9, 1.2)])):
+        bridge = paper.slab_bridge(zones=zones)
+        rec = bwim.simulate(bridge, paper.truck(), speed=20.0, lane=2.0,
+                            sensors=paper.sensors(), approach=0.0, sampling_rate=250.0)
+        space = ParameterSpace(bridge, ("mu",))
+        obj = DynamicObjective(space, [rec], paper.truck(), None, bridge, n_modes=6)
+        prep = prepare_crossing(bridge, paper.truck(), speed=20.0, lane=2.0,
+                                sensors=paper.sensors(), approach=0.0,
+                                sampling_rate=rec.sampling_rate, tail=rec.settings.tail)
+        for f in factors:
+            theta = space.vector() * np.array(f)
+            trial = space.bridge(theta)
+            ref = run_crossing(prep, trial, n_modes=6, warn=False).data
+            got = obj.predicted(theta)[0]
+            err = np.abs(got - ref).max() / np.abs(ref).max()
+            assert err < 1e-13  # measured 7.6e-15 (scaled), 0 (solved)
+            if zones != (1, 1):  # solved, not scaled
+                np.testing.assert_array_equal(obj.modes(trial).omega, trial.modes(6).omega)

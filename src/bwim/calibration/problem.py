@@ -11,6 +11,10 @@ Contract
   sensor, §1.5), against the measured (dynamic) strains.
 * :class:`DynamicObjective` (step 2) simulates the calibration crossing on the trial
   bridge (vehicle–bridge interaction over the given road) and compares total strains.
+  A trial whose stiffness equals a recent trial's and whose masses are all that trial's
+  times one factor c (e.g. a single μ zone) reuses its modes, scaled exactly
+  (:func:`bwim.fe.modal.scaled_modes`: ω × c^(−½), shapes × c^(−½)); otherwise the
+  modes are solved for.
 * :meth:`StaticObjective.jacobian` is the residuals' Jacobian by the adjoint method
   (THEORY §1.5).
 * Both return, per trial, the squared misfit of each **part**: the channels of one
@@ -36,7 +40,7 @@ from bwim.dynamics.crossing import DEFAULT_APPROACH, prepare_crossing, run_cross
 from bwim.errors import InputError, NumericalError
 from bwim.fe.bridge import Bridge
 from bwim.fe.influence import static_sensitivities
-from bwim.fe.modal import select_modes
+from bwim.fe.modal import Modes, scaled_modes, select_modes
 from bwim.records import Record, SimulationSettings
 from bwim.road import RoadProfile
 from bwim.vehicles import Vehicle
@@ -234,6 +238,91 @@ def _channel_weights(weights, records) -> list[np.ndarray]:
     return out
 
 
+def _factored_loads(dofs, vals, t_idx, shape) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+    """The load matrix ``L`` (rows: time steps; a wheel at step ``t_idx[p]`` loads
+    ``dofs[p]`` with ``vals[p]``) as ``A @ R``, fewer non-zeros for the same product.
+
+    The wheels that load the same DOF set (one element, one wheel line) have shape-function
+    rows in a space of low dimension (a wheel line crosses a bicubic element along a
+    cubic); an SVD of each such group gives ``R``'s rows and ``A``'s coefficients,
+    exact to round-off (singular values below ``k ε σ₁`` are dropped: checked).  ``L @ g``
+    then costs the non-zeros of ``A`` and ``R`` instead of those of ``L``.
+    """
+    k = dofs.shape[1]
+    L = sp.csr_matrix((vals.ravel(), (np.repeat(t_idx, k), dofs.ravel())), shape=shape)
+    if t_idx.size == 0:
+        return sp.identity(shape[0], format="csr"), L
+    uniq, inv = np.unique(dofs, axis=0, return_inverse=True)
+    inv = inv.ravel()
+    order = np.argsort(inv, kind="stable")
+    bounds = np.searchsorted(inv[order], np.arange(uniq.shape[0] + 1))
+    a_r, a_c, a_v, r_r, r_c, r_v = [], [], [], [], [], []
+    n_r = 0
+    for g in range(uniq.shape[0]):
+        sel = order[bounds[g]:bounds[g + 1]]
+        u, sv, vt = np.linalg.svd(vals[sel], full_matrices=False)
+        r = max(int(np.count_nonzero(sv > k * np.finfo(float).eps * sv[0])), 1)
+        a_r.append(np.repeat(t_idx[sel], r))
+        a_c.append(np.tile(np.arange(n_r, n_r + r), sel.size))
+        a_v.append((u[:, :r] * sv[:r]).ravel())
+        r_r.append(np.repeat(np.arange(n_r, n_r + r), k))
+        r_c.append(np.tile(uniq[g], r))
+        r_v.append(vt[:r].ravel())
+        n_r += r
+    cat = np.concatenate
+    A = sp.csr_matrix((cat(a_v), (cat(a_r), cat(a_c))), shape=(shape[0], n_r))
+    R = sp.csr_matrix((cat(r_v), (cat(r_r), cat(r_c))), shape=(n_r, shape[1]))
+    scale = max(abs(L).max(), np.finfo(float).tiny)
+    if A.nnz + R.nnz >= L.nnz or abs(A @ R - L).max() > 1e-12 * scale:
+        return sp.identity(shape[0], format="csr"), L
+    return A, R
+
+
+def _stiffness_units(bridge: Bridge) -> tuple[np.ndarray, np.ndarray] | None:
+    """Banded K as a combination of a few constant matrices: the stiffness coefficients
+    (set, part, element) that are equal for every parameter value (e.g. the elements of
+    one zone) form a group G, and ``K = Σ_G c_G K_G`` with ``K_G`` assembled once.
+
+    Groups are the coefficient entries equal at the start and at two random draws of
+    every stiffness parameter; a third draw checks ``Σ_G c_G K_G`` against the assembler
+    (relative 1e-12), else None (assemble every trial).  Returns (one entry index per
+    group, the stacked ``K_G``).
+    """
+    model = bridge.model
+    p0 = bridge.params
+    rng = np.random.default_rng(0)
+
+    def draw():
+        return {**p0, **{n: v * rng.uniform(0.5, 2.0, v.shape) for n, v in p0.items()
+                         if n in Bridge.STIFFNESS_FAMILIES}}
+
+    def flat(params):
+        return np.concatenate([c.ravel() for c in model.stiffness_coefficients(params)])
+
+    samples = np.stack([flat(p0), flat(draw()), flat(draw())], axis=1)
+    _, first, inv = np.unique(samples, axis=0, return_index=True, return_inverse=True)
+    inv = inv.ravel()
+    if first.size > 64:
+        return None
+    shapes = [c.shape for c in model.stiffness_coefficients(p0)]
+    units = []
+    for g in range(first.size):
+        ind = (inv == g).astype(float)
+        parts, i = [], 0
+        for shp in shapes:
+            k = int(np.prod(shp))
+            parts.append(ind[i:i + k].reshape(shp))
+            i += k
+        units.append(model.assembler.stiffness_banded(parts))
+    units = np.stack(units)
+    check = draw()
+    ref = model.assembler.stiffness_banded(model.stiffness_coefficients(check))
+    got = np.tensordot(flat(check)[first], units, 1)
+    if np.abs(got - ref).max() > 1e-12 * np.abs(ref).max():
+        return None
+    return first, units
+
+
 class StaticObjective:
     """Pseudo-static misfit of trial stiffness parameters (see module docstring).
 
@@ -265,30 +354,41 @@ class StaticObjective:
             t_idx = np.repeat(np.arange(x.shape[0]), x.shape[1])[on]
             P = np.tile(static_wheels, x.shape[0])[on]
             rows = model.point_rows(x.ravel()[on], None if y is None else y.ravel()[on])
-            L = sp.csr_matrix(
-                ((rows.vals * P[:, None]).ravel(),
-                 (np.repeat(t_idx, rows.dofs.shape[1]), rows.dofs.ravel())),
-                shape=(x.shape[0], self.base.n_free),
-            )
             self._sensor_rows.append(S)
-            self._loads.append(L)
+            self._loads.append(_factored_loads(rows.dofs, rows.vals * P[:, None], t_idx,
+                                               (x.shape[0], self.base.n_free)))
             self._data.append(rec.data)
             self._parts.append(measurement_points(rec.sensors)[0])
         self.n_parts = max(int(p.max()) for p in self._parts) + 1
+        self._params0 = self.base.params
+        self._units = _stiffness_units(self.base)
+
+    def _stiffness_banded(self, theta: np.ndarray) -> np.ndarray:
+        """Lower-banded K of a trial: ``Σ_G c_G K_G`` over the coefficient groups when
+        :func:`_stiffness_units` found them, else the assembler's."""
+        theta = np.asarray(theta, dtype=float)
+        if theta.shape != (self.space.n,) or not (np.all(np.isfinite(theta))
+                                                  and np.all(theta > 0)):
+            self.space.bridge(theta, self.base)  # raises the bridge's own InputError
+        model = self.base.model
+        coefs = model.stiffness_coefficients({**self._params0, **self.space.split(theta)})
+        if self._units is None:
+            return model.assembler.stiffness_banded(coefs)
+        first, units = self._units
+        flat = np.concatenate([c.ravel() for c in coefs])[first]
+        return (flat @ units.reshape(first.size, -1)).reshape(units.shape[1:])
 
     def predicted(self, theta: np.ndarray) -> list[np.ndarray]:
         """Static readings of the trial model for each record, each (n_t, n_s)."""
-        bridge = self.space.bridge(theta, self.base)
-        model = bridge.model
-        ab = model.assembler.stiffness_banded(model.stiffness_coefficients(bridge.params))
+        ab = self._stiffness_banded(theta)
         try:
             c = sla.cholesky_banded(ab, lower=True, check_finite=False)
         except np.linalg.LinAlgError:
             raise NumericalError("trial stiffness is not positive definite") from None
         out = []
-        for S, L in zip(self._sensor_rows, self._loads, strict=True):
+        for S, (A, R) in zip(self._sensor_rows, self._loads, strict=True):
             g = sla.cho_solve_banded((c, True), S.T, check_finite=False)
-            out.append(np.asarray(L @ g))
+            out.append(A @ (R @ g))
         return out
 
     def parts(self, theta: np.ndarray) -> np.ndarray:
@@ -296,7 +396,9 @@ class StaticObjective:
         out = np.zeros(self.n_parts)
         for pred, d, part, w in zip(self.predicted(theta), self._data, self._parts,
                                     self.weights, strict=True):
-            np.add.at(out, part, w * ((pred - d) ** 2).sum(axis=0))
+            r = pred - d
+            out += np.bincount(part, weights=w * np.einsum("ts,ts->s", r, r),
+                               minlength=self.n_parts)
         return out
 
     def residuals(self, theta: np.ndarray) -> np.ndarray:
@@ -329,6 +431,10 @@ class StaticObjective:
 
     def __call__(self, theta: np.ndarray) -> np.ndarray:
         return self.parts(theta)
+
+
+#: Stiffnesses whose modes a :class:`DynamicObjective` remembers for mass-only trials.
+MODE_CACHE = 4
 
 
 class DynamicObjective:
@@ -371,13 +477,31 @@ class DynamicObjective:
         # K fixed (mass stage): the influence surfaces are computed once
         self._influence = (None if stiff else
                            [base.influence(rec.sensors) for rec in self.records])
+        self._modes: list[tuple[np.ndarray, np.ndarray, Modes]] = []
+
+    def modes(self, bridge: Bridge) -> Modes:
+        """The trial's ``n_modes`` modes: a recent trial's scaled when only a uniform mass
+        factor separates them (see module docstring), else solved (and remembered)."""
+        params = bridge.params
+        k = np.concatenate([params[n] for n in Bridge.STIFFNESS_FAMILIES if n in params])
+        m = np.concatenate([params[n] for n in Bridge.MASS_FAMILIES if n in params])
+        for i, (k_ref, m_ref, modes) in enumerate(self._modes):
+            if np.array_equal(k, k_ref):
+                c = float(m[0] / m_ref[0])
+                if np.allclose(m, c * m_ref, rtol=4 * np.finfo(float).eps, atol=0.0):
+                    self._modes.insert(0, self._modes.pop(i))
+                    return modes if c == 1.0 else scaled_modes(modes, c)
+        modes = bridge.modes(self.n_modes)
+        self._modes = [(k, m, modes), *self._modes[:MODE_CACHE - 1]]
+        return modes
 
     def predicted(self, theta: np.ndarray) -> list[np.ndarray]:
         bridge = self.space.bridge(theta, self.base)
+        modes = self.modes(bridge)
         out = []
         for k, (prep, rec) in enumerate(zip(self._prepared, self.records, strict=True)):
             inf = None if self._influence is None else self._influence[k]
-            sim = run_crossing(prep, bridge, n_modes=self.n_modes, influence=inf, warn=False)
+            sim = run_crossing(prep, bridge, modes=modes, influence=inf, warn=False)
             out.append(_on_times(sim, rec.time))
         return out
 

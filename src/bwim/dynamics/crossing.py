@@ -43,9 +43,9 @@ from bwim.dynamics.vbi import (
     solve_iterative,
 )
 from bwim.errors import InputError, parse_enum, require_positive
-from bwim.fe.bridge import Bridge
+from bwim.fe.bridge import Bridge, RayleighDamping
 from bwim.fe.influence import InfluenceSurfaces
-from bwim.fe.modal import select_modes
+from bwim.fe.modal import Modes, check_sampling_rate, select_modes
 from bwim.limits import check_memory
 from bwim.records import Passage, Record, SimulationSettings, Truth, VBIConvergence
 from bwim.road import RoadProfile
@@ -134,6 +134,25 @@ class PreparedCrossing:
     def approach_state(self):
         """Vehicle states before the first wheel reaches the deck (coupled solver)."""
         return approach_phase(self.crossing, self.scheme)
+
+    @cached_property
+    def _on_deck(self) -> dict:
+        """Memo of the influence surfaces at the on-deck contacts, keyed by the
+        :class:`InfluenceSurfaces` object (one entry: a calibration of the mass passes the
+        same surfaces to every trial)."""
+        return {}
+
+    def influence_on_deck(self, inf: InfluenceSurfaces) -> np.ndarray:
+        """``inf`` at every on-deck contact (the steps and contacts of ``crossing.on``
+        in C order), shape (n_on, n_sensors); the last surfaces' values are kept."""
+        last = self._on_deck.get("last")  # one (surfaces, values) pair, replaced whole
+        if last is not None and last[0] is inf:
+            return last[1]
+        c = self.crossing
+        yy = np.broadcast_to(c.y, c.x.shape)[c.on] if self.structure.is_plate else None
+        g = inf.at(c.x[c.on], yy)
+        self._on_deck["last"] = (inf, g)
+        return g
 
 
 def prepare_crossing(
@@ -236,11 +255,16 @@ def run_crossing(
     max_iter: int = 50,
     influence: InfluenceSurfaces | None = None,
     warn: bool = True,
+    modes: Modes | None = None,
 ) -> Record:
     """Simulate a prepared crossing on ``bridge`` (same structure, any parameters).
 
     ``influence`` may pass the sensors' influence surfaces of this bridge's stiffness to
-    save their computation (calibration of the mass keeps K fixed).
+    save their computation (calibration of the mass keeps K fixed).  ``modes`` may pass
+    this bridge's modes when they are known without solving (e.g.
+    :func:`bwim.fe.modal.scaled_modes` of another trial with the same K); they replace the
+    truncation of ``n_modes`` / ``max_frequency`` and are checked against the sampling
+    rate.
     """
     method = parse_enum(VBIMethod, method, "method")
     if bridge.model is not prepared.structure:
@@ -254,10 +278,18 @@ def run_crossing(
                          slopes=rows.slopes * c_speed[None, :, None])
         modes = None
     else:
-        modes = select_modes(bridge, n_modes=n_modes, max_frequency=max_frequency,
-                             sampling_rate=fs)
+        if modes is None:
+            modes = select_modes(bridge, n_modes=n_modes, max_frequency=max_frequency,
+                                 sampling_rate=fs)
+            rayleigh = bridge.rayleigh
+        else:
+            if not isinstance(modes, Modes) or modes.shapes.shape[0] != bridge.n_free:
+                raise InputError("modes must be a bwim.fe.modal.Modes of this bridge")
+            check_sampling_rate(modes, fs)
+            rayleigh = (RayleighDamping.fit(bridge.damping_ratio, *modes.omega[:2])
+                        if modes.n >= 2 else bridge.rayleigh)
         psi, psi_x = _contact_modes(rows, crossing.on, modes.shapes, c_speed)
-        rep = ModalBridge(omega=modes.omega, zeta=bridge.rayleigh.ratio(modes.omega),
+        rep = ModalBridge(omega=modes.omega, zeta=rayleigh.ratio(modes.omega),
                           psi=psi, psi_x=psi_x)
 
     veh = crossing.vehicle
@@ -283,8 +315,8 @@ def run_crossing(
         data = sol.state.u @ s_modal.T
         if static_correction:
             inf = bridge.influence(prepared.sensors) if influence is None else influence
-            data += _static_correction(inf, crossing.x, crossing.y, crossing.on, F, psi,
-                                       s_modal, modes, bridge.is_plate)
+            data += _static_correction(prepared.influence_on_deck(inf), crossing.on, F, psi,
+                                       s_modal, modes)
     time = t[keep] - t[keep][0] if abs(t[keep][0]) < 1e-9 else t[keep]
     truths = []
     j = 0
@@ -395,30 +427,38 @@ def _contact_rows(bridge: Bridge, x, y, on):
 
 def _contact_modes(rows, on, phi, c_speed):
     """``psi[k, :, c] = Φᵀ N`` and ``psi_x`` (with the speed) at every step, gathered only
-    where the contact is on the deck (zeros elsewhere)."""
+    where the contact is on the deck (zeros elsewhere), on the steps of the on-deck
+    window (zeros before and after)."""
     n_t, n_c = on.shape
-    psi = np.zeros((n_t, n_c, phi.shape[1]))
+    n_m = phi.shape[1]
+    psi = np.zeros((n_t, n_m, n_c))
     psi_x = np.zeros_like(psi)
     if on.any():
-        ph = phi[rows.dofs[on]]  # (n_on, k, n_m)
-        psi[on] = np.einsum("pj,pjm->pm", rows.vals[on], ph)
-        psi_x[on] = np.einsum("pj,pjm->pm", rows.slopes[on], ph) * np.broadcast_to(
-            c_speed, on.shape)[on][:, None]
-    return psi.transpose(0, 2, 1), psi_x.transpose(0, 2, 1)
+        steps = np.flatnonzero(on.any(axis=1))
+        win = slice(steps[0], steps[-1] + 1)
+        on_w = on[win]
+        dofs, vals, slopes = rows.dofs[win][on_w], rows.vals[win][on_w], rows.slopes[win][on_w]
+        ph = phi[dofs]  # (n_on, k, n_m)
+        k_on, c_on = np.nonzero(on_w)
+        pw, pxw = psi[win], psi_x[win]
+        pw[k_on, :, c_on] = np.einsum("pj,pjm->pm", vals, ph)
+        pxw[k_on, :, c_on] = np.einsum("pj,pjm->pm", slopes, ph) * c_speed[c_on][:, None]
+    return psi, psi_x
 
 
-def _static_correction(inf, x, y, on, F, psi, s_modal, modes, is_plate):
+def _static_correction(g, on, F, psi, s_modal, modes):
     """Quasi-static response of the truncated modes (mode-acceleration correction), built
-    from the steps with the contact on the deck only (the force is zero elsewhere)."""
-    out = np.zeros((x.shape[0], len(inf.sensors)))
+    from the steps with the contact on the deck only (the force is zero elsewhere); ``g``
+    is the influence surfaces at the on-deck contacts, (n_on, n_s)."""
+    out = np.zeros((on.shape[0], s_modal.shape[0]))
     if not on.any():
         return out
-    yy = np.broadcast_to(y, x.shape)[on] if is_plate else None
-    g = inf.at(x[on], yy)  # (n_on, n_s)
     k_on, c_on = np.nonzero(on)
-    modal_static = np.einsum("sm,m,pm->ps", s_modal, 1.0 / modes.omega**2,
-                             psi[k_on, :, c_on])
-    np.add.at(out, k_on, F[k_on, c_on][:, None] * (g - modal_static))
+    modal_static = psi[k_on, :, c_on] @ (s_modal / modes.omega**2).T
+    term = F[k_on, c_on][:, None] * (g - modal_static)
+    for c in range(on.shape[1]):  # each step once per contact: contacts added in order
+        sel = c_on == c
+        out[k_on[sel]] += term[sel]
     return out
 
 

@@ -360,19 +360,19 @@ def _modal_steps(crossing, bridge: ModalBridge, scheme, start, k_out, y_state, v
     C = np.zeros((n_w, n, n))
     K = np.zeros((n_w, n, n))
     PCt, PKt = P * ct, P * kt
-    C[:, :n_m, :n_m] = np.einsum("wmc,wlc->wml", PCt, P)
-    K[:, :n_m, :n_m] = np.einsum("wmc,wlc->wml", PKt, P) + np.einsum("wmc,wlc->wml", PCt, Px)
+    Pt, Pxt = P.transpose(0, 2, 1), Px.transpose(0, 2, 1)
+    C[:, :n_m, :n_m] = PCt @ Pt
+    K[:, :n_m, :n_m] = PKt @ Pt + PCt @ Pxt
     idx = np.arange(n_m)
     C[:, idx, idx] += Cb
     K[:, idx, idx] += Kb
     f = np.zeros((n_w, n))
-    f[:, :n_m] = np.einsum("wmc,wc->wm", P, veh.static_forces + kt * r + ct * rd)
+    f[:, :n_m] = (P @ (veh.static_forces + kt * r + ct * rd)[:, :, None])[:, :, 0]
     if n_v:
-        C[:, :n_m, n_m:] = -np.einsum("wmc,vc->wmv", PCt, E)
-        K[:, :n_m, n_m:] = -np.einsum("wmc,vc->wmv", PKt, E)
+        C[:, :n_m, n_m:] = -(PCt @ E.T)
+        K[:, :n_m, n_m:] = -(PKt @ E.T)
         C[:, n_m:, :n_m] = np.transpose(C[:, :n_m, n_m:], (0, 2, 1))
-        K[:, n_m:, :n_m] = -(np.einsum("vc,wmc->wvm", E * kt, P)
-                             + np.einsum("vc,wmc->wvm", E * ct, Px))
+        K[:, n_m:, :n_m] = -((E * kt) @ Pt + (E * ct) @ Pxt)
         C[:, n_m:, n_m:] = veh.damping
         K[:, n_m:, n_m:] = veh.stiffness
         f[:, n_m:] = -(kt * r + ct * rd) @ E.T
@@ -393,7 +393,7 @@ def _modal_steps(crossing, bridge: ModalBridge, scheme, start, k_out, y_state, v
 
 
 #: Steps whose step matrices are built at once by :func:`_stepped` (bounds its memory).
-STEP_CHUNK = 256
+STEP_CHUNK = 128
 
 
 def _stepped(scheme: Newmark, M, C, K, f, s0) -> np.ndarray:
@@ -402,37 +402,46 @@ def _stepped(scheme: Newmark, M, C, K, f, s0) -> np.ndarray:
 
     The step ``s_{i+1} = T_i s_i + b_i`` (the same algebra as :func:`integrate`'s step
     operator: ``u_new = K_eff⁻¹ (f + M(a0 u + a2 v + a3 a) + C(a1 u + a4 v + a5 a))``, then
-    the velocity and acceleration updates) is built for a chunk of steps with batched
-    inverses, so that the loop over time is one small matrix product per step."""
+    ``a_new = a0 (u_new − u) − a2 v − a3 a`` and ``v_new = v + dt ((1 − γ) a + γ a_new)``)
+    is built for a chunk of steps with batched inverses, so that the loop over time is
+    one small matrix product per step.  With ``G_i = K_eff⁻¹ [a0 M + a1 C_i | a2 M + a4 C_i
+    | a3 M + a5 C_i | f_i]`` the rows of ``T_i`` are ``G_i``, ``dt γ (a0 G_i + A) + V``
+    and ``a0 G_i + A`` with constant ``A``, ``V``: one batched product per chunk."""
     n_w, n = f.shape
     g, dt = scheme.gamma, scheme.dt
     a0, a1, a2, a3, a4, a5 = (scheme.a0, scheme.a1, scheme.a2, scheme.a3, scheme.a4,
                               scheme.a5)
     eye = np.eye(n)
+    m = 3 * n + 1
     # augmented state [s; 1]: the constant term rides in T's last column, one product
     # per step
-    out = np.empty((n_w + 1, 3 * n + 1))
+    A = np.zeros((n, m))
+    A[:, :n], A[:, n:2 * n], A[:, 2 * n:3 * n] = -a0 * eye, -a2 * eye, -a3 * eye
+    V = np.zeros((n, m))
+    V[:, n:2 * n], V[:, 2 * n:3 * n] = eye, dt * (1 - g) * eye
+    out = np.empty((n_w + 1, m))
     out[0, :-1], out[:, -1] = s0, 1.0
-    for lo in range(0, n_w, STEP_CHUNK):
-        hi = min(lo + STEP_CHUNK, n_w)
-        Ci, Ki = C[lo:hi], K[lo:hi]
-        kinv = np.linalg.inv(scheme.effective(M, Ci, Ki))
-        hu = kinv @ (a0 * M + a1 * Ci)
-        hv = kinv @ (a2 * M + a4 * Ci)
-        ha = kinv @ (a3 * M + a5 * Ci)
-        au = a0 * (hu - eye)
-        av = a0 * hv - a2 * eye
-        aa = a0 * ha - a3 * eye
-        T = np.zeros((hi - lo, 3 * n + 1, 3 * n + 1))
-        T[:, :n, :-1] = np.concatenate([hu, hv, ha], axis=2)
-        T[:, n:2 * n, :-1] = np.concatenate([dt * g * au, eye + dt * g * av,
-                                             dt * ((1 - g) * eye + g * aa)], axis=2)
-        T[:, 2 * n:-1, :-1] = np.concatenate([au, av, aa], axis=2)
-        u_f = (kinv @ f[lo:hi, :, None])[:, :, 0]
-        T[:, :-1, -1] = np.concatenate([u_f, dt * g * a0 * u_f, a0 * u_f], axis=1)
-        T[:, -1, -1] = 1.0
+    chunk = max(min(STEP_CHUNK, n_w), 1)
+    B = np.empty((chunk, n, m))
+    T = np.empty((chunk, m, m))
+    T[:, -1, :-1], T[:, -1, -1] = 0.0, 1.0
+    for lo in range(0, n_w, chunk):
+        hi = min(lo + chunk, n_w)
+        Ci, Bw, Tw = C[lo:hi], B[:hi - lo], T[:hi - lo]
+        kinv = np.linalg.inv(scheme.effective(M, Ci, K[lo:hi]))
+        for j, (cm, cc) in enumerate(((a0, a1), (a2, a4), (a3, a5))):
+            blk = Bw[:, :, j * n:(j + 1) * n]
+            np.multiply(cc, Ci, out=blk)
+            blk += cm * M
+        Bw[:, :, -1] = f[lo:hi]
+        G, Ta, Tv = Tw[:, :n], Tw[:, 2 * n:3 * n], Tw[:, n:2 * n]
+        np.matmul(kinv, Bw, out=G)
+        np.multiply(a0, G, out=Ta)
+        Ta += A
+        np.multiply(dt * g, Ta, out=Tv)
+        Tv += V
         for i in range(lo, hi):
-            np.matmul(T[i - lo], out[i], out=out[i + 1])
+            np.matmul(Tw[i - lo], out[i], out=out[i + 1])
     return out[1:, :-1]
 
 

@@ -62,6 +62,14 @@ class RayleighDamping:
         omega = np.asarray(omega, dtype=float)
         return self.alpha / (2.0 * omega) + 0.5 * self.beta * omega
 
+    @classmethod
+    def fit(cls, damping_ratio: float, omega_1: float, omega_2: float) -> RayleighDamping:
+        """The coefficients giving ``damping_ratio`` at ``omega_1`` and ``omega_2`` (rad/s)."""
+        z = damping_ratio
+        if z == 0.0:
+            return cls(0.0, 0.0)
+        return cls(2 * z * omega_1 * omega_2 / (omega_1 + omega_2), 2 * z / (omega_1 + omega_2))
+
 
 def _zone_map_plate(grid: Grid, zones: Any) -> tuple[np.ndarray, int]:
     if isinstance(zones, np.ndarray) or (
@@ -396,11 +404,10 @@ class Bridge:
     def rayleigh(self) -> RayleighDamping:
         """Rayleigh coefficients fitted to ``damping_ratio`` at the first two modes."""
         def make() -> RayleighDamping:
-            z = self.damping_ratio
-            if z == 0.0:
+            if self.damping_ratio == 0.0:
                 return RayleighDamping(0.0, 0.0)
             w1, w2 = self.modes(2).omega
-            return RayleighDamping(2 * z * w1 * w2 / (w1 + w2), 2 * z / (w1 + w2))
+            return RayleighDamping.fit(self.damping_ratio, w1, w2)
         return self._cached("rayleigh", make)
 
     def damping_matrix(self) -> sp.csr_matrix:

@@ -10,7 +10,11 @@ Contract
 * Frequencies are returned in Hz, ascending; ``omega`` in rad/s.
 * :func:`select_modes` is the truncation a simulation or an identification uses: every
   mode up to a cut-off frequency (default sampling_rate / 8), checked against the
-  sampling rate (at least 2.5 × the highest frequency in use).
+  sampling rate (at least 2.5 × the highest frequency in use, :func:`check_sampling_rate`).
+* :func:`scaled_modes` gives the modes after a uniform mass scaling ``M → c M`` (K fixed)
+  without solving again: ``K φ = ω² c M φ`` has the eigenvectors of ``K φ = ω² M φ``
+  with ``ω'² = ω² / c``, and mass normalisation ``φ'ᵀ (c M) φ' = 1`` gives
+  ``φ' = c^(−½) φ``; the order and the signs (c > 0) are unchanged.
 """
 
 from __future__ import annotations
@@ -28,7 +32,7 @@ from bwim.errors import InputError, require_positive
 if TYPE_CHECKING:
     from bwim.fe.bridge import Bridge
 
-__all__ = ["Modes", "lowest_modes", "select_modes"]
+__all__ = ["Modes", "check_sampling_rate", "lowest_modes", "scaled_modes", "select_modes"]
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -121,10 +125,26 @@ def select_modes(
             k = min(2 * k, bridge.n_free - 1)
         n = max(int(np.searchsorted(modes.frequencies, f_cut, side="right")), 1)
         modes = bridge.modes(n)
+    check_sampling_rate(modes, sampling_rate)
+    return modes
+
+
+def check_sampling_rate(modes: Modes, sampling_rate: float) -> None:
+    """Raise :class:`InputError` if ``sampling_rate`` (Hz) is below 2.5 × the highest
+    frequency of ``modes`` (Nyquist with a margin)."""
     f_max = modes.frequencies[-1]
     if sampling_rate < 2.5 * f_max:
         raise InputError(
             f"sampling_rate {sampling_rate:g} Hz is too low for the modes in use (highest "
             f"{f_max:.1f} Hz); use at least {2.5 * f_max:.0f} Hz or fewer modes"
         )
-    return modes
+
+
+def scaled_modes(modes: Modes, mass_factor: float) -> Modes:
+    """The modes of the same stiffness with every mass scaled by ``mass_factor`` (> 0):
+    frequencies × ``mass_factor^(−½)``, mass-normalised shapes × ``mass_factor^(−½)``
+    (see the module docstring)."""
+    c = require_positive("mass_factor", mass_factor)
+    s = 1.0 / np.sqrt(c)
+    omega = modes.omega * s
+    return Modes(frequencies=omega / (2 * np.pi), omega=omega, shapes=modes.shapes * s)
