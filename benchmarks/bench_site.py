@@ -37,7 +37,7 @@ import numpy as np
 from benchmarks._timing import print_table
 from bwim.accuracy import SummaryRow, assess
 from bwim.cli import main as bwim_main
-from bwim.io import build_vehicle, load_record, load_scenario
+from bwim.io import build_site_setup, build_vehicle, load_record, load_scenario
 from bwim.io.accuracy_csv import read_reference, read_summary
 from bwim.site import calibrate_site, weigh_event
 from bwim.synthetic import make_test_day
@@ -101,7 +101,7 @@ def run_day(label: str, roughness, folder: Path) -> dict:
 
     scenario = load_scenario(day.scenario)
     setup_site = calibrate_site([load_record(p, scenario) for p in day.calibration],
-                                _setup(scenario))
+                                build_site_setup(scenario))
     t0 = time.perf_counter()
     records = [(p.name, load_record(p, scenario)) for p in day.traffic]
     t_read = time.perf_counter() - t0
@@ -133,12 +133,6 @@ def run_day(label: str, roughness, folder: Path) -> dict:
             "multiple": sum(1 for name, _, ev in traffic if len(truth[name]) > 1
                             and not ev.weighed and "multiple" in ev.reason),
             "n_multiple": sum(1 for t in truth.values() if len(t) > 1)}
-
-
-def _setup(scenario):
-    from bwim.cli import _site_setup  # the command line's reading of the scenario
-
-    return _site_setup(scenario)
 
 
 def _class_rows(res) -> list[list[str]]:

@@ -472,26 +472,12 @@ def _done_rows(summary: Path, resume: bool) -> dict[str, list[str]]:
     return {r[0]: r for r in rows[1:] if r and r[-1] == ""}
 
 
-def _site_setup(scenario):
-    from bwim.io import build_vehicle
-    from bwim.site import SiteSetup
-
-    truck = build_vehicle(scenario)
-    det = scenario.axle_detectors
-    return SiteSetup(
-        calibration_loads=truck.static_axle_loads, calibration_spacings=truck.axle_spacings,
-        detectors=None if det is None else det.channels,
-        distance=None if det is None else det.distance,
-        position=0.0 if det is None else det.position,
-        max_spacing=None if det is None else det.max_spacing)
-
-
 def _calibrate_site(paths: Sequence[Path], scenario, folder: Path):
     """Lines from the calibration truck's logger events; a table of the runs."""
-    from bwim.io import load_record, write_influence_line
+    from bwim.io import build_site_setup, load_record, write_influence_line
     from bwim.site import calibrate_site
 
-    setup = _site_setup(scenario)
+    setup = build_site_setup(scenario)
     records, used, unread = [], [], []
     for p in paths:
         try:

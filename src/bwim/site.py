@@ -21,8 +21,11 @@ Contract
   ``multiple_presence`` and not weighed as one vehicle; a weighing of quality
   ``"reject"`` (negative or absurd weights, a fit far worse than the calibration's, a
   truncated record) gives no weights, only its flags.
-* Units: N, m, s; readings in the logger's units (a scale factor is not needed: the
-  calibration truck fixes it).
+* With a calibrated FE model (``weigh_event(..., bridge=...)``) the detected vehicle is
+  weighed by moving force identification instead; the gauges then need positions and
+  the readings strain units (the scenario's ``[logger] scale``).
+* Units: N, m, s; readings in the logger's units (a scale factor is not needed for
+  influence lines: the calibration truck fixes it).
 """
 
 from __future__ import annotations

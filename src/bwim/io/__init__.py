@@ -27,9 +27,11 @@ from bwim.io.atomic import atomic_open, atomic_output, check_writable
 from bwim.io.bridgefile import bridge_spec, load_bridge, save_bridge
 from bwim.io.build import (
     build_bridge,
+    build_logger_format,
     build_passage,
     build_road,
     build_sensors,
+    build_site_setup,
     build_vehicle,
     load_record,
     simulate_scenario,
@@ -88,9 +90,11 @@ __all__ = [
     "atomic_output",
     "bridge_spec",
     "build_bridge",
+    "build_logger_format",
     "build_passage",
     "build_road",
     "build_sensors",
+    "build_site_setup",
     "build_vehicle",
     "check_writable",
     "dump_scenario",

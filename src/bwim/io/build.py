@@ -43,6 +43,7 @@ from bwim.io.scenario import VEHICLE_TYPES, BridgeSpec, GirderSpec, Scenario
 from bwim.records import Passage, Record, SimulationSettings
 from bwim.road import RoadProfile
 from bwim.sensors import Sensor, SensorKind
+from bwim.site import SiteSetup
 from bwim.vehicles import Vehicle, named
 from bwim.vehicles.types import Truck3D
 
@@ -52,6 +53,7 @@ __all__ = [
     "build_passage",
     "build_road",
     "build_sensors",
+    "build_site_setup",
     "build_vehicle",
     "load_record",
     "simulate_scenario",
@@ -303,6 +305,21 @@ def build_logger_format(scenario: Scenario) -> LoggerFormat:
         return LoggerFormat(columns=spec.columns, delimiter=delimiter, header=spec.header,
                             sampling_rate=spec.sampling_rate, scale=spec.scale,
                             decimal=spec.decimal, kinds=kinds, skip_lines=spec.skip_lines)
+
+
+def build_site_setup(scenario: Scenario) -> SiteSetup:
+    """What the installation knows (:class:`bwim.site.SiteSetup`): the ``[axle_detectors]``
+    and the ``[vehicle]`` calibration truck's static axle loads and spacings."""
+    truck = build_vehicle(scenario)
+    det = scenario.axle_detectors
+    with _context(f"{scenario.source}: [axle_detectors]"):
+        return SiteSetup(
+            calibration_loads=truck.static_axle_loads,
+            calibration_spacings=truck.axle_spacings,
+            detectors=None if det is None else det.channels,
+            distance=None if det is None else det.distance,
+            position=0.0 if det is None else det.position,
+            max_spacing=None if det is None else det.max_spacing)
 
 
 def build_vehicle(scenario: Scenario) -> Vehicle:
