@@ -60,6 +60,7 @@ __all__ = [
     "THICKNESS",
     "WIDTH",
     "Drift",
+    "GaugeSpread",
     "detector_kernel",
     "gauge_points",
     "site_bridge",
@@ -98,16 +99,24 @@ def site_bridge(mesh: float = 0.25) -> Bridge:
                         damping_ratio=DAMPING_RATIO)
 
 
-def gauge_points() -> tuple[list[Sensor], np.ndarray]:
+@dataclass(frozen=True, kw_only=True, eq=False)
+class GaugeSpread:
     """The soffit points each gauge averages, and the averaging matrix.
 
-    Returns
-    -------
-    points : list of Sensor
+    Attributes
+    ----------
+    points : tuple of Sensor
         ``14 × 16`` strain_x points, gauge by gauge.
     weights : ndarray, shape (14 × 16, 14)
         Gauge readings are ``point_readings @ weights`` (each column sums to 1).
     """
+
+    points: tuple[Sensor, ...]
+    weights: np.ndarray
+
+
+def gauge_points() -> GaugeSpread:
+    """The :class:`GaugeSpread` of the site's gauges (the load spread through the slab)."""
     q, w = np.polynomial.legendre.leggauss(SPREAD_POINTS)
     dx, dy = np.meshgrid(q * SPREAD[0] / 2, q * SPREAD[1] / 2, indexing="ij")
     ww = np.outer(w, w).ravel() / 4.0
@@ -117,7 +126,7 @@ def gauge_points() -> tuple[list[Sensor], np.ndarray]:
         for k, (a, b) in enumerate(zip(dx.ravel(), dy.ravel(), strict=True)):
             pts.append(Sensor(x=GAUGE_X + a, y=y + b, kind="strain_x", name=f"{name}.{k}"))
         weights[j * ww.size:(j + 1) * ww.size, j] = ww
-    return pts, weights
+    return GaugeSpread(points=tuple(pts), weights=weights)
 
 
 def detector_kernel(u: np.ndarray) -> np.ndarray:

@@ -300,7 +300,8 @@ def make_test_day(
 
     fs = SAMPLING_RATE
     bridge = site.site_bridge(mesh)
-    points, weights = site.gauge_points()
+    spread = site.gauge_points()
+    points, weights = list(spread.points), spread.weights
     influence = bridge.influence(points)
     cal_truck = calibration_truck()
     cal_loads = cal_truck.model().static_axle_loads

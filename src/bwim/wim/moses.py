@@ -28,7 +28,7 @@ from bwim.plausibility import Limits, ordered_flags, quality_of, weight_flags
 from bwim.records import Passage, Record
 from bwim.wim.influence_line import Channel, InfluenceLine, read_channels
 
-__all__ = ["DEFAULT_MAX_RESIDUAL", "StaticWeights", "group_axles", "group_share",
+__all__ = ["DEFAULT_MAX_RESIDUAL", "AxleGroups", "StaticWeights", "group_axles", "group_share",
            "weigh_static"]
 
 #: Relative residual of Moses' fit above which a weighing is ``residual_high``.  A
@@ -129,9 +129,25 @@ def group_axles(spacings: Passage | np.ndarray, max_spacing: float = 2.0
     return tuple(tuple(g) for g in groups)
 
 
-def group_share(groups, n_axles: int) -> tuple[tuple[tuple[int, ...], ...], np.ndarray]:
-    """Checked axle groups and the matrix ``S`` (n_axles, n_groups) with axle weights
-    ``S @ group_weights``: the axles of a group share its weight equally.
+@dataclass(frozen=True, kw_only=True, eq=False)
+class AxleGroups:
+    """Checked axle groups and how their weights are shared by their axles.
+
+    Attributes
+    ----------
+    groups : tuple of tuple of int
+        Axle indices (from 0) of each group; every axle once.
+    share : ndarray, shape (n_axles, n_groups)
+        Axle weights are ``share @ group_weights``: the axles of a group share its weight
+        equally.
+    """
+
+    groups: tuple[tuple[int, ...], ...]
+    share: np.ndarray
+
+
+def group_share(groups, n_axles: int) -> AxleGroups:
+    """The :class:`AxleGroups` of ``groups`` for a vehicle of ``n_axles`` axles.
 
     ``groups`` None means every axle on its own; otherwise a sequence of sequences of axle
     indices (from 0) listing every axle once.
@@ -140,7 +156,7 @@ def group_share(groups, n_axles: int) -> tuple[tuple[tuple[int, ...], ...], np.n
     share = np.zeros((n_axles, len(out)))
     for k, g in enumerate(out):
         share[list(g), k] = 1.0 / len(g)
-    return out, share
+    return AxleGroups(groups=out, share=share)
 
 
 def _check_groups(groups, n_axles: int) -> tuple[tuple[int, ...], ...]:
@@ -217,7 +233,8 @@ def weigh_static(
     lo, hi = influence.support
     used = ((pos > lo) & (pos < hi)).any(axis=1)
     n_ax = passage.n_axles
-    groups, share = group_share(groups, n_ax)  # axle weight = share @ group weight
+    ag = group_share(groups, n_ax)  # axle weight = share @ group weight
+    groups, share = ag.groups, ag.share
     n_unknown = len(groups)
     if used.sum() < n_unknown:
         raise InputError(

@@ -83,7 +83,7 @@ from bwim.plausibility import (
 )
 from bwim.records import Passage, Record
 from bwim.wim.influence_line import Channel, hat_design, read_channels
-from bwim.wim.moses import group_axles, group_share
+from bwim.wim.moses import AxleGroups, group_axles, group_share
 from bwim.wim.multirun import MultiRunCalibration
 
 __all__ = ["HARD_FLAGS", "SOFT_FLAGS", "Limits", "Weighing", "weigh"]
@@ -168,7 +168,7 @@ _COMBINE = ("auto", "gls", "blue", "sum")
 _BASELINE = ("fit", "pretrigger", "none")
 
 
-def _groups(groups: Any, passage: Passage):
+def _groups(groups: Any, passage: Passage) -> AxleGroups:
     if isinstance(groups, str):
         if groups != "auto":
             raise InputError(f"groups must be 'auto', None or a sequence of axle index "
@@ -278,7 +278,8 @@ def weigh(
     lateral_ok = y_lo - limits.lateral_tolerance <= y <= y_hi + limits.lateral_tolerance
     if combine == "auto":
         combine = "gls" if lateral_ok else "sum"
-    groups_t, share = _groups(groups, passage)
+    axle_groups = _groups(groups, passage)
+    groups_t, share = axle_groups.groups, axle_groups.share
     flags: list[str] = []
 
     line = calibration.line
