@@ -116,11 +116,12 @@ def _locked(folder: Path):
     return OutputLock(folder)
 
 
-def _record_paths(items: Sequence[str]) -> list[Path]:
-    """Record files, folders expanded to the records they hold (sorted)."""
+def _record_paths(items: Sequence[str], *, any_suffix: bool = False) -> list[Path]:
+    """Record files, folders expanded to the records they hold (sorted); with
+    ``any_suffix`` (a logger's exports) every file of a folder."""
     from bwim.io.paths import expand_paths
 
-    return expand_paths(items, _RECORD_SUFFIXES, what="records")
+    return expand_paths(items, None if any_suffix else _RECORD_SUFFIXES, what="records")
 
 
 def _load_records(paths: Sequence[Path], scenario) -> list:
@@ -513,8 +514,8 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path) -> int:
     if not args.calibration_records:
         raise InputError("weighing logger files needs --calibration-records (runs of the "
                          "calibration truck)")
-    paths = _record_paths(args.records)
-    cal_paths = _record_paths(args.calibration_records)
+    paths = _record_paths(args.records, any_suffix=True)
+    cal_paths = _record_paths(args.calibration_records, any_suffix=True)
     summary = folder / "summary.csv"
     refuse_input_overwrite([summary, folder / "calibration_runs.csv",
                             folder / "influence_lines.h5"],
@@ -927,7 +928,8 @@ COMMANDS: tuple[Command, ...] = (
         "  bwim weigh examples/paper_slab.toml truck.h5 --calibration-records crossing.h5",
         (_SCENARIO,
          arg("records", nargs="+", metavar="RECORD",
-             help="records of the vehicles to weigh (.h5 or .csv; folders expanded)"),
+             help="records of the vehicles to weigh: logger files of any extension with a "
+             "[logger] scenario, else .h5 or .csv; folders expanded"),
          OneOf((arg("--calibration-records", nargs="+", metavar="REC",
                     help="crossings of the scenario's vehicle to calibrate the influence "
                     "line from"),

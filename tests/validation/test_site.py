@@ -153,6 +153,7 @@ def test_a_batch_survives_bad_records(day, tmp_path):
     good = day.traffic[1]
     for how in ("missing_column", "nan", "backwards_time", "no_axles"):
         _corrupt(good, traffic / f"bad_{how}.txt", how)
+    shutil.copy(good, traffic / "same_as_good.dat")  # any extension is a logger file
     out = tmp_path / "out"
     code = main(["weigh", str(day.scenario), str(traffic), "--calibration-records",
                  str(day.calibration[0].parent), "-o", str(out)])
@@ -164,6 +165,7 @@ def test_a_batch_survives_bad_records(day, tmp_path):
         assert r["gvw_kN"] == "" and needle in r["reason"].lower(), (how, r["reason"])
         assert "\n" not in r["reason"]
     assert rows[good.name]["gvw_kN"] != ""
+    assert rows["same_as_good.dat"]["gvw_kN"] == rows[good.name]["gvw_kN"]
 
 
 def test_resume_keeps_what_was_weighed(day, tmp_path):
