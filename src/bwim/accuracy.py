@@ -449,17 +449,19 @@ class ReferenceRow:
     gvw : float
         Static gross vehicle weight, N (> 0).
     axle_weights : tuple of float
-        Static axle weights, N (> 0), one per axle.
+        Static axle weights, N (> 0), one per axle; empty when only the gross weight is
+        known.
     axle_spacings : tuple of float
-        m (> 0), one fewer than the axles.
+        m (> 0), one fewer than the axles; empty when unknown (the axles are then grouped
+        by the WIM system's measured spacings).
     speed : float or None
         m/s, when known.
     """
 
     record: str
     gvw: float
-    axle_weights: tuple[float, ...]
-    axle_spacings: tuple[float, ...]
+    axle_weights: tuple[float, ...] = ()
+    axle_spacings: tuple[float, ...] = ()
     speed: float | None = None
 
     def __post_init__(self) -> None:
@@ -470,9 +472,9 @@ class ReferenceRow:
                                                 positive=True))
         set_(self, "axle_spacings", _float_tuple("axle_spacings", self.axle_spacings,
                                                  positive=True))
-        if not self.axle_weights:
-            raise InputError(f"record {self.record}: axle_weights must not be empty")
-        if len(self.axle_spacings) != len(self.axle_weights) - 1:
+        if not self.axle_weights and self.axle_spacings:
+            raise InputError(f"record {self.record}: axle spacings without axle weights")
+        if self.axle_spacings and len(self.axle_spacings) != len(self.axle_weights) - 1:
             raise InputError(
                 f"record {self.record}: {len(self.axle_weights)} axle weights need "
                 f"{len(self.axle_weights) - 1} axle spacings, got {len(self.axle_spacings)}")
@@ -480,8 +482,9 @@ class ReferenceRow:
             set_(self, "speed", require_finite("speed", self.speed))
 
     @property
-    def n_axles(self) -> int:
-        return len(self.axle_weights)
+    def n_axles(self) -> int | None:
+        """Axles (None when only the gross weight is known)."""
+        return len(self.axle_weights) or None
 
 
 # --- result ----------------------------------------------------------------------------------
@@ -618,7 +621,8 @@ def assess(summary_rows: Sequence[SummaryRow], reference_rows: Sequence[Referenc
         The default, I (environmental repeatability), is a test over a short period (a
         day) in unchanged conditions; II spans days to weeks, III a year.
     group_spacing : float
-        Consecutive axles closer than this (REFERENCE spacings, m) form a group.
+        Consecutive axles closer than this (the REFERENCE spacings, m, or the summary's
+        when the reference has none) form a group.
     strict : bool
         If True, a reference record absent from the summary is an InputError (a typo or
         the wrong summary); if False it is reported in ``unmatched``.
@@ -657,12 +661,18 @@ def assess(summary_rows: Sequence[SummaryRow], reference_rows: Sequence[Referenc
             continue
         n_vehicles += 1
         errors["gross_weight"].append(100.0 * (row.gvw - ref.gvw) / ref.gvw)
+        if ref.n_axles is None:  # a gross weight only: no axle criteria
+            continue
         if row.n_axles not in (None, ref.n_axles) or len(row.axle_weights) != ref.n_axles:
+            mismatch.append(name)
+            continue
+        spacings = ref.axle_spacings or row.axle_spacings
+        if len(spacings) != ref.n_axles - 1:  # nothing to group the axles by
             mismatch.append(name)
             continue
         wim = np.array(row.axle_weights)
         static = np.array(ref.axle_weights)
-        for group in group_axles(np.array(ref.axle_spacings), spacing):
+        for group in group_axles(np.array(spacings), spacing):
             idx = list(group)
             if len(idx) == 1:
                 errors["single_axle"].append(float(relative_errors(wim[idx], static[idx])[0]))

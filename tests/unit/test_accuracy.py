@@ -405,8 +405,9 @@ HEAD = "record,n_axles,axle_spacings_m,axle_weights_kN,gvw_kN\n"
     (read_reference, "", "the file is empty"),
     (read_reference, "# only a comment\n\n", "the file is empty"),
     (read_reference, HEAD, "no data rows"),
-    (read_reference, "record,n_axles,axle_weights_kN,gvw_kN\na,1,10,10\n",
-     "missing column.*axle_spacings_m"),
+    (read_reference, "record,n_axles,axle_weights_kN\na,1,10\n", "missing column.*gvw_kN"),
+    (read_reference, "record,n_axles,axle_weights_kN,gvw_kN\na,2,10,10\n",
+     "1 values for n_axles = 2"),
     (read_summary, "record,gvw_kN\na,10\n",
      "missing column.*n_axles, axle_spacings_m, axle_weights_kN"),
     (read_reference, "record;n_axles;axle_spacings_m;axle_weights_kN;gvw_kN\n",
@@ -460,8 +461,10 @@ def test_csv_reader_missing_file(tmp_path):
     (lambda: relative_errors([1.0, 2.0], [1.0]), "same shape"),
     (lambda: class_tolerance("gross_weight", "F"), "unknown class_name"),
     (lambda: class_tolerance("gross_weight", "E(32)"), "unknown class_name"),
-    (lambda: ReferenceRow(record="a", gvw=10.0, axle_weights=(5.0, 5.0), axle_spacings=()),
-     "need 1 axle spacings"),
+    (lambda: ReferenceRow(record="a", gvw=10.0, axle_weights=(5.0, 5.0),
+                          axle_spacings=(1.0, 2.0)), "need 1 axle spacings"),
+    (lambda: ReferenceRow(record="a", gvw=10.0, axle_spacings=(1.0,)),
+     "spacings without axle weights"),
     (lambda: ReferenceRow(record="a", gvw=10.0, axle_weights=(5.0, -5.0),
                           axle_spacings=(1.0,)), "positive"),
     (lambda: SummaryRow(record=" ", gvw=1.0), "record must be"),
@@ -476,3 +479,26 @@ def test_bad_arguments(call, pattern):
     with pytest.raises(InputError, match=pattern) as info:
         call()
     assert "\n" not in str(info.value)
+
+
+def test_a_reference_of_gross_weights_only_or_without_spacings(tmp_path):
+    """A reference may give only gross weights (the gross-weight criterion alone), or axle
+    weights without spacings (axles grouped by the summary's measured spacings: the same
+    groups as with the reference's spacings when they agree)."""
+    summary = [SummaryRow(record=f"r{k}", gvw=200e3 * (1 + 0.01 * (k % 5 - 2)),
+                          axle_weights=(80e3, 60e3 * (1 + 0.01 * (k % 3 - 1)), 60e3),
+                          axle_spacings=(4.0, 1.3), n_axles=3) for k in range(30)]
+    full = [ReferenceRow(record=f"r{k}", gvw=200e3, axle_weights=(80e3, 60e3, 60e3),
+                         axle_spacings=(4.0, 1.3)) for k in range(30)]
+    no_spacing = [ReferenceRow(record=f"r{k}", gvw=200e3, axle_weights=(80e3, 60e3, 60e3))
+                  for k in range(30)]
+    gross = [ReferenceRow(record=f"r{k}", gvw=200e3) for k in range(30)]
+    a, b, c = assess(summary, full), assess(summary, no_spacing), assess(summary, gross)
+    assert [x.name for x in a.criteria] == [x.name for x in b.criteria]
+    for x, y in zip(a.criteria, b.criteria, strict=True):
+        assert (x.mean, x.std, x.n) == (y.mean, y.std, y.n)
+    assert [x.name for x in c.criteria] == ["gross_weight"] and c.axle_mismatch == ()
+    assert c.criterion("gross_weight").mean == a.criterion("gross_weight").mean
+    p = tmp_path / "ref.csv"
+    p.write_text("record,gvw_kN\n" + "".join(f"r{k},200\n" for k in range(30)))
+    assert read_reference(p)[0].n_axles is None

@@ -41,7 +41,7 @@ def test_accuracy_command_prints_the_class(tmp_path, capsys):
 
 def test_accuracy_bad_reference_is_one_line(tmp_path, capsys):
     s, r = _files(tmp_path, [0.0] * 5)
-    r.write_text("record,gvw_kN\nx,1\n")
+    r.write_text("record,axle_weights_kN\nx,1\n")  # no gross weight column
     assert main(["accuracy", str(s), "--reference", str(r)]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("bwim: error:") and "\n" not in err

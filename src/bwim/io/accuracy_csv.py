@@ -10,10 +10,12 @@ Contract
   absent).  A cell that is empty or ``nan`` means "unknown": a row without a gross weight
   is a record the system did not weigh.  A list with an unknown value is unknown as a
   whole.
-* :func:`read_reference` reads statically weighed vehicles: ``record, n_axles,
-  axle_spacings_m, axle_weights_kN, gvw_kN`` (``speed_m_s`` optional, may be empty).
-  Every required cell must be a number (lists: numbers), ``n_axles`` must match the axle
-  weights and spacings.
+* :func:`read_reference` reads statically weighed vehicles: ``record, gvw_kN`` and, for
+  the axle criteria, ``axle_weights_kN`` with ``n_axles`` and ``axle_spacings_m`` (any of
+  them may be absent or empty: without axle weights only the gross weight is assessed;
+  without spacings the axles are grouped by the summary's measured spacings).
+  ``speed_m_s`` is optional.  Given cells must be numbers (lists: numbers) and agree with
+  ``n_axles``.
 * Weights are converted from kN to N (:class:`~bwim.accuracy.SummaryRow`,
   :class:`~bwim.accuracy.ReferenceRow`); spacings stay in m, speeds in m/s.
 * Every problem is an :class:`~bwim.errors.InputError` naming the file and, where it has
@@ -36,7 +38,7 @@ __all__ = ["read_reference", "read_summary"]
 
 _KN = 1000.0
 _SUMMARY_COLUMNS = ("record", "n_axles", "axle_spacings_m", "axle_weights_kN", "gvw_kN")
-_REFERENCE_COLUMNS = ("record", "n_axles", "axle_spacings_m", "axle_weights_kN", "gvw_kN")
+_REFERENCE_COLUMNS = ("record", "gvw_kN")
 
 
 class _Table:
@@ -201,7 +203,9 @@ def _summary_row(t: _Table, k: int, name: str, row: dict[str, str]) -> SummaryRo
 
 
 def _reference_row(t: _Table, k: int, name: str, row: dict[str, str]) -> ReferenceRow:
-    _, weights, spacings = _axles(t, k, row, optional=False)
+    full = {c: row.get(c, "") for c in ("n_axles", "axle_weights_kN", "axle_spacings_m")}
+    _, weights, spacings = _axles(t, k, {**row, **full}, optional=True)
+    weights, spacings = weights or (), spacings or ()
     for column, values in (("axle_weights_kN", weights), ("axle_spacings_m", spacings)):
         if any(v <= 0.0 for v in values):
             raise InputError(f"{t.where(k, column)}: values must be positive")
