@@ -462,12 +462,26 @@ def _weigh_row(name: str, *, passage=None, weights=None, gvw=None, groups=None, 
             method, " ".join(str(reason).split())]
 
 
+def _unique_names(paths: Sequence[Path]) -> None:
+    """The summary names each record by its file name: two files of one name (from two
+    folders) would be confused, in the summary, by ``--resume`` and by the accuracy."""
+    seen: dict[str, Path] = {}
+    for p in paths:
+        if p.name in seen:
+            raise InputError(f"two records are named {p.name!r} ({seen[p.name]} and {p}); "
+                             "the summary names records by file name: rename one")
+        seen[p.name] = p
+
+
 def _done_rows(summary: Path, resume: bool) -> dict[str, list[str]]:
     """Rows of a previous run to keep with ``--resume`` (by record name)."""
     if not resume or not summary.exists():
         return {}
-    with summary.open(newline="") as f:
-        rows = list(csv.reader(f))
+    try:
+        with summary.open(newline="", encoding="utf-8") as f:
+            rows = list(csv.reader(f))
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{summary}: cannot read it to resume ({exc})") from None
     if not rows or tuple(rows[0]) != WEIGH_COLUMNS:
         raise InputError(f"{summary}: not a bwim weigh summary; cannot resume from it")
     return {r[0]: r for r in rows[1:] if r and r[-1] == ""}
@@ -515,6 +529,7 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path) -> int:
         raise InputError("weighing logger files needs --calibration-records (runs of the "
                          "calibration truck)")
     paths = _record_paths(args.records, any_suffix=True)
+    _unique_names(paths)
     cal_paths = _record_paths(args.calibration_records, any_suffix=True)
     summary = folder / "summary.csv"
     refuse_input_overwrite([summary, folder / "calibration_runs.csv",
@@ -607,6 +622,7 @@ def _weigh_moses(args: argparse.Namespace, scenario, folder: Path) -> int:
         raise InputError("--bridge weighs logger files by MFI (a scenario with [logger]); "
                          "for records with their passages use bwim identify")
     paths = _record_paths(args.records)
+    _unique_names(paths)
     cal_paths = _record_paths(args.calibration_records) if args.calibration_records else []
     summary = folder / "summary.csv"
     stems = _unique_stems(paths)
@@ -626,7 +642,6 @@ def _weigh_moses(args: argparse.Namespace, scenario, folder: Path) -> int:
         write_influence_line(il, target)
         print(f"influence line calibrated from {len(cal_records)} crossing(s) "
               f"(residual {il.residual:.3g}): {target}")
-    summary = folder / "summary.csv"
     done = _done_rows(summary, args.resume)
     rows, shown = [], []
     n_failed = 0

@@ -62,9 +62,11 @@ def parse_size(text: str, *, total: int | None = None) -> int:
     value = float(m.group(1))
     if not math.isfinite(value) or value <= 0:
         raise InputError(f"{ENV_VAR}: the size must be positive, got {text!r}")
-    if unit == "" and value < 1.0:
-        return int(value * (_physical_memory() if total is None else total))
-    return int(value * _UNITS[unit])
+    size = (int(value * (_physical_memory() if total is None else total))
+            if unit == "" and value < 1.0 else int(value * _UNITS[unit]))
+    if size < 1:
+        raise InputError(f"{ENV_VAR}: {text!r} is less than one byte")
+    return size
 
 
 def memory_limit() -> int:

@@ -38,7 +38,7 @@ from typing import Any
 import numpy as np
 
 from bwim.detect import Detection, detect_axles, detect_from_strain
-from bwim.errors import InputError, require_finite, require_positive
+from bwim.errors import BwimError, InputError, require_finite, require_positive
 from bwim.fe.bridge import Bridge
 from bwim.mfi import ForceIdentification, identify_forces
 from bwim.plausibility import HARD_FLAGS
@@ -52,6 +52,15 @@ __all__ = ["EventWeighing", "SiteCalibration", "SiteSetup", "calibrate_site", "w
 #: A calibration run whose detected axle spacings differ from the truck's by more than
 #: this (m) is rejected: the detection, not the truck, is wrong.
 SPACING_TOLERANCE = 0.3
+
+#: What one event's detection or weighing may raise without ending a batch: bwim's own
+#: errors and the numerical failures of a degenerate record (a singular fit).
+_EVENT_ERRORS = (BwimError, ArithmeticError, ValueError, np.linalg.LinAlgError)
+
+
+def _why(exc: BaseException) -> str:
+    """An exception as one line (its type when it has no message)."""
+    return " ".join(str(exc).split()) or type(exc).__name__
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -96,7 +105,8 @@ class SiteSetup:
         spacings = np.array(self.calibration_spacings, dtype=float, ndmin=1)
         if loads.ndim != 1 or not np.all(np.isfinite(loads)) or np.any(loads <= 0):
             raise InputError("calibration_loads must be positive axle loads, N")
-        if spacings.ndim != 1 or spacings.size != loads.size - 1 or np.any(spacings <= 0):
+        if spacings.ndim != 1 or spacings.size != loads.size - 1 or not np.all(
+                np.isfinite(spacings)) or np.any(spacings <= 0):
             raise InputError(f"calibration_spacings must be {loads.size - 1} positive "
                              f"distances for {loads.size} axle loads, got {spacings.tolist()}")
         object.__setattr__(self, "calibration_loads", loads)
@@ -312,8 +322,8 @@ def weigh_event(record: Record, calibration: SiteCalibration, *, bridge: Bridge 
     lines = calibration.lines
     try:
         det = _detect(record, setup, span=lines.support, line=lines.line_at())
-    except InputError as exc:
-        return EventWeighing(weighed=False, reason=f"detection failed: {exc}")
+    except _EVENT_ERRORS as exc:
+        return EventWeighing(weighed=False, reason=f"detection failed: {_why(exc)}")
     if not det.vehicles:
         return EventWeighing(weighed=False, reason=det.message or "no axle found",
                              detection=det, flags=det.flags or ("no_axles",))
@@ -330,9 +340,9 @@ def weigh_event(record: Record, calibration: SiteCalibration, *, bridge: Bridge 
         return _weigh_mfi(record, det, flags, calibration, bridge, identify_options or {})
     try:
         w = weigh(record, vehicle.passage, lines, combine=setup.combine)
-    except InputError as exc:
+    except _EVENT_ERRORS as exc:
         return EventWeighing(weighed=False, detection=det, flags=flags,
-                             reason=f"weighing failed: {exc}")
+                             reason=f"weighing failed: {_why(exc)}")
     flags = tuple(dict.fromkeys([*flags, *w.flags]))
     if w.quality == "reject":
         hard = ", ".join(f for f in w.flags if f in HARD_FLAGS)
@@ -368,8 +378,8 @@ def _weigh_mfi(record: Record, det: Detection, flags: tuple[str, ...],
     rec = dataclasses.replace(rec, data=data, passages=(vehicle.passage,))
     try:
         ident = identify_forces(bridge, rec, **options)
-    except InputError as exc:
-        return refused(f"weighing by MFI failed: {exc}")
+    except _EVENT_ERRORS as exc:
+        return refused(f"weighing by MFI failed: {_why(exc)}")
     extra = [] if trend is None or trend.covers(float(record.time[0])) else [
         "outside_calibration_time"]
     flags = tuple(dict.fromkeys([*flags, *ident.vehicle_flags[0], *extra]))

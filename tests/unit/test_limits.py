@@ -45,3 +45,9 @@ def test_unbounded_estimate_refused():
 def test_format_bytes():
     assert format_bytes(1536) == "1.5 KiB"
     assert format_bytes(3 * 1024**3) == "3 GiB"
+
+
+def test_a_limit_of_nothing_is_refused():
+    """Issue-14 review: a fraction so small that the limit rounds to 0 bytes."""
+    with pytest.raises(InputError, match="less than one byte"):
+        parse_size("1e-30", total=8 * 1024**3)

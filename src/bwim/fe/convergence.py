@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bwim.errors import InputError
+from bwim.errors import InputError, require_range
 from bwim.fe.bridge import Bridge
 from bwim.loads import PointLoad
 from bwim.sensors import Sensor
@@ -186,8 +186,7 @@ def check_mesh(
     start : (int, int), optional
         The factory's first mesh.
     """
-    if not 0 < tol < 1:
-        raise InputError(f"tol must be a relative change in (0, 1), got {tol!r}")
+    tol = require_range("tol", tol, 0.0, 1.0)
     if not isinstance(max_levels, (int, np.integer)) or max_levels < 2:
         raise InputError(f"max_levels must be an integer >= 2, got {max_levels!r}")
     sensors = list(sensors)
@@ -199,7 +198,12 @@ def check_mesh(
     elif callable(model):
         if start is None:
             raise InputError("a mesh factory needs start=(nx, ny), its first mesh")
-        nx, ny = (int(v) for v in start)
+        try:
+            nx, ny = (int(v) for v in start)
+        except (TypeError, ValueError):
+            raise InputError(f"start must be two integers (nx, ny), got {start!r}") from None
+        if nx < 1 or ny < 1:
+            raise InputError(f"start must be positive (nx, ny), got {start!r}")
         bridges = (model(nx * 2**k, ny * 2**k) for k in range(max_levels))
     else:
         raise InputError(f"model must be a Bridge or a factory(nx, ny), got "
