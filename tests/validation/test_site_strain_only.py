@@ -8,7 +8,8 @@ simulation's truth (``truth.csv``: the true speed of every run).
 
 Measured on this day (seed 3, 6 runs; ``strain_passes=0``: the joint shared-line
 estimate only): speed errors −0.2, +1.8, +3.7, −9.7, −0.7, +4.9 %, median |error|
-2.7 %; with the default 2 re-detection passes −3.0 … +3.4 % but ~100 s.  With the detectors the same runs are within 0.05 %.  The tolerances are ~1.5–2×
+2.7 %; with the default 2 re-detection passes −3.0 … +3.4 % but ~100 s.  With the
+detectors the same runs are within 0.05 %.  The tolerances are ~1.5–2×
 those numbers; they are weak, and say so: the static model's floor on this day's
 dynamics is itself 1–3 % (see :mod:`bwim.detect.truck`).
 """
