@@ -37,6 +37,7 @@ from bwim.detect.result import (
     VehicleDetection,
 )
 from bwim.detect.strain import detect_from_strain
+from bwim.detect.truck import detect_known_truck
 
 __all__ = [
     "DEFAULT_MAX_AXLE_SPACING",
@@ -53,6 +54,7 @@ __all__ = [
     "VehicleDetection",
     "detect_axles",
     "detect_from_strain",
+    "detect_known_truck",
     "lateral_position",
     "section_gauges",
 ]
