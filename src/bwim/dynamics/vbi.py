@@ -459,8 +459,9 @@ def _stepped(scheme: Newmark, M, C, K, f, s0) -> np.ndarray:
         Ta += A
         np.multiply(dt * g, Ta, out=Tv)
         Tv += V
-        for i in range(lo, hi):
-            np.matmul(Tw[i - lo], out[i], out=out[i + 1])
+        rows = list(out[lo:hi + 1])  # views: the loop is one gemv per step
+        for t_i, s_i, s_next in zip(Tw, rows, rows[1:], strict=False):
+            np.dot(t_i, s_i, out=s_next)
     return out[1:, :-1]
 
 
