@@ -6,7 +6,8 @@ import pytest
 
 import bwim
 from bwim.errors import InputError
-from bwim.mfi import build_model, identify_forces, solve_batch, solve_dp
+from bwim.mfi import build_model, identify_forces, record_band, solve_batch, solve_dp
+from bwim.mfi.identify import BAND_SEGMENT, DEFAULT_MAX_MODES
 from bwim.mfi.statespace import ForceUnknowns, Order
 from bwim.records import Record
 
@@ -104,3 +105,37 @@ def test_too_few_channels_for_wheel_unknowns():
         identify_forces(bridge, rec, unknowns="wheel")
     ident = identify_forces(bridge, rec, unknowns="axle", lam=1e-22)
     assert ident.axle_forces.shape[1] == 2
+
+
+def _tones(freqs, noise, n=2000, fs=1000.0, seed=0):
+    """Three channels of sinusoids at ``freqs`` (Hz, unit amplitude) plus white noise of
+    standard deviation ``noise``."""
+    t = np.arange(n) / fs
+    rng = np.random.default_rng(seed)
+    phases = (0.3, 1.1, 2.0)[:len(freqs)]
+    clean = sum(np.sin(2 * np.pi * f * t + p) for f, p in zip(freqs, phases, strict=True))
+    data = clean[:, None] * np.array([1.0, 0.7, -0.4]) + noise * rng.standard_normal((n, 3))
+    return Record(time=t, data=data, sensors=tuple(bwim.Sensor(x=x) for x in (2.0, 5.0, 8.0)))
+
+
+def test_record_band_ends_above_the_highest_tone():
+    """Reference: the spectrum of tones at 10 and 60 Hz in white noise is the flat noise
+    floor except at the tones (the gap between them does not end the band), so the band
+    ends past 60 Hz within the Hann window's main lobe (two 7.8 Hz Welch bins each side)
+    plus one bin; without noise there is no floor below fs/4 and no cut."""
+    bin_width = 1000.0 / BAND_SEGMENT
+    for seed in range(3):
+        band = record_band(_tones((10.0, 60.0), noise=0.3, seed=seed))
+        assert 60.0 < band <= 60.0 + 3 * bin_width
+    assert record_band(_tones((10.0, 60.0), noise=0.0)) == np.inf
+
+
+def test_identify_forces_chooses_fewer_modes_on_noisy_records(crossing):
+    """With the L-curve the model order follows the record: a noisy record keeps fewer
+    modes than its clean version, and the default cap holds; a given λ keeps the cap."""
+    beam, _, rec = crossing
+    noisy_rec = rec.with_noise(0.05, seed=3)
+    clean = identify_forces(beam, rec)
+    noisy = identify_forces(beam, noisy_rec)
+    assert 1 <= noisy.n_modes < clean.n_modes <= DEFAULT_MAX_MODES
+    assert identify_forces(beam, noisy_rec, lam=1e-3).n_modes == clean.n_modes

@@ -133,7 +133,8 @@ class PreparedCrossing:
     @cached_property
     def approach_state(self):
         """Vehicle states before the first wheel reaches the deck (coupled solver)."""
-        return approach_phase(self.crossing, self.scheme)
+        # the states before the first kept step are not needed
+        return approach_phase(self.crossing, self.scheme, first=int(np.argmax(self.keep)))
 
     @cached_property
     def _on_deck(self) -> dict:

@@ -11,6 +11,9 @@ Contract
   precomputed step operator ``[u; v; a]ₖ₊₁ = A [u; v; a]ₖ + B fₖ₊₁``: one small matrix
   product per step.  Diagonal systems (modal coordinates) may pass 1-D arrays for M, C, K
   and are advanced for all modes at once.
+* :func:`final_state` gives the last row of :func:`integrate` (u, v, a at the last step)
+  without the history: for average acceleration a weighted sum of the loads in the
+  eigenbasis of the two-step recursion (equal to the stepping up to round-off).
 * The same step (:meth:`Newmark.effective`, :meth:`Newmark.history`,
   :meth:`Newmark.update`) is used by the time-varying vehicle–bridge solver.
 """
@@ -24,7 +27,7 @@ from scipy import signal
 
 from bwim.errors import InputError, require_positive
 
-__all__ = ["Newmark", "NewmarkResult", "integrate"]
+__all__ = ["FinalState", "Newmark", "NewmarkResult", "final_state", "integrate"]
 
 
 @dataclass(frozen=True)
@@ -229,6 +232,31 @@ def _filter_modes(M, C, K, f, dt, k0, out) -> None:
 MAX_EIGENBASIS_CONDITION = 1e6
 
 
+def _companion(M, C, K, h):
+    """Eigen-decomposition of the average-acceleration two-step recursion (see
+    :func:`_filter_coupled`): ``(lam, V, V⁻¹, V⁻¹ B)``, or None when the eigenbasis is
+    ill-conditioned (near-defective companion matrix)."""
+    n = M.shape[0]
+    Ke = M + h / 2 * C + h * h / 4 * K
+    Ki = np.linalg.inv(Ke)
+    A = np.zeros((2 * n, 2 * n))
+    A[:n, :n] = -Ki @ (h * h / 2 * K - 2 * M)
+    A[:n, n:] = -Ki @ (M - h / 2 * C + h * h / 4 * K)
+    A[n:, :n] = np.eye(n)
+    lam, V = np.linalg.eig(A)
+    if np.linalg.cond(V) > MAX_EIGENBASIS_CONDITION:
+        return None
+    Vi = np.linalg.inv(V)
+    return lam, V, Vi, Vi[:, :n] @ Ki
+
+
+def _forcings(f, h, k0):
+    """The right-hand sides ``N`` of u, v and a from step ``k0`` on (see
+    :func:`_filter_coupled`)."""
+    fk1, fk, fkm1 = f[k0:], f[k0 - 1:-1], f[k0 - 2:-2]
+    return h * h / 4 * (fk1 + 2 * fk + fkm1), h / 2 * (fk1 - fkm1), fk1 - 2 * fk + fkm1
+
+
 def _filter_coupled(M, C, K, f, dt, k0, out) -> bool:
     """The coupled (full-matrix) twin of :func:`_filter_modes`: continue the
     average-acceleration recursion from step ``k0`` as first-order complex filters.
@@ -241,22 +269,12 @@ def _filter_coupled(M, C, K, f, dt, k0, out) -> bool:
     recursion (lfilter).  Returns False (and leaves ``out`` alone) when the eigenbasis
     is ill-conditioned (near-defective A)."""
     n = M.shape[0]
-    h = dt
-    Ke = M + h / 2 * C + h * h / 4 * K
-    Ki = np.linalg.inv(Ke)
-    A = np.zeros((2 * n, 2 * n))
-    A[:n, :n] = -Ki @ (h * h / 2 * K - 2 * M)
-    A[:n, n:] = -Ki @ (M - h / 2 * C + h * h / 4 * K)
-    A[n:, :n] = np.eye(n)
-    lam, V = np.linalg.eig(A)
-    if np.linalg.cond(V) > MAX_EIGENBASIS_CONDITION:
+    eig = _companion(M, C, K, dt)
+    if eig is None:
         return False
-    Vi = np.linalg.inv(V)
-    ViB = Vi[:, :n] @ Ki  # V⁻¹ B, (2n, n)
-    fk1, fk, fkm1 = f[k0:], f[k0 - 1:-1], f[k0 - 2:-2]
-    forcing = (h * h / 4 * (fk1 + 2 * fk + fkm1), h / 2 * (fk1 - fkm1), fk1 - 2 * fk + fkm1)
+    lam, V, Vi, ViB = eig
     # u, v and a side by side: (n_t − k0, 2n, 3) forcings in the eigenbasis
-    e = np.stack([N @ ViB.T for N in forcing], axis=2)
+    e = np.stack([N @ ViB.T for N in _forcings(f, dt, k0)], axis=2)
     xi0 = Vi @ np.stack([np.concatenate([Y[k0 - 1], Y[k0 - 2]]) for Y in out], axis=1)
     xi = np.empty_like(e)
     for j in range(2 * n):
@@ -265,3 +283,62 @@ def _filter_coupled(M, C, K, f, dt, k0, out) -> bool:
     for i, Y in enumerate(out):
         Y[k0:] = (xi[:, :, i] @ V[:n].T).real
     return True
+
+
+@dataclass(frozen=True, kw_only=True)
+class FinalState:
+    """Displacement, velocity and acceleration at one step, each shape (n,)."""
+
+    u: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+
+
+def final_state(
+    M: np.ndarray,
+    C: np.ndarray,
+    K: np.ndarray,
+    f: np.ndarray,
+    scheme: Newmark,
+    u0: np.ndarray | None = None,
+    v0: np.ndarray | None = None,
+    a0: np.ndarray | None = None,
+) -> FinalState:
+    """The last row of :func:`integrate` with the same arguments (full M, C, K), without
+    the history.
+
+    For average acceleration, after the two stepped rows the recursion of
+    :func:`_filter_coupled` is summed in closed form: in the companion eigenbasis
+    ``ξ_last = λ^(n_t−k0) ξ₀ + Σ_k λ^(n_t−1−k) V⁻¹B N_k``, one weighted sum of the loads
+    (equal to the stepping up to round-off).  Other schemes, or an ill-conditioned
+    eigenbasis, step through :func:`integrate`.
+    """
+    f = np.asarray(f, dtype=float)
+    if f.ndim != 2 or np.ndim(M) != 2:
+        raise InputError("final_state needs full M, C, K and f of shape (n_t, n)")
+    n_t, n = f.shape
+    k0 = 3
+    eig = (_companion(M, C, K, scheme.dt)
+           if scheme.is_average_acceleration and n_t > k0 else None)
+    if eig is None or not np.all(eig[0]):  # (a zero eigenvalue has no logarithm)
+        res = integrate(M, C, K, f, scheme, u0=u0, v0=v0, a0=a0)
+        return FinalState(u=res.u[-1], v=res.v[-1], a=res.a[-1])
+    lam, V, Vi, ViB = eig
+    head = integrate(M, C, K, f[:k0], scheme, u0=u0, v0=v0, a0=a0)
+    xi0 = Vi @ np.stack([np.concatenate([Y[k0 - 1], Y[k0 - 2]])
+                         for Y in (head.u, head.v, head.a)], axis=1)  # (2n, 3)
+    N = np.concatenate(_forcings(f, scheme.dt, k0), axis=1)[::-1]  # (n_t − k0, 3n)
+    S = (_powers(lam, N.shape[0]) @ N).reshape(2 * n, 3, n)  # Σ_k λ_j^p N_k, u, v, a
+    xi = lam[:, None] ** (n_t - k0) * xi0 + np.einsum("jm,jim->ji", ViB, S)
+    y = (V[:n] @ xi).real  # (n, 3)
+    return FinalState(u=y[:, 0], v=y[:, 1], a=y[:, 2])
+
+
+def _powers(lam: np.ndarray, n: int, block: int = 64) -> np.ndarray:
+    """``lam[:, None] ** arange(n)`` as products ``λ^(block·b) λ^r`` of two short tables
+    (a complex power per element costs far more than a product)."""
+    nb = -(-n // block)
+    log = np.log(lam.astype(complex))[:, None]
+    outer = np.exp(log * (block * np.arange(nb)))[:, :, None]
+    inner = np.exp(log * np.arange(block))[:, None, :]
+    return (outer * inner).reshape(lam.size, nb * block)[:, :n]

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 
-from bwim.dynamics.newmark import Newmark, NewmarkResult, integrate
+from bwim.dynamics.newmark import Newmark, NewmarkResult, final_state, integrate
 from bwim.vehicles.model import VehicleModel
 
 __all__ = [
@@ -262,48 +262,67 @@ def solve_iterative(
 # --- coupled ---------------------------------------------------------------------------------
 @dataclass(frozen=True, kw_only=True, eq=False)
 class ApproachState:
-    """Vehicle states on the road before the first wheel reaches the deck."""
+    """Vehicle states on the road before the first wheel reaches the deck.
+
+    ``Y``, ``YV``, ``YA`` hold the steps ``first … start``; the earlier steps were not
+    asked for (their rows are dropped from the record) and are not computed.
+    """
 
     start: int  # last step before any contact is on the deck
-    Y: np.ndarray  # (start + 1, n_v) displacements
+    Y: np.ndarray  # (start + 1 − first, n_v) displacements
     YV: np.ndarray
     YA: np.ndarray
+    first: int = 0  # first step held
 
 
-def approach_phase(crossing: Crossing, scheme: Newmark) -> ApproachState:
+def approach_phase(crossing: Crossing, scheme: Newmark, *, first: int = 0) -> ApproachState:
     """Integrate the vehicles on the road up to the step before the deck is reached.
 
-    Independent of the bridge, so a calibration computes it once for all trials.
+    Independent of the bridge, so a calibration computes it once for all trials.  Only the
+    steps from ``first`` on are returned (``first`` is clamped to the last step before the
+    deck, whose state starts the coupled solver); the state there comes from
+    :func:`bwim.dynamics.newmark.final_state`, without stepping through the approach.
     """
     veh = crossing.vehicle
     k_in, _ = crossing.window()
     start = max(k_in - 1, 0)
+    first = min(max(int(first), 0), start)
     g0, g0_dot = -crossing.r[: start + 1], -crossing.r_dot[: start + 1]
-    if veh.n_dof:
-        pre = _vehicle_on_ground(veh, g0, g0_dot, scheme, y0=_static_on_ground(veh, g0[0]))
+    if not veh.n_dof:
+        z = np.zeros((start + 1 - first, 0))
+        return ApproachState(start=start, Y=z, YV=z, YA=z, first=first)
+    y0 = _static_on_ground(veh, g0[0])
+    if first == 0:
+        pre = _vehicle_on_ground(veh, g0, g0_dot, scheme, y0=y0)
         return ApproachState(start=start, Y=pre.u, YV=pre.v, YA=pre.a)
-    z = np.zeros((start + 1, 0))
-    return ApproachState(start=start, Y=z, YV=z, YA=z)
+    f = (veh.contact @ (veh.tyre_stiffness * g0[:first + 1]
+                        + veh.tyre_damping * g0_dot[:first + 1]).T).T
+    s = final_state(veh.mass, veh.damping, veh.stiffness, f, scheme, u0=y0)
+    pre = _vehicle_on_ground(veh, g0[first:], g0_dot[first:], scheme, y0=s.u, v0=s.v,
+                             a0=s.a)
+    return ApproachState(start=start, Y=pre.u, YV=pre.v, YA=pre.a, first=first)
 
 
 def solve_coupled(crossing: Crossing, bridge: ModalBridge | FullBridge, scheme: Newmark,
                   *, approach: ApproachState | None = None) -> Solution:
     """Bridge and vehicles advanced together, step by step (see module docstring).
 
-    ``approach`` may pass the precomputed :func:`approach_phase` of this crossing.
+    ``approach`` may pass the precomputed :func:`approach_phase` of this crossing; the
+    forces (and vehicle states) of the steps before its ``first`` are not computed: NaN.
     """
     veh = crossing.vehicle
     _, k_out = crossing.window()
     n_t = crossing.n_t
     pre = approach_phase(crossing, scheme) if approach is None else approach
-    start = pre.start
+    start, first = pre.start, pre.first
     Y = np.zeros((n_t, veh.n_dof))
     YV = np.zeros_like(Y)
     YA = np.zeros_like(Y)
-    Y[: start + 1], YV[: start + 1], YA[: start + 1] = pre.Y, pre.YV, pre.YA
+    Y[first: start + 1], YV[first: start + 1], YA[first: start + 1] = pre.Y, pre.YV, pre.YA
     y_state = (Y[start].copy(), YV[start].copy(), YA[start].copy())
     stepper = _modal_steps if isinstance(bridge, ModalBridge) else _full_steps
-    state, F = stepper(crossing, bridge, scheme, start, k_out, y_state, (Y, YV, YA))
+    state, F = stepper(crossing, bridge, scheme, (first, start), k_out, y_state,
+                       (Y, YV, YA))
     return Solution(state=state, forces=F)
 
 
@@ -332,7 +351,8 @@ def _finish(crossing, bridge, scheme, k_out, state, vstate, F, veh):
     F[sl] = _forces(veh, ys, g, g_dot)
 
 
-def _modal_steps(crossing, bridge: ModalBridge, scheme, start, k_out, y_state, vstate):
+def _modal_steps(crossing, bridge: ModalBridge, scheme, span, k_out, y_state, vstate):
+    first, start = span
     Y, YV, YA = vstate
     veh = crossing.vehicle
     n_t, n_m, n_v = crossing.n_t, bridge.n, veh.n_dof
@@ -350,8 +370,7 @@ def _modal_steps(crossing, bridge: ModalBridge, scheme, start, k_out, y_state, v
     z = np.concatenate([np.zeros(n_m), y])
     zv = np.concatenate([np.zeros(n_m), yv])
     za = np.concatenate([np.zeros(n_m), ya])
-    F[: start + 1] = _forces(veh, _slice_result(Y, YV, start + 1) if n_v else None,
-                             -crossing.r[: start + 1], -crossing.r_dot[: start + 1])
+    _approach_forces(crossing, veh, Y, YV, start, first, F)
     # the coupled matrices of every step of the window, built at once
     win = slice(start + 1, k_out + 1)
     P, Px = bridge.psi[win], bridge.psi_x[win]  # (n_w, n_m, n_c)
@@ -440,16 +459,22 @@ def _stepped(scheme: Newmark, M, C, K, f, s0) -> np.ndarray:
         Ta += A
         np.multiply(dt * g, Ta, out=Tv)
         Tv += V
-        for i in range(lo, hi):
-            np.matmul(Tw[i - lo], out[i], out=out[i + 1])
+        rows = list(out[lo:hi + 1])  # views: the loop is one gemv per step
+        for t_i, s_i, s_next in zip(Tw, rows, rows[1:], strict=False):
+            np.dot(t_i, s_i, out=s_next)
     return out[1:, :-1]
 
 
-def _slice_result(Y, YV, n):
-    return NewmarkResult(u=Y[:n], v=YV[:n], a=np.zeros_like(Y[:n]))
+def _approach_forces(crossing, veh, Y, YV, start, first, F):
+    """Contact forces on the road before the deck, from step ``first`` (NaN before)."""
+    sl = slice(first, start + 1)
+    ys = NewmarkResult(u=Y[sl], v=YV[sl], a=YV[sl]) if veh.n_dof else None
+    F[:first] = np.nan
+    F[sl] = _forces(veh, ys, -crossing.r[sl], -crossing.r_dot[sl])
 
 
-def _full_steps(crossing, bridge: FullBridge, scheme, start, k_out, y_state, vstate):
+def _full_steps(crossing, bridge: FullBridge, scheme, span, k_out, y_state, vstate):
+    first, start = span
     Y, YV, YA = vstate
     veh = crossing.vehicle
     n_t, n_b, n_v = crossing.n_t, bridge.n, veh.n_dof
@@ -467,8 +492,7 @@ def _full_steps(crossing, bridge: FullBridge, scheme, start, k_out, y_state, vst
     F = np.zeros((n_t, n_c))
     u, uv, ua = np.zeros(n_b), np.zeros(n_b), np.zeros(n_b)
     y, yv, ya = y_state
-    F[: start + 1] = _forces(veh, _slice_result(Y, YV, start + 1) if n_v else None,
-                             -crossing.r[: start + 1], -crossing.r_dot[: start + 1])
+    _approach_forces(crossing, veh, Y, YV, start, first, F)
     for k in range(start + 1, k_out + 1):
         dofs, vals, slopes = bridge.dofs[k], bridge.vals[k], bridge.slopes[k]
         r, rd = crossing.r[k], crossing.r_dot[k]
