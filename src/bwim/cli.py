@@ -315,9 +315,9 @@ def _local_iter(bridge, scenario, paths, targets, kwargs, *, jobs: int):
     """``(index, (rows, reason))`` as each record finishes, on ``jobs`` processes: this
     one and ``jobs - 1`` loky workers.  Each worker is fed by a thread the moment it is
     free (no queue to drain at the end); this process takes the next record whenever it
-    has finished one, and its first record runs while the workers start (their import)
-    and warms the bridge's caches (modes, matrices) that then travel, pickled once, to
-    every worker."""
+    has finished one.  The bridge is pickled once, and again (with its warm caches:
+    modes, matrices) after this process's first record, which runs while new workers
+    start (their import)."""
     import pickle
     import queue
     import threading
@@ -345,10 +345,10 @@ def _local_iter(bridge, scenario, paths, targets, kwargs, *, jobs: int):
     stop = threading.Event()
     finished: queue.Queue = queue.Queue()
 
-    def feed(blob: bytes) -> None:
+    def feed() -> None:
         try:
             while not stop.is_set() and (i := take()) is not None:
-                fut = executor.submit(_identify_pickled, blob, scenario, paths[i],
+                fut = executor.submit(_identify_pickled, blob[0], scenario, paths[i],
                                       targets[i], kwargs)
                 finished.put((i, fut.result()))
         except BaseException as exc:  # handed to the main thread
@@ -357,16 +357,14 @@ def _local_iter(bridge, scenario, paths, targets, kwargs, *, jobs: int):
             finished.put((None, None))
 
     try:
-        warm = [executor.submit(int, 0) for _ in range(workers)]  # start the workers
+        blob = [pickle.dumps(bridge, protocol=pickle.HIGHEST_PROTOCOL)]
         first = take()
-        yield first, here(first)
-        del warm
-        blob = pickle.dumps(bridge, protocol=pickle.HIGHEST_PROTOCOL)
-        threads = [threading.Thread(target=feed, args=(blob,), daemon=True)
-                   for _ in range(workers)]
+        threads = [threading.Thread(target=feed, daemon=True) for _ in range(workers)]
         for t in threads:
             t.start()
         alive = workers
+        yield first, here(first)
+        blob[0] = pickle.dumps(bridge, protocol=pickle.HIGHEST_PROTOCOL)  # warm caches
 
         def ready(block: bool):
             nonlocal alive
