@@ -11,6 +11,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from benchmarks import (  # noqa: E402
+    bench_batch,
     bench_calibration,
     bench_fe,
     bench_mfi,
@@ -29,6 +30,7 @@ def main() -> None:
     bench_fe.main()
     bench_vbi.main()
     bench_mfi.main()
+    bench_batch.main()
     bench_wim.main()
     bench_multirun.main()
     bench_optimize.main()

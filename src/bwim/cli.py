@@ -19,10 +19,12 @@ Subcommands:
     Calibrate the scenario's bridge (the starting model) from records of the scenario's
     vehicle; write the model (TOML) and print start → calibrated ± uncertainty.
 ``identify SCENARIO RECORD... [--bridge MODEL] [-o FOLDER|SUMMARY.csv] [--jobs|--scheduler]``
-    Moving force identification on each record (folders expanded), in parallel with
-    joblib or on a dask.distributed scheduler; a CSV summary (one row per vehicle, one
-    with the reason per failed record) and one HDF5 result per record, written as each
-    record finishes.  A rerun skips the records done (``manifest.json``); ``--force``
+    Moving force identification on each record (folders expanded), in parallel on
+    ``--jobs`` processes (this one and loky workers, each reading its records and
+    writing their results) or on a dask.distributed scheduler; a CSV summary (one row
+    per vehicle, one with the reason per failed record) and one HDF5 result per record,
+    written as each record finishes (the summary and ``manifest.json`` at most every
+    second or so).  A rerun skips the records done (``manifest.json``); ``--force``
     starts afresh.  Exit code 0: all records done; 1: some failed; 2: bad input.
 
 Safety of outputs (:mod:`bwim.io.batch`): an output that is one of the inputs is refused;
@@ -249,6 +251,13 @@ def _calibrate(args: argparse.Namespace) -> int:
 
 
 # --- identify --------------------------------------------------------------------------------
+def _reason(exc: BaseException) -> str:
+    """A failed record's reason, on one line."""
+    if isinstance(exc, BwimError):
+        return " ".join(str(exc).split()) or type(exc).__name__
+    return f"{type(exc).__name__}: {' '.join(str(exc).split())}"
+
+
 def _identify_one(bridge, record, kwargs):
     """One record's identification (a top-level function: it runs in worker processes).
 
@@ -261,10 +270,34 @@ def _identify_one(bridge, record, kwargs):
 
     try:
         return identify_forces(bridge, record, **kwargs)
+    except (BwimError, ValueError, ArithmeticError, LinAlgError) as exc:
+        return _reason(exc)
+
+
+def _identify_file(bridge, scenario, path: Path, target: Path, kwargs) -> tuple[list, str | None]:
+    """Read one record, identify its forces, write ``target``: ``(summary rows, None)``,
+    or ``([], reason)`` if the record failed.  A top-level function, run by this process
+    or by a worker: only the rows travel back (the record and the result stay where they
+    are read and written)."""
+    from bwim.io import load_record, write_identification
+
+    try:
+        record = load_record(path, scenario)
     except BwimError as exc:
-        return " ".join(str(exc).split()) or type(exc).__name__
-    except (ValueError, ArithmeticError, LinAlgError) as exc:
-        return f"{type(exc).__name__}: {' '.join(str(exc).split())}"
+        return [], _reason(exc)
+    res = _identify_one(bridge, record, kwargs)
+    if isinstance(res, str):
+        return [], res
+    write_identification(res, target)
+    return _identify_rows(path, res), None
+
+
+def _identify_pickled(blob: bytes, scenario, path: Path, target: Path, kwargs):
+    """:func:`_identify_file` with the bridge pickled once by the parent (the same bytes
+    for every task: no pickling per task, and the parent's warm caches travel with it)."""
+    import pickle
+
+    return _identify_file(pickle.loads(blob), scenario, path, target, kwargs)
 
 
 def _shutdown_workers() -> None:
@@ -275,37 +308,124 @@ def _shutdown_workers() -> None:
         get_reusable_executor().shutdown(wait=False, kill_workers=True)
 
 
-def _identify_iter(bridge, records, kwargs, *, jobs: int, scheduler: str | None):
-    """``(index, result or reason)`` as each record finishes."""
-    n = len(records)
-    if scheduler:
-        from distributed import Client, as_completed
+def _jobs(jobs: int) -> int:
+    return (os.cpu_count() or 1) if jobs == -1 else jobs
 
+
+def _local_iter(bridge, scenario, paths, targets, kwargs, *, jobs: int):
+    """``(index, (rows, reason))`` as each record finishes, on ``jobs`` processes: this
+    one and ``jobs - 1`` loky workers.  Each worker is fed by a thread the moment it is
+    free (no queue to drain at the end); this process takes the next record whenever it
+    has finished one.  The bridge is pickled once, and again (with its warm caches:
+    modes, matrices) after this process's first record, which runs while new workers
+    start (their import)."""
+    import pickle
+    import queue
+    import threading
+
+    n = len(paths)
+    workers = min(_jobs(jobs), n) - 1
+    nxt = iter(range(n))
+    lock = threading.Lock()
+
+    def take() -> int | None:
+        with lock:
+            return next(nxt, None)
+
+    def here(i: int):
+        return _identify_file(bridge, scenario, paths[i], targets[i], kwargs)
+
+    if workers <= 0:
+        while (i := take()) is not None:
+            yield i, here(i)
+        return
+
+    from joblib.externals.loky import get_reusable_executor
+
+    executor = get_reusable_executor(max_workers=workers)
+    stop = threading.Event()
+    finished: queue.Queue = queue.Queue()
+
+    def feed() -> None:
         try:
-            client = Client(scheduler, timeout=10)
-        except (OSError, TimeoutError, ValueError) as exc:
-            raise InputError(f"cannot reach the dask scheduler {scheduler}: {exc}") from None
-        try:
-            [b] = client.scatter([bridge], broadcast=True)
-            futures = [client.submit(_identify_one, b, r, kwargs, pure=False) for r in records]
-            index = {f.key: i for i, f in enumerate(futures)}
-            for fut in as_completed(futures):
-                yield index[fut.key], fut.result()
+            while not stop.is_set() and (i := take()) is not None:
+                fut = executor.submit(_identify_pickled, blob[0], scenario, paths[i],
+                                      targets[i], kwargs)
+                finished.put((i, fut.result()))
+        except BaseException as exc:  # handed to the main thread
+            finished.put((None, exc))
         finally:
-            client.close()
-    elif jobs == 1 or n == 1:
-        for i, r in enumerate(records):
-            yield i, _identify_one(bridge, r, kwargs)
-    else:
-        from joblib import Parallel, delayed
+            finished.put((None, None))
 
-        run = Parallel(n_jobs=jobs, return_as="generator")
-        try:
-            yield from enumerate(run(delayed(_identify_one)(bridge, r, kwargs)
-                                     for r in records))
-        except BaseException:
-            _shutdown_workers()
-            raise
+    try:
+        blob = [pickle.dumps(bridge, protocol=pickle.HIGHEST_PROTOCOL)]
+        first = take()
+        threads = [threading.Thread(target=feed, daemon=True) for _ in range(workers)]
+        for t in threads:
+            t.start()
+        alive = workers
+        yield first, here(first)
+        blob[0] = pickle.dumps(bridge, protocol=pickle.HIGHEST_PROTOCOL)  # warm caches
+
+        def ready(block: bool):
+            nonlocal alive
+            while alive:
+                try:
+                    i, value = finished.get(block=block)
+                except queue.Empty:
+                    return
+                if i is not None:
+                    yield i, value
+                elif value is None:
+                    alive -= 1
+                else:
+                    raise value
+
+        while (i := take()) is not None:
+            yield from ready(False)
+            yield i, here(i)
+        yield from ready(True)
+    except BaseException:
+        stop.set()
+        _shutdown_workers()
+        raise
+    finally:
+        stop.set()
+
+
+def _dask_iter(bridge, scenario, paths, kwargs, *, scheduler: str):
+    """``(index, result or reason)`` as each record finishes on a dask scheduler.  The
+    records are read here and sent (the workers need not see this file system), at most
+    two per worker thread ahead: a day of records is never all in memory."""
+    from distributed import Client, as_completed
+
+    from bwim.io import load_record
+
+    try:
+        client = Client(scheduler, timeout=10)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise InputError(f"cannot reach the dask scheduler {scheduler}: {exc}") from None
+    try:
+        [b] = client.scatter([bridge], broadcast=True)
+        ahead = 2 * max(1, sum(client.nthreads().values())) + 2
+        running = as_completed()
+        index = {}
+        for i, path in enumerate(paths):
+            try:
+                record = load_record(path, scenario)
+            except BwimError as exc:
+                yield i, _reason(exc)
+                continue
+            fut = client.submit(_identify_one, b, record, kwargs, pure=False)
+            index[fut.key] = i
+            running.add(fut)
+            while running.count() >= ahead:
+                fut = next(running)
+                yield index.pop(fut.key), fut.result()
+        for fut in running:
+            yield index.pop(fut.key), fut.result()
+    finally:
+        client.close()
 
 
 def _check_jobs(jobs: int | None) -> None:
@@ -334,8 +454,42 @@ def _identify_rows(path: Path, ident) -> list[list]:
     return rows
 
 
+def _written(res, path: Path, target: Path) -> tuple[list, str | None]:
+    """A result sent back by a dask worker, written here: ``(rows, reason)``."""
+    from bwim.io import write_identification
+
+    if isinstance(res, str):
+        return [], res
+    write_identification(res, target)
+    return _identify_rows(path, res), None
+
+
+class _Saver:
+    """Calls ``save`` (the manifest and the summary, each rewritten whole) at most every
+    :data:`SAVE_EVERY` seconds, or 20 times the last save's duration: a batch of many
+    thousand records does not spend its time rewriting them (an interrupted run saves
+    in ``finally``; a killed one redoes at most the last few seconds' records)."""
+
+    SAVE_EVERY = 1.0
+
+    def __init__(self, save: Callable[[], object]) -> None:
+        self._save = save
+        self._last = time.perf_counter()
+        self._cost = 0.0
+
+    def now(self) -> None:
+        t = time.perf_counter()
+        self._save()
+        self._last = time.perf_counter()
+        self._cost = self._last - t
+
+    def maybe(self) -> None:
+        if time.perf_counter() - self._last >= max(self.SAVE_EVERY, 20 * self._cost):
+            self.now()
+
+
 def _identify(args: argparse.Namespace) -> int:
-    from bwim.io import load_scenario, write_identification
+    from bwim.io import load_scenario
     from bwim.io.batch import (
         EXIT_FAILED,
         EXIT_OK,
@@ -367,35 +521,35 @@ def _identify(args: argparse.Namespace) -> int:
         kwargs = scenario.identify.kwargs() if scenario.identify is not None else {}
         t0 = time.perf_counter()
         outcome: dict[int, tuple[list, str | None]] = {}
-        todo, records = [], []
+        todo = []
         for i, path in enumerate(paths):
             entry = manifest.done(path)
             if entry is not None:
                 outcome[i] = (entry["rows"], None)
-                continue
-            try:
-                records.append(_load_records([path], scenario)[0])
+            else:
                 todo.append(i)
-            except BwimError as exc:
-                reason = " ".join(str(exc).split())
-                outcome[i] = ([], reason)
-                manifest.record(path, result=None, rows=[], error=reason)
-        skipped = len(paths) - len(todo) - sum(1 for r in outcome.values() if r[1])
-        with _bar(len(todo) if len(todo) > 1 else None, "identifying forces") as bar:
-            for k, res in _identify_iter(bridge, records, kwargs, jobs=args.jobs,
-                                         scheduler=args.scheduler):
-                i = todo[k]
-                if isinstance(res, str):
-                    outcome[i] = ([], res)
-                    manifest.record(paths[i], result=None, rows=[], error=res)
-                else:
-                    write_identification(res, targets[i])
-                    rows = _identify_rows(paths[i], res)
-                    outcome[i] = (rows, None)
-                    manifest.record(paths[i], result=targets[i].name, rows=rows, error=None)
-                _write_identify_summary(summary, paths, outcome)
-                bar.update()
-        _write_identify_summary(summary, paths, outcome)
+        skipped = len(paths) - len(todo)
+        if args.scheduler:
+            runs = ((k, _written(res, paths[todo[k]], targets[todo[k]]))
+                    for k, res in _dask_iter(bridge, scenario, [paths[i] for i in todo],
+                                             kwargs, scheduler=args.scheduler))
+        else:
+            runs = _local_iter(bridge, scenario, [paths[i] for i in todo],
+                               [targets[i] for i in todo], kwargs, jobs=args.jobs)
+        saved = _Saver(lambda: (manifest.save(),
+                                _write_identify_summary(summary, paths, outcome)))
+        try:
+            with contextlib.closing(runs), \
+                    _bar(len(todo) if len(todo) > 1 else None, "identifying forces") as bar:
+                for k, (rows, reason) in runs:
+                    i = todo[k]
+                    outcome[i] = (rows, reason)
+                    manifest.record(paths[i], result=None if reason else targets[i].name,
+                                    rows=rows, error=reason, save=False)
+                    saved.maybe()
+                    bar.update()
+        finally:
+            saved.now()
     failed = [(_name(paths[i]), outcome[i][1]) for i in sorted(outcome) if outcome[i][1]]
     shown = [(r[0], r[1], ", ".join(r[3]) or (r[6] if len(r) > 6 else ""), r[4], r[5])
              for i in sorted(outcome) for r in outcome[i][0]]

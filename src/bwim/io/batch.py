@@ -13,8 +13,9 @@ Contract
   holds it).  A lock whose process is gone (a killed run) is taken over.
 * :class:`Manifest` records, per input, what a batch wrote (result file and summary rows),
   keyed by the input's resolved path, size and modification time, in
-  :data:`MANIFEST_NAME` in the output folder; it is rewritten atomically after each input,
-  so an interrupted run can be resumed: inputs already done (and unchanged) are skipped.
+  :data:`MANIFEST_NAME` in the output folder; it is rewritten atomically after each input
+  (or, with ``record(..., save=False)`` and :meth:`Manifest.save`, in batches), so an
+  interrupted run can be resumed: inputs already done (and unchanged) are skipped.
 * :func:`signals_as_interrupt` (a context manager) makes SIGTERM (and SIGHUP) raise
   :class:`KeyboardInterrupt` in the main thread, so that ``with``/``finally`` blocks run
   (atomic writers remove their temporary files, worker pools are shut down) as on Ctrl-C.
@@ -171,11 +172,17 @@ class Manifest:
             return None
         return entry
 
-    def record(self, source: Path, *, result: str | None, rows: list, error: str | None
-               ) -> None:
-        """Note an input's outcome and rewrite the manifest atomically."""
+    def record(self, source: Path, *, result: str | None, rows: list, error: str | None,
+               save: bool = True) -> None:
+        """Note an input's outcome and (unless ``save`` is false: a caller that saves
+        in batches, see :meth:`save`) rewrite the manifest atomically."""
         self.entries[_key(source)] = {"source": str(source), "result": result, "rows": rows,
                                       "error": error}
+        if save:
+            self.save()
+
+    def save(self) -> None:
+        """Rewrite the manifest atomically."""
         with atomic_open(self.path) as f:
             json.dump({"entries": self.entries}, f, indent=1)
 
