@@ -7,9 +7,7 @@ The public API is listed in ``__all__``; units, axes and signs are in
 from importlib.metadata import PackageNotFoundError, version
 
 from bwim import (
-    accuracy,
     conventions,
-    detect,
     dynamics,
     errors,
     fe,
@@ -17,13 +15,10 @@ from bwim import (
     optimize,
     paper,
     plausibility,
-    site,
     vehicles,
     wim,
 )
-from bwim.accuracy import assess
 from bwim.calibration import Calibration, calibrate
-from bwim.detect import Detection, detect_axles, detect_from_strain
 from bwim.dynamics import simulate
 from bwim.errors import BwimError, InputError, NumericalError
 from bwim.fe import Bridge, Girder, Modes, Supports, composite_section, grid_lines
@@ -32,7 +27,6 @@ from bwim.mfi import ForceIdentification, force_errors, identify_forces
 from bwim.records import Passage, Record, SimulationSettings, Truth
 from bwim.road import RoadProfile
 from bwim.sensors import Sensor, SensorKind
-from bwim.site import EventWeighing, SiteCalibration, SiteSetup, calibrate_site, weigh_event
 from bwim.vehicles import HalfCar, MovingForces, SprungMass, TractorSemitrailer, Truck3D
 from bwim.wim import (
     InfluenceLine,
@@ -45,6 +39,29 @@ from bwim.wim import (
     weigh,
     weigh_static,
 )
+
+#: Names loaded on first use (PEP 562): the site chain pulls in scipy.signal and
+#: scipy.stats, which a worker that only identifies forces should not pay for at import.
+_LAZY = {
+    "accuracy": ("bwim.accuracy", None), "assess": ("bwim.accuracy", "assess"),
+    "detect": ("bwim.detect", None), "Detection": ("bwim.detect", "Detection"),
+    "detect_axles": ("bwim.detect", "detect_axles"),
+    "detect_from_strain": ("bwim.detect", "detect_from_strain"),
+    "site": ("bwim.site", None), "EventWeighing": ("bwim.site", "EventWeighing"),
+    "SiteCalibration": ("bwim.site", "SiteCalibration"), "SiteSetup": ("bwim.site", "SiteSetup"),
+    "calibrate_site": ("bwim.site", "calibrate_site"), "weigh_event": ("bwim.site", "weigh_event"),
+}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        module, attr = _LAZY[name]
+        mod = importlib.import_module(module)
+        return mod if attr is None else getattr(mod, attr)
+    raise AttributeError(f"module 'bwim' has no attribute {name!r}")
+
 
 try:
     __version__ = version("bwim")

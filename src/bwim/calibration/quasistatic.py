@@ -67,7 +67,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.optimize as so
-import scipy.signal as ss
 from numpy.polynomial import legendre
 
 from bwim.calibration.problem import ParameterSpace, estimate_noise
@@ -155,10 +154,17 @@ class QuasiStaticCalibration:
     mass: MassFit | None
 
 
+def _signal():
+    """scipy.signal, imported on first use (it costs 0.5 s to load)."""
+    import scipy.signal
+
+    return scipy.signal
+
+
 def _lowpass(cutoff: float, fs: float, order: int):
     if not 0 < cutoff < 0.5 * fs:
         raise InputError(f"cutoff must be in (0, {0.5 * fs:g}) Hz, got {cutoff!r}")
-    return ss.butter(order, cutoff, fs=fs, output="sos")
+    return _signal().butter(order, cutoff, fs=fs, output="sos")
 
 
 class _Record:
@@ -187,7 +193,7 @@ class _Record:
         self.sos = sos
         self.fs = rec.sampling_rate
         self.sqrt_w = np.sqrt(w)
-        self.data = ss.sosfiltfilt(sos, rec.data, axis=0) * self.sqrt_w
+        self.data = _signal().sosfiltfilt(sos, rec.data, axis=0) * self.sqrt_w
         self.sensors = rec.sensors
 
     def design(self, bridge: Bridge, n_modes: int) -> tuple[np.ndarray, np.ndarray]:
@@ -224,12 +230,12 @@ class _Record:
             zeta = bridge.rayleigh.ratio(modes.omega)
             for m in range(modes.n):
                 om, z = modes.omega[m], zeta[m]
-                num, den = ss.bilinear([1.0], [1.0, 2 * z * om, om * om], fs=self.fs)
+                num, den = _signal().bilinear([1.0], [1.0, 2 * z * om, om * om], fs=self.fs)
                 f = fm[:, :, m, None] * fun  # (t, g, 1+K)
-                q = ss.lfilter(num, den, f, axis=0) - f / om**2
+                q = _signal().lfilter(num, den, f, axis=0) - f / om**2
                 cols += q[:, :, :, None] * eps[None, None, None, :, m]
-        b = ss.sosfiltfilt(self.sos, cols[:, :, 0].sum(axis=1), axis=0) * self.sqrt_w
-        A = ss.sosfiltfilt(self.sos, cols[:, :, 1:], axis=0) * self.sqrt_w
+        b = _signal().sosfiltfilt(self.sos, cols[:, :, 0].sum(axis=1), axis=0) * self.sqrt_w
+        A = _signal().sosfiltfilt(self.sos, cols[:, :, 1:], axis=0) * self.sqrt_w
         A = A.transpose(0, 3, 1, 2).reshape(n_t * G.shape[2], self.n_groups * K)
         return b.ravel(), A
 

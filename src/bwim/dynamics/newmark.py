@@ -23,7 +23,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import signal
 
 from bwim.errors import InputError, require_positive
 
@@ -215,6 +214,8 @@ def _filter_modes(M, C, K, f, dt, k0, out) -> None:
     The filters' initial conditions come from the two previous steps (lfiltic).  Equal
     to the stepping up to round-off.
     """
+    from scipy import signal  # here, not at import: scipy.signal costs 0.5 s to load
+
     h = dt
     nums = (h * h / 4 * np.array([1.0, 2.0, 1.0]), h / 2 * np.array([1.0, 0.0, -1.0]),
             np.array([1.0, -2.0, 1.0]))
@@ -268,6 +269,8 @@ def _filter_coupled(M, C, K, f, dt, k0, out) -> bool:
     ``w_{k+1} = A w_k + B N_{k+1}``; in A's eigenbasis every coordinate is a first-order
     recursion (lfilter).  Returns False (and leaves ``out`` alone) when the eigenbasis
     is ill-conditioned (near-defective A)."""
+    from scipy import signal  # here, not at import: scipy.signal costs 0.5 s to load
+
     n = M.shape[0]
     eig = _companion(M, C, K, dt)
     if eig is None:
