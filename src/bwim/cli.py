@@ -514,7 +514,8 @@ def _identify(args: argparse.Namespace) -> int:
     refuse_input_overwrite([summary, *targets], inputs)
     with OutputLock(folder):
         manifest = Manifest(folder, fresh=args.force)
-        if not manifest.entries:
+        if not manifest.entries or not manifest.belongs_to(paths):
+            # a first run, or another batch's folder: an existing summary is not ours
             refuse_existing(summary, force=args.force)
         scenario = load_scenario(args.scenario)
         bridge = _bridge(args, scenario)

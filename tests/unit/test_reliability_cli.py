@@ -133,6 +133,20 @@ def test_bad_record_does_not_abort_the_batch_and_rerun_resumes(files, tmp_path, 
     assert (out / "a_forces.h5").stat().st_mtime_ns != stamp
 
 
+def test_another_batch_into_the_folder_needs_force(files, tmp_path, capsys):
+    """A second run with other records into the same folder would replace the first's
+    summary: refused without --force (a rerun of the same records resumes instead)."""
+    out = tmp_path / "out"
+    code, _, err = _run(["identify", files["scen"], files["a"], "-o", out], capsys)
+    assert code == 0, err
+    first = (out / "summary.csv").read_text()
+    code, _, err = _run(["identify", files["scen"], files["b"], "-o", out], capsys)
+    _one_line_error(code, err, "summary.csv")
+    assert (out / "summary.csv").read_text() == first
+    code, stdout, _ = _run(["identify", files["scen"], files["a"], "-o", out], capsys)
+    assert code == 0 and "1 done before" in stdout
+
+
 def test_interrupt_keeps_finished_records_and_leaves_no_tmp(files, tmp_path, capsys,
                                                             monkeypatch):
     from bwim import cli

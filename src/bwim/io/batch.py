@@ -30,7 +30,7 @@ import json
 import os
 import signal
 import threading
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -158,6 +158,17 @@ class Manifest:
                 raise InputError(f"{self.path}: damaged manifest; remove it (or use "
                                  "--force) to start the batch afresh") from None
             self.entries = entries
+
+    def belongs_to(self, sources: Sequence[Path]) -> bool:
+        """Whether every entry is one of ``sources`` (unchanged): a rerun of the same batch,
+        which may resume, rather than another batch, which must not overwrite it."""
+        keys = set()
+        for p in sources:
+            try:
+                keys.add(_key(p))
+            except OSError:
+                continue
+        return all(k in keys for k in self.entries)
 
     def done(self, source: Path) -> dict[str, Any] | None:
         """The entry of an input already processed successfully (and unchanged), or None."""
