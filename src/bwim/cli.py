@@ -300,14 +300,6 @@ def _identify_pickled(blob: bytes, scenario, path: Path, target: Path, kwargs):
     return _identify_file(pickle.loads(blob), scenario, path, target, kwargs)
 
 
-def _shutdown_workers() -> None:
-    """Kill joblib's reusable loky workers (after an interrupt)."""
-    with contextlib.suppress(Exception):
-        from joblib.externals.loky import get_reusable_executor
-
-        get_reusable_executor().shutdown(wait=False, kill_workers=True)
-
-
 def _jobs(jobs: int) -> int:
     return (os.cpu_count() or 1) if jobs == -1 else jobs
 
@@ -340,9 +332,11 @@ def _local_iter(bridge, scenario, paths, targets, kwargs, *, jobs: int):
             yield i, here(i)
         return
 
-    from joblib.externals.loky import get_reusable_executor
+    # a pool of this run's own (not joblib's process-wide reusable one, which the library's
+    # parallel populations share): shut down when the run ends, killed on an interrupt
+    from joblib.externals.loky import ProcessPoolExecutor
 
-    executor = get_reusable_executor(max_workers=workers)
+    executor = ProcessPoolExecutor(max_workers=workers)
     stop = threading.Event()
     finished: queue.Queue = queue.Queue()
 
@@ -387,10 +381,13 @@ def _local_iter(bridge, scenario, paths, targets, kwargs, *, jobs: int):
         yield from ready(True)
     except BaseException:
         stop.set()
-        _shutdown_workers()
+        with contextlib.suppress(Exception):
+            executor.shutdown(wait=False, kill_workers=True)
         raise
     finally:
         stop.set()
+        with contextlib.suppress(Exception):
+            executor.shutdown(wait=False)
 
 
 def _dask_iter(bridge, scenario, paths, kwargs, *, scheduler: str):
