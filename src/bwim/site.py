@@ -292,20 +292,8 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
         if int(strain_passes) < 0:
             raise InputError(f"strain_passes must be >= 0, got {strain_passes!r}")
         return _calibrate_strain_only(records, setup, int(strain_passes))
-    detections, reasons, passages, kept = [], [], [], []
-    for k, rec in enumerate(records):
-        det = _detect(rec, setup, span=None)
-        reason = _run_reason(det, setup)
-        detections.append(det)
-        reasons.append(reason)
-        if not reason:
-            v = det.vehicles[0].passage
-            # the truck's layout is known exactly: keep the detected speed, arrival and
-            # lateral position, and the measured spacings of the truck
-            passages.append(Passage(speed=v.speed, lane=v.lane, delay=v.delay,
-                                    axle_spacings=setup.calibration_spacings,
-                                    track_width=v.track_width))
-            kept.append(k)
+    detections = [_detect(rec, setup, span=None) for rec in records]
+    reasons, passages, kept = _truck_runs(records, detections, setup)
     return _site_calibration(records, setup, detections, reasons, passages, kept)
 
 
@@ -326,7 +314,9 @@ def _site_calibration(records, setup, detections, reasons, passages, kept) -> Si
 
 
 def _truck_runs(records, dets, setup):
-    """Reasons and passages (the truck's exact spacings) of the runs' detections."""
+    """Reasons and passages of the runs' detections: the truck's layout is known exactly,
+    so a usable run keeps its detected speed, arrival and lateral position with the
+    truck's measured spacings."""
     reasons, passages, kept = [], [], []
     for k, det in enumerate(dets):
         reason = _run_reason(det, setup)
