@@ -429,21 +429,28 @@ def _contact_rows(bridge: Bridge, x, y, on):
 def _contact_modes(rows, on, phi, c_speed):
     """``psi[k, :, c] = Φᵀ N`` and ``psi_x`` (with the speed) at every step, gathered only
     where the contact is on the deck (zeros elsewhere), on the steps of the on-deck
-    window (zeros before and after)."""
+    window (zeros before and after).  The on-deck rows ``N`` (values, then slopes) are one
+    sparse matrix: ``Φᵀ N`` of all of them is one sparse–dense product."""
+    import scipy.sparse as sp
+
     n_t, n_c = on.shape
     n_m = phi.shape[1]
     psi = np.zeros((n_t, n_m, n_c))
-    psi_x = np.zeros_like(psi)
+    psi_x = np.zeros((n_t, n_m, n_c))
     if on.any():
         steps = np.flatnonzero(on.any(axis=1))
         win = slice(steps[0], steps[-1] + 1)
         on_w = on[win]
         dofs, vals, slopes = rows.dofs[win][on_w], rows.vals[win][on_w], rows.slopes[win][on_w]
-        ph = phi[dofs]  # (n_on, k, n_m)
+        n_on, k = dofs.shape
+        N = sp.csr_matrix((np.concatenate([vals.ravel(), slopes.ravel()]),
+                           np.concatenate([dofs.ravel(), dofs.ravel()]),
+                           np.arange(0, 2 * n_on * k + 1, k)), shape=(2 * n_on, phi.shape[0]))
+        ps = N @ phi  # (2 n_on, n_m)
         k_on, c_on = np.nonzero(on_w)
         pw, pxw = psi[win], psi_x[win]
-        pw[k_on, :, c_on] = np.einsum("pj,pjm->pm", vals, ph)
-        pxw[k_on, :, c_on] = np.einsum("pj,pjm->pm", slopes, ph) * c_speed[c_on][:, None]
+        pw[k_on, :, c_on] = ps[:n_on]
+        pxw[k_on, :, c_on] = ps[n_on:] * c_speed[c_on][:, None]
     return psi, psi_x
 
 
