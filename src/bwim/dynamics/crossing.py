@@ -420,9 +420,12 @@ def _contact_rows(bridge: Bridge, x, y, on):
     vals = np.zeros((n_t, n_c, k))
     slopes = np.zeros((n_t, n_c, k))
     if on.any():
-        yy = np.broadcast_to(y, x.shape)[on] if bridge.is_plate else None
-        rows = bridge.model.point_rows(x[on], yy, slopes=True)
-        dofs[on], vals[on], slopes[on] = rows.dofs, rows.vals, rows.slopes
+        steps = np.flatnonzero(on.any(axis=1))
+        win = slice(steps[0], steps[-1] + 1)  # the on-deck window: the rest stays zero
+        on_w = on[win]
+        yy = np.broadcast_to(y, on_w.shape)[on_w] if bridge.is_plate else None
+        rows = bridge.model.point_rows(x[win][on_w], yy, slopes=True)
+        dofs[win][on_w], vals[win][on_w], slopes[win][on_w] = rows.dofs, rows.vals, rows.slopes
     return PointRows(dofs=dofs, vals=vals, slopes=slopes)
 
 
@@ -441,16 +444,18 @@ def _contact_modes(rows, on, phi, c_speed):
         steps = np.flatnonzero(on.any(axis=1))
         win = slice(steps[0], steps[-1] + 1)
         on_w = on[win]
-        dofs, vals, slopes = rows.dofs[win][on_w], rows.vals[win][on_w], rows.slopes[win][on_w]
-        n_on, k = dofs.shape
-        N = sp.csr_matrix((np.concatenate([vals.ravel(), slopes.ravel()]),
-                           np.concatenate([dofs.ravel(), dofs.ravel()]),
-                           np.arange(0, 2 * n_on * k + 1, k)), shape=(2 * n_on, phi.shape[0]))
-        ps = N @ phi  # (2 n_on, n_m)
-        k_on, c_on = np.nonzero(on_w)
+        k = rows.dofs.shape[-1]
+        sel = np.flatnonzero(on_w.ravel())  # the on-deck (step, contact) pairs, C order
+        n_on = sel.size
+        dofs = np.take(rows.dofs[win].reshape(-1, k), sel, axis=0).ravel()
+        ptr = np.arange(0, n_on * k + 1, k)
+        k_on, c_on = np.divmod(sel, n_c)
         pw, pxw = psi[win], psi_x[win]
-        pw[k_on, :, c_on] = ps[:n_on]
-        pxw[k_on, :, c_on] = ps[n_on:] * c_speed[c_on][:, None]
+        for dst, src in ((pw, rows.vals), (pxw, rows.slopes)):
+            data = np.take(src[win].reshape(-1, k), sel, axis=0).ravel()
+            dst[k_on, :, c_on] = sp.csr_matrix((data, dofs, ptr),
+                                               shape=(n_on, phi.shape[0])) @ phi
+        pxw[k_on, :, c_on] *= c_speed[c_on][:, None]
     return psi, psi_x
 
 

@@ -409,7 +409,7 @@ def _modal_steps(crossing, bridge: ModalBridge, scheme, span, k_out, y_state, vs
 
 
 #: Steps whose step matrices are built at once by :func:`_stepped` (bounds its memory).
-STEP_CHUNK = 128
+STEP_CHUNK = 64
 
 
 def _stepped(scheme: Newmark, M, C0, K0, Lt, c, Wt, f, s0) -> np.ndarray:
@@ -427,7 +427,9 @@ def _stepped(scheme: Newmark, M, C0, K0, Lt, c, Wt, f, s0) -> np.ndarray:
     is built for a chunk of steps with batched products, so that the loop over time is
     one small matrix product per step.  With ``G_i = K_eff⁻¹ [a0 M + a1 C_i | a2 M + a4 C_i
     | a3 M + a5 C_i | f_i]`` the rows of ``T_i`` are ``G_i``, ``dt γ (a0 G_i + A) + V``
-    and ``a0 G_i + A`` with constant ``A``, ``V``: one batched product per chunk."""
+    and ``a0 G_i + A`` with constant ``A``, ``V``.  ``G_i`` is built from
+    ``K_eff⁻¹ M`` and ``K_eff⁻¹ C_i = K_eff⁻¹ C₀ + (K_eff⁻¹ L_i) c L_iᵀ`` (products with
+    the constant M, C₀ are one matrix product per chunk)."""
     n_w, n = f.shape
     r = Lt.shape[1]
     g, dt = scheme.gamma, scheme.dt
@@ -436,35 +438,37 @@ def _stepped(scheme: Newmark, M, C0, K0, Lt, c, Wt, f, s0) -> np.ndarray:
     m = 3 * n + 1
     d_inv = np.linalg.inv(scheme.effective(M, C0, K0))
     # augmented state [s; 1]: the constant term rides in T's last column, one product
-    # per step
-    # A and V are diagonal blocks: added on their diagonals only
+    # per step; A and V are diagonal blocks, added on their diagonals only
     i = np.arange(n)
     diag_a = ((i, i, -a0), (i, n + i, -a2), (i, 2 * n + i, -a3))
     diag_v = ((i, n + i, 1.0), (i, 2 * n + i, dt * (1 - g)))
     out = np.empty((n_w + 1, m))
     out[0, :-1], out[:, -1] = s0, 1.0
     chunk = max(min(STEP_CHUNK, n_w), 1)
-    B = np.empty((chunk, n, m))
     T = np.empty((chunk, m, m))
     T[:, -1, :-1], T[:, -1, -1] = 0.0, 1.0
+    blocks = ((a0, a1), (a2, a4), (a3, a5))
     for lo in range(0, n_w, chunk):
         hi = min(lo + chunk, n_w)
-        Lti, Wti, Bw, Tw = Lt[lo:hi], Wt[lo:hi], B[:hi - lo], T[:hi - lo]
+        Lti, Wti, Tw = Lt[lo:hi], Wt[lo:hi], T[:hi - lo]
         Li = np.ascontiguousarray(Lti.transpose(0, 2, 1))
-        Ci = C0 + (Li * c) @ Lti
-        Yi = d_inv @ Li  # D⁻¹ L
         Hti = Wti + (a1 * c)[:, None] * Lti
-        Zi = Hti @ d_inv  # Hᵀ D⁻¹
-        X = Hti @ Yi
+        Yi = d_inv @ Li
+        X = Hti @ Yi  # I + Hᵀ D⁻¹ L; then K_eff⁻¹ L = D⁻¹ L X⁻¹
         X[:, np.arange(r), np.arange(r)] += 1.0
-        kinv = d_inv - Yi @ (np.linalg.inv(X) @ Zi)
-        for j, (cm, cc) in enumerate(((a0, a1), (a2, a4), (a3, a5))):
-            blk = Bw[:, :, j * n:(j + 1) * n]
-            np.multiply(cc, Ci, out=blk)
-            blk += cm * M
-        Bw[:, :, -1] = f[lo:hi]
+        KL = Yi @ np.linalg.inv(X)
+        kinv = d_inv - KL @ (Hti @ d_inv)
+        flat = kinv.reshape(-1, n)
+        KM = (flat @ M).reshape(kinv.shape)
+        KC = (flat @ C0).reshape(kinv.shape)  # K_eff⁻¹ C_i = K_eff⁻¹ C₀ + (K_eff⁻¹ L) c Lᵀ
+        KC += KL @ (c[:, None] * Lti)
         G, Ta, Tv = Tw[:, :n], Tw[:, 2 * n:3 * n], Tw[:, n:2 * n]
-        np.matmul(kinv, Bw, out=G)
+        for j, (cm, cc) in enumerate(blocks):
+            blk = G[:, :, j * n:(j + 1) * n]
+            np.multiply(cm, KM, out=blk)
+            if cc:
+                blk += cc * KC
+        np.matmul(kinv, f[lo:hi, :, None], out=G[:, :, -1:])
         np.multiply(a0, G, out=Ta)
         for rr, cc, val in diag_a:
             Ta[:, rr, cc] += val
