@@ -21,9 +21,11 @@ from bwim import paper
 from bwim.dynamics import simulate
 from bwim.fe.modal import select_modes
 
-#: Coupled paper crossing before issue 15: the median wall time the issue reports
-#: (116–128 ms) on this machine.
-BEFORE_COUPLED = 0.12
+#: Coupled paper crossing before issue 15 (commit 5265d80): median wall time on this
+#: machine measured interleaved with the current code by
+#: ``python -m benchmarks.compare_coupled`` (58–63 ms per round; the 116–128 ms first
+#: reported was a loaded machine, and a lone first round still shows it).
+BEFORE_COUPLED = 0.061
 
 TARGETS = {("modal", "coupled"): 0.5, ("modal", "iterative"): 3.0}
 

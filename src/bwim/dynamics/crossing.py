@@ -420,30 +420,42 @@ def _contact_rows(bridge: Bridge, x, y, on):
     vals = np.zeros((n_t, n_c, k))
     slopes = np.zeros((n_t, n_c, k))
     if on.any():
-        yy = np.broadcast_to(y, x.shape)[on] if bridge.is_plate else None
-        rows = bridge.model.point_rows(x[on], yy, slopes=True)
-        dofs[on], vals[on], slopes[on] = rows.dofs, rows.vals, rows.slopes
+        steps = np.flatnonzero(on.any(axis=1))
+        win = slice(steps[0], steps[-1] + 1)  # the on-deck window: the rest stays zero
+        on_w = on[win]
+        yy = np.broadcast_to(y, on_w.shape)[on_w] if bridge.is_plate else None
+        rows = bridge.model.point_rows(x[win][on_w], yy, slopes=True)
+        dofs[win][on_w], vals[win][on_w], slopes[win][on_w] = rows.dofs, rows.vals, rows.slopes
     return PointRows(dofs=dofs, vals=vals, slopes=slopes)
 
 
 def _contact_modes(rows, on, phi, c_speed):
     """``psi[k, :, c] = Φᵀ N`` and ``psi_x`` (with the speed) at every step, gathered only
     where the contact is on the deck (zeros elsewhere), on the steps of the on-deck
-    window (zeros before and after)."""
+    window (zeros before and after).  The on-deck rows ``N`` (values, then slopes) are one
+    sparse matrix: ``Φᵀ N`` of all of them is one sparse–dense product."""
+    import scipy.sparse as sp
+
     n_t, n_c = on.shape
     n_m = phi.shape[1]
     psi = np.zeros((n_t, n_m, n_c))
-    psi_x = np.zeros_like(psi)
+    psi_x = np.zeros((n_t, n_m, n_c))
     if on.any():
         steps = np.flatnonzero(on.any(axis=1))
         win = slice(steps[0], steps[-1] + 1)
         on_w = on[win]
-        dofs, vals, slopes = rows.dofs[win][on_w], rows.vals[win][on_w], rows.slopes[win][on_w]
-        ph = phi[dofs]  # (n_on, k, n_m)
-        k_on, c_on = np.nonzero(on_w)
+        k = rows.dofs.shape[-1]
+        sel = np.flatnonzero(on_w.ravel())  # the on-deck (step, contact) pairs, C order
+        n_on = sel.size
+        dofs = np.take(rows.dofs[win].reshape(-1, k), sel, axis=0).ravel()
+        ptr = np.arange(0, n_on * k + 1, k)
+        k_on, c_on = np.divmod(sel, n_c)
         pw, pxw = psi[win], psi_x[win]
-        pw[k_on, :, c_on] = np.einsum("pj,pjm->pm", vals, ph)
-        pxw[k_on, :, c_on] = np.einsum("pj,pjm->pm", slopes, ph) * c_speed[c_on][:, None]
+        for dst, src in ((pw, rows.vals), (pxw, rows.slopes)):
+            data = np.take(src[win].reshape(-1, k), sel, axis=0).ravel()
+            dst[k_on, :, c_on] = sp.csr_matrix((data, dofs, ptr),
+                                               shape=(n_on, phi.shape[0])) @ phi
+        pxw[k_on, :, c_on] *= c_speed[c_on][:, None]
     return psi, psi_x
 
 

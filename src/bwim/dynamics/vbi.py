@@ -359,9 +359,6 @@ def _modal_steps(crossing, bridge: ModalBridge, scheme, span, k_out, y_state, vs
     n = n_m + n_v
     kt, ct, E = veh.tyre_stiffness, veh.tyre_damping, veh.contact
     Mb, Cb, Kb = bridge.matrices()
-    Mfull = np.zeros((n, n))
-    Mfull[:n_m, :n_m] = np.diag(Mb)
-    Mfull[n_m:, n_m:] = veh.mass
     U = np.zeros((n_t, n_m))
     V = np.zeros_like(U)
     A = np.zeros_like(U)
@@ -371,31 +368,31 @@ def _modal_steps(crossing, bridge: ModalBridge, scheme, span, k_out, y_state, vs
     zv = np.concatenate([np.zeros(n_m), yv])
     za = np.concatenate([np.zeros(n_m), ya])
     _approach_forces(crossing, veh, Y, YV, start, first, F)
-    # the coupled matrices of every step of the window, built at once
+    # the coupled system of the window: constant parts (bridge modes; vehicles without
+    # their tyres) plus the tyres between the contact displacements δ = Lᵀ z,
+    # L = [−Ψ; E] (rank n_c): C_k = C₀ + L c_t Lᵀ, K_k = K₀ + L (k_t Lᵀ + c_t Lxᵀ)
     win = slice(start + 1, k_out + 1)
     P, Px = bridge.psi[win], bridge.psi_x[win]  # (n_w, n_m, n_c)
     r, rd = crossing.r[win], crossing.r_dot[win]
-    n_w = P.shape[0]
-    C = np.zeros((n_w, n, n))
-    K = np.zeros((n_w, n, n))
-    PCt, PKt = P * ct, P * kt
-    Pt, Pxt = P.transpose(0, 2, 1), Px.transpose(0, 2, 1)
-    C[:, :n_m, :n_m] = PCt @ Pt
-    K[:, :n_m, :n_m] = PKt @ Pt + PCt @ Pxt
+    n_w, n_c = P.shape[0], kt.size
+    M0, C0, K0 = np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n))
     idx = np.arange(n_m)
-    C[:, idx, idx] += Cb
-    K[:, idx, idx] += Kb
+    M0[idx, idx], C0[idx, idx], K0[idx, idx] = Mb, Cb, Kb
+    M0[n_m:, n_m:] = veh.mass
+    C0[n_m:, n_m:] = veh.damping - (E * ct) @ E.T
+    K0[n_m:, n_m:] = veh.stiffness - (E * kt) @ E.T
+    Lt = np.empty((n_w, n_c, n))  # Lᵀ per step
+    np.negative(P.transpose(0, 2, 1), out=Lt[:, :, :n_m])
+    Lt[:, :, n_m:] = E.T
+    Wt = np.zeros_like(Lt)  # k_t Lᵀ + c_t Lxᵀ, Lx = [−Ψx; 0]
+    np.negative(Px.transpose(0, 2, 1), out=Wt[:, :, :n_m])
+    Wt *= ct[:, None]
+    Wt += kt[:, None] * Lt
     f = np.zeros((n_w, n))
     f[:, :n_m] = (P @ (veh.static_forces + kt * r + ct * rd)[:, :, None])[:, :, 0]
     if n_v:
-        C[:, :n_m, n_m:] = -(PCt @ E.T)
-        K[:, :n_m, n_m:] = -(PKt @ E.T)
-        C[:, n_m:, :n_m] = np.transpose(C[:, :n_m, n_m:], (0, 2, 1))
-        K[:, n_m:, :n_m] = -((E * kt) @ Pt + (E * ct) @ Pxt)
-        C[:, n_m:, n_m:] = veh.damping
-        K[:, n_m:, n_m:] = veh.stiffness
         f[:, n_m:] = -(kt * r + ct * rd) @ E.T
-    S = _stepped(scheme, Mfull, C, K, f, np.concatenate([z, zv, za]))
+    S = _stepped(scheme, M0, C0, K0, Lt, ct, Wt, f, np.concatenate([z, zv, za]))
     Z, ZV, ZA = S[:, :n], S[:, n:2 * n], S[:, 2 * n:]
     U[win], V[win], A[win] = Z[:, :n_m], ZV[:, :n_m], ZA[:, :n_m]
     q, qv = Z[:, :n_m], ZV[:, :n_m]
@@ -412,53 +409,72 @@ def _modal_steps(crossing, bridge: ModalBridge, scheme, span, k_out, y_state, vs
 
 
 #: Steps whose step matrices are built at once by :func:`_stepped` (bounds its memory).
-STEP_CHUNK = 128
+STEP_CHUNK = 64
 
 
-def _stepped(scheme: Newmark, M, C, K, f, s0) -> np.ndarray:
-    """Newmark steps of ``M ü + C_i u̇ + K_i u = f_i`` (C, K, f given per step) from the
-    state ``s0 = [u; v; a]``; returns the states after each step, shape (n_w, 3 n).
+def _stepped(scheme: Newmark, M, C0, K0, Lt, c, Wt, f, s0) -> np.ndarray:
+    """Newmark steps of ``M ü + C_i u̇ + K_i u = f_i`` with ``C_i = C₀ + L_i c L_iᵀ`` and
+    ``K_i = K₀ + L_i Wᵀ_i`` (``Lt``, ``Wt``: ``L_iᵀ``, ``Wᵀ_i`` of shape (n_w, r, n),
+    ``c`` of shape (r,)) from the state ``s0 = [u; v; a]``; returns the states after each
+    step, shape (n_w, 3 n).
 
+    The effective stiffness is ``D + L_i Hᵀ_i`` with the constant ``D = K₀ + a1 C₀ + a0 M``
+    and ``Hᵀ_i = Wᵀ_i + a1 c L_iᵀ``: its inverse is the Sherman–Morrison–Woodbury update
+    ``D⁻¹ − D⁻¹L_i (I + Hᵀ_i D⁻¹ L_i)⁻¹ Hᵀ_i D⁻¹`` (one r × r inverse per step).
     The step ``s_{i+1} = T_i s_i + b_i`` (the same algebra as :func:`integrate`'s step
     operator: ``u_new = K_eff⁻¹ (f + M(a0 u + a2 v + a3 a) + C(a1 u + a4 v + a5 a))``, then
     ``a_new = a0 (u_new − u) − a2 v − a3 a`` and ``v_new = v + dt ((1 − γ) a + γ a_new)``)
-    is built for a chunk of steps with batched inverses, so that the loop over time is
+    is built for a chunk of steps with batched products, so that the loop over time is
     one small matrix product per step.  With ``G_i = K_eff⁻¹ [a0 M + a1 C_i | a2 M + a4 C_i
     | a3 M + a5 C_i | f_i]`` the rows of ``T_i`` are ``G_i``, ``dt γ (a0 G_i + A) + V``
-    and ``a0 G_i + A`` with constant ``A``, ``V``: one batched product per chunk."""
+    and ``a0 G_i + A`` with constant ``A``, ``V``.  ``G_i`` is built from
+    ``K_eff⁻¹ M`` and ``K_eff⁻¹ C_i = K_eff⁻¹ C₀ + (K_eff⁻¹ L_i) c L_iᵀ`` (products with
+    the constant M, C₀ are one matrix product per chunk)."""
     n_w, n = f.shape
+    r = Lt.shape[1]
     g, dt = scheme.gamma, scheme.dt
     a0, a1, a2, a3, a4, a5 = (scheme.a0, scheme.a1, scheme.a2, scheme.a3, scheme.a4,
                               scheme.a5)
-    eye = np.eye(n)
     m = 3 * n + 1
+    d_inv = np.linalg.inv(scheme.effective(M, C0, K0))
     # augmented state [s; 1]: the constant term rides in T's last column, one product
-    # per step
-    A = np.zeros((n, m))
-    A[:, :n], A[:, n:2 * n], A[:, 2 * n:3 * n] = -a0 * eye, -a2 * eye, -a3 * eye
-    V = np.zeros((n, m))
-    V[:, n:2 * n], V[:, 2 * n:3 * n] = eye, dt * (1 - g) * eye
+    # per step; A and V are diagonal blocks, added on their diagonals only
+    i = np.arange(n)
+    diag_a = ((i, i, -a0), (i, n + i, -a2), (i, 2 * n + i, -a3))
+    diag_v = ((i, n + i, 1.0), (i, 2 * n + i, dt * (1 - g)))
     out = np.empty((n_w + 1, m))
     out[0, :-1], out[:, -1] = s0, 1.0
     chunk = max(min(STEP_CHUNK, n_w), 1)
-    B = np.empty((chunk, n, m))
     T = np.empty((chunk, m, m))
     T[:, -1, :-1], T[:, -1, -1] = 0.0, 1.0
+    blocks = ((a0, a1), (a2, a4), (a3, a5))
     for lo in range(0, n_w, chunk):
         hi = min(lo + chunk, n_w)
-        Ci, Bw, Tw = C[lo:hi], B[:hi - lo], T[:hi - lo]
-        kinv = np.linalg.inv(scheme.effective(M, Ci, K[lo:hi]))
-        for j, (cm, cc) in enumerate(((a0, a1), (a2, a4), (a3, a5))):
-            blk = Bw[:, :, j * n:(j + 1) * n]
-            np.multiply(cc, Ci, out=blk)
-            blk += cm * M
-        Bw[:, :, -1] = f[lo:hi]
+        Lti, Wti, Tw = Lt[lo:hi], Wt[lo:hi], T[:hi - lo]
+        Li = np.ascontiguousarray(Lti.transpose(0, 2, 1))
+        Hti = Wti + (a1 * c)[:, None] * Lti
+        Yi = d_inv @ Li
+        X = Hti @ Yi  # I + Hᵀ D⁻¹ L; then K_eff⁻¹ L = D⁻¹ L X⁻¹
+        X[:, np.arange(r), np.arange(r)] += 1.0
+        KL = Yi @ np.linalg.inv(X)
+        kinv = d_inv - KL @ (Hti @ d_inv)
+        flat = kinv.reshape(-1, n)
+        KM = (flat @ M).reshape(kinv.shape)
+        KC = (flat @ C0).reshape(kinv.shape)  # K_eff⁻¹ C_i = K_eff⁻¹ C₀ + (K_eff⁻¹ L) c Lᵀ
+        KC += KL @ (c[:, None] * Lti)
         G, Ta, Tv = Tw[:, :n], Tw[:, 2 * n:3 * n], Tw[:, n:2 * n]
-        np.matmul(kinv, Bw, out=G)
+        for j, (cm, cc) in enumerate(blocks):
+            blk = G[:, :, j * n:(j + 1) * n]
+            np.multiply(cm, KM, out=blk)
+            if cc:
+                blk += cc * KC
+        np.matmul(kinv, f[lo:hi, :, None], out=G[:, :, -1:])
         np.multiply(a0, G, out=Ta)
-        Ta += A
+        for rr, cc, val in diag_a:
+            Ta[:, rr, cc] += val
         np.multiply(dt * g, Ta, out=Tv)
-        Tv += V
+        for rr, cc, val in diag_v:
+            Tv[:, rr, cc] += val
         rows = list(out[lo:hi + 1])  # views: the loop is one gemv per step
         for t_i, s_i, s_next in zip(Tw, rows, rows[1:], strict=False):
             np.dot(t_i, s_i, out=s_next)
