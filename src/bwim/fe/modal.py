@@ -6,7 +6,8 @@ Contract
   Lanczos (``scipy.sparse.linalg.eigsh`` with σ = 0), the inverse operator being the
   banded Cholesky factor of K.  Tiny systems use a dense solver.
 * Shapes are mass-normalised (``Φᵀ M Φ = I``) and signed so that the largest deflection
-  component of each mode is positive, which makes results reproducible.
+  component of each mode is positive (the first such DOF where extrema tie to round-off,
+  as on a symmetric deck), which makes results reproducible.
 * Frequencies are returned in Hz, ascending; ``omega`` in rad/s.
 * :func:`select_modes` is the truncation a simulation or an identification uses: every
   mode up to a cut-off frequency (default sampling_rate / 8), checked against the
@@ -96,7 +97,10 @@ def lowest_modes(
     mnorm = np.sqrt(np.einsum("ij,ij->j", vecs, M @ vecs))
     vecs = vecs / mnorm
     w = vecs[deflection_dofs] if deflection_dofs.size else vecs
-    big = np.argmax(np.abs(w), axis=0)
+    # The first DOF whose |w| is within round-off of the largest: on a symmetric deck two
+    # opposite extrema tie, and a plain argmax would pick either by the last bit.
+    aw = np.abs(w)
+    big = np.argmax(aw >= (1.0 - 1e-8) * aw.max(axis=0), axis=0)
     vecs = vecs * np.sign(w[big, np.arange(w.shape[1])])
     omega = np.sqrt(np.clip(vals, 0.0, None))
     return Modes(frequencies=omega / (2 * np.pi), omega=omega, shapes=vecs)
