@@ -1,8 +1,16 @@
-"""Round trips simulate → identify on the paper's truck, bridge and road (exact model).
+"""Round trips simulate → identify without the inverse crime (issue 12).
+
+The data come from the paper's slab on a 24 × 16 mesh (0.5 m elements) with the paper's
+truck on the paper's road (coupled VBI); the forces are identified on the paper's 12 × 8
+model (1 m elements), whose strains at the sensors differ from the data's by up to 8.7 %
+longitudinally and 53 % transversely (``bwim.fe.convergence.check_mesh``).  Noise is
+gauge noise: one absolute σ for every strain channel, 5 % of the record's peak strain.
+The algebra (dynamic programming = batch Tikhonov) is checked on same-model data in
+``tests/unit/test_mfi.py``; nothing here is.
 
 Targets (issue 4, PAPER_CASES §5.1): static axle weights within 2 %, force RMS error within
 5 % of the static axle load over the central 80 % of each axle's time on the deck.
-Measured numbers are in the comments; with 5 % noise the degradation is reported.
+The numbers in the comments were measured on noise seeds 7, 8 and 9.
 """
 
 import numpy as np
@@ -15,55 +23,62 @@ from bwim.mfi import force_errors, identify_forces
 
 @pytest.fixture(scope="module")
 def crossing():
-    bridge = paper.slab_bridge()
-    rec = bwim.simulate(bridge, paper.truck(), speed=paper.SPEED, lane=paper.LANE,
+    data_mesh = paper.slab_bridge(nx=24, ny=16)
+    rec = bwim.simulate(data_mesh, paper.truck(), speed=paper.SPEED, lane=paper.LANE,
                         sensors=paper.sensors(), road=paper.road(1))
-    return bridge, rec
+    return paper.slab_bridge(), rec
 
 
-def test_exact_model_round_trip(crossing):
+@pytest.fixture(scope="module")
+def noisy(crossing):
+    return crossing[1].with_noise(0.05, seed=7)  # gauge noise, one σ for every channel
+
+
+def test_finer_mesh_data_noise_free(crossing):
     bridge, rec = crossing
     ident = identify_forces(bridge, rec)
     err = force_errors(ident, rec.truth)
-    # measured: weights −0.58 %, +1.00 %; RMS 0.52 %, 0.66 %; GVW +0.44 %
-    assert np.all(np.abs(err.weight_error) < 0.02)
-    assert np.all(err.rms_error < 0.05)
-    assert abs(err.gvw_error) < 0.02
+    # measured: weights −0.97 %, +0.26 %; RMS 1.21 %, 1.38 %; GVW −0.18 %
+    assert np.all(np.abs(err.weight_error) < 0.015)
+    assert np.all(err.rms_error < 0.02)
+    assert abs(err.gvw_error) < 0.005
     assert ident.unknowns.value == "wheel"
     assert ident.lcurve is not None and ident.lcurve.lam.size == 16  # 8 coarse + 8 fine (issue 15)
-    # the model reproduces the readings
-    assert np.abs(ident.fitted - rec.data).max() < 0.02 * np.abs(rec.data).max()
+    # the coarser model reproduces the finer mesh's readings: measured 2.8 % of the peak
+    assert np.abs(ident.fitted - rec.data).max() < 0.04 * np.abs(rec.data).max()
 
 
 def test_longitudinal_strains_only(crossing):
-    """The paper identifies from the 9 longitudinal strains only."""
+    """The paper identifies from the 9 longitudinal strains only (where the 1 m mesh is
+    best: the transverse strains carry its largest error)."""
     bridge, rec = crossing
     long = rec.channels([s for s in rec.sensors if s.kind.value == "strain_x"])
-    err = force_errors(identify_forces(bridge, long), rec.truth)
-    assert np.all(np.abs(err.weight_error) < 0.02) and np.all(err.rms_error < 0.05)
+    ident = identify_forces(bridge, long)
+    err = force_errors(ident, rec.truth)
+    # measured: weights −0.96 %, +0.30 %; RMS 1.17 %, 1.32 %; fit 1.1 % of the peak
+    assert np.all(np.abs(err.weight_error) < 0.015) and np.all(err.rms_error < 0.02)
+    assert np.abs(ident.fitted - long.data).max() < 0.02 * np.abs(long.data).max()
 
 
-def test_noise_degradation_and_first_beats_zeroth(crossing):
-    bridge, rec = crossing
-    noisy = rec.with_noise(0.05, seed=7, per_channel=True)  # the paper's §5.2 noise
+def test_gauge_noise_and_first_beats_zeroth(crossing, noisy):
+    bridge, _ = crossing
     first = identify_forces(bridge, noisy, order="first")
     zeroth = identify_forces(bridge, noisy, order="zeroth")
     e1, e0 = force_errors(first, noisy.truth), force_errors(zeroth, noisy.truth)
-    # measured with 5 % noise: first order weights −1.15 %, +1.08 %, RMS 3.3 %, 3.5 %;
-    # zeroth order RMS 22.7 %, 12.0 %
-    assert np.all(np.abs(e1.weight_error) < 0.025)
-    assert np.all(e1.rms_error < 0.06)
-    assert e1.rms_error.mean() < 0.5 * e0.rms_error.mean()
+    # measured (seeds 7–9): first order weights within 1.43 %, RMS 3.3–4.4 %;
+    # zeroth order RMS 22–23 % and 14 %
+    assert np.all(np.abs(e1.weight_error) < 0.02)
+    assert np.all(e1.rms_error < 0.05)
+    assert e1.rms_error.mean() < 0.3 * e0.rms_error.mean()
 
     def roughness(ident):
         return np.abs(np.diff(ident.axle_forces, axis=0)).mean()
 
-    assert roughness(first) < 0.2 * roughness(zeroth)  # measured 0.28 vs 9.6 kN per step
+    assert roughness(first) < 0.05 * roughness(zeroth)  # measured 0.26 vs 9.3 kN per step
 
 
-def test_lcurve_picks_lambda_near_the_best(crossing):
-    bridge, rec = crossing
-    noisy = rec.with_noise(0.05, seed=7, per_channel=True)  # the paper's §5.2 noise
+def test_lcurve_picks_lambda_near_the_best(crossing, noisy):
+    bridge, _ = crossing
     ident = identify_forces(bridge, noisy)
     grid = ident.lcurve.lam
     errors = np.array([
@@ -72,27 +87,33 @@ def test_lcurve_picks_lambda_near_the_best(crossing):
     ])
     best = grid[::2][int(np.argmin(errors))]
     chosen = force_errors(ident, noisy.truth).rms_error.mean()
-    # measured: corner λ 6.6× the error-minimising one, error 1.33× the minimum
+    # measured (seeds 7–9): corner λ 3.4–4.1× the error-minimising one of the grid, error
+    # 1.23–1.34× the minimum
     assert abs(np.log10(ident.lam / best)) < 1.0
     assert chosen < 1.6 * errors.min()
 
 
-def test_gcv_rule(crossing):
-    bridge, rec = crossing
-    noisy = rec.with_noise(0.05, seed=7, per_channel=True)  # the paper's §5.2 noise
+def test_gcv_rule(crossing, noisy):
+    bridge, _ = crossing
     ident = identify_forces(bridge, noisy, lam="gcv")
     err = force_errors(ident, noisy.truth)
-    # measured: RMS 3.3 %, 1.9 %; weights −1.3 %, +1.2 %
-    assert np.all(err.rms_error < 0.06) and np.all(np.abs(err.weight_error) < 0.025)
+    # measured (seeds 7–9): RMS 2.5–3.5 %; weights within 1.7 %
+    assert np.all(err.rms_error < 0.05) and np.all(np.abs(err.weight_error) < 0.025)
 
 
 def test_beam_bridge_round_trip():
-    """The same code on a 1-D beam: one force per axle."""
-    beam = bwim.Bridge.beam(length=25.0, n_elements=25, E=3.5e10, I=1.39, mu=18358.0,
-                            z_bottom=0.8)
+    """The same code on a 1-D beam: one force per axle.  Data on 100 elements, the model
+    on 25 (Hermite beams are nodally exact, so the mesh barely matters here; the check is
+    that per-axle unknowns work)."""
+    def beam(n):
+        return bwim.Bridge.beam(length=25.0, n_elements=n, E=3.5e10, I=1.39, mu=18358.0,
+                                z_bottom=0.8)
+
     sensors = [bwim.Sensor(x=x) for x in (6.25, 12.5, 18.75)]
-    rec = bwim.simulate(beam, paper.truck(), speed=22.0, sensors=sensors, road=paper.road(2))
-    ident = identify_forces(beam, rec)
+    rec = bwim.simulate(beam(100), paper.truck(), speed=22.0, sensors=sensors,
+                        road=paper.road(2))
+    ident = identify_forces(beam(25), rec)
     err = force_errors(ident, rec.truth)
     assert ident.unknowns.value == "axle"
-    assert np.all(np.abs(err.weight_error) < 0.02) and np.all(err.rms_error < 0.05)
+    # measured: weights −0.06 %, +1.16 %; RMS 2.8 %, 2.3 %
+    assert np.all(np.abs(err.weight_error) < 0.02) and np.all(err.rms_error < 0.04)
