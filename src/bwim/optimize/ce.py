@@ -62,16 +62,7 @@ from bwim.optimize.substructure import (
     parameter_elite_masks,
 )
 
-__all__ = [
-    "DEFAULT_INJECTION",
-    "CEHistory",
-    "CEResult",
-    "CrossEntropy",
-    "StopReason",
-    "load_checkpoint",
-    "minimize_ce",
-    "save_checkpoint",
-]
+# The public names are listed once, in bwim.optimize.__all__ (which re-exports them).
 
 #: Default variance-injection schedule c_1, c_2, …: σ_i ← c_j |m_i| after the j-th
 #: convergence (the paper starts at 0.3 and decreases over successive convergences).
