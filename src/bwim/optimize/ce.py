@@ -55,6 +55,7 @@ from scipy.special import ndtr, ndtri
 from bwim.atomic import atomic_output
 from bwim.errors import InputError, require_finite
 from bwim.optimize.parallel import check_int, evaluate
+from bwim.optimize.result import OptimizeResult
 from bwim.optimize.substructure import (
     check_neighbours,
     elite_mask,
@@ -127,7 +128,7 @@ class CEHistory:
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class CEResult:
+class CEResult(OptimizeResult):
     """The state of a Cross-Entropy run, in :func:`scipy.optimize.minimize` vocabulary.
 
     Attributes
@@ -161,13 +162,7 @@ class CEResult:
         The iterations (1-based) at which they happened.
     """
 
-    x: np.ndarray
-    fun: float
     fun_parts: np.ndarray | None
-    nfev: int
-    nit: int
-    success: bool
-    message: str
     stop_reasons: tuple[StopReason, ...]
     history: CEHistory
     mean: np.ndarray
