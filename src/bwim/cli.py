@@ -982,6 +982,10 @@ class Arg:
     names: tuple[str, ...]
     options: dict = field(default_factory=dict)
 
+    def updated(self, **options) -> Arg:
+        """This argument with more (or other) add_argument options, e.g. a command's help."""
+        return Arg(self.names, {**self.options, **options})
+
 
 def arg(*names: str, **options) -> Arg:
     """An :class:`Arg`: ``arg("-o", "--output", default="x", help="...")``."""
@@ -1011,7 +1015,12 @@ class Command:
     raw: bool = True
 
 
+# Arguments several commands share, declared once; a command adds its own default and help.
 _SCENARIO = arg("scenario", metavar="SCENARIO.toml")
+_RECORDS = arg("records", nargs="+", metavar="RECORD")
+_OUTPUT = arg("-o", "--output")
+_BRIDGE = arg("--bridge", metavar="MODEL.toml")
+_REFERENCE = arg("--reference", metavar="REF.csv")
 _FORCE = arg("--force", action="store_true",
              help="overwrite existing outputs (an input is never overwritten)")
 
@@ -1022,11 +1031,11 @@ COMMANDS: tuple[Command, ...] = (
         "Simulate the scenario's vehicle crossing its bridge (vehicle-bridge interaction over "
         "the road profile) and write what the sensors read.\n\n"
         "  bwim simulate examples/paper_slab.toml -o crossing.h5",
-        (arg("scenario", metavar="SCENARIO.toml", help="the scenario file"),
-         arg("-o", "--output", default="record.h5", metavar="RECORD",
+        (_SCENARIO.updated(help="the scenario file"),
+         _OUTPUT.updated(default="record.h5", metavar="RECORD",
              help="output record: .h5 (with positions, passage and true forces) or .csv "
              "(time and readings only); default record.h5"),
-         arg("--bridge", metavar="MODEL.toml",
+         _BRIDGE.updated(
              help="use this bridge model (e.g. a calibrated one) instead of the scenario's "
              "[bridge]"),
          _FORCE)),
@@ -1040,9 +1049,9 @@ COMMANDS: tuple[Command, ...] = (
         "lane and approach, over its [road].\n\n"
         "  bwim calibrate examples/paper_slab.toml crossing.h5 -o calibrated.toml",
         (_SCENARIO,
-         arg("records", nargs="+", metavar="RECORD",
+         _RECORDS.updated(
              help="records of the calibration truck (.h5 or .csv; folders expanded)"),
-         arg("-o", "--output", default="calibrated.toml", metavar="MODEL.toml",
+         _OUTPUT.updated(default="calibrated.toml", metavar="MODEL.toml",
              help="the calibrated bridge model (default calibrated.toml)"),
          arg("--method", choices=[m.value for m in Method],
              help="optimiser: ce = Cross-Entropy (the paper's), lm = Levenberg-Marquardt, "
@@ -1062,13 +1071,13 @@ COMMANDS: tuple[Command, ...] = (
         "the same OUT skips the records already done.  Exit code 0: all records done, "
         "1: some failed, 2: bad input.\n\n"
         "  bwim identify examples/paper_slab.toml records/ --bridge calibrated.toml -o out/",
-        (arg("scenario", metavar="SCENARIO.toml",
+        (_SCENARIO.updated(
              help="the scenario (sensor positions; passage of CSV records)"),
-         arg("records", nargs="+", metavar="RECORD",
+         _RECORDS.updated(
              help="records (.h5 or .csv) or folders of them"),
-         arg("--bridge", metavar="MODEL.toml",
+         _BRIDGE.updated(
              help="bridge model (default: the scenario's [bridge])"),
-         arg("-o", "--output", default="bwim-out/identify", metavar="OUT",
+         _OUTPUT.updated(default="bwim-out/identify", metavar="OUT",
              help="a results folder, or summary.csv (results beside it); default "
              "bwim-out/identify"),
          OneOf((arg("--jobs", type=int, default=1,
@@ -1094,7 +1103,7 @@ COMMANDS: tuple[Command, ...] = (
         "  bwim weigh site.toml events/ --calibration-records calibration/ -o out/\n"
         "  bwim weigh examples/paper_slab.toml truck.h5 --calibration-records crossing.h5",
         (_SCENARIO,
-         arg("records", nargs="+", metavar="RECORD",
+         _RECORDS.updated(
              help="records of the vehicles to weigh: logger files of any extension with a "
              "[logger] scenario, else .h5 or .csv; folders expanded"),
          OneOf((arg("--calibration-records", nargs="+", metavar="REC",
@@ -1102,12 +1111,12 @@ COMMANDS: tuple[Command, ...] = (
                     "line from"),
                 arg("--influence", metavar="IL.h5", help="a saved influence line")),
                required=True),
-         arg("-o", "--output", default="bwim-out/weigh", metavar="FOLDER",
+         _OUTPUT.updated(default="bwim-out/weigh", metavar="FOLDER",
              help="results folder (default bwim-out/weigh)"),
          arg("--resume", action="store_true",
              help="keep the records already weighed in the folder's summary.csv and weigh "
              "only the others"),
-         arg("--bridge", metavar="MODEL.toml",
+         _BRIDGE.updated(
              help="logger files only: weigh each detected vehicle by moving force "
              "identification with this (calibrated) bridge model instead of Moses; the "
              "gauges need x and y, and the first detector's position its x on the bridge"),
@@ -1121,7 +1130,7 @@ COMMANDS: tuple[Command, ...] = (
         "record, n_axles, axle_spacings_m, axle_weights_kN, gvw_kN; lists ';'-separated).\n\n"
         "  bwim accuracy out/summary.csv --reference static_weights.csv",
         (arg("summary", metavar="SUMMARY.csv", help="a summary written by bwim weigh"),
-         arg("--reference", required=True, metavar="REF.csv",
+         _REFERENCE.updated(required=True,
              help="static weights of the same vehicles (by record name)"),
          arg("--repeatability", choices=["r1", "r2", "RR1", "RR2"], default="RR2",
              help="test conditions: r1/r2 repeatability (one or a few vehicles passing many "
@@ -1132,7 +1141,7 @@ COMMANDS: tuple[Command, ...] = (
              "reproducibility, III full (seasons); default I"),
          arg("--strict", action="store_true",
              help="a reference record absent from the summary is an error"),
-         arg("-o", "--output", metavar="TABLE.csv", help="also write the table as CSV"),
+         _OUTPUT.updated(metavar="TABLE.csv", help="also write the table as CSV"),
          _FORCE)),
     Command(
         "report", _report,
@@ -1142,10 +1151,10 @@ COMMANDS: tuple[Command, ...] = (
         "(.toml) and summaries (.csv); folders are expanded.\n\n"
         "  bwim report out/ -o report.html",
         (arg("results", nargs="+", metavar="RESULTS"),
-         arg("-o", "--output", default="report.html", metavar="REPORT.html",
+         _OUTPUT.updated(default="report.html", metavar="REPORT.html",
              help="default report.html"),
          arg("--title", default="bwim report", help="the page title"),
-         arg("--reference", metavar="REF.csv",
+         _REFERENCE.updated(
              help="static weights of the weighed vehicles: adds the COST 323 accuracy "
              "classes of each weigh summary.csv among the results"),
          _FORCE)),

@@ -73,6 +73,7 @@ from bwim.calibration.problem import ParameterSpace, estimate_noise
 from bwim.errors import InputError, NumericalError
 from bwim.fe.bridge import Bridge
 from bwim.fe.influence import influence_surfaces
+from bwim.optimize import OptimizeResult
 from bwim.records import Record
 from bwim.vehicles import Vehicle
 
@@ -111,7 +112,7 @@ class MassFit:
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class QuasiStaticCalibration:
+class QuasiStaticCalibration(OptimizeResult):
     """Result of :func:`calibrate_quasistatic` (scipy.optimize vocabulary for the fit).
 
     Attributes
@@ -142,12 +143,6 @@ class QuasiStaticCalibration:
     bridge: Bridge
     params: dict
     uncertainty: dict
-    x: np.ndarray
-    fun: float
-    nfev: int
-    nit: int
-    success: bool
-    message: str
     cutoff: float
     force_factors: tuple
     scale_bias: float

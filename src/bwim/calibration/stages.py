@@ -40,7 +40,7 @@ from scipy.optimize import least_squares
 
 from bwim.calibration.problem import ParameterSpace
 from bwim.errors import InputError, parse_enum
-from bwim.optimize import CrossEntropy
+from bwim.optimize import CrossEntropy, OptimizeResult
 from bwim.optimize.parallel import evaluate
 
 __all__ = ["MIN_ELITE", "SUBSTRUCTURED_SMOOTHING", "Method", "StageResult", "run_stage"]
@@ -70,16 +70,10 @@ class Method(StrEnum):
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class _Outcome:
+class _Outcome(OptimizeResult):
     """What an optimiser's loop returns to :func:`run_stage` (which adds the stage's name,
     labels, start and wall time: :class:`StageResult`)."""
 
-    x: np.ndarray
-    fun: float
-    nfev: int
-    nit: int
-    success: bool
-    message: str
     uncertainty: np.ndarray
     history: object
 

@@ -22,8 +22,9 @@ Contract
 * Depends only on the core (records, sensors, errors) and :class:`~bwim.wim.InfluenceLine`.
 """
 
-from bwim.detect.axles import DEFAULT_MAX_AXLE_SPACING, detect_axles
+from bwim.detect.axles import detect_axles
 from bwim.detect.lateral import LateralPosition, lateral_position, section_gauges
+from bwim.detect.options import DEFAULT_MAX_AXLE_SPACING, DetectOptions
 from bwim.detect.result import (
     FLAG_COUNT_MISMATCH,
     FLAG_MULTIPLE_PRESENCE,
@@ -49,6 +50,7 @@ __all__ = [
     "FLAG_STRAIN_ONLY",
     "FLAG_TRUNCATED",
     "FLAG_UNEXPLAINED_STRAIN",
+    "DetectOptions",
     "Detection",
     "LateralPosition",
     "VehicleDetection",

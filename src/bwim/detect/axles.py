@@ -48,10 +48,10 @@ from scipy.signal import find_peaks
 
 from bwim.errors import InputError, require_finite, require_instance, require_positive
 from bwim.records import Record
-from bwim.wim import InfluenceLine
 
 from .assemble import VehicleEstimate, assemble_detection
 from .lateral import section_gauges
+from .options import DetectOptions
 from .presence import resolve_span
 from .result import (
     FLAG_COUNT_MISMATCH,
@@ -62,34 +62,13 @@ from .result import (
 )
 from .signals import parabolic_vertex, remove_baseline, robust_sigma
 
-__all__ = ["DEFAULT_MAX_AXLE_SPACING", "check_speed_range", "detect_axles"]
-
-#: Longest distance between consecutive axles of one vehicle, m.  Common heavy vehicles
-#: have at most 7–10 m between consecutive axles (the gap between a tractor's drive axles
-#: and a long semi-trailer's axle group; EU Directive 96/53/EC caps articulated vehicles
-#: at 16.5 m overall, so no spacing inside one reaches 12 m), while two vehicles following
-#: one another have the rear overhang, the headway and the front overhang between their
-#: axles (≥ 12 m at a 0.5 s headway at 80 km/h).
-DEFAULT_MAX_AXLE_SPACING = 12.0
+__all__ = ["detect_axles"]
 
 #: Detector matching tolerance: ± this many samples plus ``_TOL_REL`` × the lag.
 _TOL_SAMPLES = 2.0
 _TOL_REL = 0.01
 #: Spacing accuracy aimed at, m (sets the spacing-agreement confidence factor).
 _SPACING_SCALE = 0.1
-
-
-def check_speed_range(speed_range: Any) -> tuple[float, float]:
-    """``(v_min, v_max)`` in m/s, 0 < v_min < v_max, or InputError."""
-    try:
-        lo, hi = (float(v) for v in speed_range)
-    except (TypeError, ValueError):
-        raise InputError(f"speed_range must be (v_min, v_max) in m/s, got {speed_range!r}"
-                         ) from None
-    lo, hi = require_positive("speed_range[0]", lo), require_positive("speed_range[1]", hi)
-    if hi <= lo:
-        raise InputError(f"speed_range must have v_min < v_max, got ({lo:g}, {hi:g})")
-    return lo, hi
 
 
 def _noise(y: np.ndarray) -> float:
@@ -179,18 +158,12 @@ def detect_axles(
     distance: float = 3.0,
     *,
     position: float = 0.0,
-    speed_range: tuple[float, float] = (5.0, 40.0),
     snr_threshold: float = 6.0,
     min_height: float = 0.05,
-    min_axle_spacing: float = 0.8,
-    max_axle_spacing: float = DEFAULT_MAX_AXLE_SPACING,
     baseline_window: float = 0.25,
     polarity: int | None = None,
     speed_tolerance: float = 0.02,
-    span: float | Sequence[float] | InfluenceLine | None = None,
-    gauges: Sequence[str] | None = None,
-    lateral_threshold: float = 0.5,
-    unexplained_fraction: float = 0.2,
+    **options: Any,
 ) -> Detection:
     """Vehicles (speed, axles, spacings, arrival, lateral position) from two axle detectors.
 
@@ -205,17 +178,10 @@ def detect_axles(
     position : float
         x of the first detector in the influence-line frame, m: ``delay`` = time the first
         axle passes the first detector − ``position / speed``.
-    speed_range : (float, float)
-        Plausible speeds, m/s: bounds the lag between the detectors.
     snr_threshold : float
         A peak must exceed this many robust noise standard deviations.
     min_height : float
         ... and this fraction of the channel's largest peak (against ringing).
-    min_axle_spacing : float
-        Closest axles to resolve, m (peaks closer than this at the highest speed merge).
-    max_axle_spacing : float
-        Axles farther apart belong to different vehicles, m (see
-        :data:`DEFAULT_MAX_AXLE_SPACING`).
     baseline_window : float
         Running-median window of the baseline, s (several pulse widths).
     polarity : +1, −1 or None
@@ -223,18 +189,11 @@ def detect_axles(
     speed_tolerance : float
         Per-axle speeds of one vehicle differing by more (relative standard deviation)
         flag ``speed_varies``.
-    span : float, (x_start, x_end), InfluenceLine or None
-        The instrumented span in the influence-line frame (a length L means (0, L)), for
-        each vehicle's time on the span (multiple presence, truncation, unexplained
-        strain, the lateral-position window).  None: not checked.
-    gauges : sequence of str, optional
-        Strain gauges across one section for the lateral position and the strain
-        activity check (default :func:`~bwim.detect.lateral.section_gauges`).
-    lateral_threshold : float
-        See :func:`~bwim.detect.lateral.lateral_position`.
-    unexplained_fraction : float
-        Strain activity outside every vehicle's time on the span larger than this
-        fraction of the largest activity inside flags ``unexplained_strain``.
+    **options
+        The keywords of :class:`~bwim.detect.options.DetectOptions`: ``speed_range``
+        (bounds the lag between the detectors), ``min_axle_spacing`` (peaks closer than
+        this at the highest speed merge), ``max_axle_spacing``, ``span`` (None: not
+        checked), ``gauges``, ``lateral_threshold``, ``unexplained_fraction``.
 
     Returns
     -------
@@ -243,6 +202,7 @@ def detect_axles(
         ``message``) when no axle pair was found.  Confidence: see the module docstring.
     """
     require_instance("record", record, Record)
+    opts = DetectOptions(**options)
     if isinstance(detectors, str) or len(detectors) != 2 or detectors[0] == detectors[1]:
         raise InputError(f"detectors must name two different channels, got {detectors!r}")
     names = [s.name for s in record.sensors]
@@ -251,21 +211,18 @@ def detect_axles(
             raise InputError(f"detectors: no channel {d!r} in this record; channels: {names}")
     dist = require_positive("distance", distance)
     pos = require_finite("position", position)
-    v_lo, v_hi = check_speed_range(speed_range)
+    v_lo, v_hi = opts.speed_range
     snr_thr = require_positive("snr_threshold", snr_threshold)
     rel = require_finite("min_height", min_height)
     if not 0.0 <= rel < 1.0:
         raise InputError(f"min_height must lie in [0, 1), got {min_height!r}")
-    min_sp = require_positive("min_axle_spacing", min_axle_spacing)
-    max_sp = require_positive("max_axle_spacing", max_axle_spacing)
-    if max_sp <= min_sp:
-        raise InputError("max_axle_spacing must exceed min_axle_spacing")
+    min_sp, max_sp = opts.min_axle_spacing, opts.max_axle_spacing
     bw = require_positive("baseline_window", baseline_window)
     if polarity not in (None, 1, -1):
         raise InputError(f"polarity must be +1, -1 or None, got {polarity!r}")
     sp_tol = require_positive("speed_tolerance", speed_tolerance)
-    span_x = resolve_span(span)
-    gauge_sens = section_gauges(record, gauges, exclude=detectors)
+    span_x = resolve_span(opts.span)
+    gauge_sens = section_gauges(record, opts.gauges, exclude=detectors)
 
     t = record.time
     fs = record.sampling_rate
@@ -385,7 +342,7 @@ def detect_axles(
             detector_times=arr[:, 1:3]))
     return assemble_detection(
         record, vehicles, method=method, position=pos, span=span_x, gauges=gauge_sens,
-        lateral_threshold=lateral_threshold, unexplained_fraction=unexplained_fraction,
+        lateral_threshold=opts.lateral_threshold, unexplained_fraction=opts.unexplained_fraction,
         flags=(FLAG_COUNT_MISMATCH,) if orphans else (),
         notes=_count_note(detectors, n1, n2, orphans))
 

@@ -27,18 +27,7 @@ import numpy as np
 from bwim.errors import InputError, require_instance
 from bwim.records import Passage, Record
 
-__all__ = [
-    "FLAG_COUNT_MISMATCH",
-    "FLAG_MULTIPLE_PRESENCE",
-    "FLAG_NO_AXLES",
-    "FLAG_SINGLE_AXLE",
-    "FLAG_SPEED_VARIES",
-    "FLAG_STRAIN_ONLY",
-    "FLAG_TRUNCATED",
-    "FLAG_UNEXPLAINED_STRAIN",
-    "Detection",
-    "VehicleDetection",
-]
+# The public names are listed once, in bwim.detect.__all__ (which re-exports them).
 
 #: The two axle detectors saw different numbers of axles (a missed or spurious peak).
 FLAG_COUNT_MISMATCH = "axle_count_mismatch"

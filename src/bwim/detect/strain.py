@@ -46,6 +46,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy.optimize import least_squares, nnls
@@ -55,8 +56,8 @@ from bwim.records import Record
 from bwim.wim import InfluenceLine
 
 from .assemble import VehicleEstimate, assemble_detection
-from .axles import DEFAULT_MAX_AXLE_SPACING, check_speed_range
 from .lateral import section_gauges
+from .options import DetectOptions
 from .presence import resolve_span
 from .result import FLAG_NO_AXLES, FLAG_SINGLE_AXLE, FLAG_STRAIN_ONLY, Detection
 from .signals import parabolic_vertex
@@ -301,18 +302,12 @@ def detect_from_strain(
     influence_line: InfluenceLine,
     *,
     channels: Sequence[str] | None = None,
-    speed_range: tuple[float, float] = (5.0, 40.0),
     known_spacings: Sequence[float] | None = None,
     vibration: bool = True,
     n_speeds: int = 24,
     rate: float = 128.0,
     min_axle_fraction: float = 0.1,
-    min_axle_spacing: float = 0.8,
-    max_axle_spacing: float = DEFAULT_MAX_AXLE_SPACING,
-    span: float | Sequence[float] | InfluenceLine | None = None,
-    gauges: Sequence[str] | None = None,
-    lateral_threshold: float = 0.5,
-    unexplained_fraction: float = 0.2,
+    **options: Any,
 ) -> Detection:
     """Vehicles (speed, axles, spacings, arrival, lateral position) from the strain alone.
 
@@ -324,8 +319,6 @@ def detect_from_strain(
         Calibrated or from a model; its frame is the passages' frame.
     channels : sequence of str, optional
         Names of the line's channels to fit (default all).
-    speed_range : (float, float)
-        Plausible speeds, m/s.
     known_spacings : sequence of float, optional
         Axle spacings of a known vehicle (m): fit only its speed and arrival time.
     vibration : bool
@@ -337,12 +330,10 @@ def detect_from_strain(
         Rate the readings are block-averaged to for the search, Hz.
     min_axle_fraction : float
         Deconvolved axles lighter than this fraction of the heaviest are dropped.
-    min_axle_spacing, max_axle_spacing : float
-        Closer axles merge; farther ones belong to different vehicles, m.
-    span : float, (x_start, x_end), InfluenceLine or None
-        For the time on the span (default the influence line's support).
-    gauges, lateral_threshold, unexplained_fraction
-        As in :func:`~bwim.detect.detect_axles`.
+    **options
+        The keywords of :class:`~bwim.detect.options.DetectOptions`: ``speed_range``,
+        ``min_axle_spacing``, ``max_axle_spacing``, ``span`` (None: the influence line's
+        support), ``gauges``, ``lateral_threshold``, ``unexplained_fraction``.
 
     Returns
     -------
@@ -351,6 +342,7 @@ def detect_from_strain(
     """
     require_instance("record", record, Record)
     require_instance("influence_line", influence_line, InfluenceLine)
+    opts = DetectOptions(**options)
     il = influence_line
     if channels is None:
         idx = list(range(len(il.channels)))
@@ -363,15 +355,14 @@ def detect_from_strain(
                 raise InputError(f"channels: the influence line has no channel {c!r}; it has "
                                  f"{list(il.channel_names)}")
             idx.append(il.channel_names.index(c))
-    v_lo, v_hi = check_speed_range(speed_range)
+    v_lo, v_hi = opts.speed_range
     if int(n_speeds) < 4:
         raise InputError(f"n_speeds must be at least 4, got {n_speeds!r}")
     rate = require_positive("rate", rate)
     frac = float(min_axle_fraction)
     if not 0.0 <= frac < 1.0:
         raise InputError(f"min_axle_fraction must lie in [0, 1), got {min_axle_fraction!r}")
-    min_sp = require_positive("min_axle_spacing", min_axle_spacing)
-    max_sp = require_positive("max_axle_spacing", max_axle_spacing)
+    min_sp, max_sp = opts.min_axle_spacing, opts.max_axle_spacing
     offsets = None
     if known_spacings is not None:
         ks = np.array(known_spacings, dtype=float, ndmin=1)
@@ -379,7 +370,7 @@ def detect_from_strain(
             raise InputError(f"known_spacings must be positive distances, got "
                              f"{np.asarray(known_spacings).tolist()}")
         offsets = np.concatenate([[0.0], np.cumsum(ks)])
-    span_x = resolve_span(il if span is None else span)
+    span_x = resolve_span(il if opts.span is None else opts.span)
     chans = [il.channels[k] for k in idx]
     ords = il.ordinates[:, idx]
     scale = np.abs(ords).max(axis=0)
@@ -387,7 +378,7 @@ def detect_from_strain(
         raise InputError("the influence line is zero in a channel")
     ords = ords / scale
     readings = np.column_stack([c.read(record) for c in chans]) / scale
-    gauge_sens = section_gauges(record, gauges)
+    gauge_sens = section_gauges(record, opts.gauges)
     x0, x1 = il.support
     t = record.time
     method = "strain"
@@ -431,5 +422,5 @@ def detect_from_strain(
             flags=tuple(flags), amplitudes=loads[g] / top if top > 0 else loads[g],
             snr=1.0 / max(fit.residual, 1e-12), residual=fit.residual))
     return assemble_detection(record, estimates, method=method, span=span_x,
-                              gauges=gauge_sens, lateral_threshold=lateral_threshold,
-                              unexplained_fraction=unexplained_fraction)
+                              gauges=gauge_sens, lateral_threshold=opts.lateral_threshold,
+                              unexplained_fraction=opts.unexplained_fraction)

@@ -48,8 +48,8 @@ from bwim.records import Record
 from bwim.wim.influence_line import hat_design, smoothing_penalty
 
 from .assemble import VehicleEstimate, assemble_detection
-from .axles import check_speed_range
 from .lateral import section_gauges
+from .options import check_speed_range
 from .result import FLAG_NO_AXLES, FLAG_STRAIN_ONLY, Detection
 
 __all__ = ["detect_known_truck"]

@@ -47,17 +47,7 @@ from bwim.site import SiteSetup
 from bwim.vehicles import Vehicle, named
 from bwim.vehicles.types import Truck3D
 
-__all__ = [
-    "build_bridge",
-    "build_logger_format",
-    "build_passage",
-    "build_road",
-    "build_sensors",
-    "build_site_setup",
-    "build_vehicle",
-    "load_record",
-    "simulate_scenario",
-]
+# The public names are listed once, in bwim.io.__all__ (which re-exports them).
 
 
 @contextlib.contextmanager

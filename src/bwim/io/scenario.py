@@ -114,24 +114,7 @@ from bwim.sensors import SensorKind
 from bwim.vehicles import NAMED_VEHICLES
 from bwim.vehicles.types import HalfCar, MovingForces, SprungMass, TractorSemitrailer, Truck3D
 
-__all__ = [
-    "VEHICLE_TYPES",
-    "BridgeSpec",
-    "CalibrateSpec",
-    "GirderSpec",
-    "IdentifySpec",
-    "RoadSpec",
-    "RunSpec",
-    "Scenario",
-    "SectionSpec",
-    "SensorSpec",
-    "VehicleSpec",
-    "dump_scenario",
-    "load_scenario",
-    "read_toml",
-    "scenario_from_dict",
-    "scenario_to_dict",
-]
+# The public names are listed once, in bwim.io.__all__ (which re-exports them).
 
 #: Vehicle classes by their scenario ``type``.
 VEHICLE_TYPES: Mapping[str, type] = MappingProxyType({

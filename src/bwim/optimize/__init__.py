@@ -6,6 +6,8 @@ This package knows nothing about bridges; :mod:`bwim.calibration` drives it.
   sub-structured); :attr:`CrossEntropy.result` is a :class:`CEResult`.
 * :func:`minimize_ce` — the loop for a function, serial or parallel, with checkpoints.
 * :func:`evaluate` — a population's objective values, serial, joblib or dask.
+* :class:`OptimizeResult` — ``x, fun, nfev, nit, success, message`` in scipy's
+  vocabulary, the base of every minimiser's result here and in :mod:`bwim.calibration`.
 """
 
 from bwim.optimize.ce import (
@@ -19,6 +21,7 @@ from bwim.optimize.ce import (
     save_checkpoint,
 )
 from bwim.optimize.parallel import evaluate
+from bwim.optimize.result import OptimizeResult
 from bwim.optimize.substructure import parameter_elite_masks
 
 __all__ = [
@@ -26,6 +29,7 @@ __all__ = [
     "CEHistory",
     "CEResult",
     "CrossEntropy",
+    "OptimizeResult",
     "StopReason",
     "evaluate",
     "load_checkpoint",

@@ -41,6 +41,7 @@ This module knows nothing about bridges.
 from __future__ import annotations
 
 import math
+import operator
 import os
 import pickle
 from collections.abc import Callable, Sequence
@@ -55,6 +56,7 @@ from scipy.special import ndtr, ndtri
 from bwim.atomic import atomic_output
 from bwim.errors import InputError, require_finite
 from bwim.optimize.parallel import check_int, evaluate
+from bwim.optimize.result import OptimizeResult
 from bwim.optimize.substructure import (
     check_neighbours,
     elite_mask,
@@ -62,16 +64,7 @@ from bwim.optimize.substructure import (
     parameter_elite_masks,
 )
 
-__all__ = [
-    "DEFAULT_INJECTION",
-    "CEHistory",
-    "CEResult",
-    "CrossEntropy",
-    "StopReason",
-    "load_checkpoint",
-    "minimize_ce",
-    "save_checkpoint",
-]
+# The public names are listed once, in bwim.optimize.__all__ (which re-exports them).
 
 #: Default variance-injection schedule c_1, c_2, …: σ_i ← c_j |m_i| after the j-th
 #: convergence (the paper starts at 0.3 and decreases over successive convergences).
@@ -136,7 +129,7 @@ class CEHistory:
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class CEResult:
+class CEResult(OptimizeResult):
     """The state of a Cross-Entropy run, in :func:`scipy.optimize.minimize` vocabulary.
 
     Attributes
@@ -170,13 +163,7 @@ class CEResult:
         The iterations (1-based) at which they happened.
     """
 
-    x: np.ndarray
-    fun: float
     fun_parts: np.ndarray | None
-    nfev: int
-    nit: int
-    success: bool
-    message: str
     stop_reasons: tuple[StopReason, ...]
     history: CEHistory
     mean: np.ndarray
@@ -207,6 +194,11 @@ def _vector(name: str, value: object, n: int) -> np.ndarray:
         raise InputError(f"{name} must be a number or an array of shape ({n},), "
                          f"got shape {arr.shape}")
     return arr.copy()
+
+
+def _read_only(attr: str, doc: str) -> property:
+    """A read-only property returning ``self.<attr>`` as it is (no copy)."""
+    return property(operator.attrgetter(attr), doc=doc)
 
 
 def _sample_truncated(rng: np.random.Generator, mean: np.ndarray, std: np.ndarray,
@@ -438,6 +430,14 @@ class CrossEntropy:
         self._h_converged: list[bool] = []
 
     # -- read-only properties --------------------------------------------------------
+    population = _read_only("_population", "Trials per iteration, k.")
+    n_elite = _read_only("_n_elite", "Elite set size ⌈ρk⌉ (per part when sub-structured).")
+    neighbours = _read_only("_neighbours", "The neighbour map (n_parts, n_params), or None.")
+    nfev = _read_only("_nfev", "Trials evaluated so far.")
+    nit = _read_only("_nit", "Iterations (told populations) so far.")
+    best_fun = _read_only("_best_fun",
+                          "Total objective of :attr:`best_x` (inf before any finite evaluation).")
+
     @property
     def n_params(self) -> int:
         """Number of parameters."""
@@ -449,45 +449,15 @@ class CrossEntropy:
         return None if self._neighbours is None else self._neighbours.shape[0]
 
     @property
-    def population(self) -> int:
-        """Trials per iteration, k."""
-        return self._population
-
-    @property
-    def n_elite(self) -> int:
-        """Elite set size ⌈ρk⌉ (per part when sub-structured)."""
-        return self._n_elite
-
-    @property
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """Lower and upper bounds, each (n_params,) (±inf where unbounded)."""
         return self._lo.copy(), self._hi.copy()
-
-    @property
-    def neighbours(self) -> np.ndarray | None:
-        """The neighbour map (n_parts, n_params), or None."""
-        return self._neighbours
-
-    @property
-    def nfev(self) -> int:
-        """Trials evaluated so far."""
-        return self._nfev
-
-    @property
-    def nit(self) -> int:
-        """Iterations (told populations) so far."""
-        return self._nit
 
     @property
     def best_x(self) -> np.ndarray:
         """Best trial so far, (n_params,) (the initial mean before any evaluation); cheaper
         than ``result.x``."""
         return (self._x0 if self._best_x is None else self._best_x).copy()
-
-    @property
-    def best_fun(self) -> float:
-        """Total objective of :attr:`best_x` (inf before any finite evaluation)."""
-        return self._best_fun
 
     @property
     def mean(self) -> np.ndarray:
