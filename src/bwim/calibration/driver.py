@@ -32,11 +32,21 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from enum import StrEnum
 
 import numpy as np
 
+from bwim.calibration.meshdefect import (
+    AUTO_MAX_LEVELS,
+    AUTO_TOL,
+    MAX_PASSES,
+    TOL,
+    MeshCorrection,
+    check_levels,
+    corrector,
+    mesh_defects,
+)
 from bwim.calibration.problem import (
     DynamicObjective,
     ParameterSpace,
@@ -97,6 +107,10 @@ class Calibration:
     discretisation : MeshConvergence or None
         The model's discretisation error at the sensors
         (:func:`bwim.fe.convergence.check_mesh`), when ``calibrate`` was asked for it.
+    mesh_correction : MeshCorrection or None
+        What the mesh defect correction did (``mesh_correction=``): its passes, parameter
+        changes and defect.  ``two_stage`` then holds the paper's two stages on the
+        uncorrected model, ``params`` the corrected answer.
     """
 
     bridge: Bridge
@@ -109,6 +123,7 @@ class Calibration:
     two_stage: dict = field(default_factory=dict)
     weighting: str = "none"
     discretisation: MeshConvergence | None = None
+    mesh_correction: MeshCorrection | None = None
 
     @property
     def history(self) -> tuple[object, ...]:
@@ -154,6 +169,7 @@ def calibrate(
     shared_girders: bool = True,
     weights=None,
     mesh_check: float | None = None,
+    mesh_correction: int | str = 0,
     n_modes: int | None = None,
     n_jobs: int = 1,
     client=None,
@@ -218,6 +234,21 @@ def calibrate(
         sensors under the calibration truck's static loads
         (:func:`bwim.fe.convergence.check_mesh`); its discretisation error per sensor is
         :attr:`Calibration.discretisation`.  Default: no check.
+    mesh_correction : int or "auto"
+        Remove the model's discretisation error by defect correction
+        (:mod:`bwim.calibration.meshdefect`): after the stages, the crossings are simulated
+        on the calibrated model and on it bisected ``mesh_correction`` times (1 to
+        :data:`~bwim.calibration.meshdefect.MAX_LEVELS`); the measured readings minus
+        that difference are calibrated again from the answer (least squares, the same
+        stages), until no parameter moves by more than
+        :data:`~bwim.calibration.meshdefect.TOL` (at most
+        :data:`~bwim.calibration.meshdefect.MAX_PASSES` passes).  The answer is the finer
+        model's calibration at the cost of a few of its simulations.  ``"auto"``: as many
+        bisections as :func:`~bwim.fe.convergence.check_mesh` of the starting model needs
+        to bring its estimated error below ``mesh_check`` (default
+        :data:`~bwim.calibration.meshdefect.AUTO_TOL`) at every sensor, at most
+        :data:`~bwim.calibration.meshdefect.AUTO_MAX_LEVELS`; none if it is already
+        there.  Default 0: no correction.  See :attr:`Calibration.mesh_correction`.
     n_modes : int, optional
         Modes of the dynamic simulations (default: up to sampling_rate / 8).
     n_jobs, client
@@ -239,34 +270,22 @@ def calibrate(
                    n_records=len(records))
     weighting, weights, disc = _weights(weights, records, start_bridge, vehicle, mesh_check)
     unknowns = tuple(unknowns)
-    rng = np.random.default_rng(seed)
-    shared = frozenset(Bridge.GIRDER_FAMILIES if shared_girders else ())
-    current = start_bridge
-    stages: list[StageResult] = []
-    uncertainty: dict[str, np.ndarray] = {}
-    two_stage: dict[str, np.ndarray] = {}
-    for stage in _plan(start_bridge, unknowns, method, refine, population, max_evals,
-                       substructure):
-        space = ParameterSpace(current, stage.families, shared)
-        if stage.dynamic:
-            objective = DynamicObjective(space, records, vehicle, road, current,
-                                         approach=approach, n_modes=n_modes, weights=weights)
-        else:
-            objective = StaticObjective(space, records, vehicle, base=current,
-                                        weights=weights)
-        result = run_stage(
-            stage.method, objective, space, name=stage.name, bounds=bounds, seed=rng,
-            population=_population(stage, space.n), elite_fraction=elite_fraction,
-            convergences=convergences, max_evals=stage.max_evals,
-            neighbours=neighbour_map(space, records[0].sensors) if stage.substructured
-            else None, n_jobs=n_jobs, client=client, callback=callback,
-            options=_ce_options(stage, ce_options))
-        current = space.bridge(result.x, current)
-        stages.append(result)
-        if stage.method is not Method.LM or stage.name != _REFINE_NAME:
-            two_stage.update({f: current.params[f] for f in stage.families})
-        if stage.keeps_uncertainty:
-            uncertainty.update(space.split(result.uncertainty))
+    ctx = _Context(vehicle=vehicle, road=road, approach=approach, n_modes=n_modes,
+                   weights=weights, bounds=bounds, rng=np.random.default_rng(seed),
+                   shared=frozenset(Bridge.GIRDER_FAMILIES if shared_girders else ()),
+                   elite_fraction=elite_fraction, convergences=convergences, n_jobs=n_jobs,
+                   client=client, callback=callback, ce_options=ce_options)
+    levels = _correction_levels(mesh_correction, start_bridge, records, vehicle, mesh_check)
+    first = _run_plan(_plan(start_bridge, unknowns, method, refine, population, max_evals,
+                            substructure), start_bridge, records, ctx)
+    current, stages, uncertainty = first.bridge, list(first.stages), first.uncertainty
+    correction = None
+    if levels:
+        passes = _correct_mesh(first, levels, unknowns, refine, max_evals, records, ctx)
+        current, uncertainty = passes.passes[-1].bridge, passes.passes[-1].uncertainty
+        stages += [s for p in passes.passes for s in p.stages]
+        correction = passes.result
+    two_stage = first.two_stage
     stiff = tuple(u for u in unknowns if u in Bridge.STIFFNESS_FAMILIES)
     report = identifiability(current, records, vehicle, names=stiff or None)
     params = {u: current.params[u] for u in unknowns}
@@ -278,7 +297,8 @@ def calibrate(
     return Calibration(bridge=current, params=params, uncertainty=unc, stages=tuple(stages),
                        nfev=sum(s.nfev for s in stages),
                        wall_time=time.perf_counter() - t0, identifiability=report,
-                       two_stage=two, weighting=weighting, discretisation=disc)
+                       two_stage=two, weighting=weighting, discretisation=disc,
+                       mesh_correction=correction)
 
 
 def _weights(weights, records: list[Record], bridge: Bridge, vehicle: Vehicle,
@@ -435,3 +455,119 @@ def _ce_options(stage: _Stage, ce_options: dict | None) -> dict | None:
     if stage.substructured:  # std smoothing makes sub-structured CE reliable on NLC problems
         opts.setdefault("smoothing", SUBSTRUCTURED_SMOOTHING)
     return opts
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class _Context:
+    """What every stage of one :func:`calibrate` call shares."""
+
+    vehicle: Vehicle
+    road: RoadProfile | None
+    approach: float | None
+    n_modes: int | None
+    weights: list | None
+    bounds: tuple[float, float]
+    rng: np.random.Generator
+    shared: frozenset
+    elite_fraction: float
+    convergences: int
+    n_jobs: int
+    client: object
+    callback: Callable | None
+    ce_options: dict | None
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class _Pass:
+    """One run of a plan: the model it ends on, its stages, the uncertainties they kept
+    and the parameters after the paper's two stages."""
+
+    bridge: Bridge
+    stages: tuple[StageResult, ...]
+    uncertainty: dict
+    two_stage: dict
+
+
+def _run_plan(plan: list[_Stage], bridge: Bridge, records: list[Record], ctx: _Context,
+              suffix: str = "") -> _Pass:
+    """Run the stages of ``plan`` in turn from ``bridge``, each from the last's answer."""
+    current = bridge
+    stages: list[StageResult] = []
+    uncertainty: dict[str, np.ndarray] = {}
+    two_stage: dict[str, np.ndarray] = {}
+    for stage in plan:
+        space = ParameterSpace(current, stage.families, ctx.shared)
+        if stage.dynamic:
+            objective = DynamicObjective(space, records, ctx.vehicle, ctx.road, current,
+                                         approach=ctx.approach, n_modes=ctx.n_modes,
+                                         weights=ctx.weights)
+        else:
+            objective = StaticObjective(space, records, ctx.vehicle, base=current,
+                                        weights=ctx.weights)
+        result = run_stage(
+            stage.method, objective, space, name=stage.name + suffix, bounds=ctx.bounds,
+            seed=ctx.rng, population=_population(stage, space.n),
+            elite_fraction=ctx.elite_fraction, convergences=ctx.convergences,
+            max_evals=stage.max_evals,
+            neighbours=neighbour_map(space, records[0].sensors) if stage.substructured
+            else None, n_jobs=ctx.n_jobs, client=ctx.client, callback=ctx.callback,
+            options=_ce_options(stage, ctx.ce_options))
+        current = space.bridge(result.x, current)
+        stages.append(result)
+        if stage.method is not Method.LM or stage.name != _REFINE_NAME:
+            two_stage.update({f: current.params[f] for f in stage.families})
+        if stage.keeps_uncertainty:
+            uncertainty.update(space.split(result.uncertainty))
+    return _Pass(bridge=current, stages=tuple(stages), uncertainty=uncertainty,
+                 two_stage=two_stage)
+
+
+def _correction_levels(mesh_correction, bridge: Bridge, records: list[Record],
+                       vehicle: Vehicle, mesh_check: float | None) -> int:
+    """Bisections of the corrector model (0: no correction); see ``calibrate``."""
+    if isinstance(mesh_correction, str):
+        if mesh_correction.strip().lower() != "auto":
+            check_levels(mesh_correction)  # the one-line error
+        mc = check_mesh(bridge, records[0].sensors, _static_loads(records[0], vehicle, bridge),
+                        tol=mesh_check or AUTO_TOL, max_levels=AUTO_MAX_LEVELS + 1)
+        ok = np.flatnonzero(mc.relative_error.max(axis=1) < mc.tol)
+        return int(ok[0]) if ok.size else AUTO_MAX_LEVELS
+    if isinstance(mesh_correction, (int, np.integer)) and not isinstance(
+            mesh_correction, bool) and mesh_correction == 0:
+        return 0
+    return check_levels(mesh_correction)
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class _Correction:
+    """The defect-correction passes (each a :class:`_Pass`) and their report."""
+
+    passes: tuple[_Pass, ...]
+    result: MeshCorrection
+
+
+def _correct_mesh(first: _Pass, levels: int, unknowns: tuple[str, ...], refine: Refine,
+                  max_evals, records: list[Record], ctx: _Context) -> _Correction:
+    """Defect-correction passes from ``first`` (meshdefect module docstring)."""
+    plan = _plan(first.bridge, unknowns, Method.LM, refine, None, max_evals, False)
+    peak = max(float(np.abs(r.data).max()) for r in records)
+    current, passes, changes, defects = first, [], [], []
+    for k in range(1, MAX_PASSES + 1):
+        fine = corrector(current.bridge, levels)
+        d = mesh_defects(current.bridge, records, ctx.vehicle, ctx.road, fine=fine,
+                         approach=ctx.approach, n_modes=ctx.n_modes)
+        corrected = [replace(r, data=r.data - dk)
+                     for r, dk in zip(records, d, strict=True)]
+        new = _run_plan(plan, current.bridge, corrected, ctx, suffix=f", mesh pass {k}")
+        changes.append(max(float(np.abs(new.bridge.params[u] / current.bridge.params[u]
+                                        - 1).max()) for u in unknowns))
+        defects.append(max(float(np.abs(dk).max()) for dk in d) / peak)
+        passes.append(new)
+        current = new
+        if changes[-1] < TOL:
+            break
+    g = fine.model.grid
+    result = MeshCorrection(levels=levels, mesh=(g.nx, g.ny if fine.is_plate else 0),
+                            change=np.array(changes), defect=np.array(defects),
+                            converged=changes[-1] < TOL, tol=TOL)
+    return _Correction(passes=tuple(passes), result=result)
