@@ -21,7 +21,8 @@ from bwim.errors import InputError, require_finite, require_positive
 from bwim.records import AxleLayout, Passage
 from bwim.vehicles.model import BodySpec, VehicleModel, WheelSpec, assemble
 
-__all__ = ["HalfCar", "MovingForces", "SprungMass", "TractorSemitrailer", "Truck3D", "Vehicle"]
+__all__ = ["HalfCar", "MovingForces", "SprungAxles", "SprungAxles3D", "SprungMass",
+           "TractorSemitrailer", "Truck3D", "Vehicle"]
 
 
 def _per_axle(name: str, value, n: int, *, positive: bool = True, allow_zero=False):
@@ -66,13 +67,6 @@ class Vehicle(AxleLayout, ABC):
     def passage(self, speed: float, lane: float = 0.0, delay: float = 0.0) -> Passage:
         return Passage(speed=speed, lane=lane, axle_spacings=self.axle_spacings,
                        track_width=self.track_width, delay=delay)
-
-    def _wheels(self, body: int, *, two_d: bool) -> list[WheelSpec]:
-        """The wheels of every axle, hung from ``body`` (per-axle parameter arrays)."""
-        return _axle_wheels(self.n_axles, self.axle_offsets, self.track_width, body,
-                            self.wheel_mass, self.suspension_stiffness,
-                            self.suspension_damping, self.tyre_stiffness, self.tyre_damping,
-                            two_d=two_d)
 
     @abstractmethod
     def model(self) -> VehicleModel:
@@ -182,7 +176,32 @@ def _axle_wheels(
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class HalfCar(Vehicle):
+class SprungAxles(Vehicle):
+    """The base of the vehicles whose axles hang from rigid bodies: the axle layout and
+    the per-axle wheel mass, suspension and tyre (arrays of length n_axles, a scalar
+    broadcast; the subclasses say whether a value is per wheel or per axle).
+
+    ``track_width`` None (the default here): one contact per axle on the centre line.
+    """
+
+    axle_spacings: np.ndarray
+    wheel_mass: np.ndarray
+    suspension_stiffness: np.ndarray
+    suspension_damping: np.ndarray
+    tyre_stiffness: np.ndarray
+    tyre_damping: np.ndarray = 0.0
+    track_width: float | None = None
+
+    def _wheels(self, body: int, *, two_d: bool) -> list[WheelSpec]:
+        """The wheels of every axle, hung from ``body`` (per-axle parameter arrays)."""
+        return _axle_wheels(self.n_axles, self.axle_offsets, self.track_width, body,
+                            self.wheel_mass, self.suspension_stiffness,
+                            self.suspension_damping, self.tyre_stiffness, self.tyre_damping,
+                            two_d=two_d)
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class HalfCar(SprungAxles):
     """A 2-D vehicle: body bounce and pitch, one wheel mass per axle (values per axle).
 
     ``cg_offset`` is the body's centre of gravity behind the first axle, m.  With a
@@ -192,14 +211,7 @@ class HalfCar(Vehicle):
 
     body_mass: float
     pitch_inertia: float
-    axle_spacings: np.ndarray
     cg_offset: float
-    wheel_mass: np.ndarray
-    suspension_stiffness: np.ndarray
-    suspension_damping: np.ndarray
-    tyre_stiffness: np.ndarray
-    tyre_damping: np.ndarray = 0.0
-    track_width: float | None = None
 
     def __post_init__(self) -> None:
         _validate_body(self, roll=False)
@@ -211,9 +223,17 @@ class HalfCar(Vehicle):
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class Truck3D(Vehicle):
-    """The paper's 3-D rigid truck: body bounce, pitch and roll; each axle a rigid bar
-    with a wheel mass at each end (values **per wheel**, one per axle).
+class SprungAxles3D(SprungAxles):
+    """The 3-D vehicles' axles: each a rigid bar with a wheel mass at each end, the wheels
+    ``track_width`` apart (values **per wheel**, one per axle)."""
+
+    track_width: float = 2.0
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Truck3D(SprungAxles3D):
+    """The paper's 3-D rigid truck: body bounce, pitch and roll; axles as in
+    :class:`SprungAxles3D` (values per wheel).
 
     DOF: 3 + 2 × n_axles.  ``cg_offset`` is the body CG behind the first axle, m.
     """
@@ -221,14 +241,7 @@ class Truck3D(Vehicle):
     body_mass: float
     pitch_inertia: float
     roll_inertia: float
-    axle_spacings: np.ndarray
     cg_offset: float
-    wheel_mass: np.ndarray
-    suspension_stiffness: np.ndarray
-    suspension_damping: np.ndarray
-    tyre_stiffness: np.ndarray
-    tyre_damping: np.ndarray = 0.0
-    track_width: float = 2.0
 
     def __post_init__(self) -> None:
         _validate_body(self, roll=True)
@@ -261,10 +274,11 @@ class Truck3D(Vehicle):
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class TractorSemitrailer(Vehicle):
+class TractorSemitrailer(SprungAxles3D):
     """An articulated 3-D vehicle: a tractor and a semitrailer, each a rigid body with
     bounce, pitch and roll, joined at the fifth wheel (a hitch that transmits vertical
-    force and, being roll-stiff, roll).  Axles as in :class:`Truck3D` (values per wheel).
+    force and, being roll-stiff, roll).  Axles as in :class:`SprungAxles3D` (values per
+    wheel).
 
     Axles ``0 … n_tractor_axles − 1`` belong to the tractor, the rest to the trailer.
     ``hitch_offset`` is the fifth wheel's distance behind the first axle; CG offsets are
@@ -281,13 +295,6 @@ class TractorSemitrailer(Vehicle):
     trailer_cg_offset: float
     hitch_offset: float
     n_tractor_axles: int
-    axle_spacings: np.ndarray
-    wheel_mass: np.ndarray
-    suspension_stiffness: np.ndarray
-    suspension_damping: np.ndarray
-    tyre_stiffness: np.ndarray
-    tyre_damping: np.ndarray = 0.0
-    track_width: float = 2.0
 
     def __post_init__(self) -> None:
         sp = _spacings(self.axle_spacings)
