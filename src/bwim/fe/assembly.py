@@ -43,14 +43,6 @@ class ElementSet:
     mass_units: np.ndarray
     shape_id: np.ndarray
 
-    @property
-    def n_elements(self) -> int:
-        return self.dofs.shape[0]
-
-    @property
-    def n_parts(self) -> int:
-        return self.stiffness_units.shape[0]
-
 
 @dataclass(frozen=True, eq=False)
 class _Scatter:

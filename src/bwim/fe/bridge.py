@@ -111,6 +111,17 @@ def _zone_map_beam(grid: Grid, zones: Any) -> tuple[np.ndarray, int]:
     return inv.ravel(), labels.size
 
 
+def _structure(grid: Grid, supports: Any, zone_map: tuple[np.ndarray, int], **section: Any
+               ) -> FEModel:
+    """The FE model of a mesh: ``supports`` parsed, the elements' parameter zones from
+    ``zone_map`` (:func:`_zone_map_plate` or :func:`_zone_map_beam`), and the section
+    constants (``thickness``, ``poisson``, ``girders`` of a plate; ``inertia``,
+    ``z_bottom`` of a beam)."""
+    zone_of, n_zones = zone_map
+    return FEModel(grid=grid, supports=Supports.parse(supports), zone_of_element=zone_of,
+                   n_zones=n_zones, **section)
+
+
 def _param_array(name: str, value: Any, n: int) -> np.ndarray:
     arr = np.array(value, dtype=float, ndmin=1)
     if arr.size == 1 and n != 1:
@@ -234,22 +245,15 @@ class Bridge:
         if E_x is None or E_y is None:
             raise InputError("a plate needs E, or both E_x and E_y")
         grid = Grid(xl, yl)
-        zone_of, n_zones = _zone_map_plate(grid, zones)
+        zone_map = _zone_map_plate(grid, zones)
         girders = tuple(girders)
         for k, gd in enumerate(girders):
             if not isinstance(gd, Girder):
                 raise InputError(f"girders[{k}] must be a bwim.Girder, got {type(gd).__name__}")
             if not 0.0 <= gd.y <= width:
                 raise InputError(f"girders[{k}].y = {gd.y:g} m is off the deck (width {width:g})")
-        model = FEModel(
-            grid=grid,
-            supports=Supports.parse(supports),
-            zone_of_element=zone_of,
-            n_zones=n_zones,
-            thickness=thickness,
-            poisson=poisson,
-            girders=girders,
-        )
+        model = _structure(grid, supports, zone_map, thickness=thickness, poisson=poisson,
+                           girders=girders)
         return cls(
             model=model,
             E_x=E_x,
@@ -302,15 +306,8 @@ class Bridge:
         zb = None if z_bottom is None else require_positive("z_bottom", z_bottom)
         _check_mesh_memory(_n_elements("n_elements", n_elements, x_lines), None)
         grid = Grid(_lines("x_lines", "n_elements", length, n_elements, x_lines))
-        zone_of, n_zones = _zone_map_beam(grid, zones)
-        model = FEModel(
-            grid=grid,
-            supports=Supports.parse(supports),
-            zone_of_element=zone_of,
-            n_zones=n_zones,
-            inertia=inertia,
-            z_bottom=zb,
-        )
+        model = _structure(grid, supports, _zone_map_beam(grid, zones), inertia=inertia,
+                           z_bottom=zb)
         return cls(model=model, E_x=E, mu=mu, damping_ratio=damping_ratio)
 
     # --- parameters ------------------------------------------------------------------
@@ -433,7 +430,7 @@ class Bridge:
                   and k[1] >= n]
         if cached:
             m = self._cache[min(cached)]
-            return Modes(frequencies=m.frequencies[:n], omega=m.omega[:n], shapes=m.shapes[:, :n])
+            return Modes(omega=m.omega[:n], shapes=m.shapes[:, :n])
         return self._cached(("modes", n), make)
 
     def load_vector(self, loads: Sequence[PointLoad]) -> np.ndarray:

@@ -21,6 +21,7 @@ Contract
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -42,21 +43,23 @@ class Modes:
 
     Attributes
     ----------
-    frequencies : ndarray, shape (n,)
-        Natural frequencies, Hz, ascending.
     omega : ndarray, shape (n,)
-        Circular frequencies, rad/s.
+        Circular frequencies, rad/s, ascending.
     shapes : ndarray, shape (n_free, n)
         Mass-normalised mode shapes on the model's free DOF.
     """
 
-    frequencies: np.ndarray
     omega: np.ndarray
     shapes: np.ndarray
 
+    @cached_property
+    def frequencies(self) -> np.ndarray:
+        """Natural frequencies, Hz, ascending (``omega / 2π``)."""
+        return self.omega / (2 * np.pi)
+
     @property
     def n(self) -> int:
-        return self.frequencies.size
+        return self.omega.size
 
 
 def lowest_modes(
@@ -103,7 +106,7 @@ def lowest_modes(
     big = np.argmax(aw >= (1.0 - 1e-8) * aw.max(axis=0), axis=0)
     vecs = vecs * np.sign(w[big, np.arange(w.shape[1])])
     omega = np.sqrt(np.clip(vals, 0.0, None))
-    return Modes(frequencies=omega / (2 * np.pi), omega=omega, shapes=vecs)
+    return Modes(omega=omega, shapes=vecs)
 
 
 def select_modes(
@@ -150,5 +153,4 @@ def scaled_modes(modes: Modes, mass_factor: float) -> Modes:
     (see the module docstring)."""
     c = require_positive("mass_factor", mass_factor)
     s = 1.0 / np.sqrt(c)
-    omega = modes.omega * s
-    return Modes(frequencies=omega / (2 * np.pi), omega=omega, shapes=modes.shapes * s)
+    return Modes(omega=modes.omega * s, shapes=modes.shapes * s)
