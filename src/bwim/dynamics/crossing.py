@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from enum import StrEnum
 from functools import cached_property
 
@@ -274,9 +274,9 @@ def run_crossing(
     c_speed = crossing.speed
     fs = 1.0 / scheme.dt
     if full_system:
+        moving = replace(rows, slopes=rows.slopes * c_speed[None, :, None])  # v ∂N/∂x
         rep = FullBridge(M=bridge.mass_matrix(), C=bridge.damping_matrix(),
-                         K=bridge.stiffness_matrix(), dofs=rows.dofs, vals=rows.vals,
-                         slopes=rows.slopes * c_speed[None, :, None])
+                         K=bridge.stiffness_matrix(), rows=moving)
         modes = None
     else:
         if modes is None:

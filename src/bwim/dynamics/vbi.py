@@ -30,6 +30,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from bwim.dynamics.newmark import Newmark, NewmarkResult, final_state, integrate
+from bwim.fe.model import PointRows
 from bwim.vehicles.model import VehicleModel
 
 __all__ = [
@@ -145,15 +146,14 @@ class ModalBridge:
 class FullBridge:
     """The full FE system with contact rows on the time grid (free DOF).
 
-    ``dofs``, ``vals``, ``slopes`` have shape (n_t, n_c, k); ``slopes`` include the speed.
+    ``rows`` holds ``dofs``, ``vals``, ``slopes`` of shape (n_t, n_c, k); ``slopes``
+    include the speed (``v ∂N/∂x``).
     """
 
     M: object
     C: object
     K: object
-    dofs: np.ndarray
-    vals: np.ndarray
-    slopes: np.ndarray
+    rows: PointRows
 
     @property
     def n(self) -> int:
@@ -166,7 +166,7 @@ class FullBridge:
 
     def _load(self, k: int, F_k: np.ndarray) -> np.ndarray:
         f = np.zeros(self.n)
-        np.add.at(f, self.dofs[k], self.vals[k] * F_k[:, None])
+        np.add.at(f, self.rows.dofs[k], self.rows.vals[k] * F_k[:, None])
         return f
 
     def forced(self, F: np.ndarray, scheme: Newmark, start: int = 0,
@@ -191,10 +191,11 @@ class FullBridge:
 
     def under(self, st: NewmarkResult) -> tuple[np.ndarray, np.ndarray]:
         k = np.arange(st.u.shape[0])[:, None, None]
-        ud = st.u[k, self.dofs]
-        w = np.einsum("kcj,kcj->kc", self.vals, ud)
-        w_dot = (np.einsum("kcj,kcj->kc", self.vals, st.v[k, self.dofs])
-                 + np.einsum("kcj,kcj->kc", self.slopes, ud))
+        rows = self.rows
+        ud = st.u[k, rows.dofs]
+        w = np.einsum("kcj,kcj->kc", rows.vals, ud)
+        w_dot = (np.einsum("kcj,kcj->kc", rows.vals, st.v[k, rows.dofs])
+                 + np.einsum("kcj,kcj->kc", rows.slopes, ud))
         return w, w_dot
 
 
@@ -510,7 +511,7 @@ def _full_steps(crossing, bridge: FullBridge, scheme, span, k_out, y_state, vsta
     y, yv, ya = y_state
     _approach_forces(crossing, veh, Y, YV, start, first, F)
     for k in range(start + 1, k_out + 1):
-        dofs, vals, slopes = bridge.dofs[k], bridge.vals[k], bridge.slopes[k]
+        dofs, vals, slopes = bridge.rows.dofs[k], bridge.rows.vals[k], bridge.rows.slopes[k]
         r, rd = crossing.r[k], crossing.r_dot[k]
         cu_b = scheme.damping_history(u, uv, ua)
         Lt_cu = np.einsum("cj,cj->c", vals, cu_b[dofs])
