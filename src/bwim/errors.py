@@ -19,12 +19,16 @@ from collections.abc import Iterable
 from enum import Enum
 from typing import TypeVar
 
+import numpy as np
+
 __all__ = [
     "BwimError",
     "InputError",
     "NumericalError",
     "parse_enum",
+    "require_axis",
     "require_choice",
+    "require_columns",
     "require_finite",
     "require_instance",
     "require_positive",
@@ -118,3 +122,29 @@ def parse_enum(enum: type[E], value: object, name: str, *, context: str = "") ->
         raise InputError(
             f"unknown {name} {_fmt(value)}{context}; expected one of {options}"
         ) from None
+
+
+def require_axis(name: str, values, what: str = "samples") -> np.ndarray:
+    """``values`` as a float array: 1-D, at least two ``what``, finite and strictly
+    increasing (a time or position axis), else InputError naming ``name``."""
+    import numpy as np
+
+    a = np.asarray(values, dtype=float)
+    if a.ndim != 1 or a.size < 2:
+        raise InputError(f"{name} must be a 1-D array of at least two {what}")
+    if not np.all(np.isfinite(a)) or np.any(np.diff(a) <= 0):
+        raise InputError(f"{name} must be finite and strictly increasing")
+    return a
+
+
+def require_columns(name: str, values, shape: tuple[int, int], labels: str) -> np.ndarray:
+    """``values`` as a float table of ``shape`` (a 1-D array is one column), else
+    InputError naming ``name`` and the expected ``labels``, e.g. ``"(n_t, n_sensors)"``."""
+    import numpy as np
+
+    a = np.asarray(values, dtype=float)
+    if a.ndim == 1:
+        a = a[:, None]
+    if a.shape != tuple(shape):
+        raise InputError(f"{name} must have shape {labels} = {tuple(shape)}, got {a.shape}")
+    return a

@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bwim.errors import InputError, require_finite, require_positive
+from bwim.errors import InputError, require_axis, require_columns, require_finite, require_positive
 from bwim.sensors import Sensor
 
 __all__ = ["AxleLayout", "Passage", "Record", "SimulationSettings", "Truth", "VBIConvergence",
@@ -222,19 +222,8 @@ class Record:
     settings: SimulationSettings | None = None
 
     def __post_init__(self) -> None:
-        t = np.asarray(self.time, dtype=float)
-        d = np.asarray(self.data, dtype=float)
-        if d.ndim == 1:
-            d = d[:, None]
-        if t.ndim != 1 or t.size < 2:
-            raise InputError("time must be a 1-D array of at least two samples")
-        if d.shape != (t.size, len(self.sensors)):
-            raise InputError(
-                f"data must have shape (n_t, n_sensors) = ({t.size}, {len(self.sensors)}), "
-                f"got {d.shape}"
-            )
-        if not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
-            raise InputError("time must be finite and strictly increasing")
+        t = require_axis("time", self.time)
+        d = require_columns("data", self.data, (t.size, len(self.sensors)), "(n_t, n_sensors)")
         if not np.all(np.isfinite(d)):
             bad = np.argwhere(~np.isfinite(d))[0]
             raise InputError(

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from bwim.errors import InputError, require_positive, require_range
+from bwim.errors import InputError, require_axis, require_positive, require_range
 from bwim.limits import check_memory
 
 __all__ = ["ISO_CLASSES", "RoadProfile"]
@@ -49,12 +49,8 @@ class RoadProfile:
     elevation: np.ndarray
 
     def __post_init__(self) -> None:
-        x = np.asarray(self.x, dtype=float)
+        x = require_axis("road x", self.x, "positions")
         z = np.asarray(self.elevation, dtype=float)
-        if x.ndim != 1 or x.size < 2:
-            raise InputError("road x must be a 1-D array of at least two positions")
-        if not np.all(np.isfinite(x)) or np.any(np.diff(x) <= 0):
-            raise InputError("road x must be finite and strictly increasing")
         if z.shape not in ((x.size,), (x.size, 2)):
             raise InputError(
                 f"road elevation must have shape ({x.size},) or ({x.size}, 2), got {z.shape}"

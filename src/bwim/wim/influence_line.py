@@ -36,6 +36,8 @@ import scipy.sparse as sp
 from bwim.errors import (
     InputError,
     NumericalError,
+    require_axis,
+    require_columns,
     require_finite,
     require_instance,
     require_positive,
@@ -146,18 +148,10 @@ class InfluenceLine:
     residual: float | None = None
 
     def __post_init__(self) -> None:
-        x = np.asarray(self.x, dtype=float)
-        ords = np.asarray(self.ordinates, dtype=float)
-        if ords.ndim == 1:
-            ords = ords[:, None]
-        if x.ndim != 1 or x.size < 2 or not np.all(np.isfinite(x)) or np.any(np.diff(x) <= 0):
-            raise InputError("influence line x must be a 1-D ascending array of >= 2 positions")
+        x = require_axis("influence line x", self.x, "positions")
         channels = tuple(self.channels)
-        if ords.shape != (x.size, len(channels)):
-            raise InputError(
-                f"ordinates must have shape (n_x, n_channels) = ({x.size}, {len(channels)}), "
-                f"got {ords.shape}"
-            )
+        ords = require_columns("ordinates", self.ordinates, (x.size, len(channels)),
+                               "(n_x, n_channels)")
         if not np.all(np.isfinite(ords)):
             raise InputError("influence line ordinates must be finite")
         object.__setattr__(self, "x", x)
