@@ -228,6 +228,9 @@ def _calibrate(args: argparse.Namespace) -> int:
             kwargs[key] = getattr(args, key)
     if args.jobs is not None:
         kwargs["n_jobs"] = args.jobs
+    if args.mesh_correction is not None:
+        mc = args.mesh_correction.strip().lower()
+        kwargs["mesh_correction"] = int(mc) if mc.isdigit() else mc
     progress = _CalibrationProgress()
     try:
         cal = calibrate(start, records, vehicle, road=road, callback=progress, **kwargs)
@@ -245,6 +248,10 @@ def _calibrate(args: argparse.Namespace) -> int:
                 [(s.name, ", ".join(s.labels), s.nfev, f"{s.wall_time:.1f}")
                  for s in cal.stages]).render())
     print(f"\nidentifiability: {cal.identifiability.summary().replace(chr(10), '; ')}")
+    if cal.mesh_correction is not None:
+        print(cal.mesh_correction.summary())
+    if cal.discretisation is not None:
+        print(f"mesh check: {cal.discretisation.summary().replace(chr(10), '; ')}")
     print(f"{cal.nfev} evaluations, wall time {cal.wall_time:.1f} s")
     print(f"calibrated model: {out}")
     return 0
@@ -1058,6 +1065,10 @@ COMMANDS: tuple[Command, ...] = (
              "cma = CMA-ES (default: the scenario's, else ce)"),
          arg("--jobs", type=int, help="worker processes for the populations"),
          arg("--seed", type=int, help="random seed of the optimiser"),
+         arg("--mesh-correction", metavar="N|auto",
+             help="correct the model's discretisation error by a model bisected N times "
+             "(1-3), or as often as its sensors need (auto); default: the scenario's, "
+             "else none"),
          _FORCE)),
     Command(
         "identify", _identify,

@@ -108,6 +108,22 @@ def test_calibrate_then_identify_across_invocations(files, capsys):
     assert ident.axle_forces.shape[1] == 3 and (res / "truck_2_forces.h5").exists()
 
 
+def test_calibrate_mesh_correction_option(files, capsys):
+    """--mesh-correction reaches calibrate and its report is printed; a bad value is one
+    line and exit 2 (the accuracy is tests/validation/test_mesh_correction.py's)."""
+    d = files["dir"]
+    code, out, err = _run(["calibrate", files["start"], files["cal_h5"], "-o",
+                           d / "corrected.toml", "--method", "lm", "--mesh-correction", "1"],
+                          capsys)
+    assert code == 0, err
+    assert "mesh defect correction by the 24x16 model" in out and ", mesh pass 1" in out
+    for bad in ("7", "fine"):
+        code, out, err = _run(["calibrate", files["start"], files["cal_h5"], "-o",
+                               d / "bad.toml", "--mesh-correction", bad], capsys)
+        assert code == 2 and len(err.strip().splitlines()) == 1
+        assert "mesh_correction" in err and not (d / "bad.toml").exists()
+
+
 def test_identify_on_a_dask_local_cluster(files, capsys):
     """The dask path weighs as the local one: GVW against the simulated static GVW
     (measured 1.0 %, as in the local run)."""

@@ -618,6 +618,15 @@ def test_identify_and_calibrate_options(tmp_path):
     assert s.identify.kwargs() == {"lam": "gcv", "n_modes": 12}
     assert s.calibrate.kwargs() == {"unknowns": ("E_x", "mu"), "population": (200, 40),
                                     "seed": 3}
+    s = load(tmp_path, PLATE + '[calibrate]\nweights = "noise"\nmesh_check = 0.05\n'
+             'mesh_correction = "auto"\n')
+    assert s.calibrate.kwargs() == {"weights": "noise", "mesh_check": 0.05,
+                                    "mesh_correction": "auto"}
+    for bad, shown in (("4", "4"), ("-1", "-1"), ('"fine"', "'fine'"), ("true", "true")):
+        p = write(tmp_path, PLATE + f"[calibrate]\nmesh_correction = {bad}\n")
+        with raises(f'{p}: [calibrate] mesh_correction: must be an integer from 0 to 3 or '
+                    f'"auto", got {shown}'):
+            io.load_scenario(p)
 
 
 # --- the TOML writer -----------------------------------------------------------------------

@@ -104,6 +104,7 @@ from types import MappingProxyType
 from typing import Any
 
 from bwim.calibration import Method, Refine
+from bwim.calibration.meshdefect import MAX_LEVELS
 from bwim.dynamics import DEFAULT_APPROACH, DEFAULT_SAMPLING_RATE, VBIMethod
 from bwim.errors import InputError
 from bwim.fe import EdgeSupport, Supports
@@ -212,6 +213,15 @@ def _jobs(v: Any, at: _At) -> int:
     if n < 1 and n != -1:
         raise at.error(f"must be a positive integer or -1 (all cores), got {_show(v)}")
     return n
+
+
+def _levels_or_auto(v: Any, at: _At) -> int | str:
+    """``calibrate``'s ``mesh_correction``: 0 to MAX_LEVELS bisections, or "auto"."""
+    if v == "auto":
+        return v
+    if isinstance(v, bool) or not isinstance(v, int) or not 0 <= v <= MAX_LEVELS:
+        raise at.error(f"must be an integer from 0 to {MAX_LEVELS} or \"auto\", got {_show(v)}")
+    return v
 
 
 def _increasing_pair(v: Any, at: _At) -> tuple[float, float]:
@@ -653,6 +663,9 @@ class CalibrateSpec:
     max_evals: int | tuple[int, int] | None = _opt(_int_or_pair_from(1))
     bounds: tuple[float, float] | None = _opt(_pair)
     substructure: bool | None = _opt(_boolean)
+    weights: str | None = _opt(_choice("none", "noise", "peak", "model"))
+    mesh_check: float | None = _opt(_at_least(0.0, strict=True, high=1.0))
+    mesh_correction: int | str | None = _opt(_levels_or_auto)
     n_modes: int | None = _opt(_int_from(1))
     n_jobs: int | None = _opt(_jobs)
 
