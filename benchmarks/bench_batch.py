@@ -4,8 +4,8 @@ processes (``--jobs``) and on a dask ``LocalCluster`` of 1, 2 and 4 worker proce
 projected from the measured time per vehicle (as loaded, and on free cores from the CPU
 time).
 
-The batch: 20 records (60 for a second, local-only table) of the paper slab (examples/paper_slab.toml, 10 m approach), 2- and
-3-axle trucks at 15–23 m/s over 20 road seeds, 1 kHz, about 1 s each, written by
+The batch: 20 records (60 for a second, local-only table) of the paper slab
+(examples/paper_slab.toml, 10 m approach), 2- and 3-axle trucks at 15–23 m/s over 20 road seeds, 1 kHz, about 1 s each, written by
 ``bwim simulate`` into a temporary folder.  Each configuration runs the whole command
 (``main([...])``: reading, identification, writing every result, summary and manifest)
 with ``--force``; the configurations are interleaved over the repeats and the median is
