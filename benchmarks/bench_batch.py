@@ -5,18 +5,19 @@ projected from the measured time per vehicle (as loaded, and on free cores from 
 time).
 
 The batch: 20 records (60 for a second, local-only table) of the paper slab
-(examples/paper_slab.toml, 10 m approach), 2- and 3-axle trucks at 15–23 m/s over 20 road seeds, 1 kHz, about 1 s each, written by
-``bwim simulate`` into a temporary folder.  Each configuration runs the whole command
-(``main([...])``: reading, identification, writing every result, summary and manifest)
-with ``--force``; the configurations are interleaved over the repeats and the median is
-shown, with the 1-minute load average before each run (the machine is shared: a load above
-the cores in use slows the parallel runs first).  So each run's CPU time is also measured
-(this process and every process under it): the CPU-bound speed-up, ``min(processes,
-cores) × CPU(1) / CPU(n)``, is what free cores would give, short of the wait for the last
-record (at most one record's time); local runs only (the CPU of dask's workers is not all
-seen from here).  A dask cluster is started for each of its runs
-(and its workers have imported bwim) before the clock starts; its start-up is shown apart.
-Targets: ``--jobs 2`` ≥ 1.7× ``--jobs 1`` on two free cores; a day in ≤ 1 h on 2 cores.
+(examples/paper_slab.toml, 10 m approach), 2- and 3-axle trucks at 15–23 m/s over 20 road
+seeds, 1 kHz, about 1 s each, written by ``bwim simulate`` into a temporary folder. Each
+configuration runs the whole command (``main([...])``: reading, identification, writing
+every result, summary and manifest) with ``--force``; the configurations are interleaved
+over the repeats and the median is shown, with the 1-minute load average before each run
+(the machine is shared: a load above the cores in use slows the parallel runs first). So
+each run's CPU time is also measured (this process and every process under it): the
+CPU-bound speed-up, ``min(processes, cores) × CPU(1) / CPU(n)``, is what free cores would
+give, short of the wait for the last record (at most one record's time); local runs only
+(the CPU of dask's workers is not all seen from here). A dask cluster is started for each
+of its runs (and its workers have imported bwim) before the clock starts; its start-up is
+shown apart. Targets: ``--jobs 2`` ≥ 1.7× ``--jobs 1`` on two free cores; a day in ≤ 1 h
+on 2 cores.
 """
 
 from __future__ import annotations
