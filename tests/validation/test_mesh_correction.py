@@ -93,19 +93,9 @@ def test_calibration_truck_not_the_model():
     22 m/s, 1 s tail), 2 % gauge noise; the 12 × 8 model from 28 GPa, 42 GPa, 1950 kg/m²
     (issue 12's start) with the mesh correction.  Measured: +0.48, −0.67, −0.13 % with the
     nominal truck, against −0.00, −0.23, −0.04 % with the data's own truck model."""
-    import dataclasses
+    from benchmarks.bench_mismatch import truck_mismatch_data
 
-    nominal = paper.truck()
-    other = dataclasses.replace(nominal,
-                                suspension_stiffness=1.3 * nominal.suspension_stiffness,
-                                suspension_damping=0.6 * nominal.suspension_damping,
-                                tyre_stiffness=0.85 * nominal.tyre_stiffness)
-    truth = paper.slab_bridge(nx=24, ny=16)
-    road = paper.road(1, approach=APPROACH)
-    recs = [bwim.simulate(truth, other, speed=v, lane=paper.LANE, sensors=paper.sensors(),
-                          road=road, approach=APPROACH, tail=1.0) for v in (15.0, 22.0)]
-    sigma = 0.02 * max(np.abs(r.data).max() for r in recs)
-    recs = [r.with_noise(sigma=sigma, seed=40 + k) for k, r in enumerate(recs)]
+    truth, road, recs, _, nominal = truck_mismatch_data()
     start = paper.slab_bridge().with_params(E_x=28e9, E_y=42e9, mu=1950.0)
     cal = calibrate(start, recs, nominal, road=road, approach=APPROACH, method="lm",
                     weights="noise", mesh_correction=1)
