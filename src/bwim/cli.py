@@ -236,7 +236,9 @@ def _calibrate(args: argparse.Namespace) -> int:
         cal = calibrate(start, records, vehicle, road=road, callback=progress, **kwargs)
     finally:
         progress.close()
-    save_bridge(cal.bridge, out, title=f"calibrated from {len(records)} record(s) of "
+    # with the mesh correction the parameters are the finer model's: save that model
+    saved = cal.bridge if cal.mesh_correction is None else cal.mesh_correction.bridge
+    save_bridge(saved, out, title=f"calibrated from {len(records)} record(s) of "
                 f"{scenario.title or scenario.source}")
     rows = [(name, f"{s0:.5g}", f"{v:.5g}", f"± {u:.3g}", format_pct(v, s0))
             for name, v, s0, u in param_values(cal.params, start.params, cal.uncertainty)]
@@ -249,7 +251,9 @@ def _calibrate(args: argparse.Namespace) -> int:
                  for s in cal.stages]).render())
     print(f"\nidentifiability: {cal.identifiability.summary().replace(chr(10), '; ')}")
     if cal.mesh_correction is not None:
-        print(cal.mesh_correction.summary())
+        nx, ny = cal.mesh_correction.mesh
+        print(f"{cal.mesh_correction.summary()}\nthe calibrated model is saved on the "
+              f"{nx}x{ny} mesh the corrected parameters belong to")
     if cal.discretisation is not None:
         print(f"mesh check: {cal.discretisation.summary().replace(chr(10), '; ')}")
     print(f"{cal.nfev} evaluations, wall time {cal.wall_time:.1f} s")

@@ -117,6 +117,8 @@ def test_calibrate_mesh_correction_option(files, capsys):
                           capsys)
     assert code == 0, err
     assert "mesh defect correction by the 24x16 model" in out and ", mesh pass 1" in out
+    grid = load_bridge(d / "corrected.toml").model.grid  # the model the parameters fit
+    assert (grid.nx, grid.ny) == (24, 16)
     for bad in ("7", "fine"):
         code, out, err = _run(["calibrate", files["start"], files["cal_h5"], "-o",
                                d / "bad.toml", "--mesh-correction", bad], capsys)

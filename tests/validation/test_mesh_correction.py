@@ -70,6 +70,7 @@ def test_corrected_coarse_model_calibrates_like_the_fine_one(fine_case):
     assert np.abs(e_cal).max() < 0.006
     mc = cal.mesh_correction
     assert mc.levels == 1 and mc.mesh == (24, 16)
+    assert mc.bridge.model.grid.nx == 24 and mc.bridge.params["E_y"][0] == cal.params["E_y"][0]
     assert mc.converged and mc.passes <= 4 and mc.change[-1] < mc.tol
     assert mc.change[0] > 0.01  # the first pass moved E_y by 2.1 %
     assert 0.02 < mc.defect[-1] < 0.05  # measured 3.3 % of the peak strain

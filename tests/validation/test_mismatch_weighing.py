@@ -12,8 +12,9 @@ Tolerances are ≈ 1.6 × the errors measured by benchmarks/bench_mismatch.py
 (mismatch_weighing, row "18x12 / none"): parameters −1.20 / −1.20 / −1.08 %; GVW
 −0.42, −1.34, −3.81, −3.73, −0.46, −2.19 %; largest axle error 8.2 % (semitrailer tridem),
 2.5 % for the rigid trucks; GVW at most 1.49 % from the window-mean limit.  Issue 12's
-target (GVW 2 %, axles 5 %) is not met by the semitrailer: the true forces' window mean
-already misses its GVW by 2.2-2.9 %.
+target (GVW 2 %, axles 5 %) is not met by the semitrailer on these roads (the paper's
+roughness): the true forces' window mean already misses its GVW by 2.2-2.9 %.  On ISO
+class A roads, with the mesh correction, the whole chain meets it (last test).
 """
 
 import numpy as np
@@ -92,3 +93,19 @@ def test_gvw_close_to_the_window_mean_limit(weighed):
     _, _, out = weighed
     for k, (err, limit) in enumerate(out):
         assert abs(err.gvw_error - limit) < 0.025, (k, err.gvw_error, limit)
+
+
+def test_corrected_chain_meets_the_target_on_wim_grade_roads():
+    """The whole chain with the mesh correction: the 12 × 8 model calibrated from the two
+    crossings (road measured with 1 mm RMS error, start 28 / 42 GPa, 1950 kg/m²,
+    ``mesh_correction=1``), then MFI on the 24 × 16 model its parameters belong to, of the
+    six vehicles on ISO class A roads (COST 323's smooth approach; same seeds and noise).
+    Issue 12's target: every GVW within 2 %, every axle within 5 %.  Measured: GVW
+    +0.56, +0.12, −1.14, −1.17, +0.58, −0.31 %; largest axle error 4.0 % (a tridem)."""
+    from benchmarks.bench_mismatch import corrected_chain, smooth_road_records, weigh_all
+
+    chain = corrected_chain()
+    assert chain.mesh_correction.converged and chain.mesh_correction.mesh == (24, 16)
+    _, recs = smooth_road_records("A")
+    for k, (gvw, axles) in enumerate(weigh_all(chain.mesh_correction.bridge, recs)):
+        assert abs(gvw) < 2.0 and np.abs(axles).max() < 5.0, (k, gvw, axles)

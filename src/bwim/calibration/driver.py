@@ -566,8 +566,9 @@ def _correct_mesh(first: _Pass, levels: int, unknowns: tuple[str, ...], refine: 
         current = new
         if changes[-1] < TOL:
             break
+    fine = corrector(current.bridge, levels)
     g = fine.model.grid
     result = MeshCorrection(levels=levels, mesh=(g.nx, g.ny if fine.is_plate else 0),
                             change=np.array(changes), defect=np.array(defects),
-                            converged=changes[-1] < TOL, tol=TOL)
+                            converged=changes[-1] < TOL, tol=TOL, bridge=fine)
     return _Correction(passes=tuple(passes), result=result)

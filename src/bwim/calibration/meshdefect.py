@@ -69,6 +69,10 @@ class MeshCorrection:
     converged : bool
         The last pass changed no parameter by more than ``tol``.
     tol : float
+    bridge : Bridge
+        The corrector model at the corrected parameters: the model those parameters belong
+        to, and the one to weigh with (moving force identification on it carries no more
+        of the coarse mesh's error).
     """
 
     levels: int
@@ -77,6 +81,7 @@ class MeshCorrection:
     defect: np.ndarray
     converged: bool
     tol: float
+    bridge: Bridge
 
     @property
     def passes(self) -> int:
