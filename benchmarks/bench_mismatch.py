@@ -118,7 +118,12 @@ def mismatch(noise: float = 0.02, cases=MISMATCH_CASES):
     return rows, numbers
 
 
-def noise_5(seeds=(0, 1, 2), weights="noise"):
+def noise_5(seeds=range(12), weights="noise"):
+    """§5.2 at 5 % gauge noise over ``seeds``: per model, the mean ± sample std of the
+    errors, the least-squares standard errors, the largest error and the share of seeds
+    whose every parameter is within 1 %.  The data's own 24x16 model is the reference: what
+    it cannot reach, no model can (the standard error is an information limit of one
+    crossing)."""
     truth, clean = _record(24, 16)
     rows = []
     for model_mesh, levels in (((12, 8), 0), ((12, 8), 1), ((24, 16), 0)):
@@ -131,12 +136,12 @@ def noise_5(seeds=(0, 1, 2), weights="noise"):
             ses.append([cal.uncertainty[k][0] / truth.params[k][0] * 100 for k in KEYS])
         e, se = np.array(errs), np.array(ses)
         rows.append([f"{model_mesh[0]}x{model_mesh[1]}" + (" corrected" if levels else ""),
-                     len(seeds),
-                     *(f"{m:+.2f} ± {s:.2f}" for m, s in zip(e.mean(0), e.std(0),
+                     len(e),
+                     *(f"{m:+.2f} ± {s:.2f}" for m, s in zip(e.mean(0), e.std(0, ddof=1),
                                                              strict=True)),
                      *(f"{v:.2f}" for v in se.mean(0)),
                      f"{np.abs(e).max():.2f}",
-                     "met" if np.abs(e).max() <= 1.0 else "MISSED"])
+                     f"{np.mean(np.all(np.abs(e) <= 1.0, axis=1)):.0%}"])
     return rows
 
 
@@ -469,7 +474,7 @@ def main() -> None:
                 "24x16 mesh, channels weighted by their estimated noise: refined error % "
                 "(mean ± std over seeds) and the least-squares standard error %",
                 ["model", "seeds", "E_x", "E_y", "mu", "se E_x", "se E_y", "se mu",
-                 "max |err|", "≤ 1 %"], noise_5())
+                 "max |err|", "seeds all ≤ 1 %"], noise_5())
     rows, dt = road_effect()
     print_table("Road assumption (bwim.calibration.road_sensitivity, re-fitted; "
                 f"{dt:.1f} s): 24x16 data and model, 2 % gauge noise, the calibration's "

@@ -130,6 +130,38 @@ def test_record_band_ends_above_the_highest_tone():
     assert record_band(_tones((10.0, 60.0), noise=0.0)) == np.inf
 
 
+def test_record_band_of_pure_noise_is_the_lowest_cut():
+    """No bin stands out of white noise (the detrended response is below it at every
+    frequency): the lowest cut, the first bin above 0 Hz, not 'no cut' (which would keep
+    every mode for a record that resolves none)."""
+    t = np.arange(2000) / 1000.0
+    for seed in range(3):
+        data = np.random.default_rng(seed).standard_normal((t.size, 3))
+        rec = Record(time=t, data=data,
+                     sensors=tuple(bwim.Sensor(x=x) for x in (2.0, 5.0, 8.0)))
+        assert record_band(rec) == pytest.approx(1000.0 / BAND_SEGMENT, rel=1e-9)
+
+
+def test_lcurve_corner_only_among_admissible_lambdas():
+    """The corner search skips λ below the smallest one from which every grid λ is
+    admissible, and takes the largest grid λ when none is (reference: the rule itself on
+    an L-shaped curve whose true corner is at log λ = 0)."""
+    from bwim.mfi.lcurve import _corner, _lowest_admissible
+
+    t = np.linspace(-6.0, 6.0, 13)
+    rho = np.exp(np.where(t > 0, t, 0.0)) + 1.0  # flat, then rising
+    eta = np.exp(np.where(t < 0, -t, 0.0)) + 1.0  # falling, then flat
+    assert abs(_corner(t, rho, eta)[1]) < 1.0
+    ok = t >= 2.0
+    lo = _lowest_admissible(t, ok)
+    assert lo == 2.0 and _corner(t, rho, eta, lo)[1] >= 2.0
+    assert _lowest_admissible(t, np.zeros(13, bool)) == np.inf
+    assert _corner(t, rho, eta, np.inf)[1] == t[-1]
+    assert _lowest_admissible(t, np.ones(13, bool)) == t[0]
+    assert _lowest_admissible(t, None) is None
+    assert _lowest_admissible(t, t != -3.0) == -2.0  # a tensile λ inside the grid
+
+
 def test_identify_forces_chooses_fewer_modes_on_noisy_records(crossing):
     """With the L-curve the model order follows the record: a noisy record keeps fewer
     modes than its clean version, and the default cap holds; a given λ keeps the cap."""

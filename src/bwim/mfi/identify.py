@@ -220,8 +220,10 @@ def identify_forces(
     d_scale = float(np.abs(d).max())
     if d_scale == 0.0:
         raise InputError("the record is all zeros")
-    _, axles, _ = force_layout(record.passages, unknowns)
-    n_f = axles.size
+    passage_of, axle_of, _ = force_layout(record.passages, unknowns)
+    n_f = axle_of.size
+    # each force's axle in the record's axle order (passage after passage)
+    axles = np.cumsum([0, *(p.n_axles for p in record.passages)])[passage_of] + axle_of
     if record.data.shape[1] < n_f and unknowns is ForceUnknowns.WHEEL:
         raise InputError(
             f"{record.data.shape[1]} sensor channels cannot identify {n_f} wheel forces; "
@@ -233,11 +235,22 @@ def identify_forces(
     d_scaled = d / d_scale
     W = np.ones(model.n_s) if w is None else w
     curve = None
+    windows = _central_windows(record.passages, bridge.length, central)
     if isinstance(lam, str):
         if lam == "lcurve":
             n_coarse = max(4, n_lam // 2)
+            weighed = np.stack([(record.time >= windows[a, 0]) & (record.time <= windows[a, 1])
+                                for a in axles], axis=1)  # (n_t, n_f)
+
+            def compressive(X: np.ndarray) -> np.ndarray:
+                """Per λ: every force positive where its axle is weighed."""
+                return np.all((X[:, :, model.n_z:] > 0) | ~weighed[None], axis=(1, 2))
+
+            # first order only: its λ → ∞ limit is constant forces (the static weights),
+            # zeroth order's is zero force, which no sign test can tell from a good answer
             curve = lcurve_search(model, d_scaled, W, lam_range, n_coarse=n_coarse,
-                                  n_fine=max(n_lam - n_coarse, 0))
+                                  n_fine=max(n_lam - n_coarse, 0),
+                                  admissible=compressive if order is Order.FIRST else None)
             lam_s = curve.corner_scaled
         elif lam == "gcv":
             lam_s = gcv(model, d_scaled, W, lam_range)
@@ -250,8 +263,16 @@ def identify_forces(
     best = sweep(model, d_scaled, [lam_s], W, keep=True)
     sol = Solution(X=best.X[0], r=best.r[0], residual_norm=float(best.residual_norm[0]),
                    seminorm=float(best.seminorm[0]))
-    ident = _result(model, sol, record, unknowns, order, lam_s, curve, central, bridge.length)
+    ident = _result(model, sol, record, unknowns, order, lam_s, curve, windows)
     return replace(ident, n_modes=modes.n)
+
+
+def _central_windows(passages, length: float, central: float) -> np.ndarray:
+    """(first, last) time of every axle's central ``central`` fraction on the deck, s,
+    shape (n_axles, 2): where its static weight is averaged."""
+    windows = np.concatenate([p.axle_times_on(length) for p in passages])
+    cut = 0.5 * (1.0 - central) * (windows[:, 1] - windows[:, 0])
+    return np.stack([windows[:, 0] + cut, windows[:, 1] - cut], axis=1)
 
 
 def record_band(record: Record) -> float:
@@ -263,7 +284,9 @@ def record_band(record: Record) -> float:
     channel scaled by its peak, averaged over channels; the floor is their median over
     fs/4 … fs/2 (white noise is flat, the response has decayed there).  A record whose
     spectrum never meets the floor below fs/4 (clean, or too short to tell) gives
-    ``inf``: no cut.
+    ``inf``: no cut.  One in which no bin stands out (the detrended response is below the
+    noise at every frequency: only its quasi-static part is informative) gives the first
+    bin above 0 Hz, the lowest cut.
     """
     from scipy import signal
 
@@ -278,9 +301,9 @@ def record_band(record: Record) -> float:
     floor = float(np.median(P[f >= fs / 4]))
     below = f < fs / 4
     loud = np.flatnonzero((P > BAND_FACTOR * floor) & below)
-    if floor <= 0 or loud.size == 0 or loud[-1] + 1 >= np.count_nonzero(below):
+    if floor <= 0 or (loud.size and loud[-1] + 1 >= np.count_nonzero(below)):
         return float("inf")
-    return float(f[loud[-1] + 1])
+    return float(f[loud[-1] + 1] if loud.size else f[1])
 
 
 def _check_arguments(bridge, record, n_modes, lam, weights, lam_range, n_lam, central):
@@ -334,7 +357,7 @@ def _check_arguments(bridge, record, n_modes, lam, weights, lam_range, n_lam, ce
 
 
 def _result(model: MFIModel, sol: Solution, record: Record, unknowns, order, lam_s, curve,
-            central, length) -> ForceIdentification:
+            windows: np.ndarray) -> ForceIdentification:
     forces = sol.forces * model.f_scale  # (n_t, n_f)
     passages = record.passages
     wheel_cols = [p.wheels_per_axle * p.n_axles for p in passages]
@@ -356,10 +379,6 @@ def _result(model: MFIModel, sol: Solution, record: Record, unknowns, order, lam
                 f += 1
         w0 += n_w * p.n_axles
         a0 += p.n_axles
-    windows = np.concatenate([p.axle_times_on(length) for p in passages])
-    span = windows[:, 1] - windows[:, 0]
-    cut = 0.5 * (1.0 - central) * span
-    windows = np.stack([windows[:, 0] + cut, windows[:, 1] - cut], axis=1)
     t = record.time
     weights = np.empty(axles.shape[1])
     for a in range(axles.shape[1]):

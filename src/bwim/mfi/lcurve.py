@@ -10,6 +10,15 @@ Contract
   ``(log ρ, log η)`` parametrised by ``log λ`` (Hansen 1992; the paper uses Busby &
   Trujillo's definition, the same curvature), found on a cubic-spline interpolant of the
   two curves so that it is not tied to the grid.
+* Admissible λ (``admissible=``, given by :func:`~bwim.mfi.identify_forces` for first
+  order, whose λ → ∞ limit is constant forces: the static weights): tyre forces are
+  compressive, so a λ whose identified forces turn tensile where the forces are weighed
+  is not a candidate.  The corner is sought on the λ at and above the
+  smallest λ from which every grid λ is admissible (the whole grid when all are; its
+  largest λ when none is).  Without it, a nearly flat L-curve (the response below the
+  gauge noise at every frequency but the quasi-static) puts the maximum curvature on a
+  spurious kink at the small-λ end: measured force RMS errors of 80–250 % and weights off
+  by up to 24 % at 5 % gauge noise (benchmarks/mfi_accuracy.py).
 * :func:`gcv` minimises ``G(λ) = n ‖ỹ − ŷ‖² / (n − tr A_λ)²`` with the trace of the
   influence matrix estimated by Hutchinson's method (Rademacher probes with a fixed seed);
   each probe reuses the λ's DP gains.
@@ -44,6 +53,8 @@ class LCurve:
         Curvature of (log ρ, log η) at each grid λ.
     corner : float
         The chosen λ (physical units); ``corner_scaled`` in scaled units.
+    admissible : ndarray of bool (n,) or None
+        Which grid λ give admissible forces (see module docstring), when checked.
     """
 
     lam: np.ndarray
@@ -53,6 +64,7 @@ class LCurve:
     curvature: np.ndarray
     corner: float
     corner_scaled: float
+    admissible: np.ndarray | None = None
 
     def plot(self, ax=None):
         """The curve and its corner (:func:`bwim.plots.mfi.plot_lcurve`); returns the
@@ -69,24 +81,40 @@ def _curvature(t, a, b):
     return (da * d2b - d2a * db) / np.maximum((da**2 + db**2) ** 1.5, 1e-300), sa, sb
 
 
-def _corner(t, rho, eta):
-    """Curvature at the grid points and the log λ of maximum spline curvature (interior)."""
+def _corner(t, rho, eta, lo: float | None = None):
+    """Curvature at the grid points and the log λ of maximum spline curvature (interior,
+    at or above ``lo``; the largest grid λ when nothing interior is)."""
     a = np.log(np.maximum(rho, 1e-300))
     b = np.log(np.maximum(eta, 1e-300))
     kappa, sa, sb = _curvature(t, a, b)
+    start = t[1] if lo is None else max(t[1], lo)
+    if start >= t[-2]:
+        return kappa, t[-1]
     # maximise the spline curvature between grid points (interior only)
-    fine = np.linspace(t[1], t[-2], 40 * t.size)
+    fine = np.linspace(start, t[-2], 40 * t.size)
     da, db, d2a, d2b = sa(fine, 1), sb(fine, 1), sa(fine, 2), sb(fine, 2)
     kf = (da * d2b - d2a * db) / np.maximum((da**2 + db**2) ** 1.5, 1e-300)
     return kappa, fine[int(np.argmax(kf))]
 
 
-def _curve(model, lam_s, rho, eta, kappa, t_best) -> LCurve:
+def _lowest_admissible(t: np.ndarray, ok: np.ndarray | None) -> float | None:
+    """The smallest grid log λ from which every larger grid λ is admissible (None: no
+    check; +inf: not even the largest is)."""
+    if ok is None:
+        return None
+    bad = np.flatnonzero(~ok)
+    if bad.size == 0:
+        return float(t[0])
+    return float(t[bad[-1] + 1]) if bad[-1] + 1 < t.size else float("inf")
+
+
+def _curve(model, lam_s, rho, eta, kappa, t_best, admissible=None) -> LCurve:
     corner_scaled = float(np.exp(t_best))
     return LCurve(
         lam=np.array([model.lam_physical(v) for v in lam_s]),
         lam_scaled=lam_s.copy(), residual_norm=rho, seminorm=eta, curvature=kappa,
         corner=model.lam_physical(corner_scaled), corner_scaled=corner_scaled,
+        admissible=admissible,
     )
 
 
@@ -100,14 +128,19 @@ def lcurve(model: MFIModel, d, weights, lam_grid_scaled: np.ndarray) -> LCurve:
 
 
 def lcurve_search(model: MFIModel, d, weights, lam_range: tuple[float, float], *,
-                  n_coarse: int = 8, n_fine: int = 8) -> LCurve:
+                  n_coarse: int = 8, n_fine: int = 8, admissible=None) -> LCurve:
     """Coarse-to-fine L-curve: ``n_coarse`` log-spaced λ over ``lam_range`` (scaled),
     then ``n_fine`` more strictly within one coarse spacing either side of the coarse
-    corner; the corner is located on the union of both grids."""
+    corner; the corner is located on the union of both grids.  ``admissible(X) -> bool
+    per λ`` (X: the sweep's trajectories, (n_λ, N, n_x)) restricts the corner (module
+    docstring)."""
+    keep = admissible is not None
     coarse = np.geomspace(lam_range[0], lam_range[1], n_coarse)
-    first = sweep(model, d, coarse, weights)
+    first = sweep(model, d, coarse, weights, keep=keep)
     t_c = np.log(coarse)
-    _, t0 = _corner(t_c, first.residual_norm, first.seminorm)
+    ok_c = admissible(first.X) if keep else None
+    _, t0 = _corner(t_c, first.residual_norm, first.seminorm,
+                    _lowest_admissible(t_c, ok_c))
     step = t_c[1] - t_c[0]
     lo, hi = max(t0 - step, t_c[0]), min(t0 + step, t_c[-1])
     t_f = np.linspace(lo, hi, n_fine + 2)[1:-1]
@@ -115,16 +148,20 @@ def lcurve_search(model: MFIModel, d, weights, lam_range: tuple[float, float], *
     if n_fine and np.min(np.abs(t_f[:, None] - t_c[None, :])) < 1e-3 * h:
         t_f += 0.25 * h  # keep clear of the coarse nodes (the spline needs distinct points)
     rho_f = eta_f = np.empty(0)
+    ok_f = np.empty(0, dtype=bool)
     if t_f.size:
-        second = sweep(model, d, np.exp(t_f), weights)
+        second = sweep(model, d, np.exp(t_f), weights, keep=keep)
         rho_f, eta_f = second.residual_norm, second.seminorm
+        if keep:
+            ok_f = admissible(second.X)
     t = np.concatenate([t_c, t_f])
     order = np.argsort(t)
     t = t[order]
     rho = np.concatenate([first.residual_norm, rho_f])[order]
     eta = np.concatenate([first.seminorm, eta_f])[order]
-    kappa, t_best = _corner(t, rho, eta)
-    return _curve(model, np.exp(t), rho, eta, kappa, t_best)
+    ok = np.concatenate([ok_c, ok_f])[order] if keep else None
+    kappa, t_best = _corner(t, rho, eta, _lowest_admissible(t, ok))
+    return _curve(model, np.exp(t), rho, eta, kappa, t_best, ok)
 
 
 def gcv(model: MFIModel, d, weights, bounds_scaled: tuple[float, float], *, probes: int = 8,
