@@ -51,6 +51,29 @@ def test_dp_equals_batch_tikhonov(small, order, static_correction, lam):
     assert dp.seminorm == pytest.approx(batch.seminorm, rel=1e-9)
 
 
+@pytest.mark.parametrize("order", [Order.FIRST, Order.ZEROTH])
+@pytest.mark.parametrize("block_min_modes", [1, 1000])
+def test_stacked_sweep_equals_batch_tikhonov(small, order, block_min_modes):
+    """The stacked λ sweep (the L-curve's solver), with P's products by its 2 × 2 blocks
+    (block_min_modes=1) or dense (1000), against the batch solution at each λ."""
+    from bwim.mfi.dp import sweep
+
+    beam, _, rec = small
+    scale = np.abs(rec.data).max()
+    model = build_model(beam, beam.modes(4), rec, scale, unknowns=ForceUnknowns.AXLE,
+                        order=order)
+    d = rec.data / scale
+    w = np.array([1.0, 2.0, 0.5])
+    lams = np.array([1e-3, 1e-1, 10.0])
+    sw = sweep(model, d, lams, w, keep=True, block_min_modes=block_min_modes)
+    for k, lam in enumerate(lams):
+        batch = solve_batch(model, d, lam, w)
+        # round-off, as the DP solve (1e-13 relative)
+        np.testing.assert_allclose(sw.X[k], batch.X, atol=1e-10 * np.abs(batch.X).max())
+        assert sw.residual_norm[k] == pytest.approx(batch.residual_norm, rel=1e-9)
+        assert sw.seminorm[k] == pytest.approx(batch.seminorm, rel=1e-9)
+
+
 def test_lambda_units_round_trip(crossing):
     beam, _, rec = crossing
     scale = np.abs(rec.data).max()
