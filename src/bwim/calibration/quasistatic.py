@@ -52,6 +52,13 @@ Contract
   passage (speed, lane, delay) known; any number.
 * The result's ``force_factors[r]`` has shape (n_t, n_groups): the identified
   ``1 + Σ c φ`` of record r (1 off the span).
+* ``mesh_correction=N`` removes the model's discretisation error as
+  :mod:`bwim.calibration.meshdefect` does for :func:`~bwim.calibrate`: the filtered
+  prediction at the fitted stiffness and force nuisance on the model bisected N times,
+  minus the model's own, is taken off the filtered measurements and the stiffness is
+  fitted again from its answer (then the mass), until no parameter moves by
+  :data:`~bwim.calibration.meshdefect.TOL`.  The defect is static here (influence
+  surfaces and the inertia correction of the lowest modes), as is the fit.
 * ``uncertainty`` is the standard error from the raw channels' noise
   (:func:`~bwim.calibration.problem.estimate_noise`) through ``(JᵀWJ)⁻¹`` of the filtered
   fit (the filtered noise's correlation is accounted for by using the *raw* σ: the
@@ -69,6 +76,7 @@ import numpy as np
 import scipy.optimize as so
 from numpy.polynomial import legendre
 
+from bwim.calibration.meshdefect import MAX_PASSES, TOL, MeshCorrection, check_levels, corrector
 from bwim.calibration.problem import ParameterSpace, estimate_noise
 from bwim.errors import InputError, NumericalError
 from bwim.fe.bridge import Bridge
@@ -138,6 +146,8 @@ class QuasiStaticCalibration(OptimizeResult):
         a diagnostic (non-zero when axles share little time on the span).
     mass : MassFit or None
         The mass fit, or None when not asked for / no free vibration.
+    mesh_correction : MeshCorrection or None
+        What the mesh defect correction did (``mesh_correction=``).
     """
 
     bridge: Bridge
@@ -147,6 +157,7 @@ class QuasiStaticCalibration(OptimizeResult):
     force_factors: tuple
     scale_bias: float
     mass: MassFit | None
+    mesh_correction: MeshCorrection | None = None
 
 
 def _signal():
@@ -160,6 +171,19 @@ def _lowpass(cutoff: float, fs: float, order: int):
     if not 0 < cutoff < 0.5 * fs:
         raise InputError(f"cutoff must be in (0, {0.5 * fs:g}) Hz, got {cutoff!r}")
     return _signal().butter(order, cutoff, fs=fs, output="sos")
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class _Fit:
+    """One stiffness/mass alternation's end: log-stiffness z, the mass-updated base, the
+    last least-squares result, its counts and the last mass fit."""
+
+    z: np.ndarray
+    base: Bridge
+    opt: object
+    nfev: int
+    nit: int
+    mass: MassFit | None
 
 
 class _Record:
@@ -251,6 +275,7 @@ def calibrate_quasistatic(
     min_free_periods: float = 3.0,
     inertia_modes: int = 3,
     n_rounds: int = 3,
+    mesh_correction: int = 0,
 ) -> QuasiStaticCalibration:
     """Calibrate the stiffness without a road profile (and the mass from free vibration).
 
@@ -278,6 +303,8 @@ def calibrate_quasistatic(
         Modes whose dynamic correction is added to the static response (0: static only).
     n_rounds : int
         Stiffness/mass alternations (with ``mass`` and ``inertia_modes``).
+    mesh_correction : int
+        Bisections of the corrector model (0: none; see the module contract).
     """
     if not isinstance(start_bridge, Bridge):
         raise InputError(f"start_bridge must be a Bridge, got {type(start_bridge).__name__}")
@@ -289,6 +316,9 @@ def calibrate_quasistatic(
         raise InputError(f"n_basis must be a non-negative integer, got {n_basis!r}")
     if weights not in ("noise", None):
         raise InputError(f"weights must be 'noise' or None, got {weights!r}")
+    levels = 0 if (isinstance(mesh_correction, (int, np.integer))
+                   and not isinstance(mesh_correction, bool) and mesh_correction == 0
+                   ) else check_levels(mesh_correction)
     static_wheels = vehicle.model().static_forces
     for k, r in enumerate(records):
         p = r.passage
@@ -320,12 +350,14 @@ def calibrate_quasistatic(
     base = start_bridge
     n_inertia = int(inertia_modes)
 
+    defects = [0.0] * len(parts)  # filtered and weighted, per record (mesh correction)
+
     def solve(z, base):
         bridge = space.bridge(theta0 * np.exp(z), base)
         res, coefs = [], []
-        for part in parts:
+        for part, defect in zip(parts, defects, strict=True):
             b, A = part.design(bridge, n_inertia)
-            r = part.data.ravel() - b
+            r = part.data.ravel() - defect - b
             if A.shape[1]:
                 c = np.linalg.lstsq(A, r, rcond=None)[0]
                 r = r - A @ c
@@ -335,25 +367,61 @@ def calibrate_quasistatic(
             coefs.append(c)
         return np.concatenate(res), coefs
 
-    # alternate: stiffness (mass fixed) then mass (stiffness fixed); the inertia
-    # correction is what couples them, weakly
-    z, nfev, nit, mfit = np.zeros(theta0.size), 0, 0, None
-    for _ in range(max(1, int(n_rounds)) if (mass and n_inertia) else 1):
-        try:
-            opt = so.least_squares(lambda z, base=base: solve(z, base)[0], z,
-                                   method="trf", diff_step=1e-4,
-                                   bounds=(np.log(0.2), np.log(5.0)))
-        except np.linalg.LinAlgError:
-            raise NumericalError("trial stiffness is not positive definite") from None
-        z, nfev, nit = opt.x, nfev + int(opt.nfev), nit + int(opt.njev or 0)
-        bridge = space.bridge(theta0 * np.exp(z), base)
-        if mass:
-            mfit = fit_mass(bridge, records, n_modes=n_free_modes,
-                            min_periods=min_free_periods, weights=w)
-            if not mfit.success:
+    def fit(z, base, rounds):
+        """Alternate: stiffness (mass fixed) then mass (stiffness fixed); the inertia
+        correction is what couples them, weakly."""
+        nfev = nit = 0
+        mfit = None
+        for _ in range(rounds):
+            try:
+                opt = so.least_squares(lambda z, base=base: solve(z, base)[0], z,
+                                       method="trf", diff_step=1e-4,
+                                       bounds=(np.log(0.2), np.log(5.0)))
+            except np.linalg.LinAlgError:
+                raise NumericalError("trial stiffness is not positive definite") from None
+            z, nfev, nit = opt.x, nfev + int(opt.nfev), nit + int(opt.njev or 0)
+            bridge = space.bridge(theta0 * np.exp(z), base)
+            if mass:
+                mfit = fit_mass(bridge, records, n_modes=n_free_modes,
+                                min_periods=min_free_periods, weights=w)
+                if not mfit.success:
+                    break
+                base = bridge.with_params(**{n: bridge.params[n] * mfit.x
+                                             for n in _MASS if n in bridge.params})
+        return _Fit(z=z, base=base, opt=opt, nfev=nfev, nit=nit, mass=mfit)
+
+    rounds = max(1, int(n_rounds)) if (mass and n_inertia) else 1
+    state = fit(np.zeros(theta0.size), base, rounds)
+    nfev, nit = state.nfev, state.nit
+    correction = None
+    if levels:
+        changes, sizes = [], []
+        peak = max(float(np.abs(part.data).max()) for part in parts)
+        for _ in range(MAX_PASSES):
+            coarse = space.bridge(theta0 * np.exp(state.z), state.base)
+            fine = corrector(coarse, levels)
+            coefs = solve(state.z, state.base)[1]
+            for k, (part, c) in enumerate(zip(parts, coefs, strict=True)):
+                bf, Af = part.design(fine, n_inertia)
+                bc, Ac = part.design(coarse, n_inertia)
+                defects[k] = (bf - bc) + ((Af - Ac) @ c if c.size else 0.0)
+            sizes.append(max(float(np.abs(d).max()) for d in defects) / peak)
+            new = fit(state.z, state.base, rounds)
+            nfev, nit = nfev + new.nfev, nit + new.nit
+            before = coarse.params
+            after = space.bridge(theta0 * np.exp(new.z), new.base).params
+            changes.append(max(float(np.abs(after[n] / before[n] - 1).max())
+                               for n in (*names, *(m for m in _MASS if m in after))))
+            state = new
+            if changes[-1] < TOL:
                 break
-            base = bridge.with_params(**{n: bridge.params[n] * mfit.x
-                                         for n in _MASS if n in bridge.params})
+        g = fine.model.grid
+        correction = MeshCorrection(
+            levels=levels, mesh=(g.nx, g.ny if fine.is_plate else 0),
+            change=np.array(changes), defect=np.array(sizes), converged=changes[-1] < TOL,
+            tol=TOL, bridge=corrector(space.bridge(theta0 * np.exp(state.z), state.base),
+                                      levels))
+    z, base, opt, mfit = state.z, state.base, state.opt, state.mass
     theta = theta0 * np.exp(z)
     bridge = space.bridge(theta, base)
     _, coefs = solve(z, base)
@@ -381,7 +449,7 @@ def calibrate_quasistatic(
         nfev=nfev, nit=nit, success=bool(opt.success),
         message=str(opt.message), cutoff=fc, force_factors=tuple(factors),
         scale_bias=float(np.sqrt(np.mean(np.square(biases)))) if biases else 0.0,
-        mass=mfit)
+        mass=mfit, mesh_correction=correction)
 
 
 def fit_mass(
