@@ -38,7 +38,7 @@ from bwim.road import RoadProfile
 from bwim.vehicles import Vehicle
 
 __all__ = ["AUTO_MAX_LEVELS", "AUTO_TOL", "MAX_LEVELS", "MAX_PASSES", "TOL", "MeshCorrection",
-           "mesh_defects"]
+           "check_levels", "corrector", "mesh_defects"]
 
 #: Most bisections of the corrector model (each multiplies a plate's DOF by about 4).
 MAX_LEVELS = 3
