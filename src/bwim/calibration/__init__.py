@@ -1,6 +1,7 @@
 """Calibration of the bridge FE model from strains under a truck of known weight."""
 
 from bwim.calibration.driver import Calibration, Refine, calibrate
+from bwim.calibration.meshdefect import MeshCorrection, mesh_defects
 from bwim.calibration.problem import (
     DynamicObjective,
     ParameterSpace,
@@ -29,6 +30,7 @@ __all__ = [
     "DynamicObjective",
     "Identifiability",
     "MassFit",
+    "MeshCorrection",
     "Method",
     "ParameterSpace",
     "QuasiStaticCalibration",
@@ -41,6 +43,7 @@ __all__ = [
     "estimate_noise",
     "fit_mass",
     "identifiability",
+    "mesh_defects",
     "neighbour_map",
     "noise_weights",
     "peak_weights",
