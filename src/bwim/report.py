@@ -127,17 +127,21 @@ def _record(name: str, record, length) -> Section:
 def _calibration(name: str, cal, start, true_bridge) -> Section:
     from bwim.plots.calibration import plot_ce_convergence
 
-    header = ["parameter"] + (["start"] if start is not None else []) + ["calibrated",
-                                                                          "uncertainty"]
+    # the paper's two stages beside the final (refined, mesh-corrected) answer
+    header = ["parameter"] + (["start"] if start is not None else []) + [
+        "two stages", "calibrated", "uncertainty"]
     if true_bridge is not None:
-        header += ["true", "error (%)"]
+        header += ["true", "two-stage error (%)", "error (%)"]
     rows = []
-    for label, v, s0, u, t in param_values(cal.params, None if start is None else start.params,
-                                          cal.uncertainty, None if true_bridge is None
-                                          else true_bridge.params):
-        row = [label] + ([] if start is None else [f"{s0:.5g}"]) + [f"{v:.5g}", f"{u:.3g}"]
+    for label, v, s0, v2, u, t in param_values(
+            cal.params, None if start is None else start.params, cal.two_stage,
+            cal.uncertainty, None if true_bridge is None else true_bridge.params):
+        v2 = v if v2 is None else v2
+        row = [label] + ([] if start is None else [f"{s0:.5g}"]) + [f"{v2:.5g}", f"{v:.5g}",
+                                                                     f"{u:.3g}"]
         if true_bridge is not None:
-            row += ["–", "–"] if t is None else [f"{t:.5g}", format_pct(v, t, 3)]
+            row += (["–", "–", "–"] if t is None else
+                    [f"{t:.5g}", format_pct(v2, t, 3), format_pct(v, t, 3)])
         rows.append(row)
     table = Table("Calibrated parameters (SI units: Pa, kg/m²)", header, rows)
     from bwim.optimize.ce import CEHistory
@@ -152,7 +156,8 @@ def _calibration(name: str, cal, start, true_bridge) -> Section:
                 figures.append((f"Cross-Entropy convergence, {s.name}: {label}",
                                 plot_ce_convergence(s, parameter=k)))
     note = (f"{cal.nfev} objective evaluations in {cal.wall_time:.1f} s. "
-            + cal.identifiability.summary().replace("\n", "; ") + ".")
+            + cal.identifiability.summary().replace("\n", "; ") + "."
+            + ("" if cal.mesh_correction is None else f" {cal.mesh_correction.summary()}."))
     return Section(f"Calibration: {name}", (table, stages), tuple(figures), note)
 
 

@@ -330,6 +330,14 @@ def test_demo_quick_runs_the_whole_chain(tmp_path, capsys, monkeypatch):
         assert needle in out
     page = (tmp_path / "demo" / "report.html").read_text(encoding="utf-8")
     assert page.count("data:image/png;base64,") >= 5
+    # the report's calibration table: the paper's two stages beside the refined answer
+    [cal_section] = [s for s in report.sections() if s.title.startswith("Calibration")]
+    table = cal_section.tables[0]
+    two = table.header.index("two stages")
+    for row, key in zip(table.rows, ("E_x", "E_y", "mu"), strict=True):
+        assert float(row[two]) == pytest.approx(report.calibration.two_stage[key][0],
+                                                rel=1e-4)
+    assert "two-stage error (%)" in page
     calibrated = load_bridge(tmp_path / "demo" / "calibrated_bridge.toml").params
     true = paper.slab_bridge().params
     for k in ("E_x", "E_y", "mu"):
