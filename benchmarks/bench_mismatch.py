@@ -419,23 +419,24 @@ def mismatch_weighing(models=((12, 8), (18, 12))):
     return rows, results, sigma
 
 
-def corrected_chain():
+def corrected_chain(data=None):
     """The weighing target's calibration with the mesh correction: the 12x8 model from
-    28/42 GPa, 1950 kg/m², the two crossings of :func:`weighing_data`, the road measured
-    with 1 mm RMS error; returns the Calibration (its ``mesh_correction.bridge`` is the
-    24x16 model the parameters belong to, the one to weigh with)."""
-    _, road, cal_recs, _, _ = weighing_data()
+    28/42 GPa, 1950 kg/m², the two crossings of :func:`weighing_data` (or ``data``, its
+    result), the road measured with 1 mm RMS error; returns the Calibration (its
+    ``mesh_correction.bridge`` is the 24x16 model the parameters belong to, the one to
+    weigh with)."""
+    _, road, cal_recs, _, _ = weighing_data() if data is None else data
     return calibrate(paper.slab_bridge().with_params(**WEIGH_START), cal_recs, paper.truck(),
                      road=measured_road(road), approach=APPROACH, method="lm",
                      weights="noise", seed=0, mesh_correction=1)
 
 
-def smooth_road_records(iso_class: str = "A"):
+def smooth_road_records(iso_class: str = "A", sigma: float | None = None):
     """The six weighed vehicles of :data:`WEIGHED` on ISO ``iso_class`` roads (a WIM-grade
     approach: COST 323 asks for a smooth one) with the same seeds, 24x16 data and the same
-    gauge noise as the target's."""
+    gauge noise as the target's (``sigma``, default :func:`weighing_data`'s)."""
     truth = paper.slab_bridge(nx=24, ny=16)
-    sigma = weighing_data()[4]
+    sigma = weighing_data()[4] if sigma is None else sigma
     recs = []
     for k, (_, make, v, lane, rs) in enumerate(WEIGHED):
         rd = bwim.RoadProfile.iso8608(iso_class, length=APPROACH + 70.0,
@@ -451,10 +452,11 @@ def weighing_smooth_roads(iso_class: str = "A"):
     """:func:`smooth_road_records` weighed by the corrected chain, the 12x8 model with the
     true parameters, the data's own 24x16 model, and the window-mean limit.  Separates
     what the road's roughness costs (the window mean) from what the mesh costs."""
-    truth, recs = smooth_road_records(iso_class)
+    data = weighing_data()
+    truth, recs = smooth_road_records(iso_class, sigma=data[4])
     rows = []
     for label, res in (("12x8 calibrated (road 1 mm, corrected), MFI on 24x16",
-                        weigh_all(corrected_chain().mesh_correction.bridge, recs)),
+                        weigh_all(corrected_chain(data).mesh_correction.bridge, recs)),
                        ("12x8, true E, mu", weigh_all(paper.slab_bridge(), recs)),
                        ("24x16 (the data's)", weigh_all(truth, recs)),
                        ("true forces, window mean", window_mean_limit(truth, recs))):

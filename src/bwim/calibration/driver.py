@@ -46,6 +46,7 @@ from bwim.calibration.meshdefect import (
     check_levels,
     corrector,
     mesh_defects,
+    requested_levels,
 )
 from bwim.calibration.problem import (
     DynamicObjective,
@@ -530,12 +531,8 @@ def _correction_levels(mesh_correction, bridge: Bridge, records: list[Record],
             check_levels(mesh_correction)  # the one-line error
         mc = check_mesh(bridge, records[0].sensors, _static_loads(records[0], vehicle, bridge),
                         tol=mesh_check or AUTO_TOL, max_levels=AUTO_MAX_LEVELS + 1)
-        ok = np.flatnonzero(mc.relative_error.max(axis=1) < mc.tol)
-        return int(ok[0]) if ok.size else AUTO_MAX_LEVELS
-    if isinstance(mesh_correction, (int, np.integer)) and not isinstance(
-            mesh_correction, bool) and mesh_correction == 0:
-        return 0
-    return check_levels(mesh_correction)
+        return AUTO_MAX_LEVELS if mc.adequate is None else mc.meshes.index(mc.adequate)
+    return requested_levels(mesh_correction)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -566,9 +563,9 @@ def _correct_mesh(first: _Pass, levels: int, unknowns: tuple[str, ...], refine: 
         current = new
         if changes[-1] < TOL:
             break
-    fine = corrector(current.bridge, levels)
     g = fine.model.grid
     result = MeshCorrection(levels=levels, mesh=(g.nx, g.ny if fine.is_plate else 0),
                             change=np.array(changes), defect=np.array(defects),
-                            converged=changes[-1] < TOL, tol=TOL, bridge=fine)
+                            converged=changes[-1] < TOL, tol=TOL,
+                            bridge=fine.with_params(**current.bridge.params))
     return _Correction(passes=tuple(passes), result=result)

@@ -38,7 +38,7 @@ from bwim.road import RoadProfile
 from bwim.vehicles import Vehicle
 
 __all__ = ["AUTO_MAX_LEVELS", "AUTO_TOL", "MAX_LEVELS", "MAX_PASSES", "TOL", "MeshCorrection",
-           "check_levels", "corrector", "mesh_defects"]
+           "check_levels", "corrector", "mesh_defects", "requested_levels"]
 
 #: Most bisections of the corrector model (each multiplies a plate's DOF by about 4).
 MAX_LEVELS = 3
@@ -103,6 +103,15 @@ def check_levels(levels) -> int:
         raise InputError(f"mesh_correction must be an integer from 1 to {MAX_LEVELS} "
                          f"(bisections of the model) or 'auto', got {levels!r}")
     return int(levels)
+
+
+def requested_levels(mesh_correction) -> int:
+    """A calibration's integer ``mesh_correction``: 0 (no correction) or
+    :func:`check_levels`'s 1…:data:`MAX_LEVELS`."""
+    if isinstance(mesh_correction, (int, np.integer)) and not isinstance(
+            mesh_correction, bool) and mesh_correction == 0:
+        return 0
+    return check_levels(mesh_correction)
 
 
 def corrector(bridge: Bridge, levels: int) -> Bridge:

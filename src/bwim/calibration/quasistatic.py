@@ -76,7 +76,13 @@ import numpy as np
 import scipy.optimize as so
 from numpy.polynomial import legendre
 
-from bwim.calibration.meshdefect import MAX_PASSES, TOL, MeshCorrection, check_levels, corrector
+from bwim.calibration.meshdefect import (
+    MAX_PASSES,
+    TOL,
+    MeshCorrection,
+    corrector,
+    requested_levels,
+)
 from bwim.calibration.problem import ParameterSpace, estimate_noise
 from bwim.errors import InputError, NumericalError
 from bwim.fe.bridge import Bridge
@@ -316,9 +322,7 @@ def calibrate_quasistatic(
         raise InputError(f"n_basis must be a non-negative integer, got {n_basis!r}")
     if weights not in ("noise", None):
         raise InputError(f"weights must be 'noise' or None, got {weights!r}")
-    levels = 0 if (isinstance(mesh_correction, (int, np.integer))
-                   and not isinstance(mesh_correction, bool) and mesh_correction == 0
-                   ) else check_levels(mesh_correction)
+    levels = requested_levels(mesh_correction)
     static_wheels = vehicle.model().static_forces
     for k, r in enumerate(records):
         p = r.passage
@@ -419,8 +423,8 @@ def calibrate_quasistatic(
         correction = MeshCorrection(
             levels=levels, mesh=(g.nx, g.ny if fine.is_plate else 0),
             change=np.array(changes), defect=np.array(sizes), converged=changes[-1] < TOL,
-            tol=TOL, bridge=corrector(space.bridge(theta0 * np.exp(state.z), state.base),
-                                      levels))
+            tol=TOL, bridge=fine.with_params(
+                **space.bridge(theta0 * np.exp(state.z), state.base).params))
     z, base, opt, mfit = state.z, state.base, state.opt, state.mass
     theta = theta0 * np.exp(z)
     bridge = space.bridge(theta, base)
