@@ -11,7 +11,10 @@ Contract
   record's time axis, its static loads, and whether a wheel lost contact.
 * :class:`Record` is a time series of sensor readings (strain dimensionless, deflection m)
   with its sensors, passages and, for simulated records, truths.  Time 0 is the instant
-  the first axle of the first vehicle reaches x = 0.
+  the first axle of the first vehicle reaches x = 0.  ``Record.clock`` is the wall-clock
+  date and time at record time 0 when the file gave one (a logger's time column often
+  starts at 0 in every file and the clock is in the file name); :meth:`Record.clock_seconds`
+  puts every record on one clock axis (s).
 * :class:`SimulationSettings` is how a crossing was simulated (run-up ``approach`` in m,
   free vibration ``tail`` in s): what re-simulating it needs (calibration's dynamic
   stages).  :func:`bwim.simulate` sets it on its records; measured records may carry the
@@ -27,6 +30,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from datetime import datetime
 
 import numpy as np
 
@@ -35,6 +39,9 @@ from bwim.sensors import Sensor
 
 __all__ = ["AxleLayout", "Passage", "Record", "SimulationSettings", "Truth", "VBIConvergence",
            "axle_offsets", "noise_sigma", "record_list"]
+
+
+_EPOCH = datetime(1970, 1, 1)
 
 
 def axle_offsets(spacings: np.ndarray) -> np.ndarray:
@@ -211,6 +218,10 @@ class Record:
     settings : SimulationSettings or None
         How the crossing was simulated (simulated records), or the settings a model of
         it should use.
+    clock : datetime or None
+        Wall-clock date and time at record time 0 (naive: the site's local time), None
+        when unknown (then ``time`` itself may be a clock time of day, as some loggers
+        write it).
     """
 
     time: np.ndarray
@@ -220,6 +231,7 @@ class Record:
     truths: tuple[Truth, ...] = ()
     convergence: VBIConvergence | None = None
     settings: SimulationSettings | None = None
+    clock: datetime | None = None
 
     def __post_init__(self) -> None:
         t = require_axis("time", self.time)
@@ -238,6 +250,30 @@ class Record:
         if self.settings is not None and not isinstance(self.settings, SimulationSettings):
             raise InputError(f"settings must be a SimulationSettings, got "
                              f"{type(self.settings).__name__}")
+        if self.clock is not None and not isinstance(self.clock, datetime):
+            raise InputError(f"clock must be a datetime, got {type(self.clock).__name__}")
+
+    def clock_seconds(self, t: float | None = None) -> float:
+        """Clock time of record time ``t`` (default: the first sample), s.
+
+        With :attr:`clock`: seconds since 1970-01-01 00:00 of the site's local time (one
+        axis across days).  Without: ``t`` itself (a logger's time column that holds the
+        clock time of day, or a record time).
+        """
+        t = float(self.time[0]) if t is None else float(t)
+        if self.clock is None:
+            return t
+        return (self.clock.replace(tzinfo=None) - _EPOCH).total_seconds() + t
+
+    def clock_at(self, t: float | None = None) -> datetime | None:
+        """The wall-clock date and time of record time ``t`` (default: the first sample);
+        None when :attr:`clock` is unknown."""
+        if self.clock is None:
+            return None
+        from datetime import timedelta
+
+        t = float(self.time[0]) if t is None else float(t)
+        return self.clock + timedelta(seconds=t)
 
     @property
     def sampling_rate(self) -> float:

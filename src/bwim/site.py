@@ -418,7 +418,7 @@ def _weigh_mfi(record: Record, det: Detection, flags: tuple[str, ...],
     if vehicle.lateral_unit != "m" or not np.isfinite(vehicle.lateral):
         return refused("weighing by MFI needs the vehicle's lane in metres (gauge y positions)")
     trend = calibration.lines.scale_trend
-    factor = float(trend(float(record.time[0]))) if trend is not None else 1.0
+    factor = float(trend(record.clock_seconds())) if trend is not None else 1.0
     rec = record.channels(gauges)
     # the model's bridge is at rest before the first axle arrives: the logger's offsets
     # are the readings' mean until then (the pre-trigger)
@@ -432,7 +432,7 @@ def _weigh_mfi(record: Record, det: Detection, flags: tuple[str, ...],
         ident = identify_forces(bridge, rec, **options)
     except _EVENT_ERRORS as exc:
         return refused(f"weighing by MFI failed: {_why(exc)}")
-    extra = [] if trend is None or trend.covers(float(record.time[0])) else [
+    extra = [] if trend is None or trend.covers(record.clock_seconds()) else [
         "outside_calibration_time"]
     flags = tuple(dict.fromkeys([*flags, *ident.vehicle_flags[0], *extra]))
     if ident.vehicle_quality[0] == "reject":

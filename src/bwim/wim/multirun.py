@@ -39,7 +39,7 @@ Contract
   until none is left: see :class:`OutlierRule`.  Runs flagged upstream (e.g. multiple
   presence) are rejected before fitting.
 * :class:`ScaleTrend` is the kept runs' factors against the runs' clock time
-  (``record.time[0]``): a local-linear Gaussian smoother at the runs' times (bandwidth by
+  (``record.clock_seconds()``): a local-linear Gaussian smoother at the runs' times (bandwidth by
   cross-validation), piecewise linear between them, constant beyond the first and last.
 * The calibration keeps what weighing needs to combine the channels and judge a fit: the
   residual covariance between channels, the channels' noise (samples before the truck
@@ -286,7 +286,7 @@ class RunFit:
     index : int
         Position in the records given to :func:`calibrate_lines`.
     time : float
-        Clock time of the run, ``record.time[0]``, s.
+        Clock time of the run, ``record.clock_seconds()``, s.
     speed, lateral : float
         The passage's speed (m/s) and lateral covariate (``lane``).
     scale : float
@@ -713,7 +713,7 @@ def calibrate_lines(
     ----------
     records : sequence of Record
         The calibration runs, one crossing of the truck each, with clock time
-        (``record.time[0]`` is when the run was recorded).
+        (``record.clock_seconds()`` is when the run was recorded).
     passages : sequence of Passage or None
         One per record (speed, lane = lateral covariate, axle spacings, delay), e.g. from
         detection; None: each record's own single passage.
@@ -794,7 +794,7 @@ def calibrate_lines(
     E_all = [read_channels(r, chans) for r in recs]
     P_all = [p.axle_x(r.time) for r, p in zip(recs, pas, strict=True)]
     lanes = np.array([p.lane for p in pas])
-    times = np.array([float(r.time[0]) for r in recs])
+    times = np.array([r.clock_seconds() for r in recs])
     if spacing is None:
         h_req = max(p.speed / r.sampling_rate for r, p in zip(recs, pas, strict=True))
     else:

@@ -11,7 +11,7 @@ Contract
 
   ``w_j`` the weight of axle group ``j`` (its axles share it equally, as B-WIM systems
   report groups), ``s(t₀)`` the calibration's :class:`~bwim.wim.multirun.ScaleTrend` at
-  the record's clock time ``t₀ = record.time[0]``, ``I_g(·; y)`` channel ``g``'s line at
+  the record's clock time ``t₀ = record.clock_seconds()``, ``I_g(·; y)`` channel ``g``'s line at
   the vehicle's lateral covariate ``y``, ``c_g`` the channel's baseline offset.
 * Weights in N; readings in the calibration's units; positions in the passages' frame.
 * Every result carries plausibility ``flags`` (strings, written as they are to
@@ -121,7 +121,7 @@ class Weighing:
     lateral : float
         Lateral covariate the lines were taken at.
     clock_time : float
-        ``record.time[0]``, s.
+        ``record.clock_seconds()``, s.
     combine, baseline : str
         How the gauges were combined ("gls", "blue" or "sum"; "auto" resolved) and the
         offsets removed.
@@ -247,7 +247,7 @@ def weigh(
     baseline : "fit", "pretrigger" or "none"
         How the channels' offsets are removed (module docstring).
     scale_correction : bool
-        Divide by the calibration's scale trend at ``record.time[0]`` (no effect without
+        Divide by the calibration's scale trend at ``record.clock_seconds()`` (no effect without
         per-run factors).
     limits : Limits
         Plausibility thresholds.
@@ -293,7 +293,7 @@ def weigh(
     Mg = np.einsum("kic,ig->kgc", M, share)  # (n_t, n_groups, n_c)
     n_g = share.shape[1]
 
-    t0 = float(record.time[0])
+    t0 = record.clock_seconds()
     trend = calibration.scale_trend
     s = float(trend(t0)) if (scale_correction and trend is not None) else 1.0
     lo, hi = line.support
