@@ -4,8 +4,10 @@ Contract
 --------
 * A :class:`Sensor` is a point ``(x, y)`` on the deck (m; see :mod:`bwim.conventions`)
   and a kind: ``strain_x`` (longitudinal strain at the soffit), ``strain_y`` (transverse
-  strain at the soffit), ``deflection`` (w, m, positive down) or ``axle_detector`` (a
-  logger channel with a sharp local response to each axle passing; any unit, ``-``).
+  strain at the soffit), ``deflection`` (w, m, positive down), ``axle_detector`` (a
+  logger channel with a local response to each axle passing; any unit, ``-``) or
+  ``temperature`` (°C; a logger channel that reads no load).  The first three are
+  *structural* (:attr:`SensorKind.is_structural`): they read the bridge's response.
 * The position is optional: a channel read from a logger file may have ``x = y = None``
   (no finite-element model is used, e.g. influence-line weighing).  ``y`` may be known
   without ``x`` (gauges across the width: lateral position).  Given ``x`` alone, ``y``
@@ -37,15 +39,23 @@ class SensorKind(StrEnum):
     STRAIN_Y = "strain_y"
     DEFLECTION = "deflection"
     AXLE_DETECTOR = "axle_detector"
+    TEMPERATURE = "temperature"
 
     @property
     def is_strain(self) -> bool:
         return self in (SensorKind.STRAIN_X, SensorKind.STRAIN_Y)
 
     @property
+    def is_structural(self) -> bool:
+        """Strain or deflection: a reading of the bridge's response to load."""
+        return self in (SensorKind.STRAIN_X, SensorKind.STRAIN_Y, SensorKind.DEFLECTION)
+
+    @property
     def unit(self) -> str:
         if self is SensorKind.AXLE_DETECTOR:
             return "-"
+        if self is SensorKind.TEMPERATURE:
+            return "degC"
         return "m" if self is SensorKind.DEFLECTION else "m/m"
 
 
@@ -62,8 +72,8 @@ class Sensor:
         Position across the deck, m from the right-hand edge (ignored on a beam);
         default 0.0 when ``x`` is given, None (unknown) otherwise.
     kind : SensorKind or str
-        ``"strain_x"`` (default), ``"strain_y"``, ``"deflection"`` or
-        ``"axle_detector"``.
+        ``"strain_x"`` (default), ``"strain_y"``, ``"deflection"``, ``"axle_detector"``
+        or ``"temperature"``.
     name : str, optional
         Channel name (default built from kind and position), used for CSV columns.
     """

@@ -49,7 +49,6 @@ from bwim.fe.bridge import Bridge
 from bwim.mfi import ForceIdentification, identify_forces
 from bwim.plausibility import HARD_FLAGS
 from bwim.records import Passage, Record
-from bwim.sensors import SensorKind
 from bwim.wim import MultiRunCalibration, Weighing, calibrate_lines, weigh
 from bwim.wim.multirun import RunFit
 
@@ -226,7 +225,7 @@ class EventWeighing:
 
 
 def _gauges(record: Record) -> list[str]:
-    return [s.name for s in record.sensors if s.kind is not SensorKind.AXLE_DETECTOR]
+    return [s.name for s in record.sensors if s.kind.is_structural]
 
 
 def _detect(record: Record, setup: SiteSetup, *, span, line=None,
@@ -412,7 +411,7 @@ def _weigh_mfi(record: Record, det: Detection, flags: tuple[str, ...],
     def refused(reason: str) -> EventWeighing:
         return EventWeighing(weighed=False, detection=det, flags=flags, reason=reason)
 
-    gauges = [s for s in record.sensors if s.kind is not SensorKind.AXLE_DETECTOR]
+    gauges = [s for s in record.sensors if s.kind.is_structural]
     if any(s.x is None or s.y is None for s in gauges):
         return refused("weighing by MFI needs every gauge's position (x, y) in the scenario")
     if vehicle.lateral_unit != "m" or not np.isfinite(vehicle.lateral):

@@ -37,10 +37,12 @@ __all__ = ["EdgeSupport", "FEModel", "PointRows", "Supports"]
 
 
 def _require_fe_sensor(sensor: Sensor) -> None:
-    """Refuse a sensor the model cannot observe: no position, or an axle detector."""
-    if sensor.kind is SensorKind.AXLE_DETECTOR:
-        raise InputError(f"sensor {sensor.name!r} is an axle detector; an FE model has no "
-                         "reading for it")
+    """Refuse a sensor the model cannot observe: no position, or not a structural reading
+    (an axle detector, a temperature channel)."""
+    if not sensor.kind.is_structural:
+        what = "an axle detector" if sensor.kind is SensorKind.AXLE_DETECTOR else (
+            f"a {sensor.kind.value} channel")
+        raise InputError(f"sensor {sensor.name!r} is {what}; an FE model has no reading for it")
     if not sensor.has_position:
         raise InputError(f"sensor {sensor.name!r} has no position (x, y); an FE model "
                          "needs one")

@@ -81,7 +81,7 @@ __all__ = [
 ]
 
 #: Sensor kinds that read the structure (axle detectors and any other kind are skipped).
-STRUCTURAL_KINDS = (SensorKind.STRAIN_X, SensorKind.STRAIN_Y, SensorKind.DEFLECTION)
+STRUCTURAL_KINDS = tuple(k for k in SensorKind if k.is_structural)
 
 
 # --- the factors' trend -------------------------------------------------------------------
