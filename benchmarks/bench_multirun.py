@@ -222,9 +222,10 @@ def weigh_test_day(folder: str, *, combine: str = "auto") -> None:
 
     from bwim.accuracy import SummaryRow, assess
     from bwim.detect import detect_axles
-    from bwim.io import load_scenario, read_logger
+    from bwim.io import read_logger
     from bwim.io.accuracy_csv import read_reference
-    from bwim.io.build import build_logger_format, build_sensors, build_vehicle
+    from bwim.scenario import load_scenario
+    from bwim.scenario.build import build_logger_format, build_sensors, build_vehicle
 
     root = Path(folder)
     scenario = load_scenario(root / "scenario.toml")

@@ -127,7 +127,7 @@ def _record_paths(items: Sequence[str], *, any_suffix: bool = False) -> list[Pat
 
 
 def _load_records(paths: Sequence[Path], scenario) -> list:
-    from bwim.io import load_record
+    from bwim.scenario import load_record
 
     records = []
     with _bar(len(paths) if len(paths) > 1 else None, "reading records") as bar:
@@ -148,7 +148,7 @@ def _unique_stems(paths: Sequence[Path]) -> list[str]:
 
 
 def _bridge(args: argparse.Namespace, scenario):
-    from bwim.io import build_bridge, load_bridge
+    from bwim.scenario import build_bridge, load_bridge
 
     return load_bridge(args.bridge) if args.bridge else build_bridge(scenario)
 
@@ -182,7 +182,8 @@ class _CalibrationProgress:
 
 # --- simulate --------------------------------------------------------------------------------
 def _simulate(args: argparse.Namespace) -> int:
-    from bwim.io import load_scenario, simulate_scenario, write_csv_record, write_record
+    from bwim.io import write_csv_record, write_record
+    from bwim.scenario import load_scenario, simulate_scenario
 
     out = _out_file(args.output, (".h5", ".hdf5", ".hdf", ".csv"),
                     inputs=[args.scenario, *([args.bridge] if args.bridge else [])],
@@ -211,7 +212,7 @@ def _simulate(args: argparse.Namespace) -> int:
 # --- calibrate -------------------------------------------------------------------------------
 def _calibrate(args: argparse.Namespace) -> int:
     from bwim.calibration import calibrate
-    from bwim.io import build_bridge, build_road, build_vehicle, load_scenario, save_bridge
+    from bwim.scenario import build_bridge, build_road, build_vehicle, load_scenario, save_bridge
 
     _check_jobs(args.jobs)
     paths = _record_paths(args.records)
@@ -290,7 +291,8 @@ def _identify_file(bridge, scenario, path: Path, target: Path, kwargs) -> tuple[
     or ``([], reason)`` if the record failed.  A top-level function, run by this process
     or by a worker: only the rows travel back (the record and the result stay where they
     are read and written)."""
-    from bwim.io import load_record, write_identification
+    from bwim.io import write_identification
+    from bwim.scenario import load_record
 
     try:
         record = load_record(path, scenario)
@@ -416,7 +418,7 @@ def _dask_iter(bridge, scenario, paths, kwargs, *, scheduler: str):
     two per worker thread ahead: a day of records is never all in memory."""
     from distributed import Client, as_completed
 
-    from bwim.io import load_record
+    from bwim.scenario import load_record
 
     try:
         client = Client(scheduler, timeout=10)
@@ -506,7 +508,6 @@ class _Saver:
 
 
 def _identify(args: argparse.Namespace) -> int:
-    from bwim.io import load_scenario
     from bwim.io.batch import (
         EXIT_FAILED,
         EXIT_OK,
@@ -515,6 +516,7 @@ def _identify(args: argparse.Namespace) -> int:
         refuse_existing,
         refuse_input_overwrite,
     )
+    from bwim.scenario import load_scenario
 
     _check_jobs(args.jobs)
     out = Path(args.output)
@@ -661,7 +663,8 @@ def _done_rows(summary: Path, resume: bool) -> dict[str, list[str]]:
 
 def _calibrate_site(paths: Sequence[Path], scenario, folder: Path):
     """Lines from the calibration truck's logger events; a table of the runs."""
-    from bwim.io import build_site_setup, load_record, write_influence_line
+    from bwim.io import write_influence_line
+    from bwim.scenario import build_site_setup, load_record
     from bwim.site import calibrate_site
 
     setup = build_site_setup(scenario)
@@ -693,8 +696,8 @@ def _calibrate_site(paths: Sequence[Path], scenario, folder: Path):
 
 def _weigh_site(args: argparse.Namespace, scenario, folder: Path) -> int:
     """``bwim weigh`` on a real installation's logger files (scenario with [logger])."""
-    from bwim.io import load_record
     from bwim.io.batch import refuse_existing, refuse_input_overwrite
+    from bwim.scenario import load_record
     from bwim.site import weigh_event
 
     if not args.calibration_records:
@@ -712,7 +715,7 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path) -> int:
     done = _done_rows(summary, args.resume)
     bridge = options = None
     if args.bridge:
-        from bwim.io import load_bridge
+        from bwim.scenario import load_bridge
 
         bridge = load_bridge(args.bridge)
         options = scenario.identify.kwargs() if scenario.identify is not None else {}
@@ -768,7 +771,7 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path) -> int:
 
 
 def _weigh(args: argparse.Namespace) -> int:
-    from bwim.io import load_scenario
+    from bwim.scenario import load_scenario
 
     folder = _out_folder(args.output)
     with _locked(folder):
@@ -780,14 +783,9 @@ def _weigh(args: argparse.Namespace) -> int:
 
 def _weigh_moses(args: argparse.Namespace, scenario, folder: Path) -> int:
     """``bwim weigh`` on records with their passages (simulated, or a [run] scenario)."""
-    from bwim.io import (
-        build_vehicle,
-        load_record,
-        read_influence_line,
-        write_influence_line,
-        write_static_weights,
-    )
+    from bwim.io import read_influence_line, write_influence_line, write_static_weights
     from bwim.io.batch import refuse_existing, refuse_input_overwrite
+    from bwim.scenario import build_vehicle, load_record
     from bwim.wim import calibrate_influence_line, weigh_static
 
     if args.bridge:
@@ -929,7 +927,6 @@ def _demo(args: argparse.Namespace) -> int:
 
 def _demo_run(args: argparse.Namespace, out: Path) -> int:
     from bwim.io import (
-        save_bridge,
         write_identification,
         write_influence_line,
         write_record,
@@ -937,6 +934,7 @@ def _demo_run(args: argparse.Namespace, out: Path) -> int:
     )
     from bwim.paper.demo import REPORT_INTRO, REPORT_TITLE, run_demo
     from bwim.report import figure_files, write_report
+    from bwim.scenario import save_bridge
 
     t0 = time.perf_counter()
     progress = _CalibrationProgress()

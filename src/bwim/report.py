@@ -10,7 +10,7 @@ Contract
   :class:`~bwim.Bridge` (its parameters).  A simulated record's truth, when given, is
   drawn and tabulated beside identified forces and weights.
 * :func:`read_results` reads result files: any bwim HDF5 (identification, static weights,
-  influence line, record), a bridge model TOML (:func:`bwim.io.save_bridge`) and CSV
+  influence line, record), a bridge model TOML (:func:`bwim.scenario.save_bridge`) and CSV
   summaries (shown as tables); folders are expanded to the files they hold.
 * Tables are :class:`bwim.tables.Table` (re-exported here as :class:`Table`), rendered
   with :meth:`~bwim.tables.Table.to_html`.
@@ -229,12 +229,7 @@ def _read_csv_table(path: Path) -> Table:
 
 
 def _read_h5(path: Path):
-    from bwim.io import (
-        read_identification,
-        read_influence_line,
-        read_record,
-        read_static_weights,
-    )
+    from bwim.io import read_identification, read_influence_line, read_record, read_static_weights
 
     last = None
     for reader in (read_identification, read_static_weights, read_influence_line,
@@ -255,7 +250,7 @@ def result_paths(paths: Iterable[str | os.PathLike]) -> list[Path]:
 
 def read_results(paths: Sequence[str | os.PathLike]) -> list[tuple[str, Any]]:
     """(name, object) of each result file (folders expanded), in order."""
-    from bwim.io import load_bridge
+    from bwim.scenario import load_bridge
 
     out = []
     for p in result_paths(paths):

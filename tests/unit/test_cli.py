@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from bwim.cli import main
-from bwim.io import load_bridge, read_identification, read_record, read_static_weights
+from bwim.io import read_identification, read_record, read_static_weights
+from bwim.scenario import load_bridge
 
 from tests.references import levy_ss_free_first_frequency
 

@@ -4,9 +4,9 @@ a calibration truck known by its static axle loads, no [bridge] (issue 11's cont
 import numpy as np
 import pytest
 
-from bwim import io
+from bwim import scenario as scn
 from bwim.errors import InputError
-from bwim.io.build import build_logger_format, build_sensors, build_vehicle, load_record
+from bwim.scenario.build import build_logger_format, build_sensors, build_vehicle, load_record
 from bwim.sensors import SensorKind
 
 GAUGES = [f"s{i:02d}" for i in range(1, 15)]
@@ -46,7 +46,7 @@ def _event(tmp_path, name, delimiter, header, n=300, rate=512.0, t0=36000.0):
 
 
 def test_the_issue_scenario_parses_and_builds(tmp_path):
-    s = io.load_scenario(_write(tmp_path, SITE))
+    s = scn.load_scenario(_write(tmp_path, SITE))
     assert s.bridge is None
     sensors = build_sensors(s)
     assert [x.name for x in sensors] == GAUGES
@@ -63,7 +63,7 @@ def test_the_issue_scenario_parses_and_builds(tmp_path):
     ("e.txt", "\t", True), ("e.csv", ",", False), ("e.dat", ";", True), ("e.log", " ", False),
 ])
 def test_logger_files_of_any_shape_load(tmp_path, name, delimiter, header):
-    s = io.load_scenario(_write(tmp_path, SITE))
+    s = scn.load_scenario(_write(tmp_path, SITE))
     p, t, data = _event(tmp_path, name, delimiter, header)
     rec = load_record(p, s)
     np.testing.assert_allclose(rec.time, t, rtol=0, atol=1e-6)
@@ -73,10 +73,10 @@ def test_logger_files_of_any_shape_load(tmp_path, name, delimiter, header):
 
 
 def test_scenario_round_trip(tmp_path):
-    s = io.load_scenario(_write(tmp_path, SITE))
+    s = scn.load_scenario(_write(tmp_path, SITE))
     out = tmp_path / "again.toml"
-    io.dump_scenario(s, out)
-    assert io.load_scenario(out) == s
+    scn.dump_scenario(s, out)
+    assert scn.load_scenario(out) == s
 
 
 @pytest.mark.parametrize(("change", "message"), [
@@ -89,20 +89,20 @@ def test_scenario_round_trip(tmp_path):
 def test_bad_site_scenarios(tmp_path, change, message):
     p = _write(tmp_path, SITE.replace(*change))
     with pytest.raises(InputError, match=message):
-        io.load_scenario(p)
+        scn.load_scenario(p)
 
 
 def test_columns_must_match_the_channels(tmp_path):
-    s = io.load_scenario(_write(tmp_path, SITE.replace('"-", "-"]', '"s99", "-"]')))
+    s = scn.load_scenario(_write(tmp_path, SITE.replace('"-", "-"]', '"s99", "-"]')))
     with pytest.raises(InputError, match="'s99' is neither a"):
         build_logger_format(s)
-    s = io.load_scenario(_write(tmp_path, SITE.replace('"ad2", ', '"-", ')))
+    s = scn.load_scenario(_write(tmp_path, SITE.replace('"ad2", ', '"-", ')))
     with pytest.raises(InputError, match="no column for the \\[axle_detectors\\] channel 'ad2'"):
         build_logger_format(s)
 
 
 def test_a_missing_column_in_the_file_is_one_line(tmp_path):
-    s = io.load_scenario(_write(tmp_path, SITE))
+    s = scn.load_scenario(_write(tmp_path, SITE))
     p, _, _ = _event(tmp_path, "short.txt", "\t", True)
     text = p.read_text().splitlines()
     text[5] = "\t".join(text[5].split("\t")[:-1])
@@ -115,6 +115,6 @@ def test_a_missing_column_in_the_file_is_one_line(tmp_path):
 def test_named_gauges_with_transverse_positions(tmp_path):
     text = SITE.replace('kind = "strain_x"', 'kind = "strain_x"\ny = [' +
                         ", ".join(f"{0.5 + 0.7 * i:.1f}" for i in range(14)) + "]")
-    sensors = build_sensors(io.load_scenario(_write(tmp_path, text)))
+    sensors = build_sensors(scn.load_scenario(_write(tmp_path, text)))
     assert [x.y for x in sensors] == pytest.approx([0.5 + 0.7 * i for i in range(14)])
     assert all(x.x is None for x in sensors)

@@ -10,6 +10,7 @@ import pytest
 
 import bwim
 from bwim import io
+from bwim import scenario as scn
 from bwim.errors import InputError
 from bwim.records import VBIConvergence
 
@@ -360,20 +361,20 @@ def _umask() -> int:
 
 # --- records for a scenario ------------------------------------------------------------------
 def test_load_record_by_extension(tmp_path, rng):
-    scenario = io.load_scenario(Path(__file__).resolve().parents[2] / "examples" / "beam.toml")
-    sensors = io.build_sensors(scenario)
+    scenario = scn.load_scenario(Path(__file__).resolve().parents[2] / "examples" / "beam.toml")
+    sensors = scn.build_sensors(scenario)
     rec = bwim.Record(time=0.002 * np.arange(20), data=rng.normal(size=(20, 3)),
                       sensors=sensors)
     io.write_csv_record(rec, tmp_path / "log.csv")
-    got = io.load_record(tmp_path / "log.csv", scenario)
+    got = scn.load_record(tmp_path / "log.csv", scenario)
     assert np.array_equal(got.data, rec.data)
-    assert_same_passage(got.passage, io.build_passage(scenario))
+    assert_same_passage(got.passage, scn.build_passage(scenario))
     # a measured record takes the [run]'s approach; it ends before the vehicle leaves
     assert got.settings == bwim.SimulationSettings(approach=50.0, tail=0.0)
     io.write_record(got, tmp_path / "log.h5")
-    assert_same_record(io.load_record(tmp_path / "log.h5"), got)
+    assert_same_record(scn.load_record(tmp_path / "log.h5"), got)
     with raises(f"{tmp_path / 'log.csv'}: a CSV record needs a scenario for its sensor "
                 "positions"):
-        io.load_record(tmp_path / "log.csv")
+        scn.load_record(tmp_path / "log.csv")
     with raises(f"{tmp_path / 'log.xlsx'}: unknown record format '.xlsx'; use .csv or .h5"):
-        io.load_record(tmp_path / "log.xlsx", scenario)
+        scn.load_record(tmp_path / "log.xlsx", scenario)

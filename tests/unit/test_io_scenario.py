@@ -13,6 +13,7 @@ from hypothesis import strategies as st
 
 import bwim
 from bwim import io, paper
+from bwim import scenario as scn
 from bwim.errors import InputError
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -37,8 +38,8 @@ def write(tmp_path: Path, text: str, name: str = "scenario.toml") -> Path:
     return p
 
 
-def load(tmp_path: Path, text: str) -> io.Scenario:
-    return io.load_scenario(write(tmp_path, text))
+def load(tmp_path: Path, text: str) -> scn.Scenario:
+    return scn.load_scenario(write(tmp_path, text))
 
 
 def raises(match_exact: str):
@@ -72,15 +73,15 @@ def same_bridge(a: bwim.Bridge, b: bwim.Bridge) -> bool:
      ("beam", 3, bwim.TractorSemitrailer)],
 )
 def test_examples_load_and_build(name, n_sensors, vehicle):
-    s = io.load_scenario(EXAMPLES / f"{name}.toml")
-    bridge = io.build_bridge(s)
-    sensors = io.build_sensors(s)
+    s = scn.load_scenario(EXAMPLES / f"{name}.toml")
+    bridge = scn.build_bridge(s)
+    sensors = scn.build_sensors(s)
     assert len(sensors) == n_sensors
-    assert isinstance(io.build_vehicle(s), vehicle)
-    road = io.build_road(s)
-    passage = io.build_passage(s)
+    assert isinstance(scn.build_vehicle(s), vehicle)
+    road = scn.build_road(s)
+    passage = scn.build_passage(s)
     # the road covers the whole run: approach behind the last axle to the exit
-    veh = io.build_vehicle(s)
+    veh = scn.build_vehicle(s)
     assert road.covers(-(s.run.approach + veh.length), bridge.length + veh.length)
     assert passage.speed == s.run.speed
     assert bridge.sensor_matrix(sensors).shape == (n_sensors, bridge.n_free)
@@ -88,44 +89,44 @@ def test_examples_load_and_build(name, n_sensors, vehicle):
 
 
 def test_paper_slab_example_is_the_paper_bridge():
-    s = io.load_scenario(EXAMPLES / "paper_slab.toml")
-    assert same_bridge(io.build_bridge(s), paper.slab_bridge())
-    assert same_sensors(io.build_sensors(s), paper.sensors())
-    road, ref = io.build_road(s), paper.road(1)
+    s = scn.load_scenario(EXAMPLES / "paper_slab.toml")
+    assert same_bridge(scn.build_bridge(s), paper.slab_bridge())
+    assert same_sensors(scn.build_sensors(s), paper.sensors())
+    road, ref = scn.build_road(s), paper.road(1)
     assert np.array_equal(road.x, ref.x) and np.array_equal(road.elevation, ref.elevation)
-    truck = io.build_vehicle(s)
+    truck = scn.build_vehicle(s)
     assert np.array_equal(truck.static_axle_loads, paper.truck().static_axle_loads)
-    p = io.build_passage(s)
+    p = scn.build_passage(s)
     assert (p.speed, p.lane, p.track_width) == (paper.SPEED, paper.LANE, paper.TRACK_WIDTH)
     assert (s.run.sampling_rate, s.run.approach) == (paper.SAMPLING_RATE, paper.APPROACH)
 
 
 def test_vransko_example_is_the_paper_bridge():
-    s = io.load_scenario(EXAMPLES / "vransko.toml")
-    bridge = io.build_bridge(s)
+    s = scn.load_scenario(EXAMPLES / "vransko.toml")
+    bridge = scn.build_bridge(s)
     ref = paper.vransko_bridge()
     assert same_bridge(bridge, ref)
     assert bridge.model.girders == ref.model.girders
-    assert same_sensors(io.build_sensors(s), paper.vransko_sensors())
+    assert same_sensors(scn.build_sensors(s), paper.vransko_sensors())
 
 
 @pytest.mark.parametrize("name", ["paper_slab", "vransko", "beam"])
 def test_examples_dump_and_load_back_equal(tmp_path, name):
-    s = io.load_scenario(EXAMPLES / f"{name}.toml")
+    s = scn.load_scenario(EXAMPLES / f"{name}.toml")
     out = tmp_path / "again.toml"
-    io.dump_scenario(s, out, header="written by a test")
-    again = io.load_scenario(out)
+    scn.dump_scenario(s, out, header="written by a test")
+    again = scn.load_scenario(out)
     assert again == s
     assert out.read_text().startswith("# written by a test\n")
-    assert tomllib.loads(out.read_text()) == io.scenario_to_dict(s)
+    assert tomllib.loads(out.read_text()) == scn.scenario_to_dict(s)
 
 
 def test_simulate_scenario_beam_with_noise_is_seeded(tmp_path):
     text = (EXAMPLES / "beam.toml").read_text().replace("tail = 0.5", "tail = 0.0\nnoise = 0.02")
     s = load(tmp_path, text)
-    a = io.simulate_scenario(s)
-    b = io.simulate_scenario(s)
-    clean = io.simulate_scenario(load(tmp_path, text.replace("noise = 0.02", "")))
+    a = scn.simulate_scenario(s)
+    b = scn.simulate_scenario(s)
+    clean = scn.simulate_scenario(load(tmp_path, text.replace("noise = 0.02", "")))
     assert a.data.shape[1] == 3 and [c.name for c in a.sensors] == ["quarter", "mid",
                                                                    "three_quarter"]
     assert np.array_equal(a.data, b.data)
@@ -151,7 +152,7 @@ def test_orthotropic_zoned_plate_and_supports_table(tmp_path):
         x0 = "clamped"
         x_end = "simple"
     """)
-    b = io.build_bridge(s)
+    b = scn.build_bridge(s)
     ref = bwim.Bridge.plate(length=12.0, width=8.0, nx=12, ny=8, thickness=0.65,
                             E_x=[30e9, 31e9, 32e9, 33e9], E_y=20e9, mu=1560.0, zones=(2, 2),
                             supports={"x0": "clamped", "x_end": "simple"})
@@ -168,7 +169,7 @@ def test_girders_with_explicit_section_values(tmp_path):
         mu = 1000
         J = 0.01
     """)
-    b = io.build_bridge(s)
+    b = scn.build_bridge(s)
     assert b.model.girders == (bwim.Girder(y=2.0, I=0.1, z_bottom=0.8, E=35e9, mu=1000.0,
                                            J=0.01),)
 
@@ -186,7 +187,7 @@ def test_beam_with_x_through_and_zones(tmp_path):
         z_bottom = 0.5
         zones = 3
     """)
-    b = io.build_bridge(s)
+    b = scn.build_bridge(s)
     assert 7.3 in b.model.grid.x_lines
     ref = bwim.Bridge.beam(length=20.0, x_lines=bwim.grid_lines(20.0, 9, through=[7.3]),
                            E=[3e10, 3.1e10, 3.2e10], I=1.0, mu=1e4, z_bottom=0.5, zones=3)
@@ -210,7 +211,7 @@ def test_sensor_grid_and_single_entries_in_file_order(tmp_path):
         x = 1.0
         y = 1.0
     """)
-    got = [(q.name, q.x, q.y, q.kind.value) for q in io.build_sensors(s)]
+    got = [(q.name, q.x, q.y, q.kind.value) for q in scn.build_sensors(s)]
     assert got == [
         ("w_mid", 6.0, 4.0, "deflection"),
         ("x0@3", 3.0, 2.0, "strain_x"), ("x1@9", 9.0, 2.0, "strain_x"),
@@ -228,7 +229,7 @@ def test_moving_forces_and_sprung_mass(tmp_path):
         axle_spacings = [5.5]
         track_width = 1.8
     """)
-    v = io.build_vehicle(s)
+    v = scn.build_vehicle(s)
     assert isinstance(v, bwim.MovingForces)
     assert np.array_equal(v.axle_loads, [59.5e3, 108.6e3]) and v.track_width == 1.8
     s = load(tmp_path, PLATE + """
@@ -237,7 +238,7 @@ def test_moving_forces_and_sprung_mass(tmp_path):
         mass = 5750
         stiffness = 1595e3
     """)
-    v = io.build_vehicle(s)
+    v = scn.build_vehicle(s)
     assert isinstance(v, bwim.SprungMass) and (v.mass, v.stiffness, v.damping) == (
         5750.0, 1595e3, 0.0)
 
@@ -257,7 +258,7 @@ def test_truck3d_from_axle_loads_equals_the_paper_truck(tmp_path):
         tyre_damping = [1e3, 1e3]
         track_width = 2.0
     """)
-    v, ref = io.build_vehicle(s).model(), paper.truck().model()
+    v, ref = scn.build_vehicle(s).model(), paper.truck().model()
     for name in ("mass", "stiffness", "damping", "static_forces"):
         assert np.array_equal(getattr(v, name), getattr(ref, name))
 
@@ -273,7 +274,7 @@ def test_tractor_semitrailer_and_half_car_by_parameters(tmp_path):
     for f in ("axle_spacings", "wheel_mass", "suspension_stiffness", "suspension_damping",
               "tyre_stiffness", "tyre_damping"):
         lines.append(f"{f} = {getattr(ref, f).tolist()!r}")
-    v = io.build_vehicle(load(tmp_path, PLATE + "\n".join(lines)))
+    v = scn.build_vehicle(load(tmp_path, PLATE + "\n".join(lines)))
     assert np.array_equal(v.static_axle_loads, ref.static_axle_loads)
     s = load(tmp_path, PLATE + """
         [vehicle]
@@ -287,17 +288,17 @@ def test_tractor_semitrailer_and_half_car_by_parameters(tmp_path):
         suspension_damping = 1e4
         tyre_stiffness = 1.75e6
     """)
-    v = io.build_vehicle(s)
+    v = scn.build_vehicle(s)
     assert isinstance(v, bwim.HalfCar) and v.n_axles == 2
     assert np.isclose(v.static_axle_loads.sum(), (10000 + 2 * 500) * 9.81)
 
 
 # --- roads ---------------------------------------------------------------------------------
 def test_roads_flat_iso_class_and_csv_profile(tmp_path):
-    assert io.build_road(load(tmp_path, PLATE)).covers(-1e6, 1e6)
-    flat = io.build_road(load(tmp_path, PLATE + "[road]\nflat = true\n"))
+    assert scn.build_road(load(tmp_path, PLATE)).covers(-1e6, 1e6)
+    flat = scn.build_road(load(tmp_path, PLATE + "[road]\nflat = true\n"))
     assert np.all(flat.elevation == 0)
-    iso = io.build_road(load(tmp_path, PLATE + """
+    iso = scn.build_road(load(tmp_path, PLATE + """
         [road]
         roughness = "B"
         length = 50.0
@@ -313,18 +314,18 @@ def test_roads_flat_iso_class_and_csv_profile(tmp_path):
         "x,elevation\n-200,0.0\n0,0.001\n50,0.0\n100,0.002\n")
     p = write(tmp_path, PLATE + '[road]\nprofile = "profiles/road.csv"\nsmoothing = 1.0\n',
               name="sub.toml")
-    road = io.build_road(io.load_scenario(p))
+    road = scn.build_road(scn.load_scenario(p))
     assert road.extent == (-199.5, 99.5)
     (tmp_path / "two.csv").write_text("x,right,left\n-200,0,0\n200,0.001,0.002\n")
-    road = io.build_road(load(tmp_path, PLATE + f'[road]\nprofile = "{tmp_path / "two.csv"}"\n'))
+    road = scn.build_road(load(tmp_path, PLATE + f'[road]\nprofile = "{tmp_path / "two.csv"}"\n'))
     assert road.n_tracks == 2
 
 
 # --- bridge files --------------------------------------------------------------------------
 def _check_bridge_file(tmp_path, bridge):
     path = tmp_path / "bridge.toml"
-    io.save_bridge(bridge, path, title="calibrated")
-    again = io.load_bridge(path)
+    scn.save_bridge(bridge, path, title="calibrated")
+    again = scn.load_bridge(path)
     assert same_bridge(again, bridge)
     assert again.model.grid.x_lines.tolist() == bridge.model.grid.x_lines.tolist()
     return path
@@ -337,7 +338,7 @@ def test_save_load_bridge_zoned_plate_with_calibrated_params(tmp_path):
         mu=1560 * rng.uniform(0.9, 1.1, 16)).with_damping(0.021)
     path = _check_bridge_file(tmp_path, b)
     assert "zones = [4, 4]" in path.read_text()
-    assert io.load_scenario(path).title == "calibrated"
+    assert scn.load_scenario(path).title == "calibrated"
 
 
 def test_save_load_bridge_with_girders(tmp_path):
@@ -382,16 +383,16 @@ def test_zone_map_with_an_unused_label_round_trips(tmp_path):
         zone_map = [[0, 0], [0, 1], [1, 1], [1, 1]]
         n_zones = 3
     """)
-    b = io.build_bridge(s)
+    b = scn.build_bridge(s)
     assert b.n_zones == 3 and b.model.zone_of_element.tolist() == [0, 0, 0, 1, 1, 1, 1, 1]
     path = _check_bridge_file(tmp_path, b)
     assert "n_zones = 3" in path.read_text()
     bad = write(tmp_path, path.read_text().replace("n_zones = 3", "n_zones = 1"))
     with raises(f"{bad}: [bridge]: zone_map labels must lie in [0, 0], got 0 … 1"):
-        io.load_bridge(bad)
+        scn.load_bridge(bad)
     bad = write(tmp_path, path.read_text().replace("n_zones = 3", ""))
     with raises(f"{bad}: [bridge]: E_x must be a scalar or have shape (2,), got shape (3,)"):
-        io.load_bridge(bad)
+        scn.load_bridge(bad)
 
 
 # --- strict errors -------------------------------------------------------------------------
@@ -399,15 +400,15 @@ def test_malformed_toml_names_line_and_column(tmp_path):
     p = write(tmp_path, '[bridge]\nkind = "plate"\nlength = 12 m\n')
     with raises(f"{p}: line 3, column 13: Expected newline or end of document after a "
                 "statement"):
-        io.load_scenario(p)
+        scn.load_scenario(p)
     p = write(tmp_path, "[bridge]\nkind = plate\n")
     with raises(f"{p}: line 2, column 8: Invalid value"):
-        io.load_scenario(p)
+        scn.load_scenario(p)
 
 
 def test_missing_file(tmp_path):
     with raises(f"{tmp_path / 'nope.toml'}: no such file"):
-        io.load_scenario(tmp_path / "nope.toml")
+        scn.load_scenario(tmp_path / "nope.toml")
 
 
 def test_unknown_key_names_key_section_and_allowed_keys(tmp_path):
@@ -417,7 +418,7 @@ def test_unknown_key_names_key_section_and_allowed_keys(tmp_path):
         "thickness, nx, ny, x_lines, y_lines, x_through, y_through, E, E_x, E_y, mu, "
         "poisson, damping_ratio, supports, zones, zone_map, n_zones, girders"
     ):
-        io.load_scenario(p)
+        scn.load_scenario(p)
     p = write(tmp_path, """
         [bridge]
         kind = "beam"
@@ -433,30 +434,30 @@ def test_unknown_key_names_key_section_and_allowed_keys(tmp_path):
         "n_elements, x_lines, x_through, E, mu, I, z_bottom, damping_ratio, supports, zones, "
         "zone_map, n_zones"
     ):
-        io.load_scenario(p)
+        scn.load_scenario(p)
     p = write(tmp_path, PLATE + "[run]\nspeed = 20.0\nlanes = 2.0\n")
     with raises(
         f"{p}: unknown key 'lanes' in [run]; allowed keys: speed, lane, sampling_rate, "
         "approach, tail, method, delay, n_modes, max_frequency, full_system, "
         "static_correction, noise, seed"
     ):
-        io.load_scenario(p)
+        scn.load_scenario(p)
     p = write(tmp_path, PLATE + "[[sensors]]\nx = 1.0\n[[sensors]]\nx = 2.0\nz = 0.0\n")
     with raises(f"{p}: unknown key 'z' in [[sensors]] entry 2; allowed keys: x, y, kind, name"):
-        io.load_scenario(p)
+        scn.load_scenario(p)
     p = write(tmp_path, PLATE + "[runs]\nspeed = 20.0\n")
     with raises(f"{p}: unknown key 'runs' at the top level; allowed keys: title, bridge, "
                 "sensors, logger, axle_detectors, vehicle, road, run, identify, calibrate"):
-        io.load_scenario(p)
+        scn.load_scenario(p)
     p = write(tmp_path, PLATE + '[vehicle]\ntype = "sprung_mass"\nmass = 1.0\nstiffnes = 1.0\n')
     with raises(f"{p}: unknown key 'stiffnes' in [vehicle] for type = 'sprung_mass'; allowed "
                 "keys: type, mass, stiffness, damping, unsprung_mass, tyre_stiffness, "
                 "tyre_damping"):
-        io.load_scenario(p)
+        scn.load_scenario(p)
     p = write(tmp_path, PLATE + "[bridge.supports]\nx0 = \"simple\"\nx1 = \"free\"\n")
     with raises(f"{p}: unknown key 'x1' in [bridge.supports]; allowed keys: x0, x_end, y0, "
                 "y_end"):
-        io.load_scenario(p)
+        scn.load_scenario(p)
     p = write(tmp_path, PLATE + """
         [[bridge.girders]]
         y = 2.0
@@ -472,7 +473,7 @@ def test_unknown_key_names_key_section_and_allowed_keys(tmp_path):
     with raises(f"{p}: unknown key 'depth' in [bridge.girders.section] of entry 1; allowed keys: "
                 "girder_area, girder_inertia, girder_depth, slab_width, "
                 "girder_centroid_height, slab_thickness, modular_ratio, exclude_slab_bending"):
-        io.load_scenario(p)
+        scn.load_scenario(p)
 
 
 @pytest.mark.parametrize(("line", "message"), [
@@ -491,40 +492,40 @@ def test_wrong_types(tmp_path, line, message):
                      if not ln.startswith(f"{key} ")) + f"\n{line}\n"
     p = write(tmp_path, text)
     with raises(f"{p}: {message}"):
-        io.load_scenario(p)
+        scn.load_scenario(p)
 
 
 def test_missing_keys_and_sections(tmp_path):
     p = write(tmp_path, PLATE.replace("length = 12.0\n", ""))
     with raises(f"{p}: [bridge] is missing the key 'length'"):
-        io.load_scenario(p)
+        scn.load_scenario(p)
     p = write(tmp_path, PLATE.replace('kind = "plate"\n', ""))
     with raises(f"{p}: [bridge] is missing the key 'kind' (\"plate\" or \"beam\")"):
-        io.load_scenario(p)
+        scn.load_scenario(p)
     p = write(tmp_path, "[run]\nspeed = 20.0\n")
-    s = io.load_scenario(p)  # valid without a bridge (weighing with influence lines) ...
+    s = scn.load_scenario(p)  # valid without a bridge (weighing with influence lines) ...
     with raises(f"{p}: no [bridge] section"):
-        io.build_bridge(s)  # ... until a builder needs one
+        scn.build_bridge(s)  # ... until a builder needs one
     p = write(tmp_path, PLATE + '[vehicle]\ntype = "sprung_mass"\nmass = 1.0\n')
     with raises(f"{p}: [vehicle] type = 'sprung_mass' is missing the key 'stiffness'"):
-        io.load_scenario(p)
+        scn.load_scenario(p)
     p = write(tmp_path, PLATE)
-    s = io.load_scenario(p)
+    s = scn.load_scenario(p)
     with raises(f"{p}: no [vehicle] section"):
-        io.build_vehicle(s)
+        scn.build_vehicle(s)
     with raises(f"{p}: no [run] section"):
-        io.simulate_scenario(s)
+        scn.simulate_scenario(s)
     p = write(tmp_path, PLATE + "[run]\nspeed = 20.0\n")
     with raises(f"{p}: no [[sensors]] section"):
-        io.simulate_scenario(io.load_scenario(p))
+        scn.simulate_scenario(scn.load_scenario(p))
 
 
 _GIRDER = "[[bridge.girders]]\ny = 2.0\nE = 35e9\nmu = 1000\n"
 _BEAM = (EXAMPLES / "beam.toml").read_text() + '\n[[sensors]]\nx = 3.0\nkind = "strain_y"\n'
 _STAGES = {
     "load": lambda s: s,
-    "bridge": io.build_bridge, "vehicle": io.build_vehicle, "sensors": io.build_sensors,
-    "road": io.build_road, "passage": io.build_passage,
+    "bridge": scn.build_bridge, "vehicle": scn.build_vehicle, "sensors": scn.build_sensors,
+    "road": scn.build_road, "passage": scn.build_passage,
 }
 
 
@@ -557,7 +558,7 @@ _STAGES = {
      "[[sensors]] entry 1 name: bad template '{z}' ('z'); fields are kind, short, x, y, i"),
     (PLATE + '[[sensors]]\nx = 6.0\nkind = "strain_z"\n', "load",
      "[[sensors]] entry 1 kind: unknown value 'strain_z'; expected one of strain_x, "
-     "strain_y, deflection"),
+     "strain_y, deflection, temperature"),
     (_BEAM, "sensors",
      "[[sensors]] entry 4: sensor 'strain_y@3,0': strain_y is not available on a beam"),
     (PLATE + "zones = [2, 2]\nzone_map = [[0]]\n", "load",
@@ -580,29 +581,29 @@ def test_inconsistent_scenarios_are_refused_naming_file_and_section(tmp_path, te
                                                                    message):
     p = write(tmp_path, text)
     with raises(f"{p}: {message}"):
-        _STAGES[stage](io.load_scenario(p))
+        _STAGES[stage](scn.load_scenario(p))
 
 
 def test_missing_road_profile_names_the_file(tmp_path):
     p = write(tmp_path, PLATE + '[road]\nprofile = "missing.csv"\n')
     with raises(f"{tmp_path / 'missing.csv'}: no such file"):
-        io.build_road(io.load_scenario(p))
+        scn.build_road(scn.load_scenario(p))
 
 
 def test_scenario_from_dict_uses_the_source_name():
     with raises("my-run: [bridge] length: expected a number, got None"):
-        io.scenario_from_dict({"bridge": {"kind": "beam", "length": None}}, source="my-run")
+        scn.scenario_from_dict({"bridge": {"kind": "beam", "length": None}}, source="my-run")
 
 
 def test_vehicle_spec_and_lam_are_checked(tmp_path):
     with raises("unknown vehicle 'lorry'; expected one of two_axle_truck, three_axle_truck, "
                 "tractor_semitrailer"):
-        io.VehicleSpec(name="lorry")
+        scn.VehicleSpec(name="lorry")
     with raises("a vehicle spec needs either a name or a type"):
-        io.VehicleSpec()
+        scn.VehicleSpec()
     p = write(tmp_path, PLATE + '[identify]\nlam = "corner"\n')
     with raises(f"{p}: [identify] lam: unknown value 'corner'; expected one of lcurve, gcv"):
-        io.load_scenario(p)
+        scn.load_scenario(p)
 
 
 def test_identify_and_calibrate_options(tmp_path):
@@ -626,7 +627,7 @@ def test_identify_and_calibrate_options(tmp_path):
         p = write(tmp_path, PLATE + f"[calibrate]\nmesh_correction = {bad}\n")
         with raises(f'{p}: [calibrate] mesh_correction: must be an integer from 0 to 3 or '
                     f'"auto", got {shown}'):
-            io.load_scenario(p)
+            scn.load_scenario(p)
 
 
 # --- the TOML writer -----------------------------------------------------------------------

@@ -14,7 +14,8 @@ from pathlib import Path
 import pytest
 
 from bwim.cli import main
-from bwim.io import load_bridge, read_record
+from bwim.io import read_record
+from bwim.scenario import load_bridge
 
 EXAMPLES = sorted((Path(__file__).resolve().parents[2] / "examples").glob("*.toml"))
 QUICK = '[calibrate]\nmethod = "ce"\nrefine = "none"\npopulation = 8\nmax_evals = 16\n\n'

@@ -1,6 +1,6 @@
 """Issue 14: hypothesis fuzzing of the TOML scenario reader (and the builders it feeds) and
 of the HDF5 record reader: whatever the input, the outcome is a value or an InputError,
-never another exception.  Reference: the readers' contracts (bwim.io.scenario, _hdf5)."""
+never another exception.  Reference: the readers' contracts (bwim.scenario, _hdf5)."""
 
 from __future__ import annotations
 
@@ -16,16 +16,9 @@ from hypothesis import strategies as st
 
 import bwim
 from bwim.errors import InputError
-from bwim.io import (
-    build_bridge,
-    build_road,
-    build_sensors,
-    build_vehicle,
-    load_scenario,
-    read_record,
-    write_record,
-)
+from bwim.io import read_record, write_record
 from bwim.limits import ENV_VAR
+from bwim.scenario import build_bridge, build_road, build_sensors, build_vehicle, load_scenario
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLE = (ROOT / "examples" / "beam.toml").read_text(encoding="utf-8")

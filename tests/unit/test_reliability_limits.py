@@ -76,7 +76,7 @@ def test_road_and_smoothing_refused():
 
 
 def test_scenario_smoothing_1e9_refused(tmp_path):
-    from bwim.io import build_road, load_scenario
+    from bwim.scenario import build_road, load_scenario
 
     text = (_EXAMPLE.read_text(encoding="utf-8").replace("smoothing = 0.24",
                                                          "smoothing = 1e9"))

@@ -7,10 +7,11 @@ import pytest
 from bwim import paper
 from bwim.dynamics.crossing import simulate
 from bwim.errors import InputError
-from bwim.io import save_bridge, write_record
+from bwim.io import write_record
 from bwim.mfi import identify_forces
 from bwim.plots.records import plot_record
 from bwim.report import Table, read_results, render_html, section, write_report
+from bwim.scenario import save_bridge
 
 
 @pytest.fixture(scope="module")

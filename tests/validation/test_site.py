@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from bwim.cli import WEIGH_COLUMNS, main
-from bwim.io import load_record, load_scenario
+from bwim.scenario import load_record, load_scenario
 from bwim.site import SiteSetup, calibrate_site, weigh_event
 from bwim.synthetic import make_test_day
 
@@ -182,7 +182,7 @@ def test_weighing_by_mfi_with_an_fe_model(day, site):
     each detected truck is weighed by MFI: GVW within 12 % of the truth (measured
     −2.6 … +7.9 % on this day: the model is not calibrated to the data).  Without gauge
     positions MFI is refused with its reason, not attempted."""
-    from bwim.io import read_toml, scenario_from_dict
+    from bwim.scenario import read_toml, scenario_from_dict
     from bwim.synthetic import site as layout
 
     scenario, cal = site

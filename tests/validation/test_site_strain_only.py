@@ -19,7 +19,7 @@ import csv
 import numpy as np
 import pytest
 
-from bwim.io import load_record, read_toml, scenario_from_dict
+from bwim.scenario import load_record, read_toml, scenario_from_dict
 from bwim.site import SiteSetup, calibrate_site
 from bwim.synthetic import make_test_day
 

@@ -1,4 +1,4 @@
-"""Builders: bwim objects from a :class:`~bwim.io.scenario.Scenario`.
+"""Builders: bwim objects from a :class:`~bwim.scenario.Scenario`.
 
 Contract
 --------
@@ -39,15 +39,15 @@ from bwim.fe.mesh import grid_lines
 from bwim.io._csv import read_numeric_csv
 from bwim.io.logger import LoggerFormat, read_logger
 from bwim.io.records import read_csv_record, read_record
-from bwim.io.scenario import VEHICLE_TYPES, BridgeSpec, GirderSpec, Scenario
 from bwim.records import Passage, Record, SimulationSettings
 from bwim.road import RoadProfile
+from bwim.scenario.specs import VEHICLE_TYPES, BridgeSpec, GirderSpec, Scenario
 from bwim.sensors import Sensor, SensorKind
 from bwim.site import SiteSetup
 from bwim.vehicles import Vehicle, named
 from bwim.vehicles.types import Truck3D
 
-# The public names are listed once, in bwim.io.__all__ (which re-exports them).
+# The public names are listed once, in bwim.scenario.__all__ (which re-exports them).
 
 
 @contextlib.contextmanager

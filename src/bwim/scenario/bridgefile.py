@@ -12,7 +12,7 @@ Contract
   the loaded bridge has the same ``params``, damping ratio and grid, hence the same
   stiffness and mass matrices.  So ``bwim calibrate`` and ``bwim identify`` can run as
   two invocations.
-* :func:`bridge_spec` gives the :class:`~bwim.io.scenario.BridgeSpec` of a bridge.
+* :func:`bridge_spec` gives the :class:`~bwim.scenario.BridgeSpec` of a bridge.
 """
 
 from __future__ import annotations
@@ -24,8 +24,9 @@ from types import MappingProxyType
 import numpy as np
 
 from bwim.fe.bridge import Bridge
-from bwim.io.build import build_bridge
-from bwim.io.scenario import BridgeSpec, GirderSpec, Scenario, dump_scenario, load_scenario
+from bwim.scenario.build import build_bridge
+from bwim.scenario.parse import dump_scenario, load_scenario
+from bwim.scenario.specs import BridgeSpec, GirderSpec, Scenario
 
 __all__ = ["bridge_spec", "load_bridge", "save_bridge"]
 
@@ -105,7 +106,7 @@ def save_bridge(bridge: Bridge, path: str | os.PathLike, *, title: str = "") -> 
     except PackageNotFoundError:  # pragma: no cover - a source tree without installation
         release = "unknown version"
     header = (f"bwim bridge model (bwim {release}): parameters per zone, exact.\n"
-              "Load with bwim.io.load_bridge(path); any [bridge] scenario key may be edited.")
+              "Load with bwim.scenario.load_bridge(path); any [bridge] scenario key may be edited.")
     dump_scenario(Scenario(bridge=bridge_spec(bridge), title=title), path, header=header)
 
 
