@@ -222,8 +222,7 @@ def weigh_test_day(folder: str, *, combine: str = "auto") -> None:
 
     from bwim.accuracy import SummaryRow, assess
     from bwim.detect import detect_axles
-    from bwim.io import read_logger
-    from bwim.io.accuracy_csv import read_reference
+    from bwim.io import read_logger, read_reference
     from bwim.scenario import load_scenario
     from bwim.scenario.build import build_logger_format, build_sensors, build_vehicle
 

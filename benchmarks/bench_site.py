@@ -37,7 +37,7 @@ import numpy as np
 from benchmarks._timing import print_table
 from bwim.accuracy import SummaryRow, assess
 from bwim.cli import main as bwim_main
-from bwim.io.accuracy_csv import read_reference, read_summary
+from bwim.io import read_reference, read_summary
 from bwim.scenario import build_site_setup, build_vehicle, load_record, load_scenario
 from bwim.site import calibrate_site, weigh_event
 from bwim.synthetic import make_test_day

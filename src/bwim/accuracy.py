@@ -49,7 +49,8 @@ Contract
 * Overall class: the worst class of the criteria assessed (the sheet's "accepted" class is
   the largest class value).  Criteria with too few values (as above) are not assessed and
   are listed as skipped.
-* :func:`assess` matches summary rows (WIM) to reference rows (static) by record name,
+* :func:`assess` matches summary rows (WIM, :class:`bwim.summary.SummaryRow`: no file is
+  needed) to reference rows (static) by record name (and vehicle, see :func:`assess`),
   splits each vehicle's axles into single axles and groups with the REFERENCE spacings
   (consecutive axles closer than ``group_spacing``, :func:`bwim.wim.group_axles`) and
   classifies the four criteria.  Weights are in N (SI); only their ratios matter.
@@ -65,6 +66,7 @@ import numpy as np
 from scipy import optimize, stats
 
 from bwim.errors import InputError, require_choice, require_finite, require_positive
+from bwim.summary import SummaryRow
 from bwim.tables import Table
 from bwim.wim.moses import group_axles
 
@@ -393,52 +395,6 @@ def _record_name(value) -> str:
 
 
 @dataclass(frozen=True, kw_only=True)
-class SummaryRow:
-    """One record as the WIM system reported it (a row of ``summary.csv``).
-
-    Attributes
-    ----------
-    record : str
-        Record (event file) name.
-    gvw : float or None
-        Gross vehicle weight, N; None when the record was not weighed (failed, flagged).
-    axle_weights : tuple of float
-        N; empty when unknown.
-    axle_spacings : tuple of float
-        m; empty when unknown.
-    n_axles : int or None
-        Axles detected; None when unknown.
-    speed : float or None
-        m/s.
-    flags : tuple of str
-        The system's flags, kept for the report.
-    """
-
-    record: str
-    gvw: float | None = None
-    axle_weights: tuple[float, ...] = ()
-    axle_spacings: tuple[float, ...] = ()
-    n_axles: int | None = None
-    speed: float | None = None
-    flags: tuple[str, ...] = ()
-
-    def __post_init__(self) -> None:
-        set_ = object.__setattr__
-        set_(self, "record", _record_name(self.record))
-        if self.gvw is not None:
-            set_(self, "gvw", require_finite("gvw", self.gvw))
-        set_(self, "axle_weights", _float_tuple("axle_weights", self.axle_weights,
-                                                positive=False))
-        set_(self, "axle_spacings", _float_tuple("axle_spacings", self.axle_spacings,
-                                                 positive=False))
-        if self.n_axles is not None:
-            set_(self, "n_axles", _count("n_axles", self.n_axles))
-        if self.speed is not None:
-            set_(self, "speed", require_finite("speed", self.speed))
-        set_(self, "flags", tuple(str(f) for f in self.flags))
-
-
-@dataclass(frozen=True, kw_only=True)
 class ReferenceRow:
     """One statically weighed vehicle (a row of the reference file).
 
@@ -456,6 +412,11 @@ class ReferenceRow:
         by the WIM system's measured spacings).
     speed : float or None
         m/s, when known.
+    vehicle : int or None
+        Which vehicle of the record (the summary's ``vehicle``, from 1); None: the
+        record's one vehicle (see :func:`assess`).
+    lane : int or None
+        The vehicle's lane, when known (it picks the vehicle of a record with several).
     """
 
     record: str
@@ -463,6 +424,8 @@ class ReferenceRow:
     axle_weights: tuple[float, ...] = ()
     axle_spacings: tuple[float, ...] = ()
     speed: float | None = None
+    vehicle: int | None = None
+    lane: int | None = None
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -480,6 +443,10 @@ class ReferenceRow:
                 f"{len(self.axle_weights) - 1} axle spacings, got {len(self.axle_spacings)}")
         if self.speed is not None:
             set_(self, "speed", require_finite("speed", self.speed))
+        if self.vehicle is not None:
+            set_(self, "vehicle", _count("vehicle", self.vehicle))
+        if self.lane is not None:
+            set_(self, "lane", _count("lane", self.lane))
 
     @property
     def n_axles(self) -> int | None:
@@ -592,15 +559,48 @@ class AccuracyResult:
         return "\n".join([self.table().render(), *self.notes()])
 
 
-def _unique(rows, kind: str, cls) -> dict:
-    out: dict = {}
+def _label(key: tuple[str, int | None]) -> str:
+    return key[0] if key[1] is None else f"{key[0]}#{key[1]}"
+
+
+def _references(rows: Sequence[ReferenceRow]) -> dict[tuple[str, int | None], ReferenceRow]:
+    out: dict[tuple[str, int | None], ReferenceRow] = {}
     for r in rows:
-        if not isinstance(r, cls):
-            raise InputError(f"{kind} rows must be {cls.__name__}, got {type(r).__name__}")
-        if r.record in out:
-            raise InputError(f"{kind} rows name record {r.record!r} twice")
-        out[r.record] = r
+        if not isinstance(r, ReferenceRow):
+            raise InputError(f"reference rows must be ReferenceRow, got {type(r).__name__}")
+        key = (r.record, r.vehicle)
+        if key in out:
+            which = "" if r.vehicle is None else f" vehicle {r.vehicle}"
+            raise InputError(f"reference rows name record {r.record!r}{which} twice")
+        out[key] = r
     return out
+
+
+def _summaries(rows: Sequence[SummaryRow]) -> dict[str, list[SummaryRow]]:
+    out: dict[str, list[SummaryRow]] = {}
+    seen: set[tuple[str, int]] = set()
+    for r in rows:
+        if not isinstance(r, SummaryRow):
+            raise InputError(f"summary rows must be SummaryRow, got {type(r).__name__}")
+        if r.key in seen:
+            raise InputError(f"summary rows name record {r.record!r} vehicle {r.vehicle} "
+                             "twice")
+        seen.add(r.key)
+        out.setdefault(r.record, []).append(r)
+    return out
+
+
+def _match(ref: ReferenceRow, rows: list[SummaryRow] | None) -> SummaryRow | None:
+    """The summary row of a reference vehicle (see :func:`assess`)."""
+    if not rows:
+        return None
+    if ref.vehicle is not None:
+        return next((r for r in rows if r.vehicle == ref.vehicle), None)
+    if len(rows) == 1:
+        return rows[0]
+    if ref.lane is not None:
+        rows = [r for r in rows if r.lane == ref.lane] or rows
+    return next((r for r in rows if r.weighed), rows[0])
 
 
 def assess(summary_rows: Sequence[SummaryRow], reference_rows: Sequence[ReferenceRow], *,
@@ -629,20 +629,24 @@ def assess(summary_rows: Sequence[SummaryRow], reference_rows: Sequence[Referenc
 
     Notes
     -----
-    A summary row without a gross weight counts as not weighed (``missing``), never
-    silently dropped.  A weighed vehicle whose axle count differs from the reference, or
-    whose axle weights are unknown, stays in the gross-weight criterion and is left out of
-    the three axle criteria (``axle_mismatch``).  Summary records without a reference are
-    counted (``n_unreferenced``) and otherwise ignored.
+    Matching: a reference names a record and, optionally, a vehicle of it (the summary's
+    ``vehicle``); without one it is the record's only summary row, or among several the
+    one in the reference's lane (when given), a weighed one first.  A summary row without
+    a gross weight counts as not weighed (``missing``), never silently dropped.  A weighed
+    vehicle whose axle count differs from the reference, or whose axle weights are
+    unknown, stays in the gross-weight criterion and is left out of the three axle
+    criteria (``axle_mismatch``).  Summary rows without a reference are counted
+    (``n_unreferenced``) and otherwise ignored.
     """
     rep = _repeatability(repeatability)
     env = _environment(environment)
     spacing = require_positive("group_spacing", group_spacing)
-    summary = _unique(summary_rows, "summary", SummaryRow)
-    reference = _unique(reference_rows, "reference", ReferenceRow)
+    summary = _summaries(summary_rows)
+    reference = _references(reference_rows)
     if not reference:
         raise InputError("reference_rows is empty")
-    unmatched = tuple(name for name in reference if name not in summary)
+    unmatched = tuple(_label(key) for key, ref in reference.items()
+                      if _match(ref, summary.get(ref.record)) is None)
     if strict and unmatched:
         shown = ", ".join(unmatched[:5]) + (", …" if len(unmatched) > 5 else "")
         raise InputError(f"reference names {len(unmatched)} record(s) absent from the "
@@ -652,10 +656,13 @@ def assess(summary_rows: Sequence[SummaryRow], reference_rows: Sequence[Referenc
     missing: list[str] = []
     mismatch: list[str] = []
     n_vehicles = 0
-    for name, ref in reference.items():
-        row = summary.get(name)
+    matched: set[tuple[str, int]] = set()
+    for key, ref in reference.items():
+        name = _label(key)
+        row = _match(ref, summary.get(ref.record))
         if row is None:
             continue
+        matched.add(row.key)
         if row.gvw is None:
             missing.append(name)
             continue
@@ -696,5 +703,6 @@ def assess(summary_rows: Sequence[SummaryRow], reference_rows: Sequence[Referenc
         repeatability=rep, environment=env, n_reference=len(reference),
         n_vehicles=n_vehicles, missing=tuple(missing), unmatched=unmatched,
         axle_mismatch=tuple(mismatch),
-        n_unreferenced=sum(1 for name in summary if name not in reference),
+        n_unreferenced=sum(1 for rows in summary.values() for r in rows
+                           if r.key not in matched),
         group_spacing=spacing)

@@ -854,7 +854,7 @@ def _weigh_moses(args: argparse.Namespace, scenario, folder: Path) -> int:
 # --- accuracy --------------------------------------------------------------------------------
 def _accuracy(args: argparse.Namespace) -> int:
     from bwim.accuracy import assess
-    from bwim.io.accuracy_csv import read_reference, read_summary
+    from bwim.io import read_reference, read_summary
 
     summary = read_summary(args.summary)
     reference = read_reference(args.reference)
@@ -880,7 +880,7 @@ def _report(args: argparse.Namespace) -> int:
     sections = [report.section(obj, name) for name, obj in items]
     if args.reference:  # COST 323 classes of every weigh summary among the results
         from bwim.accuracy import assess
-        from bwim.io.accuracy_csv import read_reference, read_summary
+        from bwim.io import read_reference, read_summary
 
         reference = read_reference(args.reference)
         summaries = [p for p in report.result_paths(args.results)

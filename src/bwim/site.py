@@ -39,16 +39,26 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from datetime import datetime, timedelta
+from datetime import time as dtime
 from typing import Any
 
 import numpy as np
 
-from bwim.detect import Detection, detect_axles, detect_from_strain, detect_known_truck
+from bwim.classify import axle_configuration
+from bwim.detect import (
+    Detection,
+    VehicleDetection,
+    detect_axles,
+    detect_from_strain,
+    detect_known_truck,
+)
 from bwim.errors import BwimError, InputError, require_finite, require_positive
 from bwim.fe.bridge import Bridge
 from bwim.mfi import ForceIdentification, identify_forces
 from bwim.plausibility import HARD_FLAGS
 from bwim.records import Passage, Record
+from bwim.summary import SummaryRow
 from bwim.wim import MultiRunCalibration, Weighing, calibrate_lines, weigh
 from bwim.wim.multirun import RunFit
 
@@ -184,6 +194,11 @@ class EventWeighing:
         Detection and weighing flags together.
     identification : ForceIdentification or None
         The moving force identification, when weighed by MFI with an FE model.
+    clock : datetime or None
+        The record's wall clock at record time 0 (:attr:`bwim.Record.clock`).
+    clock_of_day : bool
+        True when the record has no ``clock`` but its time axis is the clock time of day
+        (a logger that writes it in the time column: the axis does not start at 0).
     """
 
     weighed: bool
@@ -192,6 +207,8 @@ class EventWeighing:
     weighing: Weighing | None = None
     flags: tuple[str, ...] = field(default_factory=tuple)
     identification: ForceIdentification | None = None
+    clock: datetime | None = None
+    clock_of_day: bool = False
 
     @property
     def method(self) -> str:
@@ -222,6 +239,58 @@ class EventWeighing:
         if self.identification is not None:
             return float(self.identification.gvw[0])
         return self.weighing.gvw
+
+    def time_at(self, t: float) -> datetime | dtime | None:
+        """Wall-clock time of record time ``t`` (s): a datetime with the record's clock, a
+        time of day when the record's axis is one, else None."""
+        if self.clock is not None:
+            return self.clock + timedelta(seconds=float(t))
+        if self.clock_of_day and 0.0 <= t < 86400.0:
+            return (datetime.min + timedelta(seconds=float(t))).time()
+        return None
+
+    def to_summary_row(self, record: str) -> SummaryRow:
+        """The summary row of this event's vehicle (the first one when several were found;
+        see :meth:`to_summary_rows`), named ``record``."""
+        return self.to_summary_rows(record)[0]
+
+    def to_summary_rows(self, record: str) -> tuple[SummaryRow, ...]:
+        """One :class:`~bwim.summary.SummaryRow` per detected vehicle (at least one), named
+        ``record``: the weighed vehicle with its weights, every other one refused with the
+        event's reason (no weight leaves without its plausibility checks)."""
+        vehicles = () if self.detection is None else self.detection.vehicles
+        if not vehicles:
+            return (SummaryRow(record=record, status="refused", flags=self.flags,
+                               reason=self.reason or "no vehicle found"),)
+        return tuple(self._row(record, k, v) for k, v in enumerate(vehicles))
+
+    def _row(self, record: str, k: int, v: VehicleDetection) -> SummaryRow:
+        p = v.passage
+        weighed = self.weighed and k == 0
+        w, ident = self.weighing, self.identification
+        lateral = float(v.lateral) if np.isfinite(v.lateral) else None
+        if ident is not None:
+            residual, quality, lam = ident.residual, ident.vehicle_quality[0], ident.lam
+            factor = None
+        elif w is not None:
+            residual, quality, lam, factor = w.residual, w.quality, None, w.scale_factor
+        else:
+            residual, quality, lam, factor = None, "", None, None
+        return SummaryRow(
+            record=record, vehicle=k + 1, status="weighed" if weighed else "refused",
+            time=self.time_at(p.delay), n_axles=p.n_axles, speed=p.speed,
+            axle_spacings=tuple(p.axle_spacings),
+            vehicle_class=axle_configuration(p.axle_spacings),
+            axle_weights=tuple(self.axle_weights) if weighed else (),
+            gvw=self.gvw if weighed else None,
+            group_weights=tuple(w.group_weights) if weighed and w is not None else (),
+            flags=self.flags, lateral=lateral,
+            lateral_unit=v.lateral_unit if lateral is not None else "",
+            confidence=v.confidence, residual=residual if k == 0 else None,
+            quality=quality if k == 0 else "", method=self.method if k == 0 else "",
+            drift_factor=factor if k == 0 else None,
+            drift_method="scale trend" if factor is not None and k == 0 else "",
+            lam=lam if k == 0 else None, reason="" if weighed else self.reason)
 
 
 def _gauges(record: Record) -> list[str]:
@@ -367,8 +436,17 @@ def weigh_event(record: Record, calibration: SiteCalibration, *, bridge: Bridge 
     the strain-to-load ratio as it does for Moses.
 
     Never raises for a record it can read: detection or weighing failures come back as an
-    :class:`EventWeighing` with ``weighed=False`` and the reason.
+    :class:`EventWeighing` with ``weighed=False`` and the reason.  The result carries the
+    record's clock (:meth:`EventWeighing.time_at`, the summary's ``time``).
     """
+    ev = _weigh_event(record, calibration, bridge=bridge, identify_options=identify_options)
+    t0 = float(record.time[0])
+    return dataclasses.replace(ev, clock=record.clock,
+                               clock_of_day=record.clock is None and 0.0 < t0 < 86400.0)
+
+
+def _weigh_event(record: Record, calibration: SiteCalibration, *, bridge: Bridge | None,
+                 identify_options: Mapping[str, Any] | None) -> EventWeighing:
     setup = calibration.setup
     lines = calibration.lines
     try:

@@ -1,4 +1,6 @@
-"""COST 323 accuracy classification (bwim.accuracy) and its CSV readers (bwim.io.accuracy_csv).
+"""COST 323 accuracy classification (bwim.accuracy) and its CSV readers (bwim.io).
+
+The readers are bwim.io.summary and bwim.io.reference.
 
 References
 ----------
@@ -48,7 +50,7 @@ from bwim.accuracy import (
     relative_errors,
 )
 from bwim.errors import InputError
-from bwim.io.accuracy_csv import read_reference, read_summary
+from bwim.io import read_reference, read_summary
 
 # The specification's table, typed independently of the module (see the docstring).
 CLASS_VALUES = (5, 7, 10, 15, 20, 25)

@@ -8,6 +8,10 @@ Contract
 * Logger files (:mod:`bwim.io.logger`): a real installation's text files, one event each,
   read by :func:`read_logger` in a :class:`LoggerFormat` (columns, delimiter, header,
   sampling rate, scale, sensor kinds) into a Record with strict, line-naming checks.
+* Summaries (:mod:`bwim.io.summary`): ``summary.csv``, one row per vehicle
+  (:class:`~bwim.summary.SummaryRow`), one column list for every command
+  (:func:`write_summary`, :func:`read_summary`); static references
+  (:mod:`bwim.io.reference`, :func:`read_reference`) for the COST 323 assessment.
 * Results (:mod:`bwim.io.results`): HDF5 for :class:`~bwim.ForceIdentification`,
   :class:`~bwim.StaticWeights` and :class:`~bwim.InfluenceLine`, exact round trips.
 * Every writer is atomic (:mod:`bwim.io.atomic`): the output appears complete or not at
@@ -29,6 +33,7 @@ from bwim.io.records import (
     write_record,
     write_records,
 )
+from bwim.io.reference import read_reference
 from bwim.io.results import (
     read_identification,
     read_influence_line,
@@ -37,6 +42,7 @@ from bwim.io.results import (
     write_influence_line,
     write_static_weights,
 )
+from bwim.io.summary import read_summary, write_summary
 from bwim.io.toml_writer import to_toml
 
 __all__ = [
@@ -50,7 +56,9 @@ __all__ = [
     "read_logger",
     "read_record",
     "read_records",
+    "read_reference",
     "read_static_weights",
+    "read_summary",
     "to_toml",
     "write_csv_record",
     "write_identification",
@@ -58,4 +66,5 @@ __all__ = [
     "write_record",
     "write_records",
     "write_static_weights",
+    "write_summary",
 ]

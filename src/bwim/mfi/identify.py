@@ -38,6 +38,7 @@ from bwim.mfi.lcurve import LCurve, gcv, lcurve_search
 from bwim.mfi.statespace import ForceUnknowns, MFIModel, Order, build_model, force_layout
 from bwim.plausibility import Limits, ordered_flags, quality_of, weight_flags
 from bwim.records import Passage, Record
+from bwim.summary import SummaryRow
 
 __all__ = ["BAND_FACTOR", "DEFAULT_MAX_MODES", "MAX_RESIDUAL", "ForceIdentification",
            "identify_forces", "record_band"]
@@ -136,6 +137,28 @@ class ForceIdentification:
     def vehicle_quality(self) -> tuple[str, ...]:
         """``"reject"``, ``"warning"`` or ``"ok"`` per vehicle (see :attr:`vehicle_flags`)."""
         return tuple(quality_of(f) for f in self.vehicle_flags)
+
+    def to_summary_rows(self, record: str) -> tuple[SummaryRow, ...]:
+        """One :class:`~bwim.summary.SummaryRow` per vehicle, named ``record``: a vehicle
+        whose weights fail the plausibility checks is refused, with its flags and no
+        weights."""
+        from bwim.classify import axle_configuration
+
+        rows, a0 = [], 0
+        for v, (p, flags, quality) in enumerate(zip(self.passages, self.vehicle_flags,
+                                                    self.vehicle_quality, strict=True)):
+            weights = self.axle_weights[a0:a0 + p.n_axles]
+            a0 += p.n_axles
+            ok = quality != "reject"
+            rows.append(SummaryRow(
+                record=record, vehicle=v + 1, status="weighed" if ok else "refused",
+                n_axles=p.n_axles, speed=p.speed, axle_spacings=tuple(p.axle_spacings),
+                vehicle_class=axle_configuration(p.axle_spacings),
+                axle_weights=tuple(weights) if ok else (),
+                gvw=float(self.gvw[v]) if ok else None, flags=flags, residual=self.residual,
+                quality=quality, method="mfi", lam=self.lam,
+                reason="" if ok else f"implausible weights ({', '.join(flags)})"))
+        return tuple(rows)
 
     def plot(self, truth=None, ax=None, **kw):
         """Forces against the truth if known (see :func:`bwim.plots.mfi.plot_forces`;
