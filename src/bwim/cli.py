@@ -27,7 +27,7 @@ Subcommands:
     second or so).  A rerun skips the records done (``manifest.json``); ``--force``
     starts afresh.  Exit code 0: all records done; 1: some failed; 2: bad input.
 
-Safety of outputs (:mod:`bwim.io.batch`): an output that is one of the inputs is refused;
+Safety of outputs (:mod:`bwim.io.outputs`): an output that is one of the inputs is refused;
 an existing output file is refused unless ``--force``; an output folder is locked
 (``.bwim.lock``) for the run; SIGTERM ends a run like Ctrl-C (temporary files removed,
 worker processes stopped, exit code 130).  ``bwim --memory-limit SIZE COMMAND`` bounds the
@@ -80,12 +80,47 @@ def _bar(total: int | None, desc: str):
     return tqdm(total=total, desc=desc, disable=_quiet(), file=sys.stderr, leave=False)
 
 
+class _Progress:
+    """A batch's progress on stderr: a bar (count, total, rate, ETA) on a terminal, else a
+    plain line every :attr:`every` seconds.  ``progress(n)``: n items finished so far."""
+
+    every = 10.0
+
+    def __init__(self, total: int, desc: str) -> None:
+        self.total, self.desc = total, desc
+        self.tty = sys.stderr.isatty()
+        self.bar = _bar(total, desc) if self.tty and total > 1 else None
+        self.t0 = self.last = time.perf_counter()
+        self.start = self.n = 0
+
+    def __call__(self, n: int) -> None:
+        if self.n == 0 and self.start == 0 and n > 0 and self.last == self.t0:
+            self.start = n  # done before: not part of the rate
+        if self.bar is not None:
+            self.bar.update(n - self.n)
+        self.n = n
+        now = time.perf_counter()
+        if not self.tty and self.total > 1 and now - self.last >= self.every:
+            self.last = now
+            rate = (n - self.start) / max(now - self.t0, 1e-9)
+            eta = (self.total - n) / rate if rate > 0 else float("nan")
+            print(f"bwim: {self.desc}: {n}/{self.total} ({100 * n / self.total:.0f} %), "
+                  f"{rate:.3g}/s, ETA {eta / 60:.1f} min", file=sys.stderr, flush=True)
+
+    def __enter__(self) -> _Progress:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
 def _out_file(path: str | Path, suffixes: Sequence[str] | None = None, *,
               inputs: Sequence[str | Path] = (), force: bool = True) -> Path:
     """An output file that can be written (checked before any work): not one of the
     ``inputs``, and not an existing file unless ``force``."""
     from bwim.io import check_writable
-    from bwim.io.batch import refuse_existing, refuse_input_overwrite
+    from bwim.io.outputs import refuse_existing, refuse_input_overwrite
 
     p = Path(path)
     if suffixes is not None and p.suffix.lower() not in suffixes:
@@ -112,8 +147,8 @@ def _out_folder(path: str | Path) -> Path:
 
 
 def _locked(folder: Path):
-    """The output folder's lock for this run (:class:`bwim.io.batch.OutputLock`)."""
-    from bwim.io.batch import OutputLock
+    """The output folder's lock for this run (:class:`bwim.io.outputs.OutputLock`)."""
+    from bwim.io.outputs import OutputLock
 
     return OutputLock(folder)
 
@@ -135,6 +170,17 @@ def _load_records(paths: Sequence[Path], scenario) -> list:
             records.append(load_record(p, scenario))
             bar.update()
     return records
+
+
+def _check_jobs(jobs: int | None) -> None:
+    if jobs is not None and jobs < 1 and jobs != -1:
+        raise InputError(f"--jobs must be a positive number or -1 (all cores), got {jobs}")
+
+
+def _name(path: Path) -> str:
+    """A file name as text that can be printed and written (a name that is not valid
+    UTF-8 shows its odd bytes as U+FFFD)."""
+    return os.fsencode(path.name).decode("utf-8", "replace")
 
 
 def _unique_stems(paths: Sequence[Path]) -> list[str]:
@@ -262,260 +308,60 @@ def _calibrate(args: argparse.Namespace) -> int:
     return 0
 
 
-# --- identify --------------------------------------------------------------------------------
-def _reason(exc: BaseException) -> str:
-    """A failed record's reason, on one line."""
-    if isinstance(exc, BwimError):
-        return " ".join(str(exc).split()) or type(exc).__name__
-    return f"{type(exc).__name__}: {' '.join(str(exc).split())}"
+# --- batches: identify and weigh -------------------------------------------------------------
+def _meta(command: str, **inputs) -> dict:
+    """What a batch is, for its manifest: the command and its inputs' identities."""
+    from bwim.io.outputs import file_key
 
-
-def _identify_one(bridge, record, kwargs):
-    """One record's identification (a top-level function: it runs in worker processes).
-
-    Returns the result, or the reason (a string) why the record failed: one bad record
-    must not end the batch.
-    """
-    from numpy.linalg import LinAlgError
-
-    from bwim.mfi import identify_forces
-
-    try:
-        return identify_forces(bridge, record, **kwargs)
-    except (BwimError, ValueError, ArithmeticError, LinAlgError) as exc:
-        return _reason(exc)
-
-
-def _identify_file(bridge, scenario, path: Path, target: Path, kwargs) -> tuple[list, str | None]:
-    """Read one record, identify its forces, write ``target``: ``(summary rows, None)``,
-    or ``([], reason)`` if the record failed.  A top-level function, run by this process
-    or by a worker: only the rows travel back (the record and the result stay where they
-    are read and written)."""
-    from bwim.io import write_identification
-    from bwim.scenario import load_record
-
-    try:
-        record = load_record(path, scenario)
-    except BwimError as exc:
-        return [], _reason(exc)
-    res = _identify_one(bridge, record, kwargs)
-    if isinstance(res, str):
-        return [], res
-    write_identification(res, target)
-    return _identify_rows(path, res), None
-
-
-def _identify_pickled(blob: bytes, scenario, path: Path, target: Path, kwargs):
-    """:func:`_identify_file` with the bridge pickled once by the parent (the same bytes
-    for every task: no pickling per task, and the parent's warm caches travel with it)."""
-    import pickle
-
-    return _identify_file(pickle.loads(blob), scenario, path, target, kwargs)
-
-
-def _jobs(jobs: int) -> int:
-    return (os.cpu_count() or 1) if jobs == -1 else jobs
-
-
-def _local_iter(bridge, scenario, paths, targets, kwargs, *, jobs: int):
-    """``(index, (rows, reason))`` as each record finishes, on ``jobs`` processes: this
-    one and ``jobs - 1`` loky workers.  Each worker is fed by a thread the moment it is
-    free (no queue to drain at the end); this process takes the next record whenever it
-    has finished one.  The bridge is pickled once, and again (with its warm caches:
-    modes, matrices) after this process's first record, which runs while new workers
-    start (their import)."""
-    import pickle
-    import queue
-    import threading
-
-    n = len(paths)
-    workers = min(_jobs(jobs), n) - 1
-    nxt = iter(range(n))
-    lock = threading.Lock()
-
-    def take() -> int | None:
-        with lock:
-            return next(nxt, None)
-
-    def here(i: int):
-        return _identify_file(bridge, scenario, paths[i], targets[i], kwargs)
-
-    if workers <= 0:
-        while (i := take()) is not None:
-            yield i, here(i)
-        return
-
-    # a pool of this run's own (not joblib's process-wide reusable one, which the library's
-    # parallel populations share): shut down when the run ends, killed on an interrupt.
-    # Each of the processes (this one included) gets its share of the cores for BLAS:
-    # two processes with a BLAS thread per core each would oversubscribe them (measured
-    # on 2 cores: 2.5× the CPU per record).
-    from joblib.externals.loky import ProcessPoolExecutor
-    from threadpoolctl import threadpool_limits
-
-    threads = max(1, (os.cpu_count() or 1) // (workers + 1))
-    executor = ProcessPoolExecutor(max_workers=workers, env={
-        name: str(threads) for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
-                                        "MKL_NUM_THREADS")})
-    limits = threadpool_limits(limits=threads)
-    stop = threading.Event()
-    finished: queue.Queue = queue.Queue()
-
-    def feed() -> None:
+    def key(p):
+        if p is None:
+            return None
         try:
-            while not stop.is_set() and (i := take()) is not None:
-                fut = executor.submit(_identify_pickled, blob[0], scenario, paths[i],
-                                      targets[i], kwargs)
-                finished.put((i, fut.result()))
-        except BaseException as exc:  # handed to the main thread
-            finished.put((None, exc))
-        finally:
-            finished.put((None, None))
+            return file_key(p)
+        except OSError:  # reported by the command's own reading, with its message
+            return str(p)
 
-    try:
-        blob = [pickle.dumps(bridge, protocol=pickle.HIGHEST_PROTOCOL)]
-        first = take()
-        threads = [threading.Thread(target=feed, daemon=True) for _ in range(workers)]
-        for t in threads:
-            t.start()
-        alive = workers
-        yield first, here(first)
-        blob[0] = pickle.dumps(bridge, protocol=pickle.HIGHEST_PROTOCOL)  # warm caches
-
-        def ready(block: bool):
-            nonlocal alive
-            while alive:
-                try:
-                    i, value = finished.get(block=block)
-                except queue.Empty:
-                    return
-                if i is not None:
-                    yield i, value
-                elif value is None:
-                    alive -= 1
-                else:
-                    raise value
-
-        while (i := take()) is not None:
-            yield from ready(False)
-            yield i, here(i)
-        yield from ready(True)
-    except BaseException:
-        stop.set()
-        with contextlib.suppress(Exception):
-            executor.shutdown(wait=False, kill_workers=True)
-        raise
-    finally:
-        stop.set()
-        limits.restore_original_limits()
-        with contextlib.suppress(Exception):
-            executor.shutdown(wait=False)
+    return {"command": command, **{k: [key(p) for p in v] if isinstance(v, list) else key(v)
+                                   for k, v in inputs.items()}}
 
 
-def _dask_iter(bridge, scenario, paths, kwargs, *, scheduler: str):
-    """``(index, result or reason)`` as each record finishes on a dask scheduler.  The
-    records are read here and sent (the workers need not see this file system), at most
-    two per worker thread ahead: a day of records is never all in memory."""
-    from distributed import Client, as_completed
+def _read(scenario):
+    """The batch's reader of one record (picklable: it goes to worker processes)."""
+    from functools import partial
 
     from bwim.scenario import load_record
 
-    try:
-        client = Client(scheduler, timeout=10)
-    except (OSError, TimeoutError, ValueError) as exc:
-        raise InputError(f"cannot reach the dask scheduler {scheduler}: {exc}") from None
-    try:
-        [b] = client.scatter([bridge], broadcast=True)
-        ahead = 2 * max(1, sum(client.nthreads().values())) + 2
-        running = as_completed()
-        index = {}
-        for i, path in enumerate(paths):
-            try:
-                record = load_record(path, scenario)
-            except BwimError as exc:
-                yield i, _reason(exc)
-                continue
-            fut = client.submit(_identify_one, b, record, kwargs, pure=False)
-            index[fut.key] = i
-            running.add(fut)
-            while running.count() >= ahead:
-                fut = next(running)
-                yield index.pop(fut.key), fut.result()
-        for fut in running:
-            yield index.pop(fut.key), fut.result()
-    finally:
-        client.close()
+    return partial(load_record, scenario=scenario)
 
 
-def _check_jobs(jobs: int | None) -> None:
-    if jobs is not None and jobs < 1 and jobs != -1:
-        raise InputError(f"--jobs must be a positive number or -1 (all cores), got {jobs}")
+def _run_batch(folder, items, run, desc: str):
+    """Run a batch into its folder with a progress display; its report."""
+    from bwim.batch import run_into
+
+    with _Progress(len(items), desc) as progress:
+        return run_into(folder, items, run, progress=progress)
 
 
-def _name(path: Path) -> str:
-    """A file name as text that can be printed and written (a name that is not valid
-    UTF-8 shows its odd bytes as U+FFFD)."""
-    return os.fsencode(path.name).decode("utf-8", "replace")
+def _report_failures(report) -> int:
+    """Print each failed record on stderr; the batch's exit code."""
+    from bwim.io.outputs import EXIT_FAILED, EXIT_OK
+
+    for name, reason in report.failures:
+        print(f"bwim: {name} failed: {reason}", file=sys.stderr)
+    if report.failures:
+        print(f"bwim: {len(report.failures)} of {report.n_inputs} record(s) failed (see the "
+              "summary's reason column)", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OK
 
 
-def _identify_rows(path: Path, ident) -> list[list]:
-    """One row per vehicle; a vehicle whose weights fail the plausibility checks gets its
-    flags and no weights."""
-    rows, a0 = [], 0
-    for v, (p, flags, quality) in enumerate(zip(ident.passages, ident.vehicle_flags,
-                                                ident.vehicle_quality, strict=True)):
-        w = ident.axle_weights[a0:a0 + p.n_axles]
-        a0 += p.n_axles
-        ok = quality != "reject"
-        rows.append([_name(path), v + 1, p.n_axles, format_kn_each(w) if ok else [],
-                     format_kn(ident.gvw[v], 2) if ok else "", f"{ident.lam:.4g}",
-                     ";".join(flags)])
-    return rows
-
-
-def _written(res, path: Path, target: Path) -> tuple[list, str | None]:
-    """A result sent back by a dask worker, written here: ``(rows, reason)``."""
-    from bwim.io import write_identification
-
-    if isinstance(res, str):
-        return [], res
-    write_identification(res, target)
-    return _identify_rows(path, res), None
-
-
-class _Saver:
-    """Calls ``save`` (the manifest and the summary, each rewritten whole) at most every
-    :data:`SAVE_EVERY` seconds, or 20 times the last save's duration: a batch of many
-    thousand records does not spend its time rewriting them (an interrupted run saves
-    in ``finally``; a killed one redoes at most the last few seconds' records)."""
-
-    SAVE_EVERY = 1.0
-
-    def __init__(self, save: Callable[[], object]) -> None:
-        self._save = save
-        self._last = time.perf_counter()
-        self._cost = 0.0
-
-    def now(self) -> None:
-        t = time.perf_counter()
-        self._save()
-        self._last = time.perf_counter()
-        self._cost = self._last - t
-
-    def maybe(self) -> None:
-        if time.perf_counter() - self._last >= max(self.SAVE_EVERY, 20 * self._cost):
-            self.now()
+def _done_before(report) -> str:
+    return f" ({report.n_done_before} done before)" if report.n_done_before else ""
 
 
 def _identify(args: argparse.Namespace) -> int:
-    from bwim.io.batch import (
-        EXIT_FAILED,
-        EXIT_OK,
-        Manifest,
-        OutputLock,
-        refuse_existing,
-        refuse_input_overwrite,
-    )
+    from bwim.batch import BatchFolder, Item, executor_for, identify_records
+    from bwim.io.outputs import refuse_input_overwrite
     from bwim.scenario import load_scenario
 
     _check_jobs(args.jobs)
@@ -528,112 +374,27 @@ def _identify(args: argparse.Namespace) -> int:
         summary = folder / "summary.csv"
     paths = _record_paths(args.records)
     inputs = [args.scenario, *([args.bridge] if args.bridge else []), *paths]
-    stems = _unique_stems(paths)
-    targets = [folder / f"{stem}_forces.h5" for stem in stems]
-    refuse_input_overwrite([summary, *targets], inputs)
-    with OutputLock(folder):
-        manifest = Manifest(folder, fresh=args.force)
-        if not manifest.entries or not manifest.belongs_to(paths):
-            # a first run, or another batch's folder: an existing summary is not ours
-            refuse_existing(summary, force=args.force)
+    items = [Item(name=_name(p), source=p, target=folder / f"{stem}_forces.h5")
+             for p, stem in zip(paths, _unique_stems(paths), strict=True)]
+    refuse_input_overwrite([summary, *(it.target for it in items)], inputs)
+    with _locked(folder):
         scenario = load_scenario(args.scenario)
         bridge = _bridge(args, scenario)
+        batch = BatchFolder(folder, resume=args.resume, force=args.force, summary=summary,
+                            meta=_meta("identify", scenario=args.scenario, bridge=args.bridge))
         kwargs = scenario.identify.kwargs() if scenario.identify is not None else {}
-        t0 = time.perf_counter()
-        outcome: dict[int, tuple[list, str | None]] = {}
-        todo = []
-        for i, path in enumerate(paths):
-            entry = manifest.done(path)
-            if entry is not None:
-                outcome[i] = (entry["rows"], None)
-            else:
-                todo.append(i)
-        skipped = len(paths) - len(todo)
-        if args.scheduler:
-            runs = ((k, _written(res, paths[todo[k]], targets[todo[k]]))
-                    for k, res in _dask_iter(bridge, scenario, [paths[i] for i in todo],
-                                             kwargs, scheduler=args.scheduler))
-        else:
-            runs = _local_iter(bridge, scenario, [paths[i] for i in todo],
-                               [targets[i] for i in todo], kwargs, jobs=args.jobs)
-        saved = _Saver(lambda: (manifest.save(),
-                                _write_identify_summary(summary, paths, outcome)))
-        try:
-            with contextlib.closing(runs), \
-                    _bar(len(todo) if len(todo) > 1 else None, "identifying forces") as bar:
-                for k, (rows, reason) in runs:
-                    i = todo[k]
-                    outcome[i] = (rows, reason)
-                    manifest.record(paths[i], result=None if reason else targets[i].name,
-                                    rows=rows, error=reason, save=False)
-                    saved.maybe()
-                    bar.update()
-        finally:
-            saved.now()
-    failed = [(_name(paths[i]), outcome[i][1]) for i in sorted(outcome) if outcome[i][1]]
-    shown = [(r[0], r[1], ", ".join(r[3]) or (r[6] if len(r) > 6 else ""), r[4], r[5])
-             for i in sorted(outcome) for r in outcome[i][0]]
-    print(Table(f"Moving force identification, {len(paths)} record(s)"
-                f"{f' ({skipped} done before)' if skipped else ''}, "
-                f"{time.perf_counter() - t0:.1f} s:",
+        executor = executor_for(args.jobs, args.scheduler)
+        report = _run_batch(batch, items, lambda todo: identify_records(
+            todo, bridge, read=_read(scenario), options=kwargs, executor=executor,
+            keep=False), "identifying forces")
+    shown = [(r.record, r.vehicle, format_kn_each(r.axle_weights) if r.weighed else
+              r.reason, format_kn(r.gvw) if r.weighed else "",
+              "" if r.lam is None else f"{r.lam:.4g}") for r in report.rows]
+    print(Table(f"Moving force identification, {len(paths)} record(s){_done_before(report)}, "
+                f"{report.elapsed:.1f} s:",
                 ("record", "vehicle", "axle weights (kN)", "GVW (kN)", "λ"), shown).render())
-    for name, reason in failed:
-        print(f"bwim: {name} failed: {reason}", file=sys.stderr)
     print(f"summary: {summary}\nforces: {folder}/<record>_forces.h5")
-    if failed:
-        print(f"bwim: {len(failed)} of {len(paths)} record(s) failed (see the summary's "
-              "error column)", file=sys.stderr)
-        return EXIT_FAILED
-    return EXIT_OK
-
-
-def _write_identify_summary(summary: Path, paths: Sequence[Path], outcome: dict) -> None:
-    """The summary of the records done so far: one row per vehicle, one per failed record
-    (with its reason in the ``error`` column)."""
-    n_max = max((r[2] for rows, _ in outcome.values() for r in rows), default=0)
-    header = ["record", "vehicle", "axles", *(f"axle_{i + 1}_kN" for i in range(n_max)),
-              "gvw_kN", "lambda", "flags", "error"]
-    out = []
-    for i in sorted(outcome):
-        rows, error = outcome[i]
-        if error is not None:
-            out.append([_name(paths[i]), "", "", *[""] * n_max, "", "", "", error])
-        for name, v, n_axles, cells, gvw, lam, *flags in rows:
-            out.append([name, v, n_axles, *cells, *[""] * (n_max - len(cells)), gvw, lam,
-                        flags[0] if flags else "", ""])
-    _write_csv(summary, header, out)
-
-
-# --- weigh -----------------------------------------------------------------------------------
-#: summary.csv of ``bwim weigh``: the contract's columns first, then bwim's extras.
-WEIGH_COLUMNS = ("record", "n_axles", "speed_m_s", "axle_spacings_m", "axle_weights_kN",
-                 "gvw_kN", "flags", "group_weights_kN", "lateral", "confidence", "residual",
-                 "quality", "method", "reason")
-
-
-def _joined(values, fmt: str) -> str:
-    return ";".join(format(float(v), fmt) for v in values)
-
-
-def _weigh_row(name: str, *, passage=None, weights=None, gvw=None, groups=None, flags=(),
-               lateral=None, confidence=None, residual=None, quality="", method="",
-               reason="") -> list:
-    """One summary row; weights are written only when given (a weighed vehicle)."""
-    import numpy as np
-
-    def num(v, fmt):
-        return "" if v is None or not np.isfinite(v) else format(float(v), fmt)
-
-    return [name,
-            "" if passage is None else passage.n_axles,
-            "" if passage is None else f"{passage.speed:.3f}",
-            "" if passage is None else _joined(passage.axle_spacings, ".3f"),
-            "" if weights is None else _joined(np.asarray(weights) / 1e3, ".2f"),
-            "" if gvw is None else f"{gvw / 1e3:.2f}",
-            ";".join(flags),
-            "" if groups is None else _joined(np.asarray(groups) / 1e3, ".2f"),
-            num(lateral, ".3f"), num(confidence, ".3f"), num(residual, ".4g"), quality,
-            method, " ".join(str(reason).split())]
+    return _report_failures(report)
 
 
 def _unique_names(paths: Sequence[Path]) -> None:
@@ -645,20 +406,6 @@ def _unique_names(paths: Sequence[Path]) -> None:
             raise InputError(f"two records are named {p.name!r} ({seen[p.name]} and {p}); "
                              "the summary names records by file name: rename one")
         seen[p.name] = p
-
-
-def _done_rows(summary: Path, resume: bool) -> dict[str, list[str]]:
-    """Rows of a previous run to keep with ``--resume`` (by record name)."""
-    if not resume or not summary.exists():
-        return {}
-    try:
-        with summary.open(newline="", encoding="utf-8") as f:
-            rows = list(csv.reader(f))
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{summary}: cannot read it to resume ({exc})") from None
-    if not rows or tuple(rows[0]) != WEIGH_COLUMNS:
-        raise InputError(f"{summary}: not a bwim weigh summary; cannot resume from it")
-    return {r[0]: r for r in rows[1:] if r and r[-1] == ""}
 
 
 def _calibrate_site(paths: Sequence[Path], scenario, folder: Path):
@@ -675,6 +422,8 @@ def _calibrate_site(paths: Sequence[Path], scenario, folder: Path):
             used.append(p)
         except InputError as exc:
             unread.append((p.name, str(exc)))
+    if not records and unread:
+        raise InputError(f"no calibration run could be read; {unread[0][0]}: {unread[0][1]}")
     site = calibrate_site(records, setup)
     rows = []
     for p, det, reason, fit in zip(used, site.detections, site.reasons, site.fits,
@@ -694,161 +443,107 @@ def _calibrate_site(paths: Sequence[Path], scenario, folder: Path):
     return site
 
 
-def _weigh_site(args: argparse.Namespace, scenario, folder: Path) -> int:
+def _print_weighed(report, title: str) -> None:
+    rows = report.rows
+    shown = [(r.record, r.vehicle, r.n_axles or "",
+              ", ".join(format_kn_each(r.axle_weights)) if r.weighed else "-",
+              format_kn(r.gvw) if r.weighed else "-",
+              ";".join(r.flags) if r.weighed else r.reason) for r in rows[:20]]
+    print(Table(title, ("record", "vehicle", "axles", "axle weights (kN)", "GVW (kN)",
+                        "flags / reason"), shown).render())
+    if len(rows) > 20:
+        print(f"... {len(rows) - 20} more in the summary")
+
+
+def _weigh_site(args: argparse.Namespace, scenario, folder: Path, batch) -> int:
     """``bwim weigh`` on a real installation's logger files (scenario with [logger])."""
-    from bwim.io.batch import refuse_existing, refuse_input_overwrite
-    from bwim.scenario import load_record
-    from bwim.site import weigh_event
+    from bwim.batch import Item, executor_for, weigh_events
 
     if not args.calibration_records:
         raise InputError("weighing logger files needs --calibration-records (runs of the "
                          "calibration truck)")
     paths = _record_paths(args.records, any_suffix=True)
-    _unique_names(paths)
-    cal_paths = _record_paths(args.calibration_records, any_suffix=True)
-    summary = folder / "summary.csv"
-    refuse_input_overwrite([summary, folder / "calibration_runs.csv",
-                            folder / "influence_lines.h5"],
-                           [args.scenario, *paths, *cal_paths])
-    if not args.resume:
-        refuse_existing(summary, force=args.force)
-    done = _done_rows(summary, args.resume)
     bridge = options = None
     if args.bridge:
         from bwim.scenario import load_bridge
 
         bridge = load_bridge(args.bridge)
         options = scenario.identify.kwargs() if scenario.identify is not None else {}
-    site = _calibrate_site(cal_paths, scenario, folder)
-    rows: list[list] = []
-    n_failed = n_weighed = 0
-    t0 = time.perf_counter()
-    try:
-        with _bar(len(paths) if len(paths) > 1 else None, "weighing") as bar:
-            for p in paths:
-                bar.update()
-                if p.name in done:
-                    rows.append(done[p.name])
-                    n_weighed += 1
-                    continue
-                try:
-                    rec = load_record(p, scenario)
-                except InputError as exc:
-                    rows.append(_weigh_row(p.name, reason=str(exc)))
-                    n_failed += 1
-                    continue
-                ev = weigh_event(rec, site, bridge=bridge, identify_options=options)
-                det = ev.detection
-                v = det.vehicles[0] if det is not None and len(det.vehicles) == 1 else None
-                w, ident = ev.weighing, ev.identification
-                rows.append(_weigh_row(
-                    p.name, passage=None if v is None else v.passage,
-                    weights=ev.axle_weights, gvw=ev.gvw,
-                    groups=w.group_weights if ev.weighed and w is not None else None,
-                    flags=ev.flags, lateral=None if v is None else v.lateral,
-                    confidence=None if v is None else v.confidence,
-                    residual=(w.residual if w is not None else
-                              ident.residual if ident is not None else None),
-                    quality=(w.quality if w is not None else
-                             ident.vehicle_quality[0] if ident is not None else ""),
-                    method=ev.method if v is not None else "", reason=ev.reason))
-                n_weighed += ev.weighed
-    finally:  # an interrupted run keeps what it weighed (rerun with --resume)
-        _write_csv(summary, WEIGH_COLUMNS, rows)
-    elapsed = time.perf_counter() - t0
-    n_flagged = len(paths) - n_weighed - n_failed
-    print(f"{len(paths)} event(s) in {elapsed:.1f} s: {n_weighed} weighed, {n_flagged} "
-          f"not weighed (flagged), {n_failed} failed")
-    shown = [(r[0], r[1], r[4].replace(";", ", "), r[5], r[6] or r[13]) for r in rows[:20]]
-    print(Table("Static weights (moving force identification with the FE model):" if bridge
-                else "Static weights (multi-run influence lines, gauges combined):",
-                ("record", "axles", "axle weights (kN)", "GVW (kN)", "flags / reason"),
-                shown).render())
-    if len(rows) > 20:
-        print(f"... {len(rows) - 20} more in the summary")
-    print(f"summary: {summary}")
-    return 1 if n_failed else 0
+    site = _calibrate_site(_record_paths(args.calibration_records, any_suffix=True),
+                           scenario, folder)
+    executor = executor_for(args.jobs, args.scheduler)
+    report = _run_batch(batch, [Item(name=_name(p), source=p) for p in paths],
+                        lambda todo: weigh_events(todo, site, read=_read(scenario),
+                                                  bridge=bridge, identify_options=options,
+                                                  executor=executor, keep=False), "weighing")
+    print(f"{len(paths)} event(s){_done_before(report)} in {report.elapsed:.1f} s: "
+          f"{report.count('weighed')} vehicle(s) weighed, {report.count('refused')} not "
+          f"weighed (flagged), {report.count('failed')} record(s) failed")
+    _print_weighed(report, "Static weights (moving force identification with the FE "
+                   "model):" if bridge else "Static weights (multi-run influence lines, "
+                   "gauges combined):")
+    print(f"summary: {batch.summary}")
+    return _report_failures(report)
 
 
 def _weigh(args: argparse.Namespace) -> int:
+    from bwim.batch import BatchFolder
+    from bwim.io.outputs import refuse_existing, refuse_input_overwrite
     from bwim.scenario import load_scenario
 
+    _check_jobs(args.jobs)
     folder = _out_folder(args.output)
+    scenario = load_scenario(args.scenario)
+    site = scenario.logger is not None
+    paths = _record_paths(args.records, any_suffix=site)
+    _unique_names(paths)
+    cal = (_record_paths(args.calibration_records, any_suffix=site)
+           if args.calibration_records else [])
+    outputs = ([folder / "calibration_runs.csv", folder / "influence_lines.h5"] if site
+               else [folder / "influence_line.h5"])
+    refuse_input_overwrite([folder / "summary.csv", *outputs],
+                           [args.scenario, *paths, *cal,
+                            *([args.influence] if args.influence else []),
+                            *([args.bridge] if args.bridge else [])])
     with _locked(folder):
-        scenario = load_scenario(args.scenario)
-        if scenario.logger is not None:
-            return _weigh_site(args, scenario, folder)
-        return _weigh_moses(args, scenario, folder)
+        if not args.resume and not (site is False and args.influence):
+            for p in outputs:  # no output of a command replaced without --force
+                refuse_existing(p, force=args.force)
+        batch = BatchFolder(folder, resume=args.resume, force=args.force, meta=_meta(
+            "weigh", scenario=args.scenario, calibration=sorted(cal, key=str),
+            influence=args.influence, bridge=args.bridge))
+        if site:
+            return _weigh_site(args, scenario, folder, batch)
+        return _weigh_moses(args, scenario, folder, batch, paths, cal)
 
 
-def _weigh_moses(args: argparse.Namespace, scenario, folder: Path) -> int:
+def _weigh_moses(args: argparse.Namespace, scenario, folder: Path, batch, paths, cal) -> int:
     """``bwim weigh`` on records with their passages (simulated, or a [run] scenario)."""
-    from bwim.io import read_influence_line, write_influence_line, write_static_weights
-    from bwim.io.batch import refuse_existing, refuse_input_overwrite
-    from bwim.scenario import build_vehicle, load_record
-    from bwim.wim import calibrate_influence_line, weigh_static
+    from bwim.batch import Item, executor_for, weigh_records
+    from bwim.io import read_influence_line, write_influence_line
+    from bwim.scenario import build_vehicle
+    from bwim.wim import calibrate_influence_line
 
     if args.bridge:
         raise InputError("--bridge weighs logger files by MFI (a scenario with [logger]); "
                          "for records with their passages use bwim identify")
-    paths = _record_paths(args.records)
-    _unique_names(paths)
-    cal_paths = _record_paths(args.calibration_records) if args.calibration_records else []
-    summary = folder / "summary.csv"
-    stems = _unique_stems(paths)
-    refuse_input_overwrite(
-        [summary, folder / "influence_line.h5",
-         *(folder / f"{stem}_static.h5" for stem in stems)],
-        [args.scenario, *paths, *cal_paths, *([args.influence] if args.influence else [])])
-    if not args.resume:
-        refuse_existing(summary, force=args.force)
     if args.influence:
         il = read_influence_line(args.influence)
         print(f"influence line: {args.influence}")
     else:
-        cal_records = _load_records(cal_paths, scenario)
-        il = calibrate_influence_line(cal_records, build_vehicle(scenario))
+        il = calibrate_influence_line(_load_records(cal, scenario), build_vehicle(scenario))
         target = folder / "influence_line.h5"
         write_influence_line(il, target)
-        print(f"influence line calibrated from {len(cal_records)} crossing(s) "
+        print(f"influence line calibrated from {len(cal)} crossing(s) "
               f"(residual {il.residual:.3g}): {target}")
-    done = _done_rows(summary, args.resume)
-    rows, shown = [], []
-    n_failed = 0
-    try:
-        with _bar(len(paths) if len(paths) > 1 else None, "weighing") as bar:
-            for path, stem in zip(paths, stems, strict=True):
-                bar.update()
-                if path.name in done:
-                    rows.append(done[path.name])
-                    continue
-                try:
-                    rec = load_record(path, scenario)
-                    w = weigh_static(rec, il)
-                except InputError as exc:
-                    rows.append(_weigh_row(path.name, reason=str(exc)))
-                    shown.append((path.name, "", "", f"failed: {exc}"))
-                    n_failed += 1
-                    continue
-                flags = w.flags
-                ok = w.quality != "reject"
-                if ok:
-                    write_static_weights(w, folder / f"{stem}_static.h5")
-                rows.append(_weigh_row(
-                    path.name, passage=w.passage, weights=w.axle_weights if ok else None,
-                    gvw=w.gvw if ok else None, groups=w.group_weights if ok else None,
-                    flags=flags, residual=w.residual, quality=w.quality, method="moses",
-                    reason="" if ok else f"implausible weighing ({';'.join(flags)})"))
-                shown.append((path.name, ", ".join(format_kn_each(w.axle_weights)) if ok
-                              else "-", format_kn(w.gvw) if ok else "-",
-                              ";".join(flags) or f"{w.residual:.3g}"))
-    finally:  # an interrupted run keeps what it weighed (rerun with --resume)
-        _write_csv(summary, WEIGH_COLUMNS, rows)
-    print(Table("Static weights (Moses):",
-                ("record", "axle weights (kN)", "GVW (kN)", "flags / residual"),
-                shown).render())
-    print(f"summary: {summary}\nweights: {folder}/<record>_static.h5")
-    return 1 if n_failed else 0
+    items = [Item(name=_name(p), source=p, target=folder / f"{stem}_static.h5")
+             for p, stem in zip(paths, _unique_stems(paths), strict=True)]
+    executor = executor_for(args.jobs, args.scheduler)
+    report = _run_batch(batch, items, lambda todo: weigh_records(
+        todo, il, read=_read(scenario), executor=executor, keep=False), "weighing")
+    _print_weighed(report, f"Static weights (Moses){_done_before(report)}:")
+    print(f"summary: {batch.summary}\nweights: {folder}/<record>_static.h5")
+    return _report_failures(report)
 
 
 # --- accuracy --------------------------------------------------------------------------------
@@ -881,10 +576,11 @@ def _report(args: argparse.Namespace) -> int:
     if args.reference:  # COST 323 classes of every weigh summary among the results
         from bwim.accuracy import assess
         from bwim.io import read_reference, read_summary
+        from bwim.io.summary import is_summary
 
         reference = read_reference(args.reference)
         summaries = [p for p in report.result_paths(args.results)
-                     if p.suffix.lower() == ".csv" and _is_weigh_summary(p)]
+                     if p.suffix.lower() == ".csv" and is_summary(p)]
         if not summaries:
             raise InputError("--reference needs a weigh summary.csv among the results")
         for p in summaries:
@@ -892,12 +588,6 @@ def _report(args: argparse.Namespace) -> int:
     report.write_report(out, sections, title=args.title)
     print(f"report of {len(items)} result(s): {out}")
     return 0
-
-
-def _is_weigh_summary(path: Path) -> bool:
-    with path.open(newline="", encoding="utf-8", errors="replace") as f:
-        header = next(csv.reader(f), [])
-    return tuple(header[:len(WEIGH_COLUMNS)]) == WEIGH_COLUMNS
 
 
 # --- demo ------------------------------------------------------------------------------------
@@ -1041,6 +731,15 @@ _BRIDGE = arg("--bridge", metavar="MODEL.toml")
 _REFERENCE = arg("--reference", metavar="REF.csv")
 _FORCE = arg("--force", action="store_true",
              help="overwrite existing outputs (an input is never overwritten)")
+_PARALLEL = OneOf((arg("--jobs", type=int, default=1,
+                       help="worker processes on this machine (-1: all cores); default 1"),
+                   arg("--scheduler", metavar="ADDRESS",
+                       help="address of a dask.distributed scheduler, e.g. "
+                       "tcp://host:8786")))
+_RESUME = arg("--resume", action="store_true",
+              help="go on with the batch in OUT (its manifest.json): records done and "
+              "unchanged are kept, failed ones are tried again, rows of records not given "
+              "again are kept")
 
 COMMANDS: tuple[Command, ...] = (
     Command(
@@ -1089,9 +788,9 @@ COMMANDS: tuple[Command, ...] = (
         "a calibrated one).  Many records run in parallel on this machine (--jobs) or on a "
         "dask.distributed cluster (--scheduler).  Writes a CSV summary, one row per vehicle, "
         "and <record>_forces.h5 per record, each as its record finishes; a record that "
-        "fails gets a summary row with its reason and the others go on.  A rerun into "
-        "the same OUT skips the records already done.  Exit code 0: all records done, "
-        "1: some failed, 2: bad input.\n\n"
+        "fails gets a summary row with its reason and the others go on; --resume goes on "
+        "with an interrupted batch.  Exit code 0: all records done, 1: some failed, 2: bad "
+        "input.\n\n"
         "  bwim identify examples/paper_slab.toml records/ --bridge calibrated.toml -o out/",
         (_SCENARIO.updated(
              help="the scenario (sensor positions; passage of CSV records)"),
@@ -1102,13 +801,9 @@ COMMANDS: tuple[Command, ...] = (
          _OUTPUT.updated(default="bwim-out/identify", metavar="OUT",
              help="a results folder, or summary.csv (results beside it); default "
              "bwim-out/identify"),
-         OneOf((arg("--jobs", type=int, default=1,
-                    help="worker processes on this machine (-1: all cores); default 1"),
-                arg("--scheduler", metavar="ADDRESS",
-                    help="address of a dask.distributed scheduler, e.g. tcp://host:8786"))),
-         arg("--force", action="store_true",
-             help="start afresh: redo every record and overwrite the outputs (default: "
-             "records already done in OUT, per its manifest.json, are skipped)"))),
+         _PARALLEL,
+         _RESUME,
+         _FORCE)),
     Command(
         "weigh", _weigh,
         "static weights by Moses' algorithm from influence lines",
@@ -1135,9 +830,8 @@ COMMANDS: tuple[Command, ...] = (
                required=True),
          _OUTPUT.updated(default="bwim-out/weigh", metavar="FOLDER",
              help="results folder (default bwim-out/weigh)"),
-         arg("--resume", action="store_true",
-             help="keep the records already weighed in the folder's summary.csv and weigh "
-             "only the others"),
+         _PARALLEL,
+         _RESUME,
          _BRIDGE.updated(
              help="logger files only: weigh each detected vehicle by moving force "
              "identification with this (calibrated) bridge model instead of Moses; the "
@@ -1243,7 +937,7 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``bwim`` command; returns the exit code."""
-    from bwim.io.batch import signals_as_interrupt
+    from bwim.io.outputs import signals_as_interrupt
     from bwim.limits import ENV_VAR, parse_size
 
     for stream in (sys.stdout, sys.stderr):  # file names that are not UTF-8 print too

@@ -68,6 +68,10 @@ __all__ = ["EventWeighing", "SiteCalibration", "SiteSetup", "calibrate_site", "w
 #: this (m) is rejected: the detection, not the truck, is wrong.
 SPACING_TOLERANCE = 0.3
 
+#: Drift corrections of the strain-to-load ratio: the calibration runs' trend over clock
+#: time, or none (the calibration's mean factor).
+DRIFT_METHODS = ("trend", "none")
+
 #: Without axle detectors: passes of (lines from the runs, runs re-detected against them).
 STRAIN_ONLY_PASSES = 2
 
@@ -107,6 +111,10 @@ class SiteSetup:
         outside it), ``"gls"``, ``"blue"`` or ``"sum"``.
     lateral : str or None
         ``"linear"``: lines linear in the lateral position; None: one line per gauge.
+    drift : str
+        How the day's drift of the strain-to-load ratio is corrected (see
+        :data:`DRIFT_METHODS`): ``"trend"`` (default: the calibration runs' scale factors
+        over clock time, :class:`bwim.wim.multirun.ScaleTrend`) or ``"none"``.
     """
 
     calibration_loads: np.ndarray
@@ -117,6 +125,7 @@ class SiteSetup:
     max_spacing: float | None = None
     combine: str = "auto"
     lateral: str | None = None
+    drift: str = "trend"
 
     def __post_init__(self) -> None:
         loads = np.array(self.calibration_loads, dtype=float, ndmin=1)
@@ -145,6 +154,9 @@ class SiteSetup:
             raise InputError(f"combine must be auto, gls, blue or sum, got {self.combine!r}")
         if self.lateral not in (None, "linear"):
             raise InputError(f"lateral must be None or 'linear', got {self.lateral!r}")
+        if self.drift not in DRIFT_METHODS:
+            raise InputError(f"drift must be one of {', '.join(DRIFT_METHODS)}, got "
+                             f"{self.drift!r}")
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -199,6 +211,10 @@ class EventWeighing:
     clock_of_day : bool
         True when the record has no ``clock`` but its time axis is the clock time of day
         (a logger that writes it in the time column: the axis does not start at 0).
+    drift_factor : float or None
+        The strain-to-load factor the weights were divided by (None: not weighed).
+    drift_method : str
+        Where it came from (:data:`DRIFT_METHODS`), ``""`` when no correction was made.
     """
 
     weighed: bool
@@ -209,6 +225,8 @@ class EventWeighing:
     identification: ForceIdentification | None = None
     clock: datetime | None = None
     clock_of_day: bool = False
+    drift_factor: float | None = None
+    drift_method: str = ""
 
     @property
     def method(self) -> str:
@@ -271,11 +289,10 @@ class EventWeighing:
         lateral = float(v.lateral) if np.isfinite(v.lateral) else None
         if ident is not None:
             residual, quality, lam = ident.residual, ident.vehicle_quality[0], ident.lam
-            factor = None
         elif w is not None:
-            residual, quality, lam, factor = w.residual, w.quality, None, w.scale_factor
+            residual, quality, lam = w.residual, w.quality, None
         else:
-            residual, quality, lam, factor = None, "", None, None
+            residual, quality, lam = None, "", None
         return SummaryRow(
             record=record, vehicle=k + 1, status="weighed" if weighed else "refused",
             time=self.time_at(p.delay), n_axles=p.n_axles, speed=p.speed,
@@ -288,8 +305,8 @@ class EventWeighing:
             lateral_unit=v.lateral_unit if lateral is not None else "",
             confidence=v.confidence, residual=residual if k == 0 else None,
             quality=quality if k == 0 else "", method=self.method if k == 0 else "",
-            drift_factor=factor if k == 0 else None,
-            drift_method="scale trend" if factor is not None and k == 0 else "",
+            drift_factor=self.drift_factor if k == 0 else None,
+            drift_method=self.drift_method if k == 0 else "",
             lam=lam if k == 0 else None, reason="" if weighed else self.reason)
 
 
@@ -468,16 +485,19 @@ def _weigh_event(record: Record, calibration: SiteCalibration, *, bridge: Bridge
     if bridge is not None:
         return _weigh_mfi(record, det, flags, calibration, bridge, identify_options or {})
     try:
-        w = weigh(record, vehicle.passage, lines, combine=setup.combine)
+        w = weigh(record, vehicle.passage, lines, combine=setup.combine,
+                  scale_correction=setup.drift != "none")
     except _EVENT_ERRORS as exc:
         return EventWeighing(weighed=False, detection=det, flags=flags,
                              reason=f"weighing failed: {_why(exc)}")
     flags = tuple(dict.fromkeys([*flags, *w.flags]))
+    drift = {"drift_factor": w.scale_factor, "drift_method": "trend" if (
+        setup.drift == "trend" and lines.scale_trend is not None) else ""}
     if w.quality == "reject":
         hard = ", ".join(f for f in w.flags if f in HARD_FLAGS)
         return EventWeighing(weighed=False, detection=det, weighing=w, flags=flags,
-                             reason=f"implausible weighing ({hard})")
-    return EventWeighing(weighed=True, detection=det, weighing=w, flags=flags)
+                             reason=f"implausible weighing ({hard})", **drift)
+    return EventWeighing(weighed=True, detection=det, weighing=w, flags=flags, **drift)
 
 
 def _weigh_mfi(record: Record, det: Detection, flags: tuple[str, ...],
@@ -494,7 +514,7 @@ def _weigh_mfi(record: Record, det: Detection, flags: tuple[str, ...],
         return refused("weighing by MFI needs every gauge's position (x, y) in the scenario")
     if vehicle.lateral_unit != "m" or not np.isfinite(vehicle.lateral):
         return refused("weighing by MFI needs the vehicle's lane in metres (gauge y positions)")
-    trend = calibration.lines.scale_trend
+    trend = calibration.lines.scale_trend if calibration.setup.drift != "none" else None
     factor = float(trend(record.clock_seconds())) if trend is not None else 1.0
     rec = record.channels(gauges)
     # the model's bridge is at rest before the first axle arrives: the logger's offsets
@@ -512,8 +532,10 @@ def _weigh_mfi(record: Record, det: Detection, flags: tuple[str, ...],
     extra = [] if trend is None or trend.covers(record.clock_seconds()) else [
         "outside_calibration_time"]
     flags = tuple(dict.fromkeys([*flags, *ident.vehicle_flags[0], *extra]))
+    drift = {"drift_factor": factor, "drift_method": "" if trend is None else "trend"}
     if ident.vehicle_quality[0] == "reject":
         hard = ", ".join(f for f in ident.vehicle_flags[0] if f in HARD_FLAGS)
         return EventWeighing(weighed=False, detection=det, flags=flags, identification=ident,
-                             reason=f"implausible weighing ({hard})")
-    return EventWeighing(weighed=True, detection=det, flags=flags, identification=ident)
+                             reason=f"implausible weighing ({hard})", **drift)
+    return EventWeighing(weighed=True, detection=det, flags=flags, identification=ident,
+                         **drift)

@@ -101,7 +101,8 @@ def test_calibrate_then_identify_across_invocations(files, capsys):
     assert [r["record"] for r in rows] == ["truck.h5", "truck.csv"]
     truth = read_record(files["truck_h5"]).truth
     for r in rows:
-        weights = np.array([float(r[f"axle_{i + 1}_kN"]) for i in range(3)]) * 1e3
+        assert r["status"] == "weighed" and r["method"] == "mfi" and r["class"] == "12"
+        weights = np.array([float(w) for w in r["axle_weights_kN"].split(";")]) * 1e3
         np.testing.assert_allclose(weights, truth.static_axle_loads, rtol=0.025)
         assert float(r["gvw_kN"]) * 1e3 == pytest.approx(truth.gvw, rel=0.02)
         assert float(r["lambda"]) > 0
@@ -253,7 +254,7 @@ def test_bad_csv_records(files, tmp_path, capsys):
         assert needle.lower() in err.lower(), err
         rows = list(csv.DictReader(out.open()))
         row = next(r for r in rows if r["record"] == bad.name)
-        assert needle.lower() in row["error"].lower()
+        assert row["status"] == "failed" and needle.lower() in row["reason"].lower()
         assert not (tmp_path / f"{name}_forces.h5").exists()
 
 

@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 
 from bwim.cli import main
-from bwim.io.batch import LOCK_NAME, MANIFEST_NAME, OutputLock, refuse_input_overwrite
+from bwim.io.outputs import LOCK_NAME, MANIFEST_NAME, OutputLock, refuse_input_overwrite
 
 ROOT = Path(__file__).resolve().parents[2]
 BEAM = ROOT / "examples" / "beam.toml"
@@ -84,7 +84,8 @@ def test_existing_output_needs_force(files, tmp_path, capsys):
     _one_line_error(code, err, "--force")
     assert out.read_text() == "precious"
     code, _, err = _run(["simulate", files["scen"], "-o", out, "--force"], capsys)
-    assert code == 0, err and out.read_bytes()[:4] == b"\x89HDF"
+    assert code == 0, err
+    assert out.read_bytes()[:4] == b"\x89HDF"
 
 
 # --- one run per output folder -------------------------------------------------------------
@@ -104,7 +105,13 @@ def test_output_folder_lock(files, tmp_path, capsys):
 
 
 # --- batches ------------------------------------------------------------------------------
-def test_bad_record_does_not_abort_the_batch_and_rerun_resumes(files, tmp_path, capsys):
+def _summary(out):
+    return list(csv.DictReader((out / "summary.csv").open()))
+
+
+def test_bad_record_does_not_abort_the_batch_and_resume_retries_it(files, tmp_path, capsys):
+    """A bad record is a failed row (exit 1); --resume skips the records done and retries
+    the failed one, which, once repaired, is processed (the resume rule of bwim.batch)."""
     junk = tmp_path / "junk.h5"
     junk.write_text("not hdf5")
     out = tmp_path / "out"
@@ -112,30 +119,37 @@ def test_bad_record_does_not_abort_the_batch_and_rerun_resumes(files, tmp_path, 
                               out], capsys)
     assert code == 1, err
     assert "junk.h5 failed" in err and "not an HDF5 file" in err
-    rows = list(csv.DictReader((out / "summary.csv").open()))
-    by = {r["record"]: r for r in rows}
-    assert by["junk.h5"]["error"] and not by["a.h5"]["error"] and not by["b.csv"]["error"]
+    by = {r["record"]: r for r in _summary(out)}
+    assert by["junk.h5"]["status"] == "failed" and by["junk.h5"]["reason"]
+    assert by["a.h5"]["status"] == by["b.csv"]["status"] == "weighed"
     assert float(by["a.h5"]["gvw_kN"]) > 0
     assert (out / "a_forces.h5").exists() and (out / "b_forces.h5").exists()
     assert (out / MANIFEST_NAME).exists() and not _tmp_files(tmp_path)
-    # the rerun skips the records done and keeps their results
+    rows = _summary(out)
+    # the resume skips the records done and keeps their results; the failed one is retried
     stamp = (out / "a_forces.h5").stat().st_mtime_ns
     code, stdout, err = _run(["identify", files["scen"], files["a"], junk, files["b"], "-o",
-                              out], capsys)
-    assert code == 1 and "2 done before" in stdout, stdout
+                              out, "--resume"], capsys)
+    assert code == 1 and "2 done before" in stdout and "junk.h5 failed" in err, stdout
     assert (out / "a_forces.h5").stat().st_mtime_ns == stamp
-    rows2 = list(csv.DictReader((out / "summary.csv").open()))
-    assert rows2 == rows
-    # --force redoes everything
+    assert _summary(out) == rows
+    junk.write_bytes(files["a"].read_bytes())  # repaired
+    code, stdout, err = _run(["identify", files["scen"], files["a"], junk, files["b"], "-o",
+                              out, "--resume"], capsys)
+    assert code == 0 and "2 done before" in stdout, err
+    by = {r["record"]: r for r in _summary(out)}
+    assert by["junk.h5"]["status"] == "weighed" and (out / "junk_forces.h5").exists()
+    # --force without --resume redoes everything
     code, stdout, _ = _run(["identify", files["scen"], files["a"], "-o", out, "--force"],
                            capsys)
     assert code == 0 and "done before" not in stdout
     assert (out / "a_forces.h5").stat().st_mtime_ns != stamp
 
 
-def test_another_batch_into_the_folder_needs_force(files, tmp_path, capsys):
-    """A second run with other records into the same folder would replace the first's
-    summary: refused without --force (a rerun of the same records resumes instead)."""
+def test_a_second_run_into_the_folder_resumes_or_is_refused(files, tmp_path, capsys):
+    """Without --resume a second run would replace the first's summary: refused.  With
+    --resume it adds its records and keeps the first's rows (a resume never drops a row);
+    a batch of another scenario is refused even with --resume."""
     out = tmp_path / "out"
     code, _, err = _run(["identify", files["scen"], files["a"], "-o", out], capsys)
     assert code == 0, err
@@ -143,32 +157,41 @@ def test_another_batch_into_the_folder_needs_force(files, tmp_path, capsys):
     code, _, err = _run(["identify", files["scen"], files["b"], "-o", out], capsys)
     _one_line_error(code, err, "summary.csv")
     assert (out / "summary.csv").read_text() == first
-    code, stdout, _ = _run(["identify", files["scen"], files["a"], "-o", out], capsys)
+    code, stdout, err = _run(["identify", files["scen"], files["b"], "-o", out, "--resume"],
+                             capsys)
+    assert code == 0, err
+    assert [r["record"] for r in _summary(out)] == ["b.csv", "a.h5"]
+    code, stdout, _ = _run(["identify", files["scen"], files["a"], "-o", out, "--resume"],
+                           capsys)
     assert code == 0 and "1 done before" in stdout
+    assert {r["record"] for r in _summary(out)} == {"a.h5", "b.csv"}
+    other = _scenario(tmp_path)
+    code, _, err = _run(["identify", other, files["a"], "-o", out, "--resume"], capsys)
+    _one_line_error(code, err, "another batch")
 
 
 def test_interrupt_keeps_finished_records_and_leaves_no_tmp(files, tmp_path, capsys,
                                                             monkeypatch):
-    from bwim import cli
+    from bwim.batch import events
 
-    real = cli._identify_one
+    real = events.identify_item
     calls = []
 
-    def one(bridge, record, kwargs):
+    def one(job, item):
         calls.append(1)
         if len(calls) == 2:
             raise KeyboardInterrupt
-        return real(bridge, record, kwargs)
+        return real(job, item)
 
-    monkeypatch.setattr(cli, "_identify_one", one)
+    monkeypatch.setattr(events, "identify_item", one)
     out = tmp_path / "out"
     code, _, err = _run(["identify", files["scen"], files["a"], files["b"], "-o", out], capsys)
     assert code == 130 and "interrupted" in err
     assert (out / "a_forces.h5").exists() and not (out / "b_forces.h5").exists()
     assert not _tmp_files(tmp_path) and not (out / LOCK_NAME).exists()
-    monkeypatch.setattr(cli, "_identify_one", real)
-    code, stdout, _ = _run(["identify", files["scen"], files["a"], files["b"], "-o", out],
-                           capsys)
+    monkeypatch.setattr(events, "identify_item", real)
+    code, stdout, _ = _run(["identify", files["scen"], files["a"], files["b"], "-o", out,
+                            "--resume"], capsys)
     assert code == 0 and "1 done before" in stdout
 
 

@@ -26,6 +26,7 @@ import numpy as np
 from bwim.errors import InputError, require_finite, require_instance, require_positive
 from bwim.plausibility import Limits, ordered_flags, quality_of, weight_flags
 from bwim.records import Passage, Record
+from bwim.summary import SummaryRow
 from bwim.wim.influence_line import Channel, InfluenceLine, read_channels
 
 __all__ = ["DEFAULT_MAX_RESIDUAL", "AxleGroups", "StaticWeights", "group_axles", "group_share",
@@ -96,6 +97,23 @@ class StaticWeights:
     def group_weights(self) -> np.ndarray:
         """Weight of each axle group, N, shape (n_groups,)."""
         return np.array([self.axle_weights[list(g)].sum() for g in self.groups])
+
+    def to_summary_row(self, record: str) -> SummaryRow:
+        """This vehicle as a summary row named ``record`` (:class:`bwim.summary.SummaryRow`):
+        refused, with its flags and no weights, when the weighing is rejected."""
+        from bwim.classify import axle_configuration
+
+        p = self.passage
+        ok = self.quality != "reject"
+        return SummaryRow(
+            record=record, status="weighed" if ok else "refused", n_axles=p.n_axles,
+            speed=p.speed, axle_spacings=tuple(p.axle_spacings),
+            vehicle_class=axle_configuration(p.axle_spacings),
+            axle_weights=tuple(self.axle_weights) if ok else (),
+            gvw=self.gvw if ok else None,
+            group_weights=tuple(self.group_weights) if ok else (), flags=self.flags,
+            residual=self.residual, quality=self.quality, method="moses",
+            reason="" if ok else f"implausible weighing ({', '.join(self.flags)})")
 
     def plot(self, ax=None, **kw):
         """Measured readings and the static fit, with a simulated ``record``'s true weights

@@ -1,4 +1,4 @@
-"""Safe batch output for the command line: no input overwritten, no run replacing another's
+"""Safe outputs for the command line: no input overwritten, no run replacing another's
 results, work kept across interruptions.
 
 Contract
@@ -12,8 +12,9 @@ Contract
   same folder fails at once with a one-line message naming the lock (and the process that
   holds it).  A lock whose process is gone (a killed run) is taken over.
 * :class:`Manifest` records, per input, what a batch wrote (result file and summary rows),
-  keyed by the input's resolved path, size and modification time, in
-  :data:`MANIFEST_NAME` in the output folder; it is rewritten atomically after each input
+  keyed by the input's resolved path, size and modification time (an input changed since
+  replaces its entry), and what the batch was (``meta``: the scenario, the calibration),
+  in :data:`MANIFEST_NAME` in the output folder; it is rewritten atomically after each input
   (or, with ``record(..., save=False)`` and :meth:`Manifest.save`, in batches), so an
   interrupted run can be resumed: inputs already done (and unchanged) are skipped.
 * :func:`signals_as_interrupt` (a context manager) makes SIGTERM (and SIGHUP) raise
@@ -38,7 +39,8 @@ from bwim.atomic import atomic_open
 from bwim.errors import InputError
 
 __all__ = ["EXIT_FAILED", "EXIT_OK", "EXIT_USAGE", "LOCK_NAME", "MANIFEST_NAME", "Manifest",
-           "OutputLock", "refuse_existing", "refuse_input_overwrite", "signals_as_interrupt"]
+           "OutputLock", "file_key", "refuse_existing", "refuse_input_overwrite",
+           "signals_as_interrupt"]
 
 EXIT_OK = 0  #: every input processed
 EXIT_FAILED = 1  #: some inputs failed (their summary rows say why)
@@ -133,9 +135,14 @@ class OutputLock:
         self.release()
 
 
-def _key(path: Path) -> str:
-    st = path.stat()
-    return f"{path.resolve()}|{st.st_size}|{st.st_mtime_ns}"
+def file_key(path: str | os.PathLike) -> str:
+    """A file's identity for a batch: its resolved path, size and modification time."""
+    p = Path(path)
+    st = p.stat()
+    return f"{p.resolve()}|{st.st_size}|{st.st_mtime_ns}"
+
+
+_key = file_key
 
 
 class Manifest:
@@ -148,16 +155,19 @@ class Manifest:
     def __init__(self, folder: str | os.PathLike, *, fresh: bool = False) -> None:
         self.path = Path(folder) / MANIFEST_NAME
         self.entries: dict[str, dict[str, Any]] = {}
+        self.meta: dict[str, Any] = {}
         if not fresh and self.path.exists():
             try:
                 data = json.loads(self.path.read_text(encoding="utf-8"))
                 entries = data["entries"]
-                if not isinstance(entries, dict):
+                meta = data.get("batch", {})
+                if not isinstance(entries, dict) or not isinstance(meta, dict):
                     raise TypeError
             except (OSError, ValueError, KeyError, TypeError):
                 raise InputError(f"{self.path}: damaged manifest; remove it (or use "
                                  "--force) to start the batch afresh") from None
             self.entries = entries
+            self.meta = meta
 
     def belongs_to(self, sources: Sequence[Path]) -> bool:
         """Whether every entry is one of ``sources`` (unchanged): a rerun of the same batch,
@@ -187,15 +197,20 @@ class Manifest:
                save: bool = True) -> None:
         """Note an input's outcome and (unless ``save`` is false: a caller that saves
         in batches, see :meth:`save`) rewrite the manifest atomically."""
-        self.entries[_key(source)] = {"source": str(source), "result": result, "rows": rows,
-                                      "error": error}
+        key = _key(source)
+        resolved = str(Path(source).resolve())
+        for old in [k for k, e in self.entries.items()
+                    if k != key and k.rpartition("|")[0].rpartition("|")[0] == resolved]:
+            del self.entries[old]  # the same file, changed since: its old entry is stale
+        self.entries[key] = {"source": str(source), "result": result, "rows": rows,
+                             "error": error}
         if save:
             self.save()
 
     def save(self) -> None:
         """Rewrite the manifest atomically."""
         with atomic_open(self.path) as f:
-            json.dump({"entries": self.entries}, f, indent=1)
+            json.dump({"batch": self.meta, "entries": self.entries}, f, indent=1)
 
 
 def _raise_interrupt(signum: int, frame: object) -> None:

@@ -1,0 +1,181 @@
+"""A batch into an output folder: the summary, the manifest and the one resume rule.
+
+Contract
+--------
+* :class:`BatchFolder` keeps a batch's results in its folder: ``manifest.json`` (per
+  input file, keyed by its path, size and modification time: its summary rows or why it
+  failed, and the result file written for it; :class:`bwim.io.outputs.Manifest`) and
+  ``summary.csv`` (:mod:`bwim.io.summary`) rewritten from it, both atomically, at most
+  every :attr:`BatchFolder.save_every` seconds (or 20 times the last save's duration)
+  and when the batch ends, also on an interrupt.
+* **The resume rule** (both commands): with ``resume``, an input is skipped when the
+  manifest holds it unchanged, its rows are not ``"failed"`` and its result file (if any)
+  still exists; every other input is processed again, so a failed record is retried
+  once it is repaired.  The rows of inputs that a rerun does not name again are kept
+  (the summary lists the inputs given, in order, then the others by file name): a resume
+  never loses a row.  A folder that holds another batch (another scenario, calibration or
+  model: the manifest's ``meta``) is refused.  Without ``resume``, an existing summary or
+  manifest is refused unless ``force`` (then the batch starts afresh).
+* :func:`run_into` drains an iterator of :class:`~bwim.batch.events.Outcome` into a
+  folder with a progress callback and returns a :class:`BatchReport`.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from bwim.batch.events import Item, Outcome
+from bwim.errors import InputError
+from bwim.io.outputs import MANIFEST_NAME, Manifest, refuse_existing
+from bwim.io.summary import from_cells, to_cells, write_summary
+from bwim.summary import SummaryRow
+
+__all__ = ["BatchFolder", "BatchReport", "run_into"]
+
+
+class BatchFolder:
+    """A batch's summary and manifest in ``folder`` (see the module docstring).
+
+    Parameters
+    ----------
+    folder : path
+        The output folder (it exists).
+    meta : mapping
+        What the batch is (plain JSON values): a resumed folder must hold the same.
+    resume : bool
+        Keep what an earlier run of the same batch did (the resume rule).
+    force : bool
+        Without ``resume``: start afresh over existing outputs.
+    summary : path, optional
+        The summary file (default ``folder/summary.csv``).
+    """
+
+    save_every = 1.0
+
+    def __init__(self, folder: str | Path, *, meta: dict[str, Any], resume: bool,
+                 force: bool, summary: str | Path | None = None) -> None:
+        self.folder = Path(folder)
+        self.summary = Path(summary) if summary is not None else self.folder / "summary.csv"
+        if not resume:
+            refuse_existing(self.summary, force=force)
+            refuse_existing(self.folder / MANIFEST_NAME, force=force)
+        self.manifest = Manifest(self.folder, fresh=not resume)
+        if resume and self.manifest.entries and self.manifest.meta != meta:
+            raise InputError(f"{self.folder} holds the results of another batch (another "
+                             "scenario, calibration or model); resume it with the same "
+                             "inputs, or use another folder (or --force without --resume)")
+        self.manifest.meta = dict(meta)
+        self._order: list[Path] = []
+        self._last = time.perf_counter()
+        self._cost = 0.0
+
+    def done(self, source: Path) -> tuple[SummaryRow, ...] | None:
+        """The rows of an input that the resume rule skips, or None (process it)."""
+        entry = self.manifest.done(source)
+        if entry is None:
+            return None
+        rows = tuple(from_cells(c) for c in entry["rows"])
+        if not rows or any(r.status == "failed" for r in rows):
+            return None
+        return rows
+
+    def order(self, sources: Sequence[Path]) -> None:
+        """The inputs of this run, in the summary's order."""
+        self._order = [Path(p) for p in sources]
+
+    def add(self, source: Path, outcome: Outcome) -> None:
+        """Note an input's outcome (saved with the next save)."""
+        self.manifest.record(source, result=outcome.result,
+                             rows=[to_cells(r) for r in outcome.rows],
+                             error=outcome.reason or None, save=False)
+        self.maybe_save()
+
+    def rows(self) -> list[SummaryRow]:
+        """Every row the folder holds: the inputs of this run in order, then the others."""
+        by_source: dict[str, dict[str, Any]] = {}
+        for entry in self.manifest.entries.values():
+            by_source[str(Path(entry["source"]).resolve())] = entry
+        out: list[SummaryRow] = []
+        for p in self._order:
+            entry = by_source.pop(str(p.resolve()), None)
+            if entry is not None:
+                out.extend(from_cells(c) for c in entry["rows"])
+        for key in sorted(by_source):
+            out.extend(from_cells(c) for c in by_source[key]["rows"])
+        return out
+
+    def save(self) -> None:
+        """Rewrite the manifest and the summary (atomically)."""
+        t = time.perf_counter()
+        self.manifest.save()
+        write_summary(self.summary, self.rows())
+        self._last = time.perf_counter()
+        self._cost = self._last - t
+
+    def maybe_save(self) -> None:
+        if time.perf_counter() - self._last >= max(self.save_every, 20 * self._cost):
+            self.save()
+
+
+@dataclass(frozen=True, kw_only=True)
+class BatchReport:
+    """What a batch did.
+
+    Attributes
+    ----------
+    n_inputs : int
+    n_done_before : int
+        Inputs skipped by the resume rule.
+    rows : tuple of SummaryRow
+        The summary's rows, in its order.
+    failures : tuple of (str, str)
+        ``(record, reason)`` of every input that failed in this run.
+    elapsed : float
+        Wall time of this run, s.
+    """
+
+    n_inputs: int
+    n_done_before: int
+    rows: tuple[SummaryRow, ...]
+    failures: tuple[tuple[str, str], ...]
+    elapsed: float
+
+    def count(self, status: str) -> int:
+        """Rows of a status (``"weighed"``, ``"refused"``, ``"failed"``)."""
+        return sum(1 for r in self.rows if r.status == status)
+
+
+def run_into(folder: BatchFolder, items: Sequence[Item],
+             run: Callable[[list[Item]], Iterable[Outcome]], *,
+             progress: Callable[[int], None] | None = None) -> BatchReport:
+    """Process ``items`` (file paths as their ``source``) into ``folder``.
+
+    ``run(todo)`` yields the outcomes of the items left by the resume rule (e.g. a
+    partial of :func:`~bwim.batch.weigh_events`); ``progress(n)`` is called with the
+    number of items finished so far (skipped ones included).
+    """
+    t0 = time.perf_counter()
+    sources = [Path(it.source) for it in items]
+    folder.order(sources)
+    todo = [it for it, src in zip(items, sources, strict=True) if folder.done(src) is None]
+    skipped = len(items) - len(todo)
+    failures: list[tuple[str, str]] = []
+    finished = skipped
+    if progress is not None:
+        progress(finished)
+    try:
+        for out in run(todo):
+            folder.add(Path(todo[out.index].source), out)
+            if out.failed:
+                failures.append((out.name, out.reason))
+            finished += 1
+            if progress is not None:
+                progress(finished)
+    finally:  # an interrupted run keeps what it finished (rerun with --resume)
+        folder.save()
+    return BatchReport(n_inputs=len(items), n_done_before=skipped, rows=tuple(folder.rows()),
+                       failures=tuple(failures), elapsed=time.perf_counter() - t0)
