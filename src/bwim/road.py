@@ -7,7 +7,8 @@ Contract
   wheel tracks identical) or two tracks (right, left).  Between samples it is linear.
 * :meth:`RoadProfile.iso8608` draws a profile with the displacement PSD
   ``G_d(n) = G_d(n₀) (n / n₀)^(−w)``, ``n₀ = 0.1`` cycle/m (ISO 8608:2016), by a sum of
-  harmonics with seeded random phases evaluated by an inverse FFT (Cebon & Newland 1983).
+  harmonics with seeded random phases evaluated by an inverse FFT (Cebon & Newland 1983;
+  docs/theory.md §2.2).
   Roughness is given as ``G_d(n₀)`` in m³/cycle or as an ISO class ``"A"`` … ``"H"``
   (geometric-mean values 16, 64, 256, … × 10⁻⁶ m³).  The paper's "class C" profile has
   ``G_d(n₀) = 65 × 10⁻⁶``, which is ISO class B's mean: pass the number.

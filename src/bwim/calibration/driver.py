@@ -2,7 +2,7 @@
 
 Contract
 --------
-The paper's procedure (Dowling, OBrien & González 2012, §5.1 steps 3–4; THEORY §7):
+The paper's procedure (Dowling, OBrien & González 2012, §5.1 steps 3–4; docs/theory.md §7):
 
 1. **Stiffness, pseudo-static.**  ``E_x``, ``E_y`` per zone (and ``E_girder``) minimise the
    misfit between the measured strains and the *static* strains of the truck's static
@@ -12,9 +12,12 @@ The paper's procedure (Dowling, OBrien & González 2012, §5.1 steps 3–4; THEO
    (vehicle–bridge interaction over the given road).
 
 Beyond the paper, an optional third stage (``refine="lm"``, the default) polishes every
-unknown together on the dynamic misfit by Levenberg–Marquardt from the two-stage answer:
-the pseudo-static fit is biased by the dynamics in the measured strains (measured here:
-about 0.5–5 % in E on the paper's crossing), the dynamic misfit is not.
+unknown together on the dynamic misfit by bounded least squares from the two-stage answer
+(docs/theory.md §10): the pseudo-static fit is biased by the dynamics in the measured
+strains, the dynamic misfit is not (on noise-free data of the model itself its minimiser
+is the truth).  Both answers are reported (:attr:`Calibration.two_stage`); the bias and
+its removal are measured by ``tests/validation/test_calibration.py`` and
+``bwim reproduce``.
 
 Every stage is one :func:`~bwim.calibration.stages.run_stage`.  ``method`` chooses the
 optimiser of stages 1–2: ``"ce"`` (the paper's Cross-Entropy, sub-structured when there

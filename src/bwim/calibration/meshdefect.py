@@ -2,9 +2,10 @@
 
 Contract
 --------
-A model whose mesh is too coarse for its sensors (transverse strains on the paper's 1 m
-elements are off by up to 50 %, :func:`bwim.fe.convergence.check_mesh`) biases a
-calibration by the discretisation error, not by the data.  Defect correction (Stetter
+A model whose mesh is too coarse for its sensors (:func:`bwim.fe.convergence.check_mesh`
+estimates the error at each sensor; on the paper's 1 m elements the transverse strains
+are far from converged) biases a calibration by the discretisation error, not by the
+data (docs/theory.md §12).  Defect correction (Stetter
 1978, *The defect correction principle and discretization methods*, Numer. Math. 29)
 removes that bias at the price of a few simulations of a finer model:
 

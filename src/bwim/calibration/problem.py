@@ -5,10 +5,10 @@ Contract
 * A :class:`ParameterSpace` maps a flat vector ``θ`` to bridge parameters: the families
   being calibrated (e.g. ``("E_x", "E_y")`` then ``("mu",)``) times their zones (or
   girders), in that order.  :meth:`ParameterSpace.bridge` builds the trial bridge.
-* :class:`StaticObjective` (THEORY §7 step 1) is the pseudo-static misfit: for a trial
+* :class:`StaticObjective` (docs/theory.md §7 step 1) is the pseudo-static misfit: for a trial
   stiffness, the static strains of the calibration truck's static wheel loads at their
   positions, through influence surfaces (one banded factorisation and one solve per
-  sensor, §1.5), against the measured (dynamic) strains.
+  sensor, docs/theory.md §1.5), against the measured (dynamic) strains.
 * :class:`DynamicObjective` (step 2) simulates the calibration crossing on the trial
   bridge (vehicle–bridge interaction over the given road) and compares total strains.
   A trial whose stiffness equals a recent trial's and whose masses are all that trial's
@@ -16,11 +16,12 @@ Contract
   (:func:`bwim.fe.modal.scaled_modes`: ω × c^(−½), shapes × c^(−½)); otherwise the
   modes are solved for.
 * :meth:`StaticObjective.jacobian` is the residuals' Jacobian by the adjoint method
-  (THEORY §1.5).
+  (docs/theory.md §1.5).
 * Both return, per trial, the squared misfit of each **part**: the channels of one
-  measurement point (the sub-objectives of sub-structured CE, paper §4.1).  Their sum is
-  the objective.  :func:`neighbour_map` says which parameters neighbour which part: the
-  zones of the elements that touch the point, and girders within one element of it.
+  measurement point (the sub-objectives of sub-structured CE, paper §4.1;
+  docs/theory.md §6).  Their sum is the objective.  :func:`neighbour_map` says which
+  parameters neighbour which part: the zones of the elements that touch the point, and
+  girders within one element of it.
 * Channel weights: unweighted by default (the paper's plain sum);
   :func:`noise_weights` estimates each channel's noise from the data itself (no noise
   model assumed); :func:`peak_weights` is the paper's §5.2 model (noise ∝ channel peak).

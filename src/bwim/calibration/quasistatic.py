@@ -3,15 +3,15 @@ the bridge's free vibration.  No road profile is needed (issue 12).
 
 Why
 ---
-The paper's procedure (THEORY §7) needs the road the truck drove on: its dynamic stage
-re-simulates the crossing, and even its pseudo-static stage is biased by the truck's
-dynamic axle forces, which the road drives.  Measured on 24 × 16 data and model with 2 %
-gauge noise (``benchmarks/bench_mismatch.py``), a road known to 1 mm RMS moves E_y by
-≈ 19 %.  Here the road never enters.
+The paper's procedure (docs/theory.md §7) needs the road the truck drove on: its dynamic
+stage re-simulates the crossing, and even its pseudo-static stage is biased by the
+truck's dynamic axle forces, which the road drives.  A road known to a millimetre moves
+the transverse modulus by far more than the gauge noise does (measured by
+``benchmarks/bench_mismatch.py``).  Here the road never enters (docs/theory.md §13).
 
 Model
 -----
-The measured strain at sensor ``s`` is (THEORY §1.5, §3)
+The measured strain at sensor ``s`` is (docs/theory.md §1.5, §3)
 
     ε_s(t) = Σ_j G_s(x_j(t), y_j) F_j(t) + v_s(t) + noise,
 
@@ -167,7 +167,7 @@ class QuasiStaticCalibration(OptimizeResult):
 
 
 def _signal():
-    """scipy.signal, imported on first use (it costs 0.5 s to load)."""
+    """scipy.signal, imported on first use (it is slow to import)."""
     import scipy.signal
 
     return scipy.signal

@@ -2,23 +2,25 @@
 
 Contract
 --------
-:func:`identifiability` stacks the relative sensitivities ``p ∂ε/∂p / ‖d‖`` of the static
-readings of the calibration crossings to every stiffness parameter (adjoint sensitivities,
-THEORY §1.5) and reports their singular values and condition number, the norm of each
-parameter's column, and the parameters the sensors cannot see: a column norm below
-``threshold`` × the largest, or a large share in a singular direction whose singular value
-is below ``threshold`` × the largest.
+:func:`identifiability` (docs/theory.md §10) stacks the relative sensitivities
+``p ∂ε/∂p / ‖d‖`` of the static readings of the calibration crossings to every stiffness
+parameter (adjoint sensitivities, docs/theory.md §1.5) and reports their singular values
+and condition number, the norm of each parameter's column, and the parameters the
+sensors cannot see: a column norm below ``threshold`` × the largest, or a large share in a
+singular direction whose singular value is below ``threshold`` × the largest.
 
 :func:`road_sensitivity` says how much the road assumption matters: for each alternative
 road (e.g. flat, or a measured profile with its error) the change of the calibrated
 parameters had the dynamic misfit been computed on that road instead.  By default each
 alternative is re-fitted (the joint least-squares refinement from the calibrated values
-on that road; about 20–40 re-simulations each).  ``linear=True`` takes one Gauss–Newton
-step instead, ``Δθ = −(JᵀJ)⁻¹ Jᵀ [r(θ; road′) − r(θ; road)]`` with ``J`` by forward
-differences (``n_params + 1 + n_alternatives`` re-simulations); measured on the paper's
-§5.1 case it is a poor guide (E_y: +9.7 % against +19.1 % re-fitted for a 1 mm RMS profile
-error, −6.0 % against +7.0 % for a flat road): the misfit is far from quadratic over
-such changes.  Shifts are relative (fractions of the calibrated value).
+on that road: a least-squares fit with a finite-difference Jacobian on each).
+``linear=True`` takes one Gauss–Newton step instead,
+``Δθ = −(JᵀJ)⁻¹ Jᵀ [r(θ; road′) − r(θ; road)]`` with ``J`` by forward differences
+(``n_params + 1 + n_alternatives`` re-simulations): cheaper, but only as good as the
+misfit is quadratic over the change of road, which for road changes of millimetres it is
+not; the two are compared by ``tests/validation/test_mismatch.py`` and
+``benchmarks/bench_mismatch.py``.  Shifts are relative (fractions of the calibrated
+value).
 """
 
 from __future__ import annotations

@@ -45,9 +45,10 @@ from bwim.optimize.parallel import evaluate
 
 __all__ = ["MIN_ELITE", "SUBSTRUCTURED_SMOOTHING", "Method", "StageResult", "run_stage"]
 
-#: (mean, std) smoothing of sub-structured CE: without it the paper's settings stopped
-#: above 1 % error in 1 of 12 runs of the 48-parameter NLC benchmark, with it in none
-#: (tests/validation/test_cross_entropy.py, benchmarks/bench_optimize.py).
+#: (mean, std) smoothing of sub-structured CE (docs/theory.md §6): damping the spread's
+#: update keeps the paper's settings from stopping early on the 48-parameter
+#: near-linear-combination problem; measured by benchmarks/bench_optimize.py and guarded
+#: by tests/validation/test_cross_entropy.py.
 SUBSTRUCTURED_SMOOTHING = (1.0, 0.7)
 
 #: Fewest elite trials per CE update: a spread needs several members (small populations

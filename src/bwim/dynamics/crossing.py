@@ -2,18 +2,20 @@
 
 Contract
 --------
-* Time is integrated with Newmark-β (average acceleration) at the sampling rate.  Time 0
-  is the instant the first axle of the first vehicle reaches x = 0; each vehicle starts
-  ``approach`` metres (its first axle) before the bridge in static equilibrium on the road
-  and the record ends ``tail`` seconds after the last axle leaves.  The record holds
-  t ≥ 0 only (before that the bridge is at rest).
+* Vehicle–bridge interaction as in docs/theory.md §3, integrated with Newmark-β (average
+  acceleration, §2.3) at the sampling rate.  Time 0 is the instant the first axle of the
+  first vehicle reaches x = 0; each vehicle starts ``approach`` metres (its first axle)
+  before the bridge in static equilibrium on the road and the record ends ``tail``
+  seconds after the last axle leaves.  The record holds t ≥ 0 only (before that the
+  bridge is at rest).
 * The bridge is modal by default: all modes up to ``max_frequency`` (default
   sampling_rate / 8) or ``n_modes`` of them, damped with the bridge's Rayleigh damping.
   ``full_system=True`` integrates the full FE system instead.
-* Modal readings carry a static correction by default (mode-acceleration method): the
-  quasi-static response of the truncated modes, ``Σ_c F_c (g_s(x_c) − S Φ Ω⁻² Φᵀ N_c)``
-  with ``g_s`` the sensors' influence surfaces, so strains under the wheels converge
-  like the static solution rather than like the modal series.
+* Modal readings carry a static correction by default (mode-acceleration method,
+  docs/theory.md §8): the quasi-static response of the truncated modes,
+  ``Σ_c F_c (g_s(x_c) − S Φ Ω⁻² Φᵀ N_c)`` with ``g_s`` the sensors' influence surfaces,
+  so strains under the wheels converge like the static solution rather than like the
+  modal series.
 * Several vehicles: pass sequences for ``vehicle``, ``speed``, ``lane`` and ``delay``
   (record time at which each first axle reaches x = 0).
 * Defaults: :data:`DEFAULT_APPROACH` (100 m) of run-up and :data:`DEFAULT_SAMPLING_RATE`

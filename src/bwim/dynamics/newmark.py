@@ -5,8 +5,8 @@ Contract
 * :class:`Newmark` holds β, γ and the step Δt and gives the standard coefficients
   ``a0 … a5`` (Bathe's notation) and the history terms built from them; nothing else in
   bwim spells a Newmark coefficient out.  The default (β = 1/4, γ = 1/2) is the
-  average-acceleration rule: unconditionally stable, second-order accurate, no numerical
-  damping.
+  average-acceleration rule (docs/theory.md §2.3): unconditionally stable, second-order
+  accurate, no numerical damping.
 * :func:`integrate` advances a time-invariant system over a whole load history with a
   precomputed step operator ``[u; v; a]ₖ₊₁ = A [u; v; a]ₖ + B fₖ₊₁``: one small matrix
   product per step.  Diagonal systems (modal coordinates) may pass 1-D arrays for M, C, K
@@ -214,7 +214,7 @@ def _filter_modes(M, C, K, f, dt, k0, out) -> None:
     The filters' initial conditions come from the two previous steps (lfiltic).  Equal
     to the stepping up to round-off.
     """
-    from scipy import signal  # here, not at import: scipy.signal costs 0.5 s to load
+    from scipy import signal  # here, not at import: scipy.signal is slow to import
 
     h = dt
     nums = (h * h / 4 * np.array([1.0, 2.0, 1.0]), h / 2 * np.array([1.0, 0.0, -1.0]),
@@ -269,7 +269,7 @@ def _filter_coupled(M, C, K, f, dt, k0, out) -> bool:
     ``w_{k+1} = A w_k + B N_{k+1}``; in A's eigenbasis every coordinate is a first-order
     recursion (lfilter).  Returns False (and leaves ``out`` alone) when the eigenbasis
     is ill-conditioned (near-defective A)."""
-    from scipy import signal  # here, not at import: scipy.signal costs 0.5 s to load
+    from scipy import signal  # here, not at import: scipy.signal is slow to import
 
     n = M.shape[0]
     eig = _companion(M, C, K, dt)

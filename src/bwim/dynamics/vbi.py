@@ -15,10 +15,11 @@ bridge's Rayleigh damping) or the full FE system (``M ü + C u̇ + K u = L(t) F`
 * :func:`solve_coupled` advances bridge and vehicles together, one Newmark step of the
   monolithic system at a time (modal: a small dense solve; full: one banded factor and a
   rank-n_c Woodbury correction per step).
-* :func:`solve_iterative` is the paper's procedure (THEORY §3): vehicles on a rigid deck,
-  the bridge under their forces, the deck deflection added to the profile, repeated until
-  the deflection under the wheels changes by less than ``tol`` (relative).  Its fixed point
-  is the same discrete system, so the two agree to the tolerance.
+* :func:`solve_iterative` is the paper's procedure (docs/theory.md §3): vehicles on a
+  rigid deck, the bridge under their forces, the deck deflection added to the profile,
+  repeated until the deflection under the wheels changes by less than ``tol``
+  (relative).  Its fixed point is the same discrete system, so the two agree to the
+  tolerance.
 * Both start with the bridge at rest and the vehicles in static equilibrium on the road.
 """
 

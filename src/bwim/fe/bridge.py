@@ -17,7 +17,7 @@ Contract
 
   ``with_params`` returns a new bridge sharing the model: nothing is re-integrated.
 * Damping is Rayleigh, ``C = α M + β K``, fitted to ``damping_ratio`` at the first two
-  modes (THEORY §1.4); modal damping ratios follow from α and β.
+  modes (docs/theory.md §1.4); modal damping ratios follow from α and β.
 * Everything returned is on the model's **free** DOF (constrained DOF removed).
 * Derived quantities (K, its factor, M, modes) are computed once per bridge and cached.
 """
@@ -462,7 +462,7 @@ class Bridge:
         return self.sensor_matrix(sensors) @ self.static_displacements(loads)
 
     def influence(self, sensors: Sequence[Sensor]):
-        """Static influence surfaces of the sensors by reciprocity (THEORY §1.5)."""
+        """Static influence surfaces of the sensors by reciprocity (docs/theory.md §1.5)."""
         from bwim.fe.influence import influence_surfaces
 
         return influence_surfaces(self, sensors)

@@ -12,10 +12,11 @@ Contract
   Relative changes are taken against ``max(|reading|, floor × peak)``: the peak |reading|
   over the sensors with the same unit and load case, ``floor`` = 5 % (a sensor near a
   zero of its influence line would otherwise never converge relatively).
-* The discretisation error of each mesh is estimated by Richardson extrapolation from the
-  last three meshes with the **observed** order ``p = log2(‖Δ₁‖ / ‖Δ₂‖)`` (clipped to
-  [0.5, 6]); ``error[k] = reading[k] − extrapolated``.  With only two meshes, the
-  last change stands in for the error of the finer one (p unknown, NaN).
+* The discretisation error of each mesh (docs/theory.md §11) is estimated by Richardson
+  extrapolation from the last three meshes with the **observed** order
+  ``p = log2(‖Δ₁‖ / ‖Δ₂‖)`` (clipped to [0.5, 6]); ``error[k] = reading[k] −
+  extrapolated``.  With only two meshes, the last change stands in for the error of the
+  finer one (p unknown, NaN).
 * Results are a frozen :class:`MeshConvergence`; readings are strains (dimensionless) or
   deflections (m), as the sensors read.
 """

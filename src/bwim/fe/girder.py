@@ -7,7 +7,8 @@ Contract
   ``M = μ ∫ h hᵀ`` (μ in kg/m).
 * A girder element runs along a plate node line ``y = y_g`` and has 6 DOF, the plate's
   ``(w, w_x, w_y)`` at each end: Hermite bending on ``(w, w_x)`` and linear St-Venant
-  torsion on the rotation about x, which is ``w_y`` (the paper's six-DOF beam element).
+  torsion on the rotation about x, which is ``w_y`` (the paper's six-DOF beam element;
+  docs/theory.md §1.2).
   Its stiffness is ``E_girder × (I k_bend + J / (2 (1 + ν_g)) k_tors)``: linear in the
   girder modulus, which is the calibrated parameter.  Rotary inertia is neglected.
 * A girder's ``I`` is the second moment of area of the girder together with its share of

@@ -4,7 +4,8 @@ Contract
 --------
 * For a sensor row ``s`` (``reading = s u``), ``g = K⁻¹ sᵀ`` is the sensor's influence
   surface in nodal form: a unit downward load at ``(x, y)`` gives the reading
-  ``g · N(x, y)ᵀ`` (THEORY §1.5).  One banded solve per **sensor**, not per load position.
+  ``g · N(x, y)ᵀ`` (docs/theory.md §1.5).  One banded solve per **sensor**, not per load
+  position.
 * :meth:`InfluenceSurfaces.at` evaluates ordinates (reading per newton) at any points;
   points off the deck give zero (a wheel not yet on the bridge).
   :meth:`InfluenceSurfaces.response` sums wheel loads for many load cases at once.
@@ -120,7 +121,7 @@ def static_sensitivities(
     *,
     chunk: int = 256,
 ) -> Sensitivities:
-    """Sensitivities of static readings to the stiffness parameters (THEORY §1.5).
+    """Sensitivities of static readings to the stiffness parameters (docs/theory.md §1.5).
 
     Parameters
     ----------

@@ -2,9 +2,9 @@
 
 Contract
 --------
-* Solves ``K φ = ω² M φ`` on the free DOF for the ``n`` lowest modes by shift-invert
-  Lanczos (``scipy.sparse.linalg.eigsh`` with σ = 0), the inverse operator being the
-  banded Cholesky factor of K.  Tiny systems use a dense solver.
+* Solves ``K φ = ω² M φ`` (docs/theory.md §1.4) on the free DOF for the ``n`` lowest
+  modes by shift-invert Lanczos (``scipy.sparse.linalg.eigsh`` with σ = 0), the inverse
+  operator being the banded Cholesky factor of K.  Tiny systems use a dense solver.
 * Shapes are mass-normalised (``Φᵀ M Φ = I``) and signed so that the largest deflection
   component of each mode is positive (the first such DOF where extrema tie to round-off,
   as on a symmetric deck), which makes results reproducible.

@@ -6,9 +6,10 @@ Contract
   calibration: geometry, mesh, supports, zone map, girder geometry, unit element matrices
   and the assembly plan.  :class:`bwim.fe.bridge.Bridge` pairs one model with a parameter
   set; bridges that differ only in parameters share the model.
-* Supports (THEORY §1.1): a simply supported edge ``x = const`` fixes ``w`` and ``w_y``,
-  an edge ``y = const`` fixes ``w`` and ``w_x``; a clamped edge fixes all four DOF of its
-  nodes (on a beam: simple fixes ``w``, clamped ``w`` and ``w_x``); free fixes nothing.
+* Supports (docs/theory.md §1.1): a simply supported edge ``x = const`` fixes ``w`` and
+  ``w_y``, an edge ``y = const`` fixes ``w`` and ``w_x``; a clamped edge fixes all four
+  DOF of its nodes (on a beam: simple fixes ``w``, clamped ``w`` and ``w_x``); free fixes
+  nothing.
 * Zones group elements; each plate zone carries ``E_x, E_y, μ``, each beam zone
   ``E_x, μ``; each girder carries ``E_girder, μ_girder``.
 * Rows that map free-DOF displacements to sensor readings and point loads to consistent

@@ -7,7 +7,7 @@ Contract
   are with respect to the physical coordinate (1/m, 1/m²).
 * The BFS element (16 DOF) is the tensor product of the Hermite functions in x and y:
   local DOF ``4 a + b`` is ``h_a(x) h_b(y)``, see :meth:`bwim.fe.mesh.Grid.element_dofs`.
-* Stiffness of an orthotropic Kirchhoff plate with Huber's torsion (THEORY §1.1)::
+* Stiffness of an orthotropic Kirchhoff plate with Huber's torsion (docs/theory.md §1.1)::
 
       K_e = D_x K_xx + D_y K_yy + sqrt(D_x D_y) K_xy,    M_e = μ M_1
 

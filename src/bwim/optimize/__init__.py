@@ -1,6 +1,7 @@
 """General-purpose optimisation: Cross-Entropy with variance injection and sub-structuring.
 
-This package knows nothing about bridges; :mod:`bwim.calibration` drives it.
+This package knows nothing about bridges; :mod:`bwim.calibration` drives it.  The method
+and its settings are in docs/theory.md §6.
 
 * :class:`CrossEntropy` — ask/tell minimiser over whole populations (plain or
   sub-structured); :attr:`CrossEntropy.result` is a :class:`CEResult`.

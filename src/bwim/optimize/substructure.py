@@ -9,7 +9,8 @@ Contract
 * :func:`elite_mask` marks the ⌈ρk⌉ best of k trials by one objective (fewer when fewer
   values are finite).
 * :func:`parameter_elite_masks` is the sub-structured rule of Dowling, OBrien & González
-  (2012) §4.1 for "Near Linear Combination" problems ``O(x) = Σ_j O_j(x)``: each part j
+  (2012) §4.1 (docs/theory.md §6) for "Near Linear Combination" problems
+  ``O(x) = Σ_j O_j(x)``: each part j
   elects its own elite set by its sub-objective ``O_j``; the elite set of parameter i is the
   union of the elite sets of the parts that neighbour i; a parameter without a neighbouring
   part uses the global elite set, ranked by the total ``Σ_j O_j``.

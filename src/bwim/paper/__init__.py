@@ -1,8 +1,9 @@
 """The bridges, sensors and calibration-truck data of Dowling, OBrien & González (2012).
 
 Every value the paper leaves unstated is *assumed* here, once, with the reason; the rest of
-bwim (tests, benchmarks, the demo, the reproductions) takes them from this module.  See
-``shared/PAPER_CASES.md``.
+bwim (tests, benchmarks, the demo, the reproductions) takes them from this module.  The
+cases, the assumed values beside the paper's and what "reproduced" means are in
+``docs/paper_cases.md``.
 
 The paper stands apart from the library: this package holds its data (this module), its
 §5 experiments (:mod:`bwim.paper.reproduce`) and the demo (:mod:`bwim.paper.demo`).  The

@@ -2,7 +2,7 @@
 
 Contract
 --------
-Each ``case_*`` function runs one experiment of PAPER_CASES.md and returns a
+Each ``case_*`` function runs one experiment of ``docs/paper_cases.md`` and returns a
 :class:`CaseReport`: printable tables with the paper's numbers beside ours, the measured
 numbers (for tests and the note), the objects figures are drawn from
 (:meth:`CaseReport.figures`), and the wall time.
@@ -375,8 +375,9 @@ def compare_methods(*, quick: bool = False, seed: int = 0, budget: int | None = 
     * §5.3 bridge #2 (48 unknowns): the whole calibration with each method for the
       paper's two stages (the same least-squares refinement after), scored against the
       true zone moduli.  The pseudo-static optimum of 32 zone moduli is itself far from
-      the truth (the dynamics' bias grows along the objective's weak directions: measured
-      −77 … +537 %), so a race to it would compare methods on reaching a wrong point.
+      the truth (the dynamics' bias grows along the objective's weak directions), so a
+      race to it would compare methods on reaching a wrong point
+      (``docs/paper_cases.md``, "Beyond the paper").
 
     ``budget`` (the race's evaluations), ``budgets`` (the two stages' evaluations in the
     48-unknown runs) and ``population`` override the run sizes; ``methods`` chooses the

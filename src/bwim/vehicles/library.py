@@ -2,9 +2,10 @@
 
 Sources and choices
 -------------------
-* The paper (Dowling, OBrien & González 2012, §5.1) gives the calibration truck's static
-  axle loads (59.5 kN, 108.6 kN) and spacing (5.5 m) and says its tyre and suspension
-  values are "typical values from the literature" without listing them.
+* The paper (Dowling, OBrien & González 2012, §5.1; docs/paper_cases.md §5.1) gives the
+  calibration truck's static axle loads (59.5 kN, 108.6 kN) and spacing (5.5 m) and says
+  its tyre and suspension values are "typical values from the literature" without listing
+  them.
 * The values below are **assumed** within the ranges given for heavy vehicles by Cebon,
   *Handbook of Vehicle–Road Interaction* (Swets & Zeitlinger, 1999), ch. 3–4: leaf-spring
   suspension 0.2–0.6 MN/m per wheel, tyres 0.8–1.8 MN/m per single tyre (about twice for

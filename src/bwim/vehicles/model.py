@@ -21,7 +21,8 @@ Contacts are ordered axle by axle, the right wheel (smaller y) first; each has a
 
 The builder (:func:`assemble`) takes rigid bodies with bounce, pitch and roll, wheel
 masses, suspensions, tyres and linear constraints (an articulation), and solves static
-equilibrium for the wheel loads — also when the axle layout is statically indeterminate.
+equilibrium for the wheel loads — also when the axle layout is statically indeterminate
+(docs/theory.md §2.1).
 A point at ``(s, e)`` on a body moves down by ``z + (s_cg − s) θ + e φ`` (pitch θ positive
 nose-down, roll φ positive left side down).
 """
