@@ -359,8 +359,8 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
         Without axle detectors: passes of (lines from the runs, every run re-detected
         against them by :func:`bwim.detect.detect_from_strain` with the truck's spacings)
         after the first estimate (:func:`bwim.detect.detect_known_truck`, line unknown).
-        Measured on a simulated day: 0 passes, speed error up to 10 % in ~3 s; 2 passes,
-        up to 3.4 % in ~100 s (6 runs).
+        More passes cost one strain-only detection per run each and reduce the speed
+        error (measured by ``tests/validation/test_site_strain_only.py``).
 
     Returns
     -------

@@ -1,5 +1,5 @@
 """Influence surfaces by reciprocity equal direct solves; sensitivities equal finite
-differences (THEORY §1.5)."""
+differences (docs/theory.md §1.5)."""
 
 import numpy as np
 import pytest

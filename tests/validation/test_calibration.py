@@ -47,10 +47,10 @@ def test_slab_5_1_ce_then_mfi(slab_case):
     assert static.name.startswith("stiffness") and static.nfev >= 100
     assert cal.nfev == sum(s.nfev for s in cal.stages)
     assert not cal.identifiability.unseen and cal.identifiability.condition < 1e3
-    # MFI with the calibrated model weighs like the exact model (PAPER_CASES §5.1)
+    # MFI with the calibrated model weighs like the exact model (docs/paper_cases.md §5.1)
     ident = bwim.identify_forces(cal.bridge, rec)
     e = bwim.force_errors(ident, rec.truth)
-    # (PAPER_CASES' targets: weights within 2 %, RMS within 5 %; measured −0.86 / −0.14 %
+    # (docs/paper_cases.md's targets: weights within 2 %, RMS within 5 %; measured −0.86 / −0.14 %
     # and 0.69 / 0.69 %, the MFI's own error with the exact model)
     assert np.all(np.abs(e.weight_error) < 0.015) and np.all(e.rms_error < 0.012)
 
@@ -107,7 +107,7 @@ def test_vransko_5_4_lm():
     cal = calibrate(start, [rec], truck, road=road, approach=APPROACH, method="lm",
                     unknowns=("E_x", "E_y", "mu", "E_girder", "mu_girder"), n_modes=20)
     err = _errors(cal.params, bridge.params)
-    # PAPER_CASES §5.4: all five within 1.5 %; measured ≤ 0.4 % (the slab/girder mass split)
+    # docs/paper_cases.md §5.4: all five within 1.5 %; measured ≤ 0.4 % (the slab/girder mass split)
     assert max(err.values()) < 0.015
     assert cal.stages[-1].x.size == 5  # one shared E and mu for the five girders
 

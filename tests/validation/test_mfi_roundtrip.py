@@ -8,7 +8,7 @@ gauge noise: one absolute σ for every strain channel, 5 % of the record's peak 
 The algebra (dynamic programming = batch Tikhonov) is checked on same-model data in
 ``tests/unit/test_mfi.py``; nothing here is.
 
-Targets (issue 4, PAPER_CASES §5.1): static axle weights within 2 %, force RMS error within
+Targets (issue 4, docs/paper_cases.md §5.1): static axle weights within 2 %, force RMS error within
 5 % of the static axle load over the central 80 % of each axle's time on the deck.
 The numbers in the comments were measured on noise seeds 7, 8 and 9.
 """

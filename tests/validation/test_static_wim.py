@@ -8,7 +8,7 @@ References
   influence line when the records are static, and averages the dynamics of several
   crossings otherwise.
 * The reference line is the FE model's static influence line (influence surfaces by
-  reciprocity, THEORY §1.5), checked against direct static solutions in
+  reciprocity, docs/theory.md §1.5), checked against direct static solutions in
   tests/unit/test_wim.py.
 * Moses (1979), ASCE J. Transp. Eng. 105(3): static least squares for the axle weights.
 

@@ -23,7 +23,7 @@ Contract
   readings with the layout's unit-load response is taken; the best trials are refined
   as above.
 * ``vibration=True``: the bridge's own vibration is the largest misfit of a static model
-  (a 10 Hz slab at 20 m/s: ~7 % of the signal).  The dominant frequency of the first
+  (at the bridge's first frequency, phase-locked to the axles).  The dominant frequency of the first
   fit's residual (2 Hz … min(60, rate/4) Hz, a clear spectral peak) is projected out —
   sine and cosine times hat functions every 0.25 s, a slowly varying amplitude — and the
   search repeated.
@@ -34,12 +34,9 @@ Contract
   residual of 25 % (a poor or wrong line, heavy dynamics) gives 0.  Every vehicle carries
   the flag ``strain_only``.
 * Accuracy is limited by the bridge's dynamics (a static model) more than by the line's
-  shape.  Measured on a simulated 9 m slab (tests/validation/test_vehicle_detection.py),
-  calibration truck at 15–25 m/s: with known spacings speed within 0.4–2.2 %, arrival
-  within 11 ms; free search speed within 5 % (median 0.8 %), 5 axles found in 9 of 10
-  events (the 1.3 m tridem merged once).  The detectors do 0.1 % and resolve every
-  axle.  Time: 0.15–0.25 s per 1.5 s event (free), ~0.5 s (known spacings), against
-  ~1 ms with detectors.
+  shape, and is below that of two axle detectors; speed, arrival and axle count are
+  measured by ``benchmarks/bench_detect.py`` and bounded by
+  ``tests/validation/test_vehicle_detection.py``.
 """
 
 from __future__ import annotations

@@ -1,8 +1,9 @@
 """Static Bridge WIM: influence-line calibration (matrix method) and Moses' algorithm.
 
-The baseline every commercial B-WIM system uses (THEORY §5): calibrate the influence line
-of a channel (usually the summed longitudinal gauges of mid-span) from crossings of a
-truck of known weight, then weigh any vehicle by least squares against it.
+The baseline every commercial B-WIM system uses (docs/theory.md §5; many runs and
+weighing: §14–15): calibrate the influence line of a channel (usually the summed
+longitudinal gauges of mid-span) from crossings of a truck of known weight, then weigh
+any vehicle by least squares against it.
 
     il = calibrate_influence_line([cal_rec], truck)      # OBrien et al. (2006)
     static = weigh_static(rec, influence=il)             # Moses (1979)

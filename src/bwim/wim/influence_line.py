@@ -16,7 +16,7 @@ Contract
   second-difference (Tikhonov) penalty.  It is linear: exact data from a piecewise-linear
   line on the same grid give that line back.
 * :func:`model_influence_line` is the FE model's static influence line for the same
-  channels, lane and track width, from the influence surfaces (THEORY §1.5): a unit axle is
+  channels, lane and track width, from the influence surfaces (docs/theory.md §1.5): a unit axle is
   half a newton at each wheel, ``y = lane ∓ track_width / 2`` (one newton on the lane
   centre line for ``track_width=None`` and on 1-D bridges).
 
@@ -475,7 +475,7 @@ def model_influence_line(
     spacing: float = 0.02,
     like: InfluenceLine | None = None,
 ) -> InfluenceLine:
-    """The FE model's static influence line of a unit axle load (THEORY §1.5).
+    """The FE model's static influence line of a unit axle load (docs/theory.md §1.5).
 
     Parameters
     ----------

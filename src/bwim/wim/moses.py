@@ -33,8 +33,8 @@ __all__ = ["DEFAULT_MAX_RESIDUAL", "AxleGroups", "StaticWeights", "group_axles",
            "weigh_static"]
 
 #: Relative residual of Moses' fit above which a weighing is ``residual_high``.  A
-#: vehicle crossing a calibrated line leaves a few per cent to about 15 % (noise, the
-#: bridge's vibration, axle hop; see the simulated crossings of
+#: vehicle crossing a calibrated line leaves well below this (noise, the bridge's
+#: vibration, axle hop; see the simulated crossings of
 #: ``tests/validation/test_static_wim.py``); a wrong time axis, swapped channels or a
 #: second vehicle leave far more.
 DEFAULT_MAX_RESIDUAL = 0.3

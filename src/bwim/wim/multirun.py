@@ -123,11 +123,8 @@ class ScaleTrend:
         ``CV_BANDWIDTHS`` × the median spacing of the runs' times that predicts each
         run's factor best from the others (leave-one-out cross-validation): little
         smoothing when the factors scatter little about a smooth drift, more when the
-        truck's own dynamics scatter them (measured on the simulated installation of
-        ``benchmarks/bench_multirun.py``, three days: error of the trend against the
-        true drift 0.46 % RMS on a flat road, 0.95 % on a class A road where the runs'
-        factors scatter by 2.4 %; a fixed bandwidth of one spacing gives 0.34 % and
-        1.22 %, of three spacings 0.52 % and 0.91 %).
+        truck's own dynamics scatter them (the bandwidth rules are compared by
+        ``benchmarks/bench_multirun.py``, the trend's error against the true drift).
         """
         t = np.array(time, dtype=float, ndmin=1)
         f = np.array(factor, dtype=float, ndmin=1)
@@ -416,9 +413,8 @@ class MultiRunCalibration:
         (its amplitude to √weight).  For ``ρ = weight / truck_weight``,
         ``C(ρ) = N + ρ (C − N)`` for ``ρ ≤ 1`` (a positive combination of ``C`` and
         ``N``) and ``ρ C`` above; ``weight=None`` gives ``C``, the calibration's
-        ``channel_covariance``.  (Measured on the simulated installation of
-        ``benchmarks/bench_multirun.py``: with ``ρ²`` the misfits of 13 t trucks are
-        1.8 times a 40 t truck's; with ``ρ`` they are alike.)
+        ``channel_covariance``.  (``benchmarks/bench_multirun.py`` compares ρ with ρ² by
+        the misfits of light and heavy trucks.)
         """
         C = self.channel_covariance
         if weight is None:
@@ -742,10 +738,8 @@ def calibrate_lines(
         outward to where it falls below ``signal_threshold`` × the peak and on to the
         next local minimum — where the line has returned to zero; beyond it a first
         pass carries the bridge's free vibration, phase-locked to the axles — or to
-        0.1 % of the peak, plus 2 spacings; the lines are refitted there.  (On the
-        simulated 9 m slab of ``benchmarks/bench_multirun.py``, true support
-        −1.5 … 7.5 m, this gives −1.32 … 7.58 m on a flat road and −1.37 … 7.78 m on a
-        class A road; the first-pass line left out is below 1 % of its peak.)
+        0.1 % of the peak, plus 2 spacings; the lines are refitted there.  (Checked
+        against the true support by ``benchmarks/bench_multirun.py``.)
     outlier : OutlierRule or None
         How runs are rejected; None keeps every run not flagged upstream (and then no
         factor test is made).

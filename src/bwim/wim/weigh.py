@@ -42,17 +42,11 @@ covariance of a new vehicle's dynamics differs from the calibration truck's);
 gauges across a section reads the section's total moment, which hardly depends on where
 the vehicle is across the deck, whereas each gauge's line does.  So ``combine="auto"``
 (the default) uses "gls" for vehicles inside the calibration runs' lateral range and the
-sum outside it (a vehicle in a lane the truck never drove: measured on the simulated
-test day of :mod:`bwim.synthetic`, lane-2 trucks weighed −14 % with "gls" from lane-1
-lines, −1.5 % with the sum).  The errors are in fact
-correlated in time (dynamics), so "best" holds for the model, not exactly.  Measured on
-the simulated installation of ``benchmarks/bench_multirun.py`` (3 calibration days × 40
-trucks, class A road, scale trend on): GVW RMS error 2.92 % with "gls", 2.99 % with
-"sum", 3.27 % with "blue" (the full covariance of one truck's dynamics does not carry
-over to other vehicles); with the lateral model "blue" is best (3.12 %) but the lateral
-model itself costs more than it gains at ±0.3 m wander.  On a smooth road, per-gauge
-lines without the lateral model lose to the sum (0.85 % vs 0.67 %) and win with it
-(0.61 %).  Most of the error is the vehicles' own dynamics, common to all gauges.
+sum outside it (a lane the truck never drove).  The errors are in fact correlated in
+time (dynamics), so "best" holds for the model, not exactly; the combinations, with and
+without the lateral model, are compared by ``benchmarks/bench_multirun.py``
+(docs/theory.md §15).  Most of the error is the vehicles' own dynamics, common to all
+gauges.
 
 Baseline offsets
 ----------------
