@@ -431,11 +431,13 @@ def corrected_chain(data=None):
                      weights="noise", seed=0, mesh_correction=1)
 
 
-def smooth_road_records(iso_class: str = "A", sigma: float | None = None):
+def smooth_road_records(iso_class: str = "A", sigma: float | None = None,
+                        data_mesh: tuple[int, int] = (24, 16)):
     """The six weighed vehicles of :data:`WEIGHED` on ISO ``iso_class`` roads (a WIM-grade
-    approach: COST 323 asks for a smooth one) with the same seeds, 24x16 data and the same
-    gauge noise as the target's (``sigma``, default :func:`weighing_data`'s)."""
-    truth = paper.slab_bridge(nx=24, ny=16)
+    approach: COST 323 asks for a smooth one) with the same seeds, data from the
+    ``data_mesh`` slab and the same gauge noise as the target's (``sigma``, default
+    :func:`weighing_data`'s)."""
+    truth = paper.slab_bridge(nx=data_mesh[0], ny=data_mesh[1])
     sigma = weighing_data()[4] if sigma is None else sigma
     recs = []
     for k, (_, make, v, lane, rs) in enumerate(WEIGHED):

