@@ -250,6 +250,40 @@ def weigh(
     -------
     Weighing
     """
+    event = _inputs(record, passage, calibration, groups=groups, combine=combine,
+                    lateral=lateral, baseline=baseline, limits=limits)
+    design = _design(record, event, calibration, scale_correction)
+    centred = _centred(design, event)
+    fit = _fit(design, centred, event, calibration)
+    flags = _flags(event, design, centred, fit, calibration)
+    return Weighing(
+        axle_weights=fit.axle_weights, group_weights=fit.group_weights,
+        groups=event.groups.groups, gvw=float(fit.axle_weights.sum()), residual=fit.residual,
+        misfit=fit.misfit, condition=fit.condition, scale_factor=design.scale, flags=flags,
+        quality=quality_of(flags), passage=event.passage, lateral=event.lateral,
+        clock_time=design.clock_time, combine=event.combine, baseline=event.baseline,
+        offsets=fit.offsets, channels=calibration.line.channels,
+        time=record.time[design.on], measured=fit.measured[design.on],
+        fitted=fit.fitted[design.on],
+    )
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class _Inputs:
+    """The checked options of one weighing."""
+
+    passage: Passage
+    lateral: float  # the vehicle's lateral covariate
+    lateral_ok: bool  # within the calibrated range (widened by the tolerance)
+    combine: str  # "auto" resolved
+    baseline: str
+    groups: AxleGroups
+    limits: Limits
+
+
+def _inputs(record, passage, calibration, *, groups, combine, lateral, baseline,
+            limits) -> _Inputs:
+    """The inputs checked (one-line InputErrors) and the options resolved."""
     require_instance("record", record, Record)
     if not isinstance(calibration, MultiRunCalibration):
         raise InputError(f"calibration must be a MultiRunCalibration, got "
@@ -272,64 +306,113 @@ def weigh(
     lateral_ok = y_lo - limits.lateral_tolerance <= y <= y_hi + limits.lateral_tolerance
     if combine == "auto":
         combine = "gls" if lateral_ok else "sum"
-    axle_groups = _groups(groups, passage)
-    groups_t, share = axle_groups.groups, axle_groups.share
-    flags: list[str] = []
+    return _Inputs(passage=passage, lateral=y, lateral_ok=lateral_ok, combine=combine,
+                   baseline=baseline, groups=_groups(groups, passage), limits=limits)
 
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class _Design:
+    """The readings and the lines' readings of a unit weight on each axle group."""
+
+    readings: np.ndarray  # (n_t, n_c)
+    positions: np.ndarray  # (n_t, n_axles) axle positions, m
+    groups: np.ndarray  # (n_t, n_groups, n_c) static readings of a unit group weight
+    on: np.ndarray  # (n_t,) an axle on the lines' support
+    support: tuple[float, float]  # the lines' support, m
+    clock_time: float  # record.clock_seconds(), s
+    scale: float  # the scale trend's factor at clock_time (1 without correction)
+
+
+def _design(record: Record, event: _Inputs, calibration: MultiRunCalibration,
+            scale_correction: bool) -> _Design:
+    """The model of the readings: the lines at the vehicle's lateral covariate under each
+    axle, summed by group, and the day's scale factor."""
     line = calibration.line
     E = read_channels(record, line.channels)  # (n_t, n_c)
     n_t, n_c = E.shape
-    ords = calibration.ordinates_at(y)[1:-1]  # interior ordinates (m, n_c)
-    pos = passage.axle_x(record.time)  # (n_t, n_axles)
+    ords = calibration.ordinates_at(event.lateral)[1:-1]  # interior ordinates (m, n_c)
+    pos = event.passage.axle_x(record.time)  # (n_t, n_axles)
     n_ax = pos.shape[1]
     H = hat_design(pos.reshape(-1, 1), np.ones(1), line.x[0], line.spacing, line.x.size - 1)
     M = np.asarray(H @ ords).reshape(n_t, n_ax, n_c)
-    Mg = np.einsum("kic,ig->kgc", M, share)  # (n_t, n_groups, n_c)
-    n_g = share.shape[1]
-
+    Mg = np.einsum("kic,ig->kgc", M, event.groups.share)  # (n_t, n_groups, n_c)
     t0 = record.clock_seconds()
     trend = calibration.scale_trend
     s = float(trend(t0)) if (scale_correction and trend is not None) else 1.0
     lo, hi = line.support
     on = ((pos > lo) & (pos < hi)).any(axis=1)
-    if pos[0, 0] > lo:
-        flags.append("truncated_start")
-    if pos[-1, -1] < hi:
-        flags.append("truncated_end")
+    return _Design(readings=E, positions=pos, groups=Mg, on=on, support=(lo, hi),
+                   clock_time=t0, scale=s)
 
-    # offsets
-    if baseline == "fit":
-        if np.count_nonzero(~on) < limits.min_baseline:
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class _Centred:
+    """The readings and the design with the channels' offsets removed."""
+
+    readings: np.ndarray  # (n_t, n_c)
+    groups: np.ndarray  # (n_t, n_groups, n_c)
+    offsets: np.ndarray | None  # the offsets removed (None: fitted, baseline="fit")
+    flags: tuple[str, ...]  # "no_baseline" when too few samples determine them
+
+
+def _centred(design: _Design, event: _Inputs) -> _Centred:
+    """The offsets removed as ``baseline`` says (module docstring)."""
+    E, Mg, limits = design.readings, design.groups, event.limits
+    flags = []
+    if event.baseline == "fit":
+        if np.count_nonzero(~design.on) < limits.min_baseline:
             flags.append("no_baseline")
-        Ec = E - E.mean(axis=0)
-        Mc = Mg - Mg.mean(axis=0)
+        return _Centred(readings=E - E.mean(axis=0), groups=Mg - Mg.mean(axis=0),
+                        offsets=None, flags=tuple(flags))
+    if event.baseline == "pretrigger":
+        pre = design.positions[:, 0] <= design.support[0]
+        n_pre = int(np.argmin(pre)) if not pre.all() else E.shape[0]
+        if n_pre < limits.min_baseline:
+            flags.append("no_baseline")
+        off = E[:n_pre].mean(axis=0) if n_pre else np.zeros(E.shape[1])
     else:
-        if baseline == "pretrigger":
-            pre = pos[:, 0] <= lo
-            n_pre = int(np.argmin(pre)) if not pre.all() else n_t
-            if n_pre < limits.min_baseline:
-                flags.append("no_baseline")
-            off = E[:n_pre].mean(axis=0) if n_pre else np.zeros(n_c)
-        else:
-            off = np.zeros(n_c)
-        Ec = E - off
-        Mc = Mg
+        off = np.zeros(E.shape[1])
+    return _Centred(readings=E - off, groups=Mg, offsets=off, flags=tuple(flags))
 
-    # combine and solve: the error covariance depends on the vehicle's weight, so a first
-    # solve with the plain sum gives the weight for the second
-    sol, rank, sv = _solve(Ec, Mc, s, None)
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class _Fit:
+    """The weights and how well they fit."""
+
+    group_weights: np.ndarray  # (n_groups,) N (nan: undetermined)
+    axle_weights: np.ndarray  # (n_axles,) N
+    undetermined: bool
+    condition: float
+    offsets: np.ndarray  # (n_c,)
+    measured: np.ndarray  # (n_t, n_c) offset-free readings
+    fitted: np.ndarray  # (n_t, n_c) fitted static readings
+    residual: float
+    misfit: float
+    misfit_ref: float  # the calibration runs' median misfit of the same kind
+
+
+def _fit(design: _Design, centred: _Centred, event: _Inputs,
+         calibration: MultiRunCalibration) -> _Fit:
+    """Least squares of the combined channels, then the residual and the misfit.
+
+    The error covariance depends on the vehicle's weight, so a first solve with the plain
+    sum gives the weight for the second.
+    """
+    s, share, combine = design.scale, event.groups.share, event.combine
+    n_g = share.shape[1]
+    sol, rank, sv = _solve(centred.readings, centred.groups, s, None)
     C = calibration.error_covariance(float(np.nansum(share @ sol)) if rank == n_g else None)
     if combine != "sum":
-        sol, rank, sv = _solve(Ec, Mc, s, _whitener(C, combine))
+        sol, rank, sv = _solve(centred.readings, centred.groups, s, _whitener(C, combine))
     condition = float(sv[0] / sv[-1]) if sv[-1] > 0 else float("inf")
     if rank < n_g:
-        flags.append("undetermined")
         sol = np.full(n_g, np.nan)
     group_w = sol
     axle_w = share @ group_w
 
-    fitted = s * np.einsum("kgc,g->kc", Mg, np.nan_to_num(group_w))
-    offsets = (E - fitted).mean(axis=0) if baseline == "fit" else off
+    E = design.readings
+    fitted = s * np.einsum("kgc,g->kc", design.groups, np.nan_to_num(group_w))
+    offsets = (E - fitted).mean(axis=0) if event.baseline == "fit" else centred.offsets
     meas = E - offsets
     den = float(np.linalg.norm(meas))
     resid = float(np.linalg.norm(meas - fitted)) / den if den > 0 else float("inf")
@@ -341,26 +424,32 @@ def weigh(
         sd = np.sqrt(np.clip(np.diag(C), np.finfo(float).tiny, None))
         misfit = float(np.sqrt(np.mean(((meas - fitted) / sd) ** 2)))
         misfit_ref = calibration.misfit_median
+    return _Fit(group_weights=group_w, axle_weights=axle_w, undetermined=rank < n_g,
+                condition=condition, offsets=offsets, measured=meas, fitted=fitted,
+                residual=resid, misfit=misfit, misfit_ref=misfit_ref)
 
-    # plausibility
-    flags += weight_flags(axle_w, group_w, limits)
-    gvw = float(axle_w.sum())
-    if not misfit <= limits.misfit * misfit_ref:
+
+def _flags(event: _Inputs, design: _Design, centred: _Centred, fit: _Fit,
+           calibration: MultiRunCalibration) -> tuple[str, ...]:
+    """The plausibility flags of the weighing, in the canonical order."""
+    limits, pos = event.limits, design.positions
+    lo, hi = design.support
+    flags: list[str] = []
+    if pos[0, 0] > lo:
+        flags.append("truncated_start")
+    if pos[-1, -1] < hi:
+        flags.append("truncated_end")
+    flags += centred.flags
+    if fit.undetermined:
+        flags.append("undetermined")
+    flags += weight_flags(fit.axle_weights, fit.group_weights, limits)
+    if not fit.misfit <= limits.misfit * fit.misfit_ref:
         flags.append("residual_high")
     t_lo, t_hi = calibration.time_span
-    if not t_lo <= t0 <= t_hi:
+    if not t_lo <= design.clock_time <= t_hi:
         flags.append("outside_calibration_time")
-    if not lateral_ok:
+    if not event.lateral_ok:
         flags.append("lateral_extrapolated")
-    if condition > limits.condition:
+    if fit.condition > limits.condition:
         flags.append("ill_conditioned")
-    flags_t = ordered_flags(flags)
-    quality = quality_of(flags_t)
-    return Weighing(
-        axle_weights=axle_w, group_weights=group_w, groups=groups_t, gvw=gvw,
-        residual=resid, misfit=misfit, condition=condition, scale_factor=s, flags=flags_t,
-        quality=quality,
-        passage=passage, lateral=y, clock_time=t0, combine=combine, baseline=baseline,
-        offsets=offsets, channels=line.channels, time=record.time[on], measured=meas[on],
-        fitted=fitted[on],
-    )
+    return ordered_flags(flags)
