@@ -43,11 +43,9 @@ import numpy as np
 from bwim.calibration.meshdefect import (
     AUTO_MAX_LEVELS,
     AUTO_TOL,
-    MAX_PASSES,
-    TOL,
+    DefectCorrection,
     MeshCorrection,
     check_levels,
-    corrector,
     mesh_defects,
     requested_levels,
 )
@@ -64,6 +62,7 @@ from bwim.calibration.stages import SUBSTRUCTURED_SMOOTHING, Method, StageResult
 from bwim.errors import InputError, parse_enum
 from bwim.fe.bridge import Bridge
 from bwim.fe.convergence import MeshConvergence, check_mesh
+from bwim.optimize import OptimizeResult
 from bwim.records import Record
 from bwim.road import RoadProfile
 from bwim.vehicles import Vehicle
@@ -86,8 +85,9 @@ class Refine(StrEnum):
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class Calibration:
-    """A calibrated bridge model.
+class Calibration(OptimizeResult):
+    """A calibrated bridge model, with the calibration's outcome in
+    :mod:`scipy.optimize`'s vocabulary.
 
     Attributes
     ----------
@@ -97,9 +97,26 @@ class Calibration:
         The calibrated parameter families.
     uncertainty : dict of str to ndarray
         Their uncertainty (see module docstring), same shapes.
-    stages : tuple of StageResult
+    x : ndarray
+        The calibrated parameter vector, SI units, in the order of ``labels``: the
+        families of ``unknowns`` in turn, one entry per zone or girder (one for a family
+        shared by identical girders: their common value).
+    labels : tuple of str
+        The entries of ``x``, ``"family[i]"``.
+    fun : float
+        The objective of the last stage at its answer (the summed squared misfit,
+        :attr:`StageResult.fun`): by default the joint refinement's dynamic misfit; with
+        the mesh correction, against the last pass's corrected readings.
     nfev : int
         Objective evaluations over all stages.
+    nit : int
+        Iterations over all stages (each stage's ``nit``).
+    success : bool
+        Every stage stopped normally and, with the mesh correction, its passes converged.
+    message : str
+        Why the calibration stopped: the first stage that did not succeed, the
+        correction that did not converge, or the last stage's message.
+    stages : tuple of StageResult
     wall_time : float
         Seconds.
     identifiability : Identifiability
@@ -120,8 +137,8 @@ class Calibration:
     bridge: Bridge
     params: dict
     uncertainty: dict
+    labels: tuple[str, ...]
     stages: tuple[StageResult, ...]
-    nfev: int
     wall_time: float
     identifiability: Identifiability
     two_stage: dict = field(default_factory=dict)
@@ -282,27 +299,49 @@ def calibrate(
     levels = _correction_levels(mesh_correction, start_bridge, records, vehicle, mesh_check)
     first = _run_plan(_plan(start_bridge, unknowns, method, refine, population, max_evals,
                             substructure), start_bridge, records, ctx)
-    current, stages, uncertainty = first.bridge, list(first.stages), first.uncertainty
-    correction = None
+    passes, correction = [first], None
     if levels:
-        passes = _correct_mesh(first, levels, unknowns, refine, max_evals, records, ctx)
-        current, uncertainty = passes.passes[-1].bridge, passes.passes[-1].uncertainty
-        stages += [s for p in passes.passes for s in p.stages]
-        correction = passes.result
-    two_stage = first.two_stage
+        mesh = _DynamicCorrection(levels, plan=_plan(first.bridge, unknowns, Method.LM, refine,
+                                                     None, max_evals, False),
+                                  unknowns=unknowns, records=records, ctx=ctx)
+        correction = mesh.solve(first)
+        passes += mesh.states
+    return _result(passes, correction, unknowns=unknowns, records=records, ctx=ctx,
+                   weighting=weighting, disc=disc, mesh_check=mesh_check, t0=t0)
+
+
+def _result(passes: list[_Pass], correction: MeshCorrection | None, *,
+            unknowns: tuple[str, ...], records: list[Record], ctx: _Context, weighting: str,
+            disc: MeshConvergence | None, mesh_check: float | None, t0: float) -> Calibration:
+    """The last pass's model and uncertainties, the first pass's two stages, every stage,
+    the identifiability and mesh check of the answer, and the outcome in scipy's terms."""
+    current, uncertainty = passes[-1].bridge, passes[-1].uncertainty
+    stages = tuple(s for p in passes for s in p.stages)
+    two_stage = passes[0].two_stage
     stiff = tuple(u for u in unknowns if u in Bridge.STIFFNESS_FAMILIES)
-    report = identifiability(current, records, vehicle, names=stiff or None)
+    report = identifiability(current, records, ctx.vehicle, names=stiff or None)
     params = {u: current.params[u] for u in unknowns}
     unc = {u: uncertainty.get(u, np.full(params[u].shape, np.nan)) for u in unknowns}
     two = {u: two_stage.get(u, params[u]) for u in unknowns}
     if mesh_check is not None:
         disc = check_mesh(current, records[0].sensors,
-                          _static_loads(records[0], vehicle, current), tol=mesh_check)
-    return Calibration(bridge=current, params=params, uncertainty=unc, stages=tuple(stages),
-                       nfev=sum(s.nfev for s in stages),
-                       wall_time=time.perf_counter() - t0, identifiability=report,
-                       two_stage=two, weighting=weighting, discretisation=disc,
-                       mesh_correction=correction)
+                          _static_loads(records[0], ctx.vehicle, current), tol=mesh_check)
+    space = ParameterSpace(current, unknowns, ctx.shared)
+    failed = [s for s in stages if not s.success]
+    if failed:
+        message = (f"{len(failed)} of {len(stages)} stages did not succeed; the first, "
+                   f"{failed[0].name}: {failed[0].message}")
+    elif correction is not None and not correction.converged:
+        message = correction.summary()
+    else:
+        message = f"every stage succeeded; the last, {stages[-1].name}: {stages[-1].message}"
+    return Calibration(bridge=current, params=params, uncertainty=unc, stages=stages,
+                       x=space.vector(), labels=tuple(space.labels()), fun=stages[-1].fun,
+                       nfev=sum(s.nfev for s in stages), nit=sum(s.nit for s in stages),
+                       success=not failed and (correction is None or correction.converged),
+                       message=message, wall_time=time.perf_counter() - t0,
+                       identifiability=report, two_stage=two, weighting=weighting,
+                       discretisation=disc, mesh_correction=correction)
 
 
 def _weights(weights, records: list[Record], bridge: Bridge, vehicle: Vehicle,
@@ -538,37 +577,33 @@ def _correction_levels(mesh_correction, bridge: Bridge, records: list[Record],
     return requested_levels(mesh_correction)
 
 
-@dataclass(frozen=True, kw_only=True, eq=False)
-class _Correction:
-    """The defect-correction passes (each a :class:`_Pass`) and their report."""
+class _DynamicCorrection(DefectCorrection):
+    """:func:`calibrate`'s defect correction (meshdefect module docstring): the crossings
+    re-simulated on the model and on its corrector; each pass runs ``plan`` (least
+    squares) on the measured readings less the defect.  A state is a :class:`_Pass`."""
 
-    passes: tuple[_Pass, ...]
-    result: MeshCorrection
+    def __init__(self, levels: int, *, plan: list[_Stage], unknowns: tuple[str, ...],
+                 records: list[Record], ctx: _Context) -> None:
+        super().__init__(levels)
+        self.plan, self.unknowns, self.records, self.ctx = plan, unknowns, records, ctx
+        self.peak = max(float(np.abs(r.data).max()) for r in records)
+        self.corrected = records
 
+    def model(self, state: _Pass) -> Bridge:
+        return state.bridge
 
-def _correct_mesh(first: _Pass, levels: int, unknowns: tuple[str, ...], refine: Refine,
-                  max_evals, records: list[Record], ctx: _Context) -> _Correction:
-    """Defect-correction passes from ``first`` (meshdefect module docstring)."""
-    plan = _plan(first.bridge, unknowns, Method.LM, refine, None, max_evals, False)
-    peak = max(float(np.abs(r.data).max()) for r in records)
-    current, passes, changes, defects = first, [], [], []
-    for k in range(1, MAX_PASSES + 1):
-        fine = corrector(current.bridge, levels)
-        d = mesh_defects(current.bridge, records, ctx.vehicle, ctx.road, fine=fine,
+    def correct(self, state: _Pass, coarse: Bridge, fine: Bridge) -> float:
+        ctx = self.ctx
+        d = mesh_defects(coarse, self.records, ctx.vehicle, ctx.road, fine=fine,
                          approach=ctx.approach, n_modes=ctx.n_modes)
-        corrected = [replace(r, data=r.data - dk)
-                     for r, dk in zip(records, d, strict=True)]
-        new = _run_plan(plan, current.bridge, corrected, ctx, suffix=f", mesh pass {k}")
-        changes.append(max(float(np.abs(new.bridge.params[u] / current.bridge.params[u]
-                                        - 1).max()) for u in unknowns))
-        defects.append(max(float(np.abs(dk).max()) for dk in d) / peak)
-        passes.append(new)
-        current = new
-        if changes[-1] < TOL:
-            break
-    g = fine.model.grid
-    result = MeshCorrection(levels=levels, mesh=(g.nx, g.ny if fine.is_plate else 0),
-                            change=np.array(changes), defect=np.array(defects),
-                            converged=changes[-1] < TOL, tol=TOL,
-                            bridge=fine.with_params(**current.bridge.params))
-    return _Correction(passes=tuple(passes), result=result)
+        self.corrected = [replace(r, data=r.data - dk)
+                          for r, dk in zip(self.records, d, strict=True)]
+        return max(float(np.abs(dk).max()) for dk in d) / self.peak
+
+    def refit(self, state: _Pass, k: int) -> _Pass:
+        return _run_plan(self.plan, state.bridge, self.corrected, self.ctx,
+                         suffix=f", mesh pass {k}")
+
+    def change(self, old: _Pass, new: _Pass) -> float:
+        return max(float(np.abs(new.bridge.params[u] / old.bridge.params[u] - 1).max())
+                   for u in self.unknowns)

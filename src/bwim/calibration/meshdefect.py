@@ -20,13 +20,23 @@ removes that bias at the price of a few simulations of a finer model:
   to ``(J_h − J_f)ᵀ r`` — exact when the finer model fits the data, and second order (mesh
   error of the sensitivities times the residual) otherwise.
 
+The passes are an iterative solver with a visible shape, :class:`DefectCorrection`:
+``setup`` from a calibration, ``step`` = one pass (returns the largest relative parameter
+change), ``run`` until a pass changes no parameter by :data:`TOL` or :data:`MAX_PASSES`
+passes are done, ``finalize`` = the :class:`MeshCorrection` report.  A calibration method
+says what its state is, how the defect enters its data and how it refits
+(:func:`~bwim.calibrate`'s dynamic re-simulation, :func:`~bwim.calibration.
+calibrate_quasistatic`'s static filtered prediction).
+
 Readings are in the records' units (strain or m); parameter changes are relative.
 """
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -38,8 +48,8 @@ from bwim.records import Record
 from bwim.road import RoadProfile
 from bwim.vehicles import Vehicle
 
-__all__ = ["AUTO_MAX_LEVELS", "AUTO_TOL", "MAX_LEVELS", "MAX_PASSES", "TOL", "MeshCorrection",
-           "check_levels", "corrector", "mesh_defects", "requested_levels"]
+__all__ = ["AUTO_MAX_LEVELS", "AUTO_TOL", "MAX_LEVELS", "MAX_PASSES", "TOL", "DefectCorrection",
+           "MeshCorrection", "check_levels", "corrector", "mesh_defects", "requested_levels"]
 
 #: Most bisections of the corrector model (each multiplies a plate's DOF by about 4).
 MAX_LEVELS = 3
@@ -145,3 +155,98 @@ def mesh_defects(bridge: Bridge, records: Sequence[Record], vehicle: Vehicle,
         out = ([sign * p for p in pred] if out is None
                else [o + sign * p for o, p in zip(out, pred, strict=True)])
     return out
+
+
+class DefectCorrection(ABC):
+    """Defect-correction passes (module docstring) in the shape of an iterative solver:
+    ``setup``, ``step``, ``run``, ``finalize``.
+
+        correction = SomeCorrection(levels, ...)       # a subclass: the four hooks below
+        report = correction.solve(first)               # setup, run, finalize
+        last = correction.state                        # the last pass's calibration
+
+    A subclass defines what a calibration *state* is through four hooks:
+    :meth:`model` (the calibrated model at a state), :meth:`correct` (the data less the
+    defect at a state), :meth:`refit` (the calibration of the corrected data from a
+    state) and :meth:`change` (the largest relative parameter change between two states).
+
+    Attributes
+    ----------
+    state : object
+        The current calibration (after the last pass); this and the following attributes
+        are set by ``setup``.
+    states : list
+        Each pass's calibration, in order.
+    changes, defects : list of float
+        Each pass's largest relative parameter change and largest |defect| relative to
+        the peak |reading|.
+    fine : Bridge or None
+        The last pass's corrector model (``levels`` bisections of the model it started
+        from).
+    """
+
+    def __init__(self, levels: int, *, tol: float = TOL, max_passes: int = MAX_PASSES) -> None:
+        self.levels = check_levels(levels)
+        self.tol = float(tol)
+        self.max_passes = int(max_passes)
+
+    @abstractmethod
+    def model(self, state: Any) -> Bridge:
+        """The calibrated (coarse) model at ``state``."""
+
+    @abstractmethod
+    def correct(self, state: Any, coarse: Bridge, fine: Bridge) -> float:
+        """Take the defect ``fine − coarse`` at ``state`` off the data the next
+        :meth:`refit` uses; return its largest |value| relative to the peak |reading|."""
+
+    @abstractmethod
+    def refit(self, state: Any, k: int) -> Any:
+        """The calibration of the corrected data from ``state`` (pass ``k``, from 1)."""
+
+    @abstractmethod
+    def change(self, old: Any, new: Any) -> float:
+        """The largest relative change of a calibrated parameter from ``old`` to ``new``."""
+
+    def setup(self, start: Any) -> None:
+        """Start from the uncorrected calibration ``start``."""
+        self.state = start
+        self.states: list = []
+        self.changes: list[float] = []
+        self.defects: list[float] = []
+        self.fine: Bridge | None = None
+
+    def step(self) -> float:
+        """One pass: the defect at the current state, the refit; its parameter change."""
+        coarse = self.model(self.state)
+        self.fine = corrector(coarse, self.levels)
+        self.defects.append(self.correct(self.state, coarse, self.fine))
+        new = self.refit(self.state, len(self.states) + 1)
+        self.changes.append(self.change(self.state, new))
+        self.states.append(new)
+        self.state = new
+        return self.changes[-1]
+
+    @property
+    def converged(self) -> bool:
+        """The last pass changed no parameter by ``tol`` or more."""
+        return bool(self.changes) and self.changes[-1] < self.tol
+
+    def run(self) -> None:
+        """Pass until converged or ``max_passes`` passes are done."""
+        while not self.converged and len(self.states) < self.max_passes:
+            self.step()
+
+    def finalize(self) -> MeshCorrection:
+        """The report, with the corrector model at the corrected parameters."""
+        fine = self.fine
+        g = fine.model.grid
+        return MeshCorrection(levels=self.levels, mesh=(g.nx, g.ny if fine.is_plate else 0),
+                              change=np.array(self.changes), defect=np.array(self.defects),
+                              converged=self.converged, tol=self.tol,
+                              bridge=fine.with_params(**self.model(self.state).params))
+
+    def solve(self, start: Any) -> MeshCorrection:
+        """``setup``, ``run``, ``finalize``."""
+        self.setup(start)
+        self.run()
+        return self.finalize()

@@ -77,10 +77,8 @@ import scipy.optimize as so
 from numpy.polynomial import legendre
 
 from bwim.calibration.meshdefect import (
-    MAX_PASSES,
-    TOL,
+    DefectCorrection,
     MeshCorrection,
-    corrector,
     requested_levels,
 )
 from bwim.calibration.problem import ParameterSpace, estimate_noise
@@ -312,6 +310,36 @@ def calibrate_quasistatic(
     mesh_correction : int
         Bisections of the corrector model (0: none; see the module contract).
     """
+    checked = _check_inputs(start_bridge, records, vehicle, unknowns=unknowns,
+                            n_basis=n_basis, weights=weights, mesh_correction=mesh_correction)
+    problem = _RoadFree(start_bridge, checked, cutoff=cutoff, n_basis=int(n_basis),
+                        per_wheel=per_wheel, filter_order=filter_order, weights=weights,
+                        mass=mass, n_free_modes=n_free_modes,
+                        min_free_periods=min_free_periods, inertia_modes=int(inertia_modes),
+                        n_rounds=n_rounds)
+    states, correction = [problem.fit(np.zeros(problem.theta0.size), start_bridge)], None
+    if checked.levels:
+        mesh = _StaticCorrection(checked.levels, problem=problem)
+        correction = mesh.solve(states[0])
+        states += mesh.states
+    return _result(problem, states, correction)
+
+
+# --- step 1: the inputs -------------------------------------------------------------------
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class _Checked:
+    """The checked inputs of :func:`calibrate_quasistatic`."""
+
+    records: list[Record]
+    names: tuple[str, ...]  # the stiffness families fitted
+    levels: int  # bisections of the corrector model (0: no mesh correction)
+    static_wheels: np.ndarray  # the vehicle's static wheel loads, N
+
+
+def _check_inputs(start_bridge, records, vehicle, *, unknowns, n_basis, weights,
+                  mesh_correction) -> _Checked:
+    """The inputs checked (one-line InputErrors)."""
     if not isinstance(start_bridge, Bridge):
         raise InputError(f"start_bridge must be a Bridge, got {type(start_bridge).__name__}")
     records = list(records) if isinstance(records, (list, tuple)) else [records]
@@ -332,11 +360,20 @@ def calibrate_quasistatic(
         n for n in _STIFFNESS if n in start_bridge.params)
     if any(n not in _STIFFNESS for n in names):
         raise InputError(f"unknowns must be stiffness families {_STIFFNESS}, got {names}")
-    space = ParameterSpace(start_bridge, names)
-    f1 = float(start_bridge.modes(1).frequencies[0])
-    fc = DEFAULT_CUTOFF_FRACTION * f1 if cutoff is None else float(cutoff)
-    fs = records[0].sampling_rate
-    sos = _lowpass(fc, fs, filter_order)
+    return _Checked(records=records, names=names, levels=levels, static_wheels=static_wheels)
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class _Weights:
+    """Channel weights per record and the unit of the residuals."""
+
+    channels: list[np.ndarray]  # per record (n_s,), mean 1 over the channels' 1/σ²
+    scale: float  # squared residual unit: the raw noise's variance
+
+
+def _channel_weights(records: list[Record], weights: str | None) -> _Weights:
+    """``1/σ̂²`` per channel from each record's noise (or 1), and the noise variance the
+    residuals are divided by (so the optimiser's tolerances are meaningful)."""
     sig = estimate_noise(records)
     if weights == "noise":
         top = max(float(s.max()) for s in sig)
@@ -348,19 +385,58 @@ def calibrate_quasistatic(
     # residuals in units of the raw noise σ (so the optimiser's tolerances are meaningful)
     sig2 = 1.0 / np.mean(np.concatenate([1 / np.maximum(s, 1e-30) ** 2 for s in sig]))
     scale = sig2 if weights == "noise" else float(np.mean(np.concatenate(sig) ** 2))
-    parts = [_Record(r, static_wheels, int(n_basis), per_wheel, sos, start_bridge.length,
-                     wk / scale) for r, wk in zip(records, w, strict=True)]
-    theta0 = space.vector()
-    base = start_bridge
-    n_inertia = int(inertia_modes)
+    return _Weights(channels=w, scale=scale)
 
-    defects = [0.0] * len(parts)  # filtered and weighted, per record (mesh correction)
 
-    def solve(z, base):
-        bridge = space.bridge(theta0 * np.exp(z), base)
+# --- step 2: the road-free fit ------------------------------------------------------------
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class _Projection:
+    """The projected residual at a trial stiffness and the force nuisance behind it."""
+
+    residual: np.ndarray  # all records, filtered, weighted
+    coefs: list[np.ndarray]  # per record, the Legendre coefficients c
+
+
+class _RoadFree:
+    """The road-free problem (module docstring): the stiffness by variable projection of
+    the filtered strains, alternated with the mass from the free vibration.
+
+    ``defects`` (filtered and weighted, per record) are taken off the measurements; the
+    mesh correction sets them (zero otherwise).
+    """
+
+    def __init__(self, start: Bridge, checked: _Checked, *, cutoff, n_basis, per_wheel,
+                 filter_order, weights, mass, n_free_modes, min_free_periods,
+                 inertia_modes, n_rounds) -> None:
+        records = checked.records
+        self.names = checked.names
+        self.space = ParameterSpace(start, checked.names)
+        f1 = float(start.modes(1).frequencies[0])
+        self.cutoff = DEFAULT_CUTOFF_FRACTION * f1 if cutoff is None else float(cutoff)
+        sos = _lowpass(self.cutoff, records[0].sampling_rate, filter_order)
+        self.weights = _channel_weights(records, weights)
+        self.parts = [_Record(r, checked.static_wheels, n_basis, per_wheel, sos, start.length,
+                              wk / self.weights.scale)
+                      for r, wk in zip(records, self.weights.channels, strict=True)]
+        self.records = records
+        self.theta0 = self.space.vector()
+        self.n_inertia = inertia_modes
+        self.mass = mass
+        self.n_free_modes, self.min_free_periods = n_free_modes, min_free_periods
+        self.rounds = max(1, int(n_rounds)) if (mass and inertia_modes) else 1
+        self.defects = [0.0] * len(self.parts)
+
+    def bridge(self, z: np.ndarray, base: Bridge) -> Bridge:
+        """The model at log-stiffness ``z`` (relative to the start), mass from ``base``."""
+        return self.space.bridge(self.theta0 * np.exp(z), base)
+
+    def project(self, z: np.ndarray, base: Bridge) -> _Projection:
+        """The filtered residual with the force nuisance c(θ) projected out."""
+        bridge = self.bridge(z, base)
         res, coefs = [], []
-        for part, defect in zip(parts, defects, strict=True):
-            b, A = part.design(bridge, n_inertia)
+        for part, defect in zip(self.parts, self.defects, strict=True):
+            b, A = part.design(bridge, self.n_inertia)
             r = part.data.ravel() - defect - b
             if A.shape[1]:
                 c = np.linalg.lstsq(A, r, rcond=None)[0]
@@ -369,66 +445,100 @@ def calibrate_quasistatic(
                 c = np.zeros(0)
             res.append(r)
             coefs.append(c)
-        return np.concatenate(res), coefs
+        return _Projection(residual=np.concatenate(res), coefs=coefs)
 
-    def fit(z, base, rounds):
+    def fit(self, z: np.ndarray, base: Bridge) -> _Fit:
         """Alternate: stiffness (mass fixed) then mass (stiffness fixed); the inertia
         correction is what couples them, weakly."""
         nfev = nit = 0
         mfit = None
-        for _ in range(rounds):
+        for _ in range(self.rounds):
             try:
-                opt = so.least_squares(lambda z, base=base: solve(z, base)[0], z,
+                opt = so.least_squares(lambda z, base=base: self.project(z, base).residual, z,
                                        method="trf", diff_step=1e-4,
                                        bounds=(np.log(0.2), np.log(5.0)))
             except np.linalg.LinAlgError:
                 raise NumericalError("trial stiffness is not positive definite") from None
             z, nfev, nit = opt.x, nfev + int(opt.nfev), nit + int(opt.njev or 0)
-            bridge = space.bridge(theta0 * np.exp(z), base)
-            if mass:
-                mfit = fit_mass(bridge, records, n_modes=n_free_modes,
-                                min_periods=min_free_periods, weights=w)
+            bridge = self.bridge(z, base)
+            if self.mass:
+                mfit = fit_mass(bridge, self.records, n_modes=self.n_free_modes,
+                                min_periods=self.min_free_periods,
+                                weights=self.weights.channels)
                 if not mfit.success:
                     break
                 base = bridge.with_params(**{n: bridge.params[n] * mfit.x
                                              for n in _MASS if n in bridge.params})
         return _Fit(z=z, base=base, opt=opt, nfev=nfev, nit=nit, mass=mfit)
 
-    rounds = max(1, int(n_rounds)) if (mass and n_inertia) else 1
-    state = fit(np.zeros(theta0.size), base, rounds)
-    nfev, nit = state.nfev, state.nit
-    correction = None
-    if levels:
-        changes, sizes = [], []
-        peak = max(float(np.abs(part.data).max()) for part in parts)
-        for _ in range(MAX_PASSES):
-            coarse = space.bridge(theta0 * np.exp(state.z), state.base)
-            fine = corrector(coarse, levels)
-            coefs = solve(state.z, state.base)[1]
-            for k, (part, c) in enumerate(zip(parts, coefs, strict=True)):
-                bf, Af = part.design(fine, n_inertia)
-                bc, Ac = part.design(coarse, n_inertia)
-                defects[k] = (bf - bc) + ((Af - Ac) @ c if c.size else 0.0)
-            sizes.append(max(float(np.abs(d).max()) for d in defects) / peak)
-            new = fit(state.z, state.base, rounds)
-            nfev, nit = nfev + new.nfev, nit + new.nit
-            before = coarse.params
-            after = space.bridge(theta0 * np.exp(new.z), new.base).params
-            changes.append(max(float(np.abs(after[n] / before[n] - 1).max())
-                               for n in (*names, *(m for m in _MASS if m in after))))
-            state = new
-            if changes[-1] < TOL:
-                break
-        g = fine.model.grid
-        correction = MeshCorrection(
-            levels=levels, mesh=(g.nx, g.ny if fine.is_plate else 0),
-            change=np.array(changes), defect=np.array(sizes), converged=changes[-1] < TOL,
-            tol=TOL, bridge=fine.with_params(
-                **space.bridge(theta0 * np.exp(state.z), state.base).params))
+
+# --- step 3: the mesh correction ----------------------------------------------------------
+
+class _StaticCorrection(DefectCorrection):
+    """The road-free defect correction (module contract): the filtered prediction at the
+    fitted stiffness and force nuisance on the corrector model minus the model's own; each
+    pass refits the stiffness (then the mass).  A state is a :class:`_Fit`."""
+
+    def __init__(self, levels: int, *, problem: _RoadFree) -> None:
+        super().__init__(levels)
+        self.problem = problem
+        self.peak = max(float(np.abs(part.data).max()) for part in problem.parts)
+
+    def model(self, state: _Fit) -> Bridge:
+        return self.problem.bridge(state.z, state.base)
+
+    def correct(self, state: _Fit, coarse: Bridge, fine: Bridge) -> float:
+        pb = self.problem
+        coefs = pb.project(state.z, state.base).coefs
+        for k, (part, c) in enumerate(zip(pb.parts, coefs, strict=True)):
+            bf, Af = part.design(fine, pb.n_inertia)
+            bc, Ac = part.design(coarse, pb.n_inertia)
+            pb.defects[k] = (bf - bc) + ((Af - Ac) @ c if c.size else 0.0)
+        return max(float(np.abs(d).max()) for d in pb.defects) / self.peak
+
+    def refit(self, state: _Fit, k: int) -> _Fit:
+        return self.problem.fit(state.z, state.base)
+
+    def change(self, old: _Fit, new: _Fit) -> float:
+        before, after = self.model(old).params, self.model(new).params
+        return max(float(np.abs(after[n] / before[n] - 1).max())
+                   for n in (*self.problem.names, *(m for m in _MASS if m in after)))
+
+
+# --- step 4: the result -------------------------------------------------------------------
+
+def _result(problem: _RoadFree, states: list[_Fit],
+            correction: MeshCorrection | None) -> QuasiStaticCalibration:
+    """The last state's model, force factors and standard errors; counts over all fits."""
+    state = states[-1]
     z, base, opt, mfit = state.z, state.base, state.opt, state.mass
-    theta = theta0 * np.exp(z)
-    bridge = space.bridge(theta, base)
-    _, coefs = solve(z, base)
+    theta = problem.theta0 * np.exp(z)
+    bridge = problem.space.bridge(theta, base)
+    forces = _force_factors(problem.parts, problem.project(z, base).coefs)
+    params = problem.space.split(theta)
+    unc = problem.space.split(_standard_error(opt.jac, theta))
+    if mfit is not None and mfit.success:
+        params.update({n: bridge.params[n] for n in _MASS if n in bridge.params})
+    return QuasiStaticCalibration(
+        bridge=bridge, params=params, uncertainty=unc, x=theta,
+        fun=float(2 * opt.cost * problem.weights.scale),
+        nfev=sum(s.nfev for s in states), nit=sum(s.nit for s in states),
+        success=bool(opt.success), message=str(opt.message), cutoff=problem.cutoff,
+        force_factors=forces.factors, scale_bias=forces.scale_bias, mass=mfit,
+        mesh_correction=correction)
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class _Forces:
+    """The identified force variations (:class:`QuasiStaticCalibration`'s fields)."""
+
+    factors: tuple  # per record (n_t, n_groups): 1 + Σ c φ
+    scale_bias: float
+
+
+def _force_factors(parts: list[_Record], coefs: list[np.ndarray]) -> _Forces:
+    """Per record the force factors ``1 + Σ c φ`` (n_t, n_groups), and the RMS over groups
+    and records of their mean over each group's time on the span less 1."""
     factors, biases = [], []
     for part, c in zip(parts, coefs, strict=True):
         d = (np.einsum("tgk,gk->tg", part.basis, c.reshape(part.n_groups, -1))
@@ -437,23 +547,19 @@ def calibrate_quasistatic(
         on = part.basis[:, :, 0] != 0 if part.basis.shape[2] else np.zeros_like(d, bool)
         biases += [float(d[on[:, g], g].mean()) if on[:, g].any() else 0.0
                    for g in range(part.n_groups)]
-    # standard error: residuals are in units of σ, so cov = (JᵀJ)⁻¹ (J in θ, not log θ)
-    J = opt.jac / theta[None, :]
+    return _Forces(factors=tuple(factors),
+                   scale_bias=float(np.sqrt(np.mean(np.square(biases)))) if biases else 0.0)
+
+
+def _standard_error(jac: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    """``sqrt(diag((JᵀJ)⁻¹))`` with J (in log θ, residuals in units of σ) taken to θ; nan
+    where JᵀJ is singular."""
+    J = jac / theta[None, :]
     try:
         cov = np.linalg.inv(J.T @ J)
-        se = np.sqrt(np.clip(np.diag(cov), 0, None))
+        return np.sqrt(np.clip(np.diag(cov), 0, None))
     except np.linalg.LinAlgError:
-        se = np.full(theta.size, np.nan)
-    params = space.split(theta)
-    unc = space.split(se)
-    if mfit is not None and mfit.success:
-        params.update({n: bridge.params[n] for n in _MASS if n in bridge.params})
-    return QuasiStaticCalibration(
-        bridge=bridge, params=params, uncertainty=unc, x=theta, fun=float(2 * opt.cost * scale),
-        nfev=nfev, nit=nit, success=bool(opt.success),
-        message=str(opt.message), cutoff=fc, force_factors=tuple(factors),
-        scale_bias=float(np.sqrt(np.mean(np.square(biases)))) if biases else 0.0,
-        mass=mfit, mesh_correction=correction)
+        return np.full(theta.size, np.nan)
 
 
 def fit_mass(

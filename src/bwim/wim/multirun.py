@@ -529,14 +529,10 @@ def _reject_outliers(runs: _Runs, reasons: dict[int, str]) -> _KeptFit:
         raise InputError("every calibration run is flagged upstream; nothing to calibrate")
     current = _fit_kept(runs, kept, reasons, nfev=0)
     while (rejection := _next_rejection(runs, current)) is not None:
-        current = _fit_kept(runs, *_without(current, rejection), nfev=current.nfev)
+        current = _fit_kept(runs, [k for k in current.kept if k != rejection.index],
+                            {**current.reasons, rejection.index: rejection.reason},
+                            nfev=current.nfev)
     return current
-
-
-def _without(current: _KeptFit, rejection: Rejection) -> tuple[list[int], dict[int, str]]:
-    """The kept runs and the reasons after ``rejection``."""
-    return ([k for k in current.kept if k != rejection.index],
-            {**current.reasons, rejection.index: rejection.reason})
 
 
 def _fit_kept(runs: _Runs, kept: list[int], reasons: dict[int, str], *,
