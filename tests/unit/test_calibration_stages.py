@@ -5,24 +5,30 @@ ends the run, e.g. ``least_squares`` status 0 "the maximum number of function ev
 is exceeded"); the CE stop reasons of bwim.optimize.ce.
 """
 
+import numpy as np
 import pytest
 
 import bwim
-from bwim.calibration import Method, ParameterSpace, StaticObjective, run_stage
+from bwim.calibration import Method, ParameterSpace, StaticObjective, calibrate, run_stage
 from bwim.errors import InputError
 
 
-@pytest.fixture(scope="module")
-def problem():
-    """A two-zone beam's stiffness stage from a moving-force crossing (static readings
-    at 200 Hz), started 20 % off."""
+def _crossing():
+    """A two-zone beam, a moving-force crossing (static readings at 200 Hz) and the start
+    20 % off."""
     beam = bwim.Bridge.beam(length=20.0, n_elements=8, E=30e9, I=0.4, mu=4000.0,
                             z_bottom=0.5, zones=2)
     truck = bwim.MovingForces(axle_loads=[60e3, 100e3], axle_spacings=[4.0])
     sensors = [bwim.Sensor(x=6.0), bwim.Sensor(x=14.0)]
     rec = bwim.simulate(beam, truck, speed=20.0, sensors=sensors, approach=0.0,
                         sampling_rate=200.0)
-    start = beam.with_params(E_x=[24e9, 36e9])
+    return rec, truck, beam.with_params(E_x=[24e9, 36e9])
+
+
+@pytest.fixture(scope="module")
+def problem():
+    """The beam's stiffness stage."""
+    rec, truck, start = _crossing()
     space = ParameterSpace(start, ("E_x",))
     return StaticObjective(space, [rec], truck), space
 
@@ -71,3 +77,22 @@ def test_bad_stage_input(problem):
         run_stage(Method.LM, obj, space, bounds=(1.2, 5.0))
     with pytest.raises(InputError, match="must allow one CMA-ES population"):
         run_stage(Method.CMA, obj, space, population=6, max_evals=3)
+
+
+def test_calibration_speaks_scipys_vocabulary():
+    """``calibrate``'s result: ``x`` the parameters in ``labels``' order, ``fun`` the last
+    stage's objective, ``nfev``/``nit`` summed over the stages, ``success`` False with the
+    stage that spent its budget named in ``message``; converged, a success with a smaller
+    objective."""
+    rec, truck, start = _crossing()
+    short = calibrate(start, [rec], truck, unknowns=("E_x",), method="lm", refine="none",
+                      max_evals=3)
+    assert short.labels == ("E_x[0]", "E_x[1]")
+    np.testing.assert_array_equal(short.x, short.params["E_x"])
+    assert short.fun == short.stages[-1].fun
+    assert short.nfev == sum(s.nfev for s in short.stages)
+    assert short.nit == sum(s.nit for s in short.stages)
+    assert not short.success and "stiffness (static)" in short.message
+    full = calibrate(start, [rec], truck, unknowns=("E_x",), method="lm", refine="none")
+    assert full.success and "every stage succeeded" in full.message
+    assert full.fun < short.fun

@@ -79,6 +79,12 @@ def test_corrected_coarse_model_calibrates_like_the_fine_one(fine_case):
     assert "defect correction" in mc.summary()
     # the paper's two stages (uncorrected) stay reported beside the corrected answer
     assert cal.two_stage["E_y"][0] != cal.params["E_y"][0]
+    # scipy's vocabulary: x the corrected parameters in labels' order, fun the last pass's
+    # objective, success the stages' and the correction's
+    assert cal.labels == ("E_x[0]", "E_y[0]", "mu[0]")
+    np.testing.assert_array_equal(cal.x, [cal.params[k][0] for k in KEYS])
+    assert cal.fun == cal.stages[-1].fun and "mesh pass" in cal.stages[-1].name
+    assert cal.success and cal.nit == sum(s.nit for s in cal.stages)
 
 
 def test_mesh_correction_input(fine_case):
