@@ -10,7 +10,7 @@ Contract
       ε_g(t_k) = s(t₀) Σ_j w_j Σ_{i ∈ group j} I_g(x_ik; y) / n_j + c_g + e_gk
 
   ``w_j`` the weight of axle group ``j`` (its axles share it equally, as B-WIM systems
-  report groups), ``s(t₀)`` the calibration's :class:`~bwim.wim.multirun.ScaleTrend` at
+  report groups), ``s(t₀)`` the calibration's :class:`~bwim.wim.scale_trend.ScaleTrend` at
   the record's clock time ``t₀ = record.clock_seconds()``, ``I_g(·; y)`` channel ``g``'s line at
   the vehicle's lateral covariate ``y``, ``c_g`` the channel's baseline offset.
 * Weights in N; readings in the calibration's units; positions in the passages' frame.
