@@ -24,16 +24,17 @@ Contract
   detector and the support may start at negative x.  Units: x in m, ordinates in reading
   per newton (``I1`` per newton and per unit of the lateral covariate), time in s (the
   records' clock), factors dimensionless.
-* The calibration is a sequence of named steps, each in its own module:
+* The calibration is a sequence of named steps; the concepts they use live in their own
+  modules:
 
   1. the inputs checked and every run's readings and axle positions read;
   2. runs flagged upstream (e.g. multiple presence) rejected
      (:func:`~bwim.wim.outliers.upstream_rejections`);
-  3. the kept runs fitted (:func:`~bwim.wim.support` estimates where the lines may be
-     non-zero, in two passes unless given; :class:`~bwim.wim.stacked_fit.
-     AlternatingLines` solves the bilinear problem in lines and factors), and the worst
-     outlier run removed (:func:`~bwim.wim.outliers.worst_run`, :class:`OutlierRule`),
-     repeatedly until none is left;
+  3. the kept runs fitted (:mod:`bwim.wim.support` estimates where the lines may be
+     non-zero, in two passes unless given; :class:`~bwim.wim.stacked_fit.AlternatingLines`
+     solves the bilinear problem in lines and factors), and the worst outlier run removed
+     (:func:`~bwim.wim.outliers.worst_run`, :class:`OutlierRule`), repeatedly until none
+     is left;
   4. every run, kept or rejected, evaluated against the final lines (:class:`RunFit`),
      the channels' noise estimated, and the factors' :class:`ScaleTrend` fitted
      (:mod:`bwim.wim.scale_trend`: local-linear over the runs' clock time,
