@@ -53,7 +53,8 @@ def test_cross_entropy_results_and_calibration_stages():
                         message="", uncertainty=np.zeros(2), history=res.history,
                         wall_time=0.0)
     cal = Calibration(bridge=None, params={}, uncertainty={}, stages=(stage,), nfev=res.nfev,
-                      wall_time=0.0, identifiability=None)
+                      x=res.x, labels=("E_x[0]", "E_y[0]"), fun=res.fun, nit=res.nit,
+                      success=True, message="", wall_time=0.0, identifiability=None)
     assert cal.plot(parameter=1).axes[0].get_title() == "stiffness: E_y"
     lm = StageResult(**{**stage.__dict__, "history": np.ones(3)})
     with pytest.raises(ValueError, match="not run by Cross-Entropy"):

@@ -407,7 +407,7 @@ class _Runs:
     outlier: OutlierRule | None
     tol: float
     max_iter: int
-    penalties: dict = field(default_factory=dict)  # smoothing terms by grid intervals
+    penalties: dict = field(default_factory=dict)  # smoothing terms by (intervals, spacing)
 
     @property
     def n(self) -> int:
@@ -417,9 +417,10 @@ class _Runs:
         """The smoothing term on ``grid`` (None without smoothing)."""
         if self.smoothing == 0:
             return None
-        if grid.n not in self.penalties:
-            self.penalties[grid.n] = smoothing_penalty(grid.n - 1, self.smoothing, grid.h)
-        return self.penalties[grid.n]
+        key = (grid.n, grid.h)  # the term is (ℓ / h)⁴ D₂ᵀ D₂: both matter
+        if key not in self.penalties:
+            self.penalties[key] = smoothing_penalty(grid.n - 1, self.smoothing, grid.h)
+        return self.penalties[key]
 
 
 def _read_runs(records, passages, axle_loads, *, channels, lateral, per_run_scale,
