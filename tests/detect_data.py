@@ -128,3 +128,65 @@ def with_detectors(rec: bwim.Record, vehicles, **kw) -> bwim.Record:
     ad = detector_channels(rec.time, vehicles, **kw)
     return dataclasses.replace(rec, data=np.hstack([ad, rec.data]),
                                sensors=(*detector_sensors(), *rec.sensors))
+
+
+# --- wide detector responses (a real site's: issue 20) ---------------------------------------
+#: The wide-response detectors' bridge: a 6 m simply supported span, detectors 1.5 m and
+#: 4.5 m from its first support, in the wheel path's lane at y = 0 (lateral offsets of the
+#: vehicles are relative to it).
+WIDE_SPAN = 6.0
+WIDE_X = (1.5, 4.5)
+
+
+def wide_pulse(u: np.ndarray, lateral: float = 0.0, x_axle: np.ndarray | None = None, *,
+               detector_x: float = 1.5, width: float = 0.65, bending: float = 0.25
+               ) -> np.ndarray:
+    """A detector's reading for a unit axle ``u`` m past it (this test suite's own model,
+    not bwim's nor the simulated site's): a local peak ``(1 + (u/width)²)^-1.5`` (full
+    width at half maximum ≈ 1.0 m for ``width`` 0.65) of the two wheels 0.9 m either side
+    of ``lateral`` seen through a lateral sensitivity ``exp(−½ (dy/1.0)²)``, less
+    ``bending`` × the span's bending at the detector (the slab's global response: the
+    simply supported moment line, 1 at the detector), which pulls the reading below zero
+    between axle groups."""
+    u = np.asarray(u, dtype=float)
+    local = (1.0 + (u / width) ** 2) ** -1.5
+    side = 0.5 * (np.exp(-0.5 * (lateral - 0.9) ** 2) + np.exp(-0.5 * (lateral + 0.9) ** 2))
+    x = detector_x + u if x_axle is None else x_axle
+    L = WIDE_SPAN
+    moment = np.where(x < detector_x, x * (L - detector_x), detector_x * (L - x)) / L
+    moment = np.where((x > 0) & (x < L), moment, 0.0) / (detector_x * (L - detector_x) / L)
+    return side * local - bending * moment
+
+
+def wide_channels(time: np.ndarray, vehicles, *, noise: float = 0.01, seed: int = 0,
+                  gains=(1.0, 0.25), steer: float = 0.45, offsets=(0.3, -0.2),
+                  drifts=(0.1, -0.05), per_newton: float = 1e-5) -> np.ndarray:
+    """Readings (n_t, 2) of two wide-response detectors DISTANCE apart (WIDE_X).
+
+    ``vehicles``: (speed m/s, spacings m, loads N, time the first axle passes detector 1
+    s, lateral offset m).  The steering axle is seen ``steer`` × its load's share (single
+    tyres, narrower: the real sites' 0.2–0.55 of the largest peak); gains differ 4×.
+    """
+    rng = np.random.default_rng(seed)
+    t = np.asarray(time, dtype=float)
+    out = np.zeros((t.size, 2))
+    for c in range(2):
+        for v, spacings, loads, t_first, lat in vehicles:
+            offs = np.concatenate([[0.0], np.cumsum(spacings)])
+            for i, (a, w) in enumerate(zip(offs, loads, strict=True)):
+                x = WIDE_X[0] + v * (t - t_first) - a
+                vis = steer if i == 0 else 1.0
+                out[:, c] += gains[c] * w * per_newton * vis * wide_pulse(
+                    x - WIDE_X[c], lat, x, detector_x=WIDE_X[c])
+        out[:, c] += offsets[c] + drifts[c] * (t - t[0])
+    scale = np.abs(out - np.median(out[:20], axis=0)).max(axis=0)
+    out += noise * scale * rng.standard_normal(out.shape)
+    return out
+
+
+def wide_record(vehicles, *, duration: float = 2.0, fs: float = FS, t0: float = 0.0,
+                **kw) -> bwim.Record:
+    """A record of the two wide-response detectors (ad1, ad2) from time ``t0``."""
+    t = t0 + np.arange(round(duration * fs)) / fs
+    return bwim.Record(time=t, data=wide_channels(t, vehicles, **kw),
+                       sensors=detector_sensors())

@@ -8,6 +8,8 @@ alike on simulated and measured records and needs no bridge model.
     det = detect_axles(record, ("ad1", "ad2"), 3.0, span=influence_line)
     det.single.passage                       # Passage(speed, lane, axle_spacings, delay)
     rec = det.annotate(record)               # the record with the detected passages
+    resp = learn_responses(cal_runs, ("ad1", "ad2"), 3.0, truck_spacings)  # wide peaks
+    det = detect_axles(record, ("ad1", "ad2"), 3.0, responses=resp)  # merged peaks apart
     det = detect_from_strain(record, influence_line)          # no axle detectors
     det = detect_from_strain(record, il, known_spacings=[3.8, 6.0, 1.3, 1.3])
 
@@ -25,6 +27,7 @@ Contract
 from bwim.detect.axles import detect_axles
 from bwim.detect.lateral import LateralPosition, lateral_position, section_gauges
 from bwim.detect.options import DEFAULT_MAX_AXLE_SPACING, DetectOptions
+from bwim.detect.response import DetectorResponse, LearnedResponses, learn_responses
 from bwim.detect.result import (
     FLAG_COUNT_MISMATCH,
     FLAG_MULTIPLE_PRESENCE,
@@ -52,11 +55,14 @@ __all__ = [
     "FLAG_UNEXPLAINED_STRAIN",
     "DetectOptions",
     "Detection",
+    "DetectorResponse",
     "LateralPosition",
+    "LearnedResponses",
     "VehicleDetection",
     "detect_axles",
     "detect_from_strain",
     "detect_known_truck",
     "lateral_position",
+    "learn_responses",
     "section_gauges",
 ]

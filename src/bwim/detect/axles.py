@@ -53,6 +53,8 @@ from .assemble import VehicleEstimate, assemble_detection
 from .lateral import section_gauges
 from .options import DetectOptions
 from .presence import resolve_span
+from .pursuit import pursue_axles
+from .response import LearnedResponses
 from .result import (
     FLAG_COUNT_MISMATCH,
     FLAG_NO_AXLES,
@@ -163,6 +165,7 @@ def detect_axles(
     baseline_window: float = 0.25,
     polarity: int | None = None,
     speed_tolerance: float = 0.02,
+    responses: LearnedResponses | None = None,
     **options: Any,
 ) -> Detection:
     """Vehicles (speed, axles, spacings, arrival, lateral position) from two axle detectors.
@@ -189,6 +192,11 @@ def detect_axles(
     speed_tolerance : float
         Per-axle speeds of one vehicle differing by more (relative standard deviation)
         flag ``speed_varies``.
+    responses : LearnedResponses, optional
+        The detectors' responses learned from the calibration runs
+        (:func:`bwim.detect.learn_responses`): axles are then found by sparse
+        deconvolution (:mod:`bwim.detect.pursuit`), which resolves merged peaks and uses
+        both detectors together; ``baseline_window`` and ``polarity`` do not apply.
     **options
         The keywords of :class:`~bwim.detect.options.DetectOptions`: ``speed_range``
         (bounds the lag between the detectors), ``min_axle_spacing`` (peaks closer than
@@ -224,6 +232,10 @@ def detect_axles(
     span_x = resolve_span(opts.span)
     gauge_sens = section_gauges(record, opts.gauges, exclude=detectors)
 
+    if responses is not None:
+        return _detect_learned(record, detectors, dist, responses, position=pos,
+                               span=span_x, gauges=gauge_sens, opts=opts,
+                               snr_threshold=snr_thr, min_height=rel)
     t = record.time
     fs = record.sampling_rate
     dt = 1.0 / fs
@@ -345,6 +357,34 @@ def detect_axles(
         lateral_threshold=opts.lateral_threshold, unexplained_fraction=opts.unexplained_fraction,
         flags=(FLAG_COUNT_MISMATCH,) if orphans else (),
         notes=_count_note(detectors, n1, n2, orphans))
+
+
+def _detect_learned(record: Record, detectors: Sequence[str], distance: float,
+                    responses: LearnedResponses, *, position: float, span, gauges, opts,
+                    snr_threshold: float, min_height: float) -> Detection:
+    """:func:`detect_axles` with learned responses (matching pursuit)."""
+    if not isinstance(responses, LearnedResponses):
+        raise InputError(f"responses must be LearnedResponses, got {type(responses).__name__}")
+    if tuple(detectors) != responses.channels:
+        raise InputError(f"the responses were learned for {list(responses.channels)}, not "
+                         f"{list(detectors)}")
+    if abs(distance - responses.distance) > 1e-9 * distance:
+        raise InputError(f"the responses were learned for detectors {responses.distance:g} m "
+                         f"apart, not {distance:g} m")
+    method = "learned responses"
+    y = record.channels(list(detectors)).data
+    estimates = pursue_axles(record.time, y, responses, speed_range=opts.speed_range,
+                             min_axle_spacing=opts.min_axle_spacing,
+                             max_axle_spacing=opts.max_axle_spacing,
+                             snr_threshold=snr_threshold, min_height=max(min_height, 0.1))
+    if not estimates:
+        return Detection(flags=(FLAG_NO_AXLES,), method=method,
+                         message=f"no axle found: nothing on {detectors[0]} and "
+                         f"{detectors[1]} fits their learned responses above "
+                         f"{snr_threshold:g} noise standard deviations")
+    return assemble_detection(
+        record, estimates, method=method, position=position, span=span, gauges=gauges,
+        lateral_threshold=opts.lateral_threshold, unexplained_fraction=opts.unexplained_fraction)
 
 
 def _count_note(detectors: Sequence[str], n1: int, n2: int, orphans: int) -> list[str]:
