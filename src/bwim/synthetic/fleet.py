@@ -25,7 +25,8 @@ Contract
   loads of on-highway tractors are about 10,500–11,500 lb (46.7–51.2 kN) bobtail
   (trucknews.com, "Spring Loaded", on EPA-2004/2010 tractors).  The spread (CV ≈ 5 %) is
   this model's, not a published value.  Rigid trucks: the front axle's share of the
-  gross weight falls with payload (two-axle: 0.55–0.65 empty, 0.30–0.36 full).
+  gross weight falls with payload (two-axle: 0.55–0.65 empty, 0.36–0.42 full, near the
+  7.1 t / 11.5 t axle limits of an 18 t truck).
 * Axle spacings in ranges typical of EU vehicles (group axles 1.30–1.40 m apart, equal
   within a group); tyres: steering ``single``, drive and rigid rear axles ``dual``,
   semitrailer axles ``wide`` singles (70 % of semitrailers) or ``dual``.  Suspension and
@@ -152,9 +153,9 @@ def traffic_vehicle(kind: str, rng: np.random.Generator) -> TrafficVehicle:
         roles = ["steer"] * n_front + ["drive"] * (n - n_front)
         tyres = ["single"] * n_front + ["dual"] * (n - n_front)
         axles = _axles(roles, tyres, rng)
-        share = {"rigid_2": ((0.55, 0.65), (0.30, 0.36)),
-                 "rigid_3": ((0.45, 0.55), (0.25, 0.30)),
-                 "rigid_4": ((0.50, 0.58), (0.36, 0.42))}[kind]
+        share = {"rigid_2": ((0.55, 0.65), (0.36, 0.42)),
+                 "rigid_3": ((0.45, 0.55), (0.28, 0.33)),
+                 "rigid_4": ((0.50, 0.58), (0.38, 0.44))}[kind]
         s_empty, s_full = u(*share[0]), u(*share[1])
         front = s_empty + (s_full - s_empty) * min(loading, 1.0)
         body = gvw - 2.0 * axles["wheel_mass"].sum()

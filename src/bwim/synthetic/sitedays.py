@@ -40,18 +40,19 @@ writes what its logger would have recorded, plus the ground truth, into a new fo
     The hidden facts (the weighing side never reads them) and this layout in short.
 
 **Event files.**  Tab-separated text without a header, at the layout's 512 Hz, columns in
-the layout's order: ``time`` from 0 in every file (s, exact multiples of 1/512 written with 9 decimals); the lane-1 detectors;
-the gauges in uncalibrated logger units ``gain_j × (f ε + noise + offset + baseline drift)
-/ 10⁻⁶`` with per-gauge gains in 0.95–1.05, one absolute noise σ for every gauge
-(``noise`` × the calibration truck's peak static gauge strain in lane 1), an offset per
-channel per event uniform in ±50 µε and a linear baseline drift per channel per event
-(change over the event normal with σ = 2 noise σ); the lane-3 detectors; two digital
-status columns (``1`` and ``0``); with ``temperature_channel`` a last column ``temp_C``
-(deck temperature, noise σ 0.1 °C).  The clock is only in the file name: the date and
-time of the first sample to the millisecond.  An event starts 154 samples (0.30 s)
-before the first axle of any of its vehicles enters the bridge (the bridge is at rest)
-and ends 0.2 s after the last axle leaves.  Axle detectors:
-:mod:`bwim.synthetic.detector`; gains drawn per site, a lane's two about 3–5 × apart.
+the layout's order: ``time`` from 0 in every file (s, exact multiples of 1/512 written
+with 9 decimals); the lane-1 detectors; the gauges in uncalibrated logger units
+``gain_j × (f ε + noise + offset + baseline drift) / 10⁻⁶`` with per-gauge gains in
+0.95–1.05, one absolute noise σ for every gauge (``noise`` × the calibration truck's peak
+static gauge strain in lane 1), an offset per channel per event uniform in ±50 µε and a
+linear baseline drift per channel per event (change over the event normal with σ = 2
+noise σ); the lane-3 detectors; two digital status columns (``1`` and ``0``); with
+``temperature_channel`` a last column ``temp_C`` (deck temperature, noise σ 0.1 °C).  The
+clock is only in the file name: the date and time of the first sample to the
+millisecond.  An event starts 154 samples (0.30 s) before the first axle of any of its
+vehicles enters the bridge (the bridge is at rest) and ends 0.2 s after the last axle
+leaves.  Axle detectors: :mod:`bwim.synthetic.detector`; gains drawn per site, a lane's
+two about 3–5 × apart.
 
 **Drift.**  The strain-to-load factor ``f`` (:mod:`bwim.synthetic.thermal`) follows the
 deck temperature of each date (two different days); it multiplies every simulated strain
