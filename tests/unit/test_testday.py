@@ -273,3 +273,17 @@ def test_trucks_are_reproducible_across_processes():
                            check=True, env={**os.environ, "PYTHONHASHSEED": h}).stdout
             for h in ("1", "2", "3")}
     assert len(outs) == 1
+
+
+def test_basic_site_is_the_default_and_reports_progress(tmp_path):
+    """``site="basic-2-lane"`` is the default (the same files, byte for byte), and
+    progress(done, total) is called after every event file."""
+    kw = {"seed": 5, "n_calibration": 1, "n_traffic": 1, "mesh": 0.6}
+    calls = []
+    a = make_test_day(tmp_path / "a", **kw)
+    b = make_test_day(tmp_path / "b", site="basic-2-lane",
+                      progress=lambda done, total: calls.append((done, total)), **kw)
+    assert calls == [(1, 2), (2, 2)]
+    for p in sorted(a.out_dir.rglob("*")):
+        q = b.out_dir / p.relative_to(a.out_dir)
+        assert p.is_dir() or p.read_bytes() == q.read_bytes()

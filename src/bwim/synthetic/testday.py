@@ -2,10 +2,13 @@
 
 Contract
 --------
-:func:`make_test_day` simulates a day of trucks crossing the slab of
-:mod:`bwim.synthetic.site` (vehicle–bridge interaction with :mod:`bwim.dynamics`, each truck
-on its own ISO 8608 road) and writes what the installation's logger would have recorded,
-plus the ground truth, into a new folder:
+:func:`make_test_day` is the entry point for every simulated site: ``site`` names a
+preset of :data:`SITES` (:data:`SITE_NAMES`).  The default, ``basic-2-lane``
+(:func:`basic_test_day`, kept as it was: the same files for the same seed), simulates a
+day of trucks crossing the slab of :mod:`bwim.synthetic.site` (vehicle–bridge interaction
+with :mod:`bwim.dynamics`, each truck on its own ISO 8608 road) and writes what the
+installation's logger would have recorded, plus the ground truth, into a new folder (the
+realistic ``short-span-4-lane`` preset and its files: :mod:`bwim.synthetic.sitedays`):
 
 ``scenario.toml``
     The site's scenario in the shape of an installation without an FE model:
@@ -89,7 +92,9 @@ from __future__ import annotations
 
 import csv
 import dataclasses
+import inspect
 import os
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -104,7 +109,9 @@ from bwim.io.atomic import atomic_open
 from bwim.io.toml_writer import to_toml
 from bwim.road import ISO_CLASSES, RoadProfile
 from bwim.synthetic import site
+from bwim.synthetic.layout import SHORT_SPAN_4_LANE, SiteLayout
 from bwim.synthetic.site import Drift
+from bwim.synthetic.sitedays import SiteDays, make_site_days
 from bwim.synthetic.traffic import (
     TRUCK_KINDS,
     TRUCK_MIX,
@@ -113,8 +120,9 @@ from bwim.synthetic.traffic import (
 )
 from bwim.vehicles.types import TractorSemitrailer, Truck3D
 
-__all__ = ["COLUMNS", "POST_TRIGGER", "PRE_TRIGGER", "SAMPLING_RATE", "Event", "TestDay",
-           "VehicleTruth", "make_test_day"]
+__all__ = ["BASIC_SITE", "COLUMNS", "POST_TRIGGER", "PRE_TRIGGER", "SAMPLING_RATE",
+           "SITES", "SITE_NAMES", "Event", "TestDay", "VehicleTruth", "basic_test_day",
+           "make_test_day"]
 
 SAMPLING_RATE = 512.0  #: Hz
 OVERSAMPLE = 2  #: the simulation runs at OVERSAMPLE × SAMPLING_RATE
@@ -144,6 +152,11 @@ CAL_SPEED = (18.0, 25.0)  #: m/s
 TRAFFIC_SPEED = (21.5, 2.5, 15.0, 25.0)  #: m/s: mean, σ of a normal truncated to [min, max]
 MIN_GAP = 20.0  #: s between event starts
 REDRAWS = 10  #: attempts at a road on which no wheel loses contact
+
+BASIC_SITE = "basic-2-lane"  #: the default preset: this module's test day
+#: The realistic presets by name (layouts simulated by make_site_days).
+SITES = {SHORT_SPAN_4_LANE.name: SHORT_SPAN_4_LANE}
+SITE_NAMES = (BASIC_SITE, *SITES)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -224,6 +237,47 @@ class _Plan:
 def make_test_day(
     out_dir: str | os.PathLike,
     *,
+    site: str | SiteLayout = BASIC_SITE,
+    progress: Callable[[int, int], None] | None = None,
+    **options,
+) -> TestDay | SiteDays:
+    """Simulate an installation's test data and write it to the new folder ``out_dir``.
+
+    ``site`` names a preset of :data:`SITES`: ``"basic-2-lane"`` (the default; this
+    module's day, the same files for the same seed as before presets existed; options
+    those of :func:`basic_test_day`) or ``"short-span-4-lane"`` (a realistic site with a
+    calibration date and a traffic date: :func:`bwim.synthetic.sitedays.make_site_days`
+    with :data:`~bwim.synthetic.layout.SHORT_SPAN_4_LANE`, whose keywords are its
+    options).  A :class:`~bwim.synthetic.layout.SiteLayout` instance is simulated like
+    the realistic preset.  ``progress(done, total)`` is called after each event file.
+    An option the site does not have is an :class:`~bwim.errors.InputError`.
+    """
+    if isinstance(site, SiteLayout):
+        layout = site
+    elif site == BASIC_SITE:
+        _check_options(basic_test_day, options, site)
+        return basic_test_day(out_dir, progress=progress, **options)
+    elif site in SITES:
+        layout = SITES[site]
+    else:
+        raise InputError(f"unknown site {site!r}; expected one of {', '.join(SITE_NAMES)}")
+    _check_options(make_site_days, options, layout.name, exclude=("layout",))
+    return make_site_days(out_dir, layout=layout, progress=progress, **options)
+
+
+def _check_options(fn, options: dict, site: str, exclude=()) -> None:
+    allowed = [p.name for p in inspect.signature(fn).parameters.values()
+               if p.kind is inspect.Parameter.KEYWORD_ONLY and p.name not in exclude
+               and p.name != "progress"]
+    for key in options:
+        if key not in allowed:
+            raise InputError(f"{key!r} is not an option of site {site}; its options are "
+                             f"{', '.join(allowed)}")
+
+
+def basic_test_day(
+    out_dir: str | os.PathLike,
+    *,
     seed: int = 0,
     n_calibration: int = 12,
     n_traffic: int = 100,
@@ -233,8 +287,9 @@ def make_test_day(
     drift: float = 0.08,
     approach: float = 60.0,
     roughness: tuple[float, float] = ROUGHNESS,
+    progress: Callable[[int, int], None] | None = None,
 ) -> TestDay:
-    """Simulate a B-WIM test day and write it to the new folder ``out_dir``.
+    """Simulate the ``basic-2-lane`` test day and write it to the new folder ``out_dir``.
 
     Parameters
     ----------
@@ -261,11 +316,15 @@ def make_test_day(
     roughness : (float, float)
         Range of the roads' G_d(n₀), m³/cycle (drawn log-uniformly per event); default
         :data:`ROUGHNESS`, class A to B; :data:`WIM_GRADE_ROUGHNESS` is a smooth approach.
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each event file.
 
     Returns
     -------
     TestDay
     """
+    if progress is not None and not callable(progress):
+        raise InputError("progress must be a callable (done, total) or None")
     n_calibration = _count("n_calibration", n_calibration, 1)
     n_traffic = _count("n_traffic", n_traffic, 0)
     if n_multiple is None:
@@ -314,12 +373,14 @@ def make_test_day(
     (out / "traffic").mkdir()
     events = []
     counters = {"calibration": 0, "traffic": 0}
-    for plan in plans:
+    for k, plan in enumerate(plans):
         counters[plan.kind] += 1
         events.append(_simulate_and_write(
             plan, counters[plan.kind], out, bridge=bridge, points=points, weights=weights,
             influence=influence, approach=float(approach), drift=day_drift, sigma=sigma,
             gauge_gains=gauge_gains, detector_gains=detector_gains, fs=fs))
+        if progress is not None:
+            progress(k + 1, len(plans))
 
     reference = out / "reference.csv"
     truth = out / "truth.csv"
