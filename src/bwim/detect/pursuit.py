@@ -8,10 +8,16 @@ Contract
 
       y_d(t) = c_d(t) + Σ_i A_id K_d(v (t − τ_i) − D_d) + e,   D_1 = 0, D_2 = D,
 
-  ``τ_i`` the time axle ``i`` passes detector 1, ``v`` the vehicle's speed, ``A_id ≥ 0``
-  its amplitude at each detector (free: a detector may see an axle weakly), ``c_d`` a
+  ``τ_i`` the time axle ``i`` passes detector 1, ``v`` the vehicle's speed,
+  ``A_id = g_d a_i`` its amplitude at each detector (``a_i ≥ 0`` one per axle, ``g_d`` the
+  detectors' gains as learned: a lane's two detectors lie on one line across the lane,
+  so they see every axle through the same tyres and lateral position, and what one
+  detector shows without the other, such as a tyre force's dynamics while it passes, is
+  not taken for an axle), ``c_d`` a
   slowly varying baseline (offset, drift, the span's bending) and noise ``e``, each
-  channel weighted by its noise.  Readings and model are **high-passed in space**
+  channel weighted by its level (:attr:`~bwim.detect.response.DetectorResponse.level`:
+  its noise, or what the learned response missed of the calibration truck's axles if
+  that is more).  Readings and model are **high-passed in space**
   (:func:`~bwim.detect.response.high_pass` over
   :data:`~bwim.detect.response.HIGH_PASS` m of travel at the vehicle's speed), as the
   responses were learned: what identifies an axle is its own local peak; the slab's
@@ -19,7 +25,7 @@ Contract
   offset or drift, are left out.
 * Steps: (1) the speed, from the band-passed detectors' lag; (2) **matching pursuit**:
   the axle time that most reduces the weighted misfit of both detectors together is added
-  and every amplitude refitted (non-negative least squares), while the reduction exceeds
+  and every amplitude refitted (non-negative least squares, both detectors in one), while the reduction exceeds
   ``snr_threshold²`` noise variances and ``min_height²`` of what the record's strongest
   axle gave (an axle ``min_height`` as tall as the largest: what the learned response
   misses of a big axle must not pass for a small one), and its amplitude is at least
@@ -29,13 +35,12 @@ Contract
   whose removal costs less than the threshold, or closer than ``min_axle_spacing`` to
   another, is dropped and the vehicle refitted; one more pursuit step may add an axle
   the first pass missed.  Merged peaks (a tridem 1.3 m apart under a 1 m wide response)
-  come apart because the fit knows the response; an axle seen weakly by one detector is
-  kept when both together need it, so the detectors never "disagree" on the count:
-  their agreement enters the confidence instead.
+  come apart because the fit knows the response; the detectors never "disagree" on the
+  count, since one fit counts for both: their agreement enters the confidence instead.
 * Confidence of a vehicle = ``c_snr × c_both``: ``c_snr = clip(√Δ / (2 snr_threshold),
-  0.5, 1)`` with ``Δ`` the smallest misfit reduction (noise variances) of its axles;
-  ``c_both`` the share of its axles whose amplitude reaches ``min_height`` of the
-  largest at each detector alone, at least 0.5.
+  0.5, 1)`` with ``Δ`` the smallest misfit reduction (level variances) of its axles;
+  ``c_both`` the share of its axles that each detector fitted alone sees with at least
+  0.4 of the joint amplitude, at least 0.5.
 * Times in s, distances in m, speeds in m/s.
 """
 
@@ -70,8 +75,9 @@ class _Problem:
     responses in space."""
 
     t: np.ndarray
-    y: np.ndarray  # (n_t, 2) high-passed, weighted (noise units)
-    w: np.ndarray  # (2,) 1 / noise
+    y: np.ndarray  # (n_t, 2) high-passed, weighted (level units)
+    w: np.ndarray  # (2,) 1 / level
+    ratio: np.ndarray  # (2,) the detectors' gains relative to the first
     shift: tuple[float, float]  # D_d
     grids: tuple  # per detector (u, K_hp, dK_hp/du)
     fs: float
@@ -84,30 +90,39 @@ class _Problem:
         out, der = [], []
         for c, (u, k, dk) in enumerate(self.grids):
             x = v * (t[:, None] - taus[None, :]) - self.shift[c]
-            out.append(np.interp(x, u, k, left=0.0, right=0.0) * self.w[c])
+            scale = self.w[c] * self.ratio[c]
+            out.append(np.interp(x, u, k, left=0.0, right=0.0) * scale)
             if slopes:
-                der.append(np.interp(x, u, dk, left=0.0, right=0.0) * self.w[c])
+                der.append(np.interp(x, u, dk, left=0.0, right=0.0) * scale)
         return (out, der) if slopes else out
 
     def fit(self, taus: np.ndarray, v: float, rows: slice | np.ndarray = slice(None)
             ) -> tuple[np.ndarray, float, np.ndarray]:
-        """Amplitudes (n, 2) ≥ 0 (weighted units), the misfit, the residual (rows)."""
+        """One amplitude ≥ 0 per axle (both detectors, in their gains' ratio), the
+        misfit, the residual (rows)."""
         y = self.y[rows]
-        amps = np.zeros((taus.size, 2))
-        res = y.copy()
-        if taus.size:
-            for c, X in enumerate(self.atoms(taus, v, rows)):
-                a, _ = nnls(X, y[:, c])
-                amps[:, c] = a
-                res[:, c] = y[:, c] - X @ a
-        return amps, float(np.sum(res**2)), res
+        if not taus.size:
+            return np.zeros(0), float(np.sum(y**2)), y.copy()
+        X = self.atoms(taus, v, rows)
+        a, _ = nnls(np.vstack(X), np.concatenate([y[:, 0], y[:, 1]]))
+        res = y - np.column_stack([X[0] @ a, X[1] @ a])
+        return a, float(np.sum(res**2)), res
+
+    def separate(self, taus: np.ndarray, v: float, rows) -> np.ndarray:
+        """Each detector's own amplitudes ≥ 0 (n, 2), in units of the first's gain."""
+        y = self.y[rows]
+        return np.column_stack([nnls(X, y[:, c])[0]
+                                for c, X in enumerate(self.atoms(taus, v, rows))])
 
 
 def _problem(t: np.ndarray, y: np.ndarray, learned: LearnedResponses, v: float) -> _Problem:
     fs = 1.0 / float(np.median(np.diff(t)))
-    w = 1.0 / np.array([max(r.noise, 1e-300) for r in learned.responses])
+    w = 1.0 / np.array([max(r.level, 1e-300) for r in learned.responses])
     y_hp = high_pass(y, HIGH_PASS / v * fs) * w
-    return _Problem(t=t, y=y_hp, w=w, shift=(0.0, learned.distance),
+    amps = np.abs(learned.amplitudes)
+    ratio = float(np.median(amps[:, 1] / np.maximum(amps[:, 0], 1e-300)))
+    return _Problem(t=t, y=y_hp, w=w, ratio=np.array([1.0, ratio]),
+                    shift=(0.0, learned.distance),
                     grids=tuple(r.high_passed() for r in learned.responses), fs=fs)
 
 
@@ -125,20 +140,19 @@ def _best_new(pb: _Problem, res: np.ndarray, v: float, taken: np.ndarray, min_ga
     """The axle time whose atoms (both detectors, each its own amplitude ≥ 0) most reduce
     the residual ``res`` (all samples)."""
     n = pb.t.size
-    score = np.zeros(n)
+    corr = np.zeros(n)
+    energy = 0.0
     for c, (u, k, _) in enumerate(pb.grids):
         d = pb.shift[c]
         m_lo = int(np.floor((u[0] + d) / v * pb.fs)) - 1
         m_hi = int(np.ceil((u[-1] + d) / v * pb.fs)) + 1
         atom = np.interp(v * np.arange(m_lo, m_hi + 1) / pb.fs - d, u, k, left=0.0,
-                         right=0.0) * pb.w[c]
-        energy = float(atom @ atom)
-        if energy <= 0:
-            continue
+                         right=0.0) * pb.w[c] * pb.ratio[c]
+        energy += float(atom @ atom)
         lo, hi = max(0, -m_lo), max(0, m_hi)
         r = np.concatenate([np.zeros(lo), res[:, c], np.zeros(hi)])
-        corr = np.correlate(r, atom, mode="valid")[m_lo + lo:m_lo + lo + n]
-        score += np.maximum(corr, 0.0) ** 2 / energy
+        corr += np.correlate(r, atom, mode="valid")[m_lo + lo:m_lo + lo + n]
+    score = np.maximum(corr, 0.0) ** 2 / max(energy, 1e-300)
     for tk in taken:  # not on an axle already found
         score[np.abs(pb.t - tk) < min_gap / v] = 0.0
     return float(pb.t[int(np.argmax(score))])
@@ -187,12 +201,12 @@ def _tall(amps: np.ndarray, taus: np.ndarray, tk: float, min_height: float) -> b
     """Whether the axle at ``tk`` reaches ``min_height`` of the largest amplitude at one
     detector at least."""
     i = int(np.flatnonzero(taus == tk)[0])
-    return bool(_relative(amps)[i].max() >= min_height)
+    return bool(_relative(amps)[i] >= min_height)
 
 
 def _relative(amps: np.ndarray) -> np.ndarray:
-    top = amps.max(axis=0)
-    return amps / np.where(top > 0, top, 1.0)
+    top = float(amps.max()) if amps.size else 0.0
+    return amps / top if top > 0 else amps
 
 
 def _groups(taus: np.ndarray, v: float, max_spacing: float) -> list[np.ndarray]:
@@ -216,12 +230,12 @@ def _refine(pb: _Problem, taus: np.ndarray, v0: float) -> tuple[np.ndarray, floa
     amps, _, _ = pb.fit(taus, v0, rows)
 
     def unpack(p):
-        return p[:n], p[n], p[n + 1:].reshape(2, n)
+        return p[:n], p[n], p[n + 1:]
 
     def resid(p: np.ndarray) -> np.ndarray:
         tt, v, a = unpack(p)
         X = pb.atoms(tt, v, rows)
-        return np.concatenate([y[:, c] - X[c] @ a[c] for c in range(2)])
+        return np.concatenate([y[:, c] - X[c] @ a for c in range(2)])
 
     def jac(p: np.ndarray) -> np.ndarray:
         tt, v, a = unpack(p)
@@ -229,17 +243,17 @@ def _refine(pb: _Problem, taus: np.ndarray, v0: float) -> tuple[np.ndarray, floa
         dt = pb.t[rows][:, None] - tt[None, :]
         blocks = []
         for c in range(2):
-            J = np.zeros((rows.size, 3 * n + 1))
-            J[:, :n] = dX[c] * a[c] * v  # d/dτ_i of −a K(v (t − τ_i) − D)
-            J[:, n] = -(dX[c] * dt) @ a[c]
-            J[:, n + 1 + c * n:n + 1 + (c + 1) * n] = -X[c]
+            J = np.zeros((rows.size, 2 * n + 1))
+            J[:, :n] = dX[c] * a * v  # d/dτ_i of −a K(v (t − τ_i) − D)
+            J[:, n] = -(dX[c] * dt) @ a
+            J[:, n + 1:] = -X[c]
             blocks.append(J)
         return np.vstack(blocks)
 
-    p0 = np.concatenate([taus, [v0], amps.T.ravel()])
+    p0 = np.concatenate([taus, [v0], amps])
     sol = least_squares(resid, p0, jac=jac, method="lm",
                         x_scale=np.concatenate([np.full(n, 2e-3), [0.02 * v0],
-                                                np.maximum(amps.T.ravel(), 1e-3)]))
+                                                np.maximum(amps, 1e-3)]))
     tt, v, _ = unpack(sol.x)
     order = np.argsort(tt)
     return tt[order], float(v)
@@ -261,8 +275,7 @@ def _check(pb: _Problem, taus: np.ndarray, v: float, limit: float, min_spacing: 
             changed = True
         rows = _window(pb, taus, v)
         amps, chi, _ = pb.fit(taus, v, rows)
-        weak = ((_gains(pb, taus, v, chi, rows) < limit)
-                | (_relative(amps).max(axis=1) < min_height))
+        weak = (_gains(pb, taus, v, chi, rows) < limit) | (_relative(amps) < min_height)
         if weak.any() and taus.size > 1:
             taus = np.delete(taus, int(np.flatnonzero(weak)[0]))
             changed = True
@@ -285,10 +298,11 @@ def _check(pb: _Problem, taus: np.ndarray, v: float, limit: float, min_spacing: 
     rows = _window(pb, taus, v)
     amps, chi, _ = pb.fit(taus, v, rows)
     gains = _gains(pb, taus, v, chi, rows)
-    rel = _relative(amps)
     snr = float(np.sqrt(max(float(gains.min()), 0.0)))
     c_snr = float(np.clip(snr / (2.0 * snr_threshold), 0.5, 1.0))
-    c_both = max(0.5, float(np.mean(rel.min(axis=1) >= min_height)))
+    own = pb.separate(taus, v, rows)  # each detector alone: does it see the axle?
+    seen = (own / np.maximum(amps[:, None], 1e-300) >= 0.4).all(axis=1)
+    c_both = max(0.5, float(np.mean(seen)))
     det_times = np.column_stack([taus, taus + pb.shift[1] / v])
     return VehicleEstimate(times=taus, speed=v, confidence=c_snr * c_both,
-                           amplitudes=rel.mean(axis=1), snr=snr, detector_times=det_times)
+                           amplitudes=_relative(amps), snr=snr, detector_times=det_times)

@@ -109,12 +109,22 @@ class DetectorResponse:
         ``K(0)`` is ±1.
     noise : float
         The channel's noise standard deviation in the runs, reading units.
+    misfit : float
+        Root-mean-square of the runs' residual while the truck crosses, reading units:
+        what one response cannot explain of a real axle (its dynamic force while it
+        passes, its tyres and lateral position), the level an axle must stand out of.
     """
 
     channel: str
     u: np.ndarray
     k: np.ndarray
     noise: float
+    misfit: float = 0.0
+
+    @property
+    def level(self) -> float:
+        """The larger of ``noise`` and ``misfit``: the scale detection weighs with."""
+        return max(self.noise, self.misfit)
 
     def __call__(self, u: np.ndarray) -> np.ndarray:
         """``K`` at distances ``u`` (m), zero outside the grid."""
@@ -395,6 +405,23 @@ def _refit_run(run: _Run, offsets: np.ndarray, kernels, amps: np.ndarray, distan
     return new, float(np.linalg.norm(sol.fun) / max(np.linalg.norm(yw), 1e-300))
 
 
+def _misfits(runs: Sequence[_Run], offsets: np.ndarray, kernels, amps: np.ndarray,
+             distance: float) -> np.ndarray:
+    """Per detector, the RMS residual of the runs while the truck crosses (from NEAR m
+    before its first axle reaches detector 1 to NEAR m after its last leaves detector 2)."""
+    sq = np.zeros(2)
+    count = 0
+    for r in runs:
+        on = ((r.t >= r.tau - NEAR / r.v)
+              & (r.t <= r.tau + (offsets[-1] + distance + NEAR) / r.v))
+        for c, (grid, k) in enumerate(kernels):
+            e = r.y[on, c] - _columns(r, offsets, distance if c else 0.0, grid, k)[on] \
+                @ amps[:, c]
+            sq[c] += float(e @ e)
+        count += int(on.sum())
+    return np.sqrt(sq / max(count, 1))
+
+
 def learn_responses(records: Sequence[Record], detectors: Sequence[str], distance: float,
                     spacings: Sequence[float], *, loads: Sequence[float] | None = None,
                     speed_range: tuple[float, float] = (5.0, 40.0),
@@ -497,12 +524,13 @@ def learn_responses(records: Sequence[Record], detectors: Sequence[str], distanc
                               f"median {med:.3g}: another vehicle on the detectors?")
             used.remove(worst)
 
+    misfit = _misfits([runs[k] for k in used], offs, kernels, amps, dist)
     responses = []
     for c, (g, kk) in enumerate(kernels):
         _, top = _peak(g, kk)
         scale = abs(top)
         responses.append(DetectorResponse(channel=chans[c], u=g.copy(), k=kk / scale,
-                                          noise=float(noise[c])))
+                                          noise=float(noise[c]), misfit=float(misfit[c])))
         amps[:, c] *= scale
     offset = _distance_offset([runs[k] for k in used], offs, dist)
     if abs(offset) > DISTANCE_TOLERANCE * dist:
