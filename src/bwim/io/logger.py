@@ -55,8 +55,9 @@ Contract
   characters (whole lines), each parsed at once (vectorised over its bytes; a chunk with
   anything unusual is re-read line by line, which gives the same numbers or the precise
   message) into the record's data array, sized from the estimate and scaled in place:
-  the reader holds the data array, the time column and one chunk's text and work arrays,
-  whatever the file's length.
+  the reader holds the data array, the time column (and a few arrays of its length while
+  it is checked) and one chunk's text and work arrays, whatever the file's length; the
+  memory estimate checked against the limit counts all of these.
 """
 
 from __future__ import annotations
@@ -95,7 +96,10 @@ CHUNK = 2**16
 
 #: Bytes of work memory per character of a chunk while it is parsed (byte masks, field
 #: offsets, the numbers' digit matrix), for the memory estimate.
-_WORK_PER_CHAR = 24
+_WORK_PER_CHAR = 32
+#: Arrays of the time column's length alive besides the data while the record is checked
+#: (time steps, their median, masks), for the memory estimate.
+_TIME_TEMPORARIES = 4
 
 _NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?", re.ASCII)
 _NON_FINITE = {"nan": "NaN", "inf": "infinite", "infinity": "infinite"}
@@ -535,7 +539,7 @@ class _Rows:
                            need * self.size / max(chars_read, 1) * 1.02)
         rows = int(min(max(estimate, need), self.max_samples))
         columns = self.n_channels + self.has_time
-        check_memory(rows * columns * 8.0 + _WORK_PER_CHAR * CHUNK,
+        check_memory(rows * (columns + _TIME_TEMPORARIES) * 8.0 + _WORK_PER_CHAR * CHUNK,
                      f"{self.where}: reading about {rows} rows of {columns} numbers")
         if self.values is None:
             self.values = np.empty((rows, self.n_channels))
