@@ -25,10 +25,8 @@ def _outcome(path, fmt, **kw):
     return ("ok", r.time.tobytes(), r.data.tobytes(), r.data.shape)
 
 
-def _line_by_line(monkeypatch, path, fmt, **kw):
-    with monkeypatch.context() as m:
-        m.setattr(logger._Parser, "_fast", lambda self, text, numbers: False)
-        return _outcome(path, fmt, **kw)
+def _line_by_line(path, fmt, **kw):
+    return _outcome(path, fmt, vectorised=False, **kw)
 
 
 def test_plain_decimals_read_exactly_as_float(tmp_path, monkeypatch):
@@ -142,7 +140,23 @@ def test_same_outcome_as_line_by_line(tmp_path, monkeypatch, case, chunk):
     p.write_bytes(text.encode())
     monkeypatch.setattr(logger, "CHUNK", chunk)
     kw = dict(max_field=40, clip_run=3)
-    assert _outcome(p, fmt, **kw) == _line_by_line(monkeypatch, p, fmt, **kw)
+    assert _outcome(p, fmt, **kw) == _line_by_line(p, fmt, **kw)
+
+
+@settings(max_examples=300, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(cells=st.lists(st.text(alphabet="0123456789.,+-eE x", max_size=18), min_size=2,
+                      max_size=30), comma=st.booleans())
+def test_any_field_text_same_as_line_by_line(tmp_path, cells, comma):
+    """Random field texts of digits, marks, signs, exponents, spaces and letters in one
+    column (a valid time column beside it): the same numbers bit for bit or the same
+    message as the line-by-line path."""
+    fmt = LoggerFormat(columns=("time", "a"), delimiter=";", header=False,
+                       decimal="," if comma else ".")
+    p = tmp_path / "cells.txt"
+    p.write_text("".join(f"{k}.5;{c}\n" for k, c in enumerate(cells)))
+    kw = dict(clip_run=None)
+    assert _outcome(p, fmt, **kw) == _line_by_line(p, fmt, **kw)
 
 
 @pytest.mark.parametrize("chunk", [32, 100, 2**16])

@@ -151,6 +151,8 @@ class LoggerFormat:
     kinds: Mapping[str, SensorKind] = field(default_factory=dict)
     skip_lines: int = 0
     clock: ClockSpec | None = None
+    _channels: tuple[str, ...] = field(default=(), init=False, repr=False, compare=False)
+    _sensors: tuple[Sensor, ...] = field(default=(), init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         cols = self.columns
@@ -176,6 +178,8 @@ class LoggerFormat:
             if self.clock.column == TIME and TIME not in cols:
                 raise InputError("LoggerFormat.clock: column 'time' (the time of day) needs "
                                  "a 'time' column")
+        other = (SKIP, TIME, *self.clock_columns)
+        object.__setattr__(self, "_channels", tuple(c for c in cols if c not in other))
         channels = self.channels
         if not channels:
             raise InputError(f"LoggerFormat.columns names no channel (only 'time', '-' and "
@@ -215,6 +219,8 @@ class LoggerFormat:
             except InputError as exc:
                 raise InputError(f"LoggerFormat.kinds[{name!r}]: {exc}") from None
         object.__setattr__(self, "kinds", MappingProxyType(kinds))
+        object.__setattr__(self, "_sensors", tuple(Sensor(name=c, kind=self.kind_of(c))
+                                                   for c in channels))
 
     @staticmethod
     def _check_scale(scale, channels):
@@ -249,8 +255,7 @@ class LoggerFormat:
     def channels(self) -> tuple[str, ...]:
         """The channel names (columns other than ``"time"``, ``"-"`` and the clock's), in
         file order."""
-        other = (SKIP, TIME, *self.clock_columns)
-        return tuple(c for c in self.columns if c not in other)
+        return self._channels
 
     @property
     def has_time(self) -> bool:
@@ -286,6 +291,8 @@ def _channel_sensors(fmt: LoggerFormat, sensors: Sequence[Sensor] | None) -> tup
             raise InputError(f"sensors: {s.name!r} is a {s.kind.value} sensor but the logger "
                              f"format says {fmt.kinds[s.name].value}")
         given[s.name] = s
+    if not given:
+        return fmt._sensors                         # immutable: shared by its records
     return tuple(given.get(c) or Sensor(name=c, kind=fmt.kind_of(c)) for c in fmt.channels)
 
 
@@ -376,6 +383,7 @@ def read_logger(
     min_samples: int = 2,
     clip_run: int | None = 10,
     time_tolerance: float = 0.01,
+    vectorised: bool = True,
 ) -> Record:
     """A record from one logger text file.
 
@@ -409,6 +417,10 @@ def read_logger(
         Allowed relative deviation of each time step from the median step (default 1 %),
         on top of one unit of the last time decimal the file writes; also the allowed
         relative difference between a clock column's and the record's durations.
+    vectorised : bool
+        Parse each chunk at once (default).  False parses every line one by one, the
+        reference path that gives the messages: the same record or message, slower (for
+        checks and benchmarks).
 
     Returns
     -------
@@ -432,6 +444,8 @@ def read_logger(
     if isinstance(time_tolerance, bool) or not isinstance(time_tolerance, (int, float)) \
             or not 0 <= time_tolerance < 0.5:
         raise InputError(f"time_tolerance must lie in [0, 0.5), got {time_tolerance!r}")
+    if not isinstance(vectorised, bool):
+        raise InputError(f"vectorised must be true or false, got {vectorised!r}")
     channel_sensors = _channel_sensors(fmt, sensors)
     p = Path(path)
     with open_regular(p) as raw:
@@ -441,7 +455,8 @@ def read_logger(
         try:
             with io.TextIOWrapper(raw, encoding="utf-8-sig", newline=None) as f:
                 parser = _Parser(f, p, fmt, size=size, max_bytes=max_bytes,
-                                 max_samples=max_samples, max_field=max_field)
+                                 max_samples=max_samples, max_field=max_field,
+                                 vectorised=vectorised)
                 parser.run()
         except UnicodeDecodeError:
             raise InputError(f"{p}: not UTF-8 text") from None
@@ -596,18 +611,21 @@ def _plain_numbers(a: np.ndarray, fs: np.ndarray, fe: np.ndarray, comma: bool) -
     b = a[fe - 1 - back]                            # (w, k); _PAD bytes keep the index >= 0
     d = b - np.uint8(48)
     digit = d < 10
+    digit &= inside
     mark = (b == 46) | (b == 44) if comma else b == 46
-    sign = (b == 45) | (b == 43)
-    first = a[fs]
-    lead = (first == 45) | (first == 43)
     mark &= inside
-    n_mark = mark.sum(axis=0, dtype=np.uint8).astype(np.int64)
-    n_digit = length - n_mark - lead
-    ok = ~((inside & ~(digit | mark | sign)).any(axis=0)       # only digits, mark, sign
-           | (sign & (back < length - 1)).any(axis=0))         # a sign only in front
-    ok &= (length <= _MAX_DIGITS + 2) & (n_mark <= 1) & (n_digit >= 1) \
-        & (n_digit <= _MAX_DIGITS)
-    d *= digit & inside                             # digits; 0 elsewhere (mark, sign, outside)
+    sign = (b == 45) | (b == 43)
+    sign &= inside
+    lead = a[fs]
+    negative = lead == 45
+    lead = negative | (lead == 43)
+    n_digit = digit.sum(axis=0, dtype=np.uint8)
+    n_mark = mark.sum(axis=0, dtype=np.uint8)
+    n_sign = sign.sum(axis=0, dtype=np.uint8)
+    # nothing but digits, one mark at most and a sign only in front
+    ok = ((n_digit + n_mark + n_sign == length) & (n_sign == lead) & (n_mark <= 1)
+          & (n_digit >= 1) & (n_digit <= _MAX_DIGITS) & (length <= _MAX_DIGITS + 2))
+    d *= digit                                      # digits; 0 elsewhere (mark, sign, outside)
     r = d[0].astype(float)
     for j in range(1, w):                           # r = the digits as one integer, the
         r *= 10.0                                   # mark's place counted as a 0 digit
@@ -618,7 +636,7 @@ def _plain_numbers(a: np.ndarray, fs: np.ndarray, fe: np.ndarray, comma: bool) -
     head = np.floor(r / (10.0 * p))                 # the digits before the mark (exact)
     mantissa = np.where(n_mark > 0, head * p + (r - head * 10.0 * p), r)
     values = mantissa / p
-    np.negative(values, out=values, where=first == 45)
+    np.negative(values, out=values, where=negative)
     return _Numbers(values=values, ok=ok, decimals=decimals)
 
 
@@ -626,14 +644,19 @@ class _Parser:
     """Reads a logger file's rows into :class:`_Rows` (see the module docstring)."""
 
     def __init__(self, f: TextIO, p: Path, fmt: LoggerFormat, *, size: int, max_bytes: int,
-                 max_samples: int, max_field: int) -> None:
+                 max_samples: int, max_field: int, vectorised: bool = True) -> None:
         self.f, self.p, self.fmt = f, p, fmt
+        self.vectorised, self.size = vectorised, size
         self.max_bytes, self.max_samples, self.max_field = max_bytes, max_samples, max_field
         cols = fmt.columns
         self.n = n = len(cols)
         self.max_line = max(4096, (max_field + 1) * (n + 1))
         channels = set(fmt.channels)
         self.keep = [j for j, c in enumerate(cols) if c in channels]
+        # the channel columns as a slice when they are adjacent (a view, not a gather)
+        contiguous = self.keep == list(range(self.keep[0], self.keep[-1] + 1))
+        self.keep_index = (slice(self.keep[0], self.keep[-1] + 1) if contiguous
+                           else np.array(self.keep))
         self.t_col = cols.index(TIME) if fmt.has_time else None
         self.numeric = self.keep if self.t_col is None else [self.t_col, *self.keep]
         self.clock_cols = {c: cols.index(c) for c in fmt.clock_columns}
@@ -681,7 +704,10 @@ class _Parser:
         pending = [] if self._is_header(first, self.line) else [first]
         start = self.line - len(pending)            # lines before the chunk's first
         while True:
-            text = self.f.read(CHUNK)
+            # equal chunks of at most CHUNK characters (no short tail chunk)
+            remaining = max(self.size - self.chars, 1)
+            pieces = -(-remaining // CHUNK)
+            text = self.f.read(min(CHUNK, -(-remaining // pieces) + 64))
             if text and not text.endswith("\n"):
                 text += self.f.readline(self.max_line + 2)
             if not text and not pending:
@@ -759,7 +785,7 @@ class _Parser:
             self._slow(start, lines)                # raises at the row past the limit
             return
         self.rows.reserve(numbers.size, self.chars)
-        if not self._fast(text, numbers):
+        if not (self.vectorised and self._fast(text, numbers)):
             self._slow(start, lines)
 
     def _fast(self, text: str, numbers: np.ndarray) -> bool:
@@ -795,8 +821,9 @@ class _Parser:
             if not (np.all(kinds[:, -1] == 10) and np.all(kinds[:, :-1] == code)):
                 return False
             fs = np.empty_like(ends)
-            fs.flat[0] = _PAD
-            fs.flat[1:] = ends.flat[:-1] + 1
+            flat = fs.reshape(-1)
+            flat[0] = _PAD
+            np.add(ends.reshape(-1)[:-1], 1, out=flat[1:])
             fe = ends
             if m == n + 1:
                 if np.any(fe[:, n] > fs[:, n]):
@@ -804,7 +831,8 @@ class _Parser:
                 fs, fe = fs[:, :n], fe[:, :n]
         if int((fe - fs).max()) > self.max_field:
             return False                            # (bytes: the line-by-line path decides)
-        data = self._numbers(a, b, fs[:, self.keep].ravel(), fe[:, self.keep].ravel())
+        keep = self.keep_index
+        data = self._numbers(a, b, fs[:, keep].ravel(), fe[:, keep].ravel())
         if data is None:
             return False
         time = None
