@@ -57,6 +57,38 @@ def test_plain_decimals_read_exactly_as_float(tmp_path, monkeypatch):
     assert slow_calls == []
 
 
+@pytest.mark.parametrize(
+    ("text", "fmt"),
+    [
+        ("time\ta\tb\n" + "".join(f"{k}.5\t{k}\t-{k}.25\n" for k in range(50)),
+         LoggerFormat(columns=("time", "a", "b"))),
+        ("".join(f"{k}.5;{k};-{k}.25;\r\n" for k in range(50)),            # CRLF, trailing ;
+         LoggerFormat(columns=("time", "a", "b"))),
+        ("".join(f"  {k}.5 \t {k}\t\t-{k}.25  \n" for k in range(50)),     # runs of blanks
+         LoggerFormat(columns=("time", "a", "b"), delimiter=" ")),
+        ("# logger v2\n\ntime,a,b\n" + "".join(f"{k}.5,{k},-{k}.25\n" + ("# mark\n\n"
+                                                                        if k % 7 == 0 else "")
+                                                for k in range(50)),
+         LoggerFormat(columns=("time", "a", "b"))),
+        ("".join(f"{k},5;{k};-{k},25;ok\n" for k in range(50)),             # decimal comma
+         LoggerFormat(columns=("time", "a", "b", "-"), decimal=",")),
+    ],
+)
+def test_common_layouts_stay_on_the_vectorised_path(tmp_path, monkeypatch, text, fmt):
+    """Tabs, CRLF, a trailing delimiter, runs of spaces and tabs, comments and blank
+    lines between rows, a decimal comma: read without the line-by-line path (the speed
+    contract), to the same record as it."""
+    p = tmp_path / "e.txt"
+    p.write_bytes(text.encode())
+    reference = _line_by_line(p, fmt)
+    original = logger._Parser._slow
+    calls = []
+    monkeypatch.setattr(logger._Parser, "_slow",
+                        lambda self, *a: calls.append(a) or original(self, *a))
+    assert _outcome(p, fmt) == reference and reference[0] == "ok"
+    assert calls == []
+
+
 def test_long_and_exponent_numbers_are_read_one_by_one(tmp_path):
     """Reference: ``float(s)``.  17-digit reprs and exponents (outside the vectorised
     forms) in the same file as plain decimals."""
@@ -159,6 +191,37 @@ def test_any_field_text_same_as_line_by_line(tmp_path, cells, comma):
     assert _outcome(p, fmt, **kw) == _line_by_line(p, fmt, **kw)
 
 
+@pytest.mark.parametrize(
+    ("extra", "outcome"),
+    [("x", "line 2 has 4 fields, the format has 3 columns (delimiter ';')"),
+     (" ", None), ("", None)],
+)
+def test_every_row_with_one_more_field(tmp_path, extra, outcome):
+    """Every data row with a fourth field: text is refused at the first row (the
+    line-by-line rule), blank is a trailing delimiter and dropped."""
+    p = tmp_path / "e.txt"
+    p.write_text("time;a;b\n" + "".join(f"{k}.5;1;2;{extra}\n" for k in range(20)))
+    fmt = LoggerFormat(columns=("time", "a", "b"))
+    result = _outcome(p, fmt)
+    assert result == _line_by_line(p, fmt)
+    if outcome is None:
+        assert result[0] == "ok" and result[3] == (20, 2)
+    else:
+        assert result == ("error", f"{p}: {outcome}")
+
+
+@pytest.mark.parametrize("ws", ["\x0b", "\x0c", "\x1c", "\u00a0", "\u2003"])
+def test_unusual_whitespace_with_the_whitespace_delimiter(tmp_path, ws):
+    """Whitespace that str.split() splits at but the vectorised path does not: inside a
+    field, at its edges, and as the whole separator."""
+    fmt = LoggerFormat(columns=("time", "a", "b"), delimiter=" ")
+    p = tmp_path / "e.txt"
+    for row in (f"{{}} 1{ws}2 3", f"{{}} 1{ws} 2", f"{{}}{ws}1 2", f"{ws}{{}} 1 2{ws}"):
+        p.write_text("".join(row.format(f"{k}.5") + "\n" for k in range(10)),
+                     encoding="utf-8")
+        assert _outcome(p, fmt) == _line_by_line(p, fmt)
+
+
 @pytest.mark.parametrize("chunk", [32, 100, 2**16])
 def test_errors_name_the_right_line_across_chunks(tmp_path, monkeypatch, chunk):
     """A bad field at line 150 after comments and blank lines in the earlier chunks: the
@@ -178,3 +241,10 @@ def test_errors_name_the_right_line_across_chunks(tmp_path, monkeypatch, chunk):
     p.write_text("\n".join(rows) + "\n")
     r = read_logger(p, LoggerFormat(columns=("time", "a", "b")))
     assert r.data.shape == (200, 2) and r.data[199, 0] == 199.5
+
+
+def test_vectorised_must_be_a_bool(tmp_path):
+    p = tmp_path / "e.txt"
+    p.write_text("0;1\n1;2\n")
+    with pytest.raises(InputError, match="vectorised must be true or false, got 'no'"):
+        read_logger(p, LoggerFormat(columns=("time", "a")), vectorised="no")

@@ -103,7 +103,6 @@ _TIME_TEMPORARIES = 4
 
 _NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?", re.ASCII)
 _NON_FINITE = {"nan": "NaN", "inf": "infinite", "infinity": "infinite"}
-_ODD_SPACE = re.compile(r"[\x0b\x0c\x1c-\x1f]")    # whitespace str.split() knows, rare in files
 
 
 def _delim_name(d: str) -> str:
@@ -792,8 +791,8 @@ class _Parser:
         """Parse content lines (``text``, each ended by a newline) at once; False (nothing
         added) when anything is unusual."""
         n, m_rows = self.n, numbers.size
-        if self.delim == " " and (not text.isascii() or _ODD_SPACE.search(text)):
-            return False
+        # (whitespace other than space and tab, which str.split also splits at, either
+        # changes a row's field count or sits at a field's edge where _clean strips it)
         b = b"\n" * _PAD + text.encode()
         a = np.frombuffer(b, dtype=np.uint8)
         t = a[_PAD:]
