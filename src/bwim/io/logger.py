@@ -98,7 +98,8 @@ CHUNK = 2**16
 #: offsets, the numbers' digit matrix), for the memory estimate.
 _WORK_PER_CHAR = 32
 #: Arrays of the time column's length alive besides the data while the record is checked
-#: (time steps, their median, masks), for the memory estimate.
+#: (time steps, their median, masks), for the memory estimate; a mask of the data's shape
+#: (finite samples, clipping) is counted too.
 _TIME_TEMPORARIES = 4
 
 _NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?", re.ASCII)
@@ -553,7 +554,10 @@ class _Rows:
                            need * self.size / max(chars_read, 1) * 1.02)
         rows = int(min(max(estimate, need), self.max_samples))
         columns = self.n_channels + self.has_time
-        check_memory(rows * (columns + _TIME_TEMPORARIES) * 8.0 + _WORK_PER_CHAR * CHUNK,
+        # the values, and the larger of one chunk's work (while reading) and a mask of the
+        # values' shape with the time checks' arrays (after reading)
+        extra = max(_WORK_PER_CHAR * CHUNK, rows * (columns + 8.0 * _TIME_TEMPORARIES))
+        check_memory(rows * columns * 8.0 + extra,
                      f"{self.where}: reading about {rows} rows of {columns} numbers")
         if self.values is None:
             self.values = np.empty((rows, self.n_channels))
