@@ -15,8 +15,9 @@ clock time of day with 9 decimals) and one long recording (``--minutes``, defaul
 
 Every ratio is measured in the same run (median wall time of repeats, one core, one BLAS
 thread).  Events/s is reading alone, one file after the other.  The long file is also read
-in a child process that reports its peak resident memory above the imports, beside the
-size of the record's arrays (the reader streams: the data array plus one chunk).
+in a child process that reports the peak of its allocated memory (tracemalloc, numpy's
+arrays included) while reading, beside the size of the record's arrays (the reader
+streams: the data array plus one chunk's work, then the checks' temporaries).
 
     python -m benchmarks.bench_logger [--minutes 60]
 """
@@ -112,16 +113,13 @@ def event_rows(repeat: int = 7):
 
 
 _CHILD = textwrap.dedent("""
-    import resource, sys, time
+    import sys, tracemalloc
     from bwim.io.logger import LoggerFormat, read_logger
     path, columns = sys.argv[1], tuple(sys.argv[2].split(","))
-    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    t0 = time.perf_counter()
-    r = read_logger(path, LoggerFormat(columns=columns), max_bytes=2**33,
-                    max_samples=10**8, clip_run=None)
-    wall = time.perf_counter() - t0
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    print(wall, (peak - before) * 1024, r.data.nbytes + r.time.nbytes)
+    fmt = LoggerFormat(columns=columns)
+    tracemalloc.start()
+    r = read_logger(path, fmt, max_bytes=2**33, max_samples=10**8, clip_run=None)
+    print(tracemalloc.get_traced_memory()[1], r.data.nbytes + r.time.nbytes)
 """)
 
 
@@ -143,10 +141,10 @@ def long_rows(minutes: float, *, baselines: bool = True):
         new = once(lambda: read_logger(p, fmt, **kw))
         out = subprocess.run([sys.executable, "-c", _CHILD, str(p), ",".join(columns)],
                              capture_output=True, text=True, check=True).stdout.split()
-        _, rss, arrays = (float(v) for v in out)
+        peak, arrays = (float(v) for v in out)
         row = [f"{minutes:g} min, {n} rows", f"{size / 2**20:.0f}", f"{new:.2f}",
                f"{size / 2**20 / new:.0f}", f"{minutes * 60 / new:.0f}",
-               f"{rss / 2**20:.0f} / {arrays / 2**20:.0f}"]
+               f"{peak / 2**20:.0f} / {arrays / 2**20:.0f}"]
         if baselines:
             old = once(lambda: read_logger(p, fmt, vectorised=False, **kw))
             lt = once(lambda: np.loadtxt(p, delimiter="\t", skiprows=1))
@@ -173,7 +171,7 @@ def main(argv=None) -> None:
                 event_rows())
     print_table("A long recording (time + 20 channels, 512 Hz): streamed",
                 ["file", "MiB", "read_logger s", "MiB/s", "x real time",
-                 "peak RSS / arrays MiB", "line by line s (x)", "loadtxt s (x)",
+                 "peak / arrays MiB", "line by line s (x)", "loadtxt s (x)",
                  "pandas s (x)"],
                 long_rows(args.minutes, baselines=not args.no_baselines))
 

@@ -50,7 +50,9 @@ Contract
   off the median by more than ``time_tolerance`` of it, plus one unit of the file's last
   written time decimal); a time column that disagrees with ``sampling_rate``; a clipped
   channel (see :func:`read_logger`); a clock that cannot be read (see
-  :mod:`bwim.io.clock`).  Of several problems, the first in the file is reported.
+  :mod:`bwim.io.clock`).  A problem of the text (lines, fields, numbers, the row count) is
+  reported at the first line that has one, before the checks of the whole record (time,
+  clipping, clock).
 * Streaming, bounded memory.  The file is read once, in chunks of at most :data:`CHUNK`
   characters (whole lines), each parsed at once (vectorised over its bytes; a chunk with
   anything unusual is re-read line by line, which gives the same numbers or the precise
@@ -708,9 +710,10 @@ class _Parser:
         start = self.line - len(pending)            # lines before the chunk's first
         while True:
             # equal chunks of at most CHUNK characters (no short tail chunk)
-            remaining = max(self.size - self.chars, 1)
-            pieces = -(-remaining // CHUNK)
-            text = self.f.read(min(CHUNK, -(-remaining // pieces) + 64))
+            remaining = self.size - self.chars
+            size = CHUNK if remaining <= 0 else \
+                min(CHUNK, -(-remaining // -(-remaining // CHUNK)) + 64)
+            text = self.f.read(size)
             if text and not text.endswith("\n"):
                 text += self.f.readline(self.max_line + 2)
             if not text and not pending:
