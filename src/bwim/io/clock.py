@@ -120,7 +120,10 @@ def _parse_pattern(pattern: str, what: str) -> tuple[str, frozenset[str]]:
 
 
 def _has_date(used: frozenset[str]) -> bool:
-    return bool(used & {"Y", "y"}) and ("j" in used or ({"m", "b", "B"} & used and "d" in used))
+    """Whether strptime directives give a full date: a year, and a day of the year or a
+    month and a day."""
+    month_day = bool(used & {"m", "b", "B"}) and "d" in used
+    return bool(used & {"Y", "y"}) and ("j" in used or month_day)
 
 
 @dataclass(frozen=True, kw_only=True)
