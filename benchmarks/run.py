@@ -14,6 +14,7 @@ from benchmarks import (  # noqa: E402
     bench_batch,
     bench_calibration,
     bench_fe,
+    bench_logger,
     bench_mfi,
     bench_mismatch,
     bench_multirun,
@@ -36,6 +37,7 @@ def main() -> None:
     bench_optimize.main()
     bench_calibration.main()
     bench_testday.main()
+    bench_logger.main([])
     bench_site.main()
     bench_mismatch.main()
 

@@ -2,6 +2,7 @@
 
 import os
 import re
+from datetime import datetime
 from pathlib import Path
 
 import h5py
@@ -25,7 +26,10 @@ def raises(message: str):
     return pytest.raises(InputError, match="^" + re.escape(message) + "$")
 
 
-def synthetic_record(rng, *, truths=True) -> bwim.Record:
+CLOCK = datetime(2015, 10, 1, 9, 45, 52, 576000)
+
+
+def synthetic_record(rng, *, truths=True, clock=CLOCK) -> bwim.Record:
     t = 0.001 * np.arange(50)
     passages = (
         bwim.Passage(speed=20.0, lane=2.0, axle_spacings=[5.5], track_width=2.0, delay=0.0),
@@ -46,7 +50,8 @@ def synthetic_record(rng, *, truths=True) -> bwim.Record:
                        passages=passages, truths=tr,
                        convergence=VBIConvergence(method="iterative", iterations=7,
                                                   change=3.2e-7, converged=False),
-                       settings=bwim.SimulationSettings(approach=37.5, tail=0.125))
+                       settings=bwim.SimulationSettings(approach=37.5, tail=0.125),
+                       clock=clock)
 
 
 def assert_same_passage(p, q):
@@ -72,11 +77,12 @@ def assert_same_record(r, q):
             assert a.dtype == b.dtype and np.array_equal(a, b)
     assert r.convergence == q.convergence
     assert r.settings == q.settings
+    assert r.clock == q.clock
 
 
 # --- CSV -------------------------------------------------------------------------------------
 def test_csv_round_trip_is_exact_and_columns_follow_the_sensors(tmp_path, rng):
-    rec = synthetic_record(rng, truths=False)
+    rec = synthetic_record(rng, truths=False, clock=None)
     path = tmp_path / "rec.csv"
     io.write_csv_record(rec, path)
     assert path.read_text().splitlines()[0] == 'time,a,b,"strain_y@3,2"'
@@ -176,8 +182,47 @@ def test_hdf5_record_round_trip_exact(tmp_path, rng):
     assert_same_record(io.read_record(tmp_path / "bare.h5"), bare)
 
 
+def test_hdf5_clock_round_trip_and_older_files(tmp_path, rng):
+    """Record.clock (to the microsecond) is an ISO attribute; a file without it (as bwim
+    wrote before the clock existed: the attribute deleted) reads as None; a damaged one is
+    refused naming the file."""
+    rec = synthetic_record(rng, clock=datetime(1999, 12, 31, 23, 59, 59, 999999))
+    io.write_record(rec, tmp_path / "r.h5")
+    with h5py.File(tmp_path / "r.h5", "r") as f:
+        assert f.attrs["clock"] == "1999-12-31T23:59:59.999999"
+    assert io.read_record(tmp_path / "r.h5").clock == rec.clock
+    with h5py.File(tmp_path / "r.h5", "a") as f:
+        del f.attrs["clock"]
+    assert io.read_record(tmp_path / "r.h5").clock is None
+    with h5py.File(tmp_path / "r.h5", "a") as f:
+        f.attrs["clock"] = "yesterday"
+    with raises(f"{tmp_path / 'r.h5'}: damaged bwim record file (ValueError)"):
+        io.read_record(tmp_path / "r.h5")
+
+
+def test_csv_clock_round_trip(tmp_path, rng):
+    """The clock is a '# clock = ISO' line before the header: written, read back, skipped
+    by readers that do not know it (read_numeric_csv); no line: None; a bad one refused."""
+    rec = synthetic_record(rng, truths=False)
+    p = tmp_path / "r.csv"
+    io.write_csv_record(rec, p)
+    assert p.read_text().splitlines()[0] == "# clock = 2015-10-01T09:45:52.576000"
+    assert io.read_csv_record(p, SENSORS).clock == CLOCK
+    bare = bwim.Record(time=rec.time, data=rec.data, sensors=SENSORS)
+    io.write_csv_record(bare, p)
+    assert not p.read_text().startswith("#") and io.read_csv_record(p, SENSORS).clock is None
+    lines = p.read_text().splitlines()
+    p.write_text("\n".join(["# exported by hand", "#clock=2015-10-01 09:45:52", *lines,
+                            "# clock = not read after the header"]) + "\n")
+    assert io.read_csv_record(p, SENSORS).clock == datetime(2015, 10, 1, 9, 45, 52)
+    p.write_text("\n".join(["# clock = 1 October", *lines]) + "\n")
+    with raises(f"{p}: line 1: '1 October' is not an ISO 8601 date and time (the record's "
+                "clock)"):
+        io.read_csv_record(p, SENSORS)
+
+
 def test_hdf5_several_records(tmp_path, rng):
-    recs = [synthetic_record(rng), synthetic_record(rng, truths=False)]
+    recs = [synthetic_record(rng), synthetic_record(rng, truths=False, clock=None)]
     io.write_records(recs, tmp_path / "rs.h5")
     back = io.read_records(tmp_path / "rs.h5")
     assert len(back) == 2

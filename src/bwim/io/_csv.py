@@ -11,6 +11,10 @@ Contract
   not a number, a NaN or infinite sample, and no data rows.
 * The file's size is checked against :func:`bwim.limits.check_memory` before it is read,
   and a line longer than :data:`MAX_LINE` characters is refused (read line by line).
+* :func:`open_regular` opens a file for reading only if it is a regular file: a folder, a
+  FIFO (named pipe), a device or a socket is refused at once with a one-line
+  :class:`~bwim.errors.InputError` (it is opened without blocking and never read, so a
+  FIFO without a writer cannot hang the reader).
 * :func:`check_time` validates a time column (s) read from a file: strictly increasing
   always; with a ``tolerance``, also uniformly sampled (no dropped sample, no jitter).
 """
@@ -18,8 +22,10 @@ Contract
 from __future__ import annotations
 
 import csv
+import io
 import math
 import os
+import stat
 from pathlib import Path
 
 import numpy as np
@@ -27,7 +33,7 @@ import numpy as np
 from bwim.errors import InputError
 from bwim.limits import check_memory
 
-__all__ = ["check_time", "decimal_resolution", "read_numeric_csv"]
+__all__ = ["check_time", "decimal_resolution", "open_regular", "read_numeric_csv"]
 
 
 #: Longest line (characters) a numeric CSV file may have: 64 Ki characters hold thousands
@@ -38,14 +44,58 @@ MAX_LINE = 65536
 _BYTES_PER_CHAR = 8
 
 
+_KINDS = ((stat.S_ISDIR, "a directory"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
+          (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+          (stat.S_ISSOCK, "a socket"))
+
+
+def _cannot_read(path: Path, exc: BaseException) -> InputError:
+    why = getattr(exc, "strerror", None) or str(exc)
+    return InputError(f"{path}: cannot read: {why.lower()}")
+
+
+def open_regular(path: str | os.PathLike) -> io.BufferedReader:
+    """``path`` opened for binary reading if it is a regular file (symbolic links
+    followed); anything else is refused before a byte is read.
+
+    Raises
+    ------
+    InputError
+        No such file, not a regular file (a folder, a FIFO, a device, a socket), or not
+        readable; the message names the path.
+    """
+    p = Path(path)
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0)
+    try:
+        fd = os.open(p, flags)
+    except FileNotFoundError:
+        raise InputError(f"{p}: no such file") from None
+    except (OSError, ValueError) as exc:
+        raise _cannot_read(p, exc) from None
+    try:
+        mode = os.fstat(fd).st_mode
+        if not stat.S_ISREG(mode):
+            kind = next((name for test, name in _KINDS if test(mode)), "not a file")
+            raise InputError(f"{p}: is {kind}, not a regular file")
+        if flags & getattr(os, "O_NONBLOCK", 0) and hasattr(os, "set_blocking"):
+            os.set_blocking(fd, True)
+        return open(fd, "rb", closefd=True)
+    except BaseException as exc:
+        os.close(fd)
+        if isinstance(exc, OSError):
+            raise _cannot_read(p, exc) from None
+        raise
+
+
 def _read_lines(path: Path) -> list[str]:
     try:
-        size = os.stat(path).st_size
-        check_memory(size * _BYTES_PER_CHAR, f"{path}: reading a CSV file of {size} bytes")
-        lines = []
-        with open(path, encoding="utf-8-sig", newline="") as f:
-            while raw := f.readline(MAX_LINE + 2):
-                text = raw.rstrip("\r\n")
+        with open_regular(path) as raw:
+            size = os.fstat(raw.fileno()).st_size
+            check_memory(size * _BYTES_PER_CHAR, f"{path}: reading a CSV file of {size} bytes")
+            lines = []
+            f = io.TextIOWrapper(raw, encoding="utf-8-sig", newline="")
+            while line := f.readline(MAX_LINE + 2):
+                text = line.rstrip("\r\n")
                 if len(text) > MAX_LINE:
                     raise InputError(f"{path}: line {len(lines) + 1} is longer than "
                                      f"{MAX_LINE} characters")
@@ -152,7 +202,7 @@ def check_time(
     ----------
     time : ndarray, shape (n_t,)
         Sample times, s, finite, n_t >= 2.
-    lines : ndarray of int, shape (n_t,)
+    lines : ndarray of int, shape (n_t,), or any sequence indexable by sample
         File line number of each sample (for the messages).
     where : str or path
         The file, first word of every message.

@@ -6,7 +6,8 @@ Contract
   ``"records"``, ``"identification"``, ``"static_weights"``, ``"influence_line"``) and
   ``bwim_format_version`` (an integer, :data:`VERSION`).  :func:`h5_reader` refuses a
   missing file, a file that is not HDF5, a file of another format and a newer version,
-  each with an :class:`~bwim.errors.InputError` naming the file; a missing dataset inside
+  each with an :class:`~bwim.errors.InputError` naming the file (a path that is not a regular
+  file, such as a FIFO or a device, is refused before it is opened); a missing dataset inside
   is reported as a damaged file, and so is any content of the wrong type, shape or
   encoding (the reader never lets a TypeError or ValueError escape).
 * :func:`h5_writer` writes atomically (:func:`bwim.io.atomic.atomic_output`).
@@ -27,6 +28,7 @@ import h5py
 import numpy as np
 
 from bwim.errors import InputError
+from bwim.io._csv import open_regular
 from bwim.io.atomic import atomic_output
 from bwim.limits import check_memory
 from bwim.records import Passage
@@ -56,6 +58,8 @@ def h5_reader(path: str | os.PathLike, *fmts: str) -> Iterator[h5py.File]:
         raise InputError(f"{p}: no such file")
     if p.is_dir():
         raise InputError(f"{p}: is a folder, not a file")
+    with open_regular(p):                 # a FIFO or a device: refused, never read
+        pass
     try:
         f = h5py.File(p, "r")
     except (OSError, ValueError, RuntimeError, KeyError):

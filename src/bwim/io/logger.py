@@ -3,10 +3,12 @@
 Contract
 --------
 * A :class:`LoggerFormat` says what the columns of a logger file are: ``columns`` names
-  each column in file order; ``"-"`` skips a column (its content is never read, so it may
-  hold text such as a date or a status); ``"time"`` (at most once) is the time column, s.
-  Every other name is a channel, in that order, with a :class:`~bwim.SensorKind` from
-  ``kinds`` (default ``strain_x``; axle detectors are ``axle_detector``).
+  each column in file order; ``"-"`` skips a column (its content is never parsed, so it
+  may hold text such as a status); ``"time"`` (at most once) is the time column, s; the
+  columns that ``clock`` names (:class:`~bwim.io.clock.ClockSpec`: a clock column, a date
+  column) hold the wall-clock time as text or numbers.  Every other name is a channel, in
+  that order, with a :class:`~bwim.SensorKind` from ``kinds`` (default ``strain_x``; axle
+  detectors are ``axle_detector``).
 * :func:`read_logger` returns a :class:`~bwim.Record` with ``passages = ()``: ``time`` is
   the time column **as written** (s, not shifted: a clock time of day stays one), or
   ``k / sampling_rate`` (k = 0, 1, ...) without a time column; ``data`` (n_t, n_channels)
@@ -14,7 +16,11 @@ Contract
   file's units, which is right for data already in strain and for influence-line weighing,
   which works on uncalibrated units); ``sensors`` are one :class:`~bwim.Sensor` per
   channel, the caller's (by name) when given, else ``Sensor(name=..., kind=...)`` without
-  a position.
+  a position; ``clock`` is the wall-clock date and time at record time 0
+  (:func:`bwim.io.clock.logger_clock`): by default from a timestamp in the file name
+  (``2015-10-01-09-45-52-576``, ``20151001_094552``, ISO 8601), None when the name has
+  none; ``LoggerFormat.clock`` sets a name pattern, a clock column or a date and time
+  column pair instead (see :mod:`bwim.io.clock`).
 * Text layout.  Any file extension.  UTF-8, a byte-order mark ignored; LF, CRLF or CR line
   endings; blank lines and lines whose first non-blank character is ``#`` are skipped
   anywhere (no comment after data on a line); ``skip_lines`` raw lines are dropped first
@@ -28,26 +34,41 @@ Contract
   enclosed in double quotes (no delimiter or quote inside).  Numbers are decimal ASCII
   (``1``, ``-2.5``, ``.5``, ``3e-06``); with ``decimal=","`` the decimal mark is a comma,
   which needs a ``;``, tab or whitespace delimiter (auto-detection then never picks ``,``).
+  Every number is read to the nearest double, exactly as ``float`` reads it.
 * Refused with an :class:`~bwim.errors.InputError` whose one-line message starts with the
   file and names the line (and column) where there is one: a missing, unreadable, non-UTF-8
-  or empty file; a file larger than ``max_bytes`` (refused before reading); a line longer
-  than the format allows or a field longer than ``max_field`` characters; a row with a
-  missing or extra field; an empty field, text that is not a number, NaN or an infinite
-  sample in a channel or the time column; fewer than ``min_samples`` or more than
-  ``max_samples`` rows; time that goes back or repeats, a dropped sample (a step over 1.5 x
-  the median step) or jitter (a step off the median by more than ``time_tolerance`` of it,
-  plus one unit of the file's last written time decimal); a time column that disagrees
-  with ``sampling_rate``; a clipped channel (see :func:`read_logger`).
-* The file is streamed once, line by line, into one flat float buffer that becomes the
-  record's data array (scaled in place): the numbers are held in memory once.
+  or empty file; a path that is not a regular file (a folder, a FIFO, a device: refused at
+  once, never read); a file larger than ``max_bytes`` (refused before reading); a data
+  array (estimated from the file's size and the length of its first lines, before it is
+  allocated) over the memory limit (:func:`bwim.limits.check_memory`,
+  ``BWIM_MEMORY_LIMIT``); a line longer than the format allows or a field longer than
+  ``max_field`` characters; a row with a missing or extra field; an empty field, text that
+  is not a number (a number written with a decimal comma while ``decimal`` is ``"."``:
+  the message hints ``decimal = ","``), NaN or an infinite sample in a channel or the time
+  column; fewer than ``min_samples`` or more than ``max_samples`` rows; time that goes
+  back or repeats, a dropped sample (a step over 1.5 x the median step) or jitter (a step
+  off the median by more than ``time_tolerance`` of it, plus one unit of the file's last
+  written time decimal); a time column that disagrees with ``sampling_rate``; a clipped
+  channel (see :func:`read_logger`); a clock that cannot be read (see
+  :mod:`bwim.io.clock`).  A problem of the text (lines, fields, numbers, the row count) is
+  reported at the first line that has one, before the checks of the whole record (time,
+  clipping, clock).
+* Streaming, bounded memory.  The file is read once, in chunks of at most :data:`CHUNK`
+  characters (whole lines), each parsed at once (vectorised over its bytes; a chunk with
+  anything unusual is re-read line by line, which gives the same numbers or the precise
+  message) into the record's data array, sized from the estimate and scaled in place:
+  the reader holds the data array, the time column (and a few arrays of its length while
+  it is checked) and one chunk's text and work arrays, whatever the file's length; the
+  memory estimate checked against the limit counts all of these.
 """
 
 from __future__ import annotations
 
+import io
 import math
 import os
 import re
-from array import array
+from bisect import bisect_right
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -57,11 +78,13 @@ from typing import TextIO
 import numpy as np
 
 from bwim.errors import InputError, parse_enum, require_positive
-from bwim.io._csv import check_time
+from bwim.io._csv import check_time, open_regular
+from bwim.io.clock import ClockRow, ClockSpec, logger_clock
+from bwim.limits import check_memory
 from bwim.records import Record
 from bwim.sensors import Sensor, SensorKind
 
-__all__ = ["DELIMITERS", "LoggerFormat", "read_logger"]
+__all__ = ["CHUNK", "DELIMITERS", "LoggerFormat", "read_logger"]
 
 DELIMITERS = (";", "\t", ",", " ")
 """Delimiters in the order auto-detection tries them (``" "``: any run of whitespace)."""
@@ -69,6 +92,17 @@ DELIMITERS = (";", "\t", ",", " ")
 SKIP = "-"
 TIME = "time"
 MiB = 2**20
+
+CHUNK = 2**16
+"""Characters of text parsed at once (whole lines are added to finish the last one)."""
+
+#: Bytes of work memory per character of a chunk while it is parsed (byte masks, field
+#: offsets, the numbers' digit matrix), for the memory estimate.
+_WORK_PER_CHAR = 32
+#: Arrays of the time column's length alive besides the data while the record is checked
+#: (time steps, their median, masks), for the memory estimate; a mask of the data's shape
+#: (finite samples, clipping) is counted too.
+_TIME_TEMPORARIES = 4
 
 _NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?", re.ASCII)
 _NON_FINITE = {"nan": "NaN", "inf": "infinite", "infinity": "infinite"}
@@ -85,8 +119,8 @@ class LoggerFormat:
     Parameters
     ----------
     columns : sequence of str
-        One name per column, in file order: ``"time"`` (at most once), ``"-"`` (skipped)
-        or a channel name (unique).
+        One name per column, in file order: ``"time"`` (at most once), ``"-"`` (skipped),
+        a column of ``clock``, or a channel name (unique).
     delimiter : str, optional
         ``","``, ``";"``, ``"\\t"`` or ``" "`` (any run of spaces/tabs); None: detected.
     header : bool, optional
@@ -104,6 +138,10 @@ class LoggerFormat:
         Sensor kind of channels by name (default ``strain_x``).
     skip_lines : int
         Raw lines to drop at the start of the file (a logger's preamble), >= 0.
+    clock : ClockSpec, optional
+        Where the files' wall-clock time is (:mod:`bwim.io.clock`); None: a timestamp in
+        the file name in a common form, if there is one.  Its ``column`` and
+        ``date_column`` (other than ``"time"``) must be columns of ``columns``.
     """
 
     columns: tuple[str, ...]
@@ -114,6 +152,9 @@ class LoggerFormat:
     decimal: str = "."
     kinds: Mapping[str, SensorKind] = field(default_factory=dict)
     skip_lines: int = 0
+    clock: ClockSpec | None = None
+    _channels: tuple[str, ...] = field(default=(), init=False, repr=False, compare=False)
+    _sensors: tuple[Sensor, ...] = field(default=(), init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         cols = self.columns
@@ -128,10 +169,23 @@ class LoggerFormat:
                 raise InputError(f"LoggerFormat.columns: {c!r} appears twice")
         cols = tuple(cols)
         object.__setattr__(self, "columns", cols)
+        if self.clock is not None:
+            if not isinstance(self.clock, ClockSpec):
+                raise InputError(f"LoggerFormat.clock must be a bwim.io.clock.ClockSpec or "
+                                 f"None, got {type(self.clock).__name__}")
+            for c in self.clock.columns:
+                if c not in cols:
+                    raise InputError(f"LoggerFormat.clock: the column {c!r} is not one of "
+                                     f"the columns {list(cols)}")
+            if self.clock.column == TIME and TIME not in cols:
+                raise InputError("LoggerFormat.clock: column 'time' (the time of day) needs "
+                                 "a 'time' column")
+        other = (SKIP, TIME, *self.clock_columns)
+        object.__setattr__(self, "_channels", tuple(c for c in cols if c not in other))
         channels = self.channels
         if not channels:
-            raise InputError(f"LoggerFormat.columns names no channel (only 'time' and '-'): "
-                             f"{list(cols)}")
+            raise InputError(f"LoggerFormat.columns names no channel (only 'time', '-' and "
+                             f"clock columns): {list(cols)}")
         if self.delimiter is not None and self.delimiter not in DELIMITERS:
             raise InputError(f"LoggerFormat.delimiter must be one of ',', ';', tab or ' ' "
                              f"(whitespace), or None to detect it; got {self.delimiter!r}")
@@ -167,6 +221,8 @@ class LoggerFormat:
             except InputError as exc:
                 raise InputError(f"LoggerFormat.kinds[{name!r}]: {exc}") from None
         object.__setattr__(self, "kinds", MappingProxyType(kinds))
+        object.__setattr__(self, "_sensors", tuple(Sensor(name=c, kind=self.kind_of(c))
+                                                   for c in channels))
 
     @staticmethod
     def _check_scale(scale, channels):
@@ -193,9 +249,15 @@ class LoggerFormat:
         return factor("", scale)
 
     @property
+    def clock_columns(self) -> tuple[str, ...]:
+        """The columns the clock reads (other than ``"time"``), in ``clock``'s order."""
+        return () if self.clock is None else self.clock.columns
+
+    @property
     def channels(self) -> tuple[str, ...]:
-        """The channel names (columns other than ``"time"`` and ``"-"``), in file order."""
-        return tuple(c for c in self.columns if c not in (SKIP, TIME))
+        """The channel names (columns other than ``"time"``, ``"-"`` and the clock's), in
+        file order."""
+        return self._channels
 
     @property
     def has_time(self) -> bool:
@@ -231,6 +293,8 @@ def _channel_sensors(fmt: LoggerFormat, sensors: Sequence[Sensor] | None) -> tup
             raise InputError(f"sensors: {s.name!r} is a {s.kind.value} sensor but the logger "
                              f"format says {fmt.kinds[s.name].value}")
         given[s.name] = s
+    if not given:
+        return fmt._sensors                         # immutable: shared by its records
     return tuple(given.get(c) or Sensor(name=c, kind=fmt.kind_of(c)) for c in fmt.channels)
 
 
@@ -238,37 +302,6 @@ def _limit(name: str, value: object, low: int) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or value < low:
         raise InputError(f"{name} must be an integer >= {low}, got {value!r}")
     return value
-
-
-class _Lines:
-    """Content lines of an open text file: (line number, text), with size limits."""
-
-    def __init__(self, f: TextIO, where: Path, *, max_line: int, max_chars: int,
-                 skip: int) -> None:
-        self.f, self.where, self.max_line, self.max_chars = f, where, max_line, max_chars
-        self.skip = skip
-        self.number = 0
-        self.chars = 0
-
-    def __iter__(self):
-        while True:
-            raw = self.f.readline(self.max_line + 2)
-            if not raw:
-                return
-            self.number += 1
-            self.chars += len(raw)
-            if self.chars > self.max_chars:
-                raise InputError(f"{self.where}: larger than max_bytes = {self.max_chars} "
-                                 "(the file grew while read?)")
-            text = raw.rstrip("\r\n")
-            if len(text) > self.max_line:
-                raise InputError(f"{self.where}: line {self.number} is longer than "
-                                 f"{self.max_line} characters")
-            if self.number <= self.skip:
-                continue
-            s = text.strip()
-            if s and not s.startswith("#"):
-                yield self.number, text
 
 
 def _split(text: str, delim: str, n: int) -> list[str]:
@@ -299,13 +332,15 @@ def _is_number(s: str, decimal: str) -> bool:
     return _NUMBER.fullmatch(s.replace(",", ".") if decimal == "," else s) is not None
 
 
-def _bad_field(s: str) -> str:
+def _bad_field(s: str, decimal: str) -> str:
     if not s:
         return "empty field"
     kind = _NON_FINITE.get(s.lower().lstrip("+-"))
     if kind:
         return f"{kind} sample"
     shown = s if len(s) <= 20 else s[:20] + "..."
+    if decimal == "." and "," in s and _NUMBER.fullmatch(s.replace(",", ".")):
+        return f'{shown!r} is not a number (a decimal comma? set decimal = ",")'
     return f"{shown!r} is not a number"
 
 
@@ -317,12 +352,16 @@ def _runs(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _check_clipping(values: np.ndarray, names: Sequence[str], kinds: Sequence[SensorKind],
-                    lines: np.ndarray, where: Path, run: int) -> None:
+                    lines, where: Path, run: int) -> None:
+    highs, lows = values.max(axis=0), values.min(axis=0)
+    # a channel can only be clipped where at least `run` samples sit at its extreme
+    at_high = (values == highs).sum(axis=0) >= run
+    at_low = (values == lows).sum(axis=0) >= run
     for j, (name, kind) in enumerate(zip(names, kinds, strict=True)):
-        if kind is SensorKind.AXLE_DETECTOR:
+        if kind is SensorKind.AXLE_DETECTOR or not (at_high[j] or at_low[j]):
             continue
         col = values[:, j]
-        for label, extreme in (("maximum", col.max()), ("minimum", col.min())):
+        for label, extreme in (("maximum", highs[j]), ("minimum", lows[j])):
             if col[0] == extreme or col[-1] == extreme:
                 continue                    # the channel's resting value, not a saturation
             starts, lengths = _runs(col == extreme)
@@ -346,13 +385,14 @@ def read_logger(
     min_samples: int = 2,
     clip_run: int | None = 10,
     time_tolerance: float = 0.01,
+    vectorised: bool = True,
 ) -> Record:
     """A record from one logger text file.
 
     Parameters
     ----------
     path : str or path
-        The logger file (any extension).
+        The logger file (any extension; a regular file).
     fmt : LoggerFormat
         Its layout.
     sensors : sequence of Sensor, optional
@@ -377,13 +417,18 @@ def read_logger(
         None: no check.
     time_tolerance : float
         Allowed relative deviation of each time step from the median step (default 1 %),
-        on top of one unit of the last time decimal the file writes.
+        on top of one unit of the last time decimal the file writes; also the allowed
+        relative difference between a clock column's and the record's durations.
+    vectorised : bool
+        Parse each chunk at once (default).  False parses every line one by one, the
+        reference path that gives the messages: the same record or message, slower (for
+        checks and benchmarks).
 
     Returns
     -------
     Record
         ``time`` as in the file (s), ``data`` scaled, one sensor per channel,
-        ``passages = ()``.
+        ``passages = ()``, ``clock`` from the file name or its clock columns (or None).
 
     Raises
     ------
@@ -401,32 +446,33 @@ def read_logger(
     if isinstance(time_tolerance, bool) or not isinstance(time_tolerance, (int, float)) \
             or not 0 <= time_tolerance < 0.5:
         raise InputError(f"time_tolerance must lie in [0, 0.5), got {time_tolerance!r}")
+    if not isinstance(vectorised, bool):
+        raise InputError(f"vectorised must be true or false, got {vectorised!r}")
     channel_sensors = _channel_sensors(fmt, sensors)
     p = Path(path)
-    try:
-        size = p.stat().st_size
-    except FileNotFoundError:
-        raise InputError(f"{p}: no such file") from None
-    except (OSError, ValueError) as exc:
-        why = getattr(exc, "strerror", None) or str(exc)
-        raise InputError(f"{p}: cannot read: {why.lower()}") from None
-    if p.is_dir():
-        raise InputError(f"{p}: is a directory, not a logger file")
-    if size > max_bytes:
-        raise InputError(f"{p}: {size} bytes is more than max_bytes = {max_bytes}")
-    try:
-        with open(p, encoding="utf-8-sig", newline=None) as f:
-            values, time, lines, resolution = _parse(f, p, fmt, max_bytes=max_bytes,
-                                                     max_samples=max_samples,
-                                                     max_field=max_field)
-    except UnicodeDecodeError:
-        raise InputError(f"{p}: not UTF-8 text") from None
-    except OSError as exc:
-        raise InputError(f"{p}: cannot read: {(exc.strerror or str(exc)).lower()}") from None
-    n_t = lines.size
+    with open_regular(p) as raw:
+        size = os.fstat(raw.fileno()).st_size
+        if size > max_bytes:
+            raise InputError(f"{p}: {size} bytes is more than max_bytes = {max_bytes}")
+        try:
+            with io.TextIOWrapper(raw, encoding="utf-8-sig", newline=None) as f:
+                parser = _Parser(f, p, fmt, size=size, max_bytes=max_bytes,
+                                 max_samples=max_samples, max_field=max_field,
+                                 vectorised=vectorised)
+                parser.run()
+        except UnicodeDecodeError:
+            raise InputError(f"{p}: not UTF-8 text") from None
+        except OSError as exc:
+            raise InputError(f"{p}: cannot read: {(exc.strerror or str(exc)).lower()}"
+                             ) from None
+    rows = parser.rows
+    n_t = rows.n
     if n_t < min_samples:
         raise InputError(f"{p}: {n_t} data row{'s' if n_t != 1 else ''}; a record needs at "
                          f"least {min_samples} samples")
+    values, time = rows.finish()
+    lines = rows.lines
+    resolution = 10.0 ** -parser.decimals if parser.decimals else 0.0
     if time is None:
         time = np.arange(n_t) / fmt.sampling_rate
     else:
@@ -447,78 +493,434 @@ def read_logger(
             k, j = bad[0]
             raise InputError(f"{p}: line {lines[k]}, column {fmt.channels[j]!r}: the scaled "
                              "sample overflows")
-    return Record(time=time, data=values, sensors=channel_sensors)
+    first = ClockRow(line=lines[0], time=float(time[0]), fields=parser.clock_first)
+    last = ClockRow(line=lines[n_t - 1], time=float(time[-1]), fields=parser.clock_last)
+    clock = logger_clock(fmt.clock, p, first, last, decimal=fmt.decimal,
+                         tolerance=float(time_tolerance))
+    return Record(time=time, data=values, sensors=channel_sensors, clock=clock)
 
 
-def _parse(f: TextIO, p: Path, fmt: LoggerFormat, *, max_bytes: int, max_samples: int,
-           max_field: int):
-    """Stream the rows: (values (n_t, n_channels), time or None, line numbers,
-    time resolution)."""
-    n = len(fmt.columns)
-    keep = [j for j, c in enumerate(fmt.columns) if c not in (SKIP, TIME)]
-    t_col = fmt.columns.index(TIME) if fmt.has_time else None
-    numeric = keep if t_col is None else [t_col, *keep]
-    comma = fmt.decimal == ","
-    max_line = max(4096, (max_field + 1) * (n + 1))
-    rows = _Lines(f, p, max_line=max_line, max_chars=max_bytes, skip=fmt.skip_lines)
-    buf = array("d")
-    times = array("d")
-    line_no = array("q")
-    delim = fmt.delimiter
-    header = fmt.header
-    decimals = 0
-    first = True
-    for k, text in rows:
-        if delim is None:
-            delim = _detect_delimiter(text, n, fmt.decimal, p, k)
+# --- the data rows: a growing array and their line numbers --------------------------------
+
+class _LineNumbers:
+    """File line number of each data row, kept as runs of consecutive lines."""
+
+    def __init__(self) -> None:
+        self.rows: list[int] = []                   # first row of each run
+        self.first: list[int] = []                  # its line
+
+    def add(self, row: int, lines: np.ndarray) -> None:
+        """Rows ``row, row + 1, ...`` are on ``lines`` (ascending)."""
+        if lines.size == 0:
+            return
+        breaks = np.concatenate([[0], np.flatnonzero(np.diff(lines) != 1) + 1])
+        for b in breaks.tolist():
+            r, line = row + b, int(lines[b])
+            if self.rows and line - self.first[-1] == r - self.rows[-1]:
+                continue                            # continues the last run
+            self.rows.append(r)
+            self.first.append(line)
+
+    def __getitem__(self, k) -> int:
+        k = int(k)
+        i = bisect_right(self.rows, k) - 1
+        return self.first[i] + (k - self.rows[i])
+
+
+class _Rows:
+    """The data array (rows × channels) and the time column, grown in place."""
+
+    def __init__(self, where: Path, n_channels: int, has_time: bool, *, size: int,
+                 max_samples: int) -> None:
+        self.where, self.n_channels, self.has_time = where, n_channels, has_time
+        self.size, self.max_samples = size, max_samples
+        self.values: np.ndarray | None = None
+        self.time: np.ndarray | None = None
+        self.n = 0
+        self.lines = _LineNumbers()
+
+    @property
+    def capacity(self) -> int:
+        return 0 if self.values is None else self.values.shape[0]
+
+    def reserve(self, extra: int, chars_read: int) -> None:
+        """Room for ``extra`` more rows; the first time, for the whole file as estimated
+        from its size and the characters read so far."""
+        need = self.n + extra
+        if need <= self.capacity:
+            return
+        if self.values is None:
+            estimate = need * self.size / max(chars_read, 1) * 1.02 + 16
+        else:
+            estimate = max(self.capacity * 1.25 + 1024,
+                           need * self.size / max(chars_read, 1) * 1.02)
+        rows = int(min(max(estimate, need), self.max_samples))
+        columns = self.n_channels + self.has_time
+        # the values, and the larger of one chunk's work (while reading) and a mask of the
+        # values' shape with the time checks' arrays (after reading)
+        extra = max(_WORK_PER_CHAR * CHUNK, rows * (columns + 8.0 * _TIME_TEMPORARIES))
+        check_memory(rows * columns * 8.0 + extra,
+                     f"{self.where}: reading about {rows} rows of {columns} numbers")
+        if self.values is None:
+            self.values = np.empty((rows, self.n_channels))
+            self.time = np.empty(rows) if self.has_time else None
+        else:
+            self.values.resize((rows, self.n_channels), refcheck=False)
+            if self.time is not None:
+                self.time.resize(rows, refcheck=False)
+
+    def add(self, values: np.ndarray, time: np.ndarray | None, lines: np.ndarray) -> None:
+        r = values.shape[0]
+        if r == 0:
+            return
+        self.values[self.n:self.n + r] = values
+        if self.time is not None:
+            self.time[self.n:self.n + r] = time
+        self.lines.add(self.n, lines)
+        self.n += r
+
+    def finish(self) -> tuple[np.ndarray, np.ndarray | None]:
+        """The data array and the time column, trimmed to the rows read."""
+        self.values.resize((self.n, self.n_channels), refcheck=False)
+        if self.time is not None:
+            self.time.resize(self.n, refcheck=False)
+        return self.values, self.time
+
+
+# --- the parser ------------------------------------------------------------------------------
+
+_PAD = 16                   #: bytes before a chunk's text (the digit matrix looks back)
+_MAX_DIGITS = 14            #: digits a field may have on the vectorised path (exactness)
+_P10 = 10.0 ** np.arange(23)  # exact powers of ten
+
+
+@dataclass
+class _Numbers:
+    values: np.ndarray      # (k,) the numbers, exact where ok
+    ok: np.ndarray          # (k,) bool: a plain decimal read exactly
+    decimals: np.ndarray    # (k,) digits after the decimal mark
+
+
+def _plain_numbers(a: np.ndarray, fs: np.ndarray, fe: np.ndarray, comma: bool) -> _Numbers:
+    """Read the fields ``a[fs:fe]`` that are plain decimals (an optional leading sign,
+    1 to 14 digits, at most one decimal mark, nothing else), vectorised.
+
+    Each value is ``m / 10**f`` with the integer mantissa ``m < 2**53`` and ``10**f``
+    both exact, so the division rounds the exact decimal once: the double that ``float``
+    gives (Clinger's fast path).  Other fields come back with ``ok`` False.
+    """
+    length = fe - fs
+    w = int(min(length.max(initial=1), _MAX_DIGITS + 2))
+    back = np.arange(w - 1, -1, -1)[:, None]        # row j: byte fe - 1 - back[j]
+    inside = back < length                          # (w, k): the row is in the field
+    b = a[fe - 1 - back]                            # (w, k); _PAD bytes keep the index >= 0
+    d = b - np.uint8(48)
+    digit = d < 10
+    digit &= inside
+    mark = (b == 46) | (b == 44) if comma else b == 46
+    mark &= inside
+    sign = (b == 45) | (b == 43)
+    sign &= inside
+    lead = a[fs]
+    negative = lead == 45
+    lead = negative | (lead == 43)
+    n_digit = digit.sum(axis=0, dtype=np.uint8)
+    n_mark = mark.sum(axis=0, dtype=np.uint8)
+    n_sign = sign.sum(axis=0, dtype=np.uint8)
+    # nothing but digits, one mark at most and a sign only in front
+    ok = ((n_digit + n_mark + n_sign == length) & (n_sign == lead) & (n_mark <= 1)
+          & (n_digit >= 1) & (n_digit <= _MAX_DIGITS) & (length <= _MAX_DIGITS + 2))
+    d *= digit                                      # digits; 0 elsewhere (mark, sign, outside)
+    r = d[0].astype(float)
+    for j in range(1, w):                           # r = the digits as one integer, the
+        r *= 10.0                                   # mark's place counted as a 0 digit
+        r += d[j]
+    # the mark's distance from the field's end (float32 sums of small integers: exact)
+    decimals = (back[:, 0].astype(np.float32) @ mark.astype(np.float32)).astype(np.int64)
+    p = _P10[np.minimum(decimals, _MAX_DIGITS)]
+    head = np.floor(r / (10.0 * p))                 # the digits before the mark (exact)
+    mantissa = np.where(n_mark > 0, head * p + (r - head * 10.0 * p), r)
+    values = mantissa / p
+    np.negative(values, out=values, where=negative)
+    return _Numbers(values=values, ok=ok, decimals=decimals)
+
+
+class _Parser:
+    """Reads a logger file's rows into :class:`_Rows` (see the module docstring)."""
+
+    def __init__(self, f: TextIO, p: Path, fmt: LoggerFormat, *, size: int, max_bytes: int,
+                 max_samples: int, max_field: int, vectorised: bool = True) -> None:
+        self.f, self.p, self.fmt = f, p, fmt
+        self.vectorised, self.size = vectorised, size
+        self.max_bytes, self.max_samples, self.max_field = max_bytes, max_samples, max_field
+        cols = fmt.columns
+        self.n = n = len(cols)
+        self.max_line = max(4096, (max_field + 1) * (n + 1))
+        channels = set(fmt.channels)
+        self.keep = [j for j, c in enumerate(cols) if c in channels]
+        # the channel columns as a slice when they are adjacent (a view, not a gather)
+        contiguous = self.keep == list(range(self.keep[0], self.keep[-1] + 1))
+        self.keep_index = (slice(self.keep[0], self.keep[-1] + 1) if contiguous
+                           else np.array(self.keep))
+        self.t_col = cols.index(TIME) if fmt.has_time else None
+        self.numeric = self.keep if self.t_col is None else [self.t_col, *self.keep]
+        self.clock_cols = {c: cols.index(c) for c in fmt.clock_columns}
+        self.comma = fmt.decimal == ","
+        self.delim = fmt.delimiter
+        self.rows = _Rows(p, len(self.keep), fmt.has_time, size=size, max_samples=max_samples)
+        self.decimals = 0
+        self.clock_first: dict[str, str] = {}
+        self.clock_last: dict[str, str] = {}
+        self.line = 0                               # lines read
+        self.chars = 0                              # characters read
+
+    # -- reading -------------------------------------------------------------------------
+    def _grew(self) -> InputError:
+        return InputError(f"{self.p}: larger than max_bytes = {self.max_bytes} (the file "
+                          "grew while read?)")
+
+    def _long(self, line: int) -> InputError:
+        return InputError(f"{self.p}: line {line} is longer than {self.max_line} characters")
+
+    def _readline(self) -> str | None:
+        raw = self.f.readline(self.max_line + 2)
+        if not raw:
+            return None
+        self.line += 1
+        self.chars += len(raw)
+        if self.chars > self.max_bytes:
+            raise self._grew()
+        text = raw.rstrip("\r\n")
+        if len(text) > self.max_line:
+            raise self._long(self.line)
+        return text
+
+    def run(self) -> None:
+        first = None
+        while (text := self._readline()) is not None:
+            if self.line <= self.fmt.skip_lines:
+                continue
+            s = text.strip()
+            if s and not s.startswith("#"):
+                first = text
+                break
+        if first is None:
+            raise InputError(f"{self.p}: the file is empty (no data rows)")
+        pending = [] if self._is_header(first, self.line) else [first]
+        start = self.line - len(pending)            # lines before the chunk's first
+        while True:
+            # equal chunks of at most CHUNK characters (no short tail chunk)
+            remaining = self.size - self.chars
+            size = CHUNK if remaining <= 0 else \
+                min(CHUNK, -(-remaining // -(-remaining // CHUNK)) + 64)
+            text = self.f.read(size)
+            if text and not text.endswith("\n"):
+                text += self.f.readline(self.max_line + 2)
+            if not text and not pending:
+                break
+            self.chars += len(text)
+            if self.chars > self.max_bytes:
+                raise self._grew()
+            lines = text.split("\n")
+            if lines[-1] == "":
+                lines.pop()
+            self.line += len(lines)
+            if pending:
+                lines = pending + lines
+                text = pending[0] + "\n" + text
+            self._chunk(start, lines, text)
+            start, pending = self.line, []
+            if not text:
+                break
+        if self.rows.n == 0:
+            raise InputError(f"{self.p}: no data rows after the header")
+
+    def _is_header(self, text: str, k: int) -> bool:
+        """Whether the first content line is the header (and the delimiter, if detected)."""
+        n, fmt = self.n, self.fmt
+        if self.delim is None:
+            self.delim = _detect_delimiter(text, n, fmt.decimal, self.p, k)
+        raw = self._fields(text, k)
+        if fmt.header is not None:
+            return fmt.header
+        fields = [_clean(s) for s in raw]
+        numbers = [_is_number(fields[j], fmt.decimal) for j in self.numeric]
+        if not any(numbers):
+            return True
+        if not all(numbers):
+            j = self.numeric[numbers.index(False)]
+            raise InputError(
+                f"{self.p}: line {k} is neither a header (it has numbers) nor data "
+                f"(column {fmt.columns[j]!r}: {_bad_field(fields[j], fmt.decimal)}); set the "
+                "format's header")
+        return False
+
+    def _fields(self, text: str, k: int) -> list[str]:
+        """The raw fields of a line, checked for their count and length."""
+        n, delim = self.n, self.delim
         raw = _split(text, delim, n)
         if len(raw) != n:
-            raise InputError(f"{p}: line {k} has {len(raw)} fields, the format has {n} "
+            raise InputError(f"{self.p}: line {k} has {len(raw)} fields, the format has {n} "
                              f"columns (delimiter {_delim_name(delim)})")
         longest = max(range(n), key=lambda j: len(raw[j]))
-        if len(raw[longest]) > max_field:
-            raise InputError(f"{p}: line {k}, field {longest + 1} is longer than "
-                             f"max_field = {max_field} characters")
-        fields = [_clean(s) for s in raw]
-        if first:
-            first = False
-            numbers = [_is_number(fields[j], fmt.decimal) for j in numeric]
-            if header is None:
-                if not any(numbers):
-                    continue                        # the header row
-                if not all(numbers):
-                    j = numeric[numbers.index(False)]
-                    raise InputError(
-                        f"{p}: line {k} is neither a header (it has numbers) nor data "
-                        f"(column {fmt.columns[j]!r}: {_bad_field(fields[j])}); set the "
-                        "format's header")
-            elif header:
-                continue
-        if len(line_no) >= max_samples:
-            raise InputError(f"{p}: more than max_samples = {max_samples} data rows")
-        for j in numeric:
-            s = fields[j]
-            if comma:
+        if len(raw[longest]) > self.max_field:
+            raise InputError(f"{self.p}: line {k}, field {longest + 1} is longer than "
+                             f"max_field = {self.max_field} characters")
+        return raw
+
+    # -- one chunk -----------------------------------------------------------------------
+    def _chunk(self, start: int, lines: list[str], text: str) -> None:
+        """Parse ``lines`` (file lines ``start + 1, ...``; ``text``: them, joined)."""
+        if not lines:
+            return
+        if max(map(len, lines)) > self.max_line:
+            i = next(i for i, s in enumerate(lines) if len(s) > self.max_line)
+            self._slow(start, lines[:i])            # an earlier problem comes first
+            raise self._long(start + i + 1)
+        if "#" in text or "\n\n" in text or text.startswith("\n"):
+            keep = [i for i, s in enumerate(lines) if (t := s.strip()) and t[0] != "#"]
+            if not keep:
+                return
+            text = "\n".join([lines[i] for i in keep])
+            numbers = start + 1 + np.array(keep, dtype=np.int64)
+        else:
+            numbers = start + 1 + np.arange(len(lines), dtype=np.int64)
+        if not text.endswith("\n"):
+            text += "\n"
+        if self.rows.n + numbers.size > self.max_samples:
+            self._slow(start, lines)                # raises at the row past the limit
+            return
+        self.rows.reserve(numbers.size, self.chars)
+        if not (self.vectorised and self._fast(text, numbers)):
+            self._slow(start, lines)
+
+    def _fast(self, text: str, numbers: np.ndarray) -> bool:
+        """Parse content lines (``text``, each ended by a newline) at once; False (nothing
+        added) when anything is unusual."""
+        n, m_rows = self.n, numbers.size
+        # (whitespace other than space and tab, which str.split also splits at, either
+        # changes a row's field count or sits at a field's edge where _clean strips it)
+        b = b"\n" * _PAD + text.encode()
+        a = np.frombuffer(b, dtype=np.uint8)
+        t = a[_PAD:]
+        if self.delim == " ":
+            blank = (t == 32) | (t == 9) | (t == 10)
+            filled = ~blank
+            fs = np.flatnonzero(filled & np.concatenate([[True], blank[:-1]]))
+            fe = np.flatnonzero(filled & np.concatenate([blank[1:], [True]])) + 1
+            per_row = np.bincount(np.searchsorted(np.flatnonzero(t == 10), fs),
+                                  minlength=m_rows)
+            if fs.size != n * m_rows or np.any(per_row != n):
+                return False
+            fs = fs.reshape(m_rows, n) + _PAD
+            fe = fe.reshape(m_rows, n) + _PAD
+        else:
+            code = ord(self.delim)
+            ends = np.flatnonzero((t == code) | (t == 10))
+            if ends.size % m_rows:
+                return False
+            m = ends.size // m_rows
+            if m not in (n, n + 1):
+                return False
+            ends = ends.reshape(m_rows, m) + _PAD
+            kinds = a[ends]
+            if not (np.all(kinds[:, -1] == 10) and np.all(kinds[:, :-1] == code)):
+                return False
+            fs = np.empty_like(ends)
+            flat = fs.reshape(-1)
+            flat[0] = _PAD
+            np.add(ends.reshape(-1)[:-1], 1, out=flat[1:])
+            fe = ends
+            if m == n + 1:
+                if np.any(fe[:, n] > fs[:, n]):
+                    return False                    # a non-empty extra field
+                fs, fe = fs[:, :n], fe[:, :n]
+        if int((fe - fs).max()) > self.max_field:
+            return False                            # (bytes: the line-by-line path decides)
+        keep = self.keep_index
+        data = self._numbers(a, b, fs[:, keep].ravel(), fe[:, keep].ravel())
+        if data is None:
+            return False
+        time = None
+        if self.t_col is not None:
+            time = self._numbers(a, b, fs[:, self.t_col], fe[:, self.t_col])
+            if time is None:
+                return False
+            self.decimals = max(self.decimals, int(time.decimals.max()))
+            time = time.values
+        self.rows.add(data.values.reshape(m_rows, len(self.keep)), time, numbers)
+        if self.clock_cols:
+            row = {c: _clean(b[fs[0, j]:fe[0, j]].decode()) for c, j in self.clock_cols.items()}
+            if not self.clock_first:
+                self.clock_first = row
+            self.clock_last = {c: _clean(b[fs[-1, j]:fe[-1, j]].decode())
+                               for c, j in self.clock_cols.items()}
+        return True
+
+    def _numbers(self, a: np.ndarray, b: bytes, fs: np.ndarray, fe: np.ndarray
+                 ) -> _Numbers | None:
+        """The numbers of the fields ``b[fs:fe]``: plain decimals vectorised, others one by
+        one as the line-by-line path reads them; None if one is not a finite number."""
+        nums = _plain_numbers(a, fs, fe, self.comma)
+        for i in np.flatnonzero(~nums.ok).tolist():
+            s = _clean(b[fs[i]:fe[i]].decode())
+            if self.comma:
                 s = s.replace(",", ".")
             if _NUMBER.fullmatch(s) is None:
-                raise InputError(f"{p}: line {k}, column {fmt.columns[j]!r}: "
-                                 f"{_bad_field(fields[j])}")
+                return None
             v = float(s)
             if not math.isfinite(v):
-                raise InputError(f"{p}: line {k}, column {fmt.columns[j]!r}: "
-                                 "infinite sample (overflow)")
-            if j == t_col:
-                times.append(v)
-                dot = s.find(".")
-                if dot >= 0 and "e" not in s and "E" not in s:
-                    decimals = max(decimals, len(s) - dot - 1)
-            else:
-                buf.append(v)
-        line_no.append(k)
-    if not line_no:
-        raise InputError(f"{p}: the file is empty (no data rows)"
-                         if first else f"{p}: no data rows after the header")
-    values = np.frombuffer(buf, dtype=float).reshape(len(line_no), len(keep))
-    time = None if t_col is None else np.frombuffer(times, dtype=float)
-    resolution = 10.0 ** -decimals if decimals else 0.0
-    return values, time, np.frombuffer(line_no, dtype=np.int64), resolution
+                return None
+            nums.values[i] = v
+            dot = s.find(".")
+            nums.decimals[i] = len(s) - dot - 1 if dot >= 0 and "e" not in s \
+                and "E" not in s else 0
+        return nums
+
+    def _slow(self, start: int, lines: list[str]) -> None:
+        """Parse lines one by one, with the precise message for the first problem."""
+        fmt, p = self.fmt, self.p
+        t_col, comma = self.t_col, self.comma
+        buf: list[float] = []
+        times: list[float] = []
+        numbers: list[int] = []
+        decimals = self.decimals
+        for i, text in enumerate(lines):
+            k = start + i + 1
+            s = text.strip()
+            if not s or s.startswith("#"):
+                continue
+            fields = [_clean(f) for f in self._fields(text, k)]
+            if self.rows.n + len(numbers) >= self.max_samples:
+                raise InputError(f"{p}: more than max_samples = {self.max_samples} data rows")
+            for j in self.numeric:
+                s = fields[j]
+                if comma:
+                    s = s.replace(",", ".")
+                if _NUMBER.fullmatch(s) is None:
+                    raise InputError(f"{p}: line {k}, column {fmt.columns[j]!r}: "
+                                     f"{_bad_field(fields[j], fmt.decimal)}")
+                v = float(s)
+                if not math.isfinite(v):
+                    raise InputError(f"{p}: line {k}, column {fmt.columns[j]!r}: "
+                                     "infinite sample (overflow)")
+                if j == t_col:
+                    times.append(v)
+                    dot = s.find(".")
+                    if dot >= 0 and "e" not in s and "E" not in s:
+                        decimals = max(decimals, len(s) - dot - 1)
+                else:
+                    buf.append(v)
+            numbers.append(k)
+            if self.clock_cols:
+                row = {c: fields[j] for c, j in self.clock_cols.items()}
+                if not self.clock_first:
+                    self.clock_first = row
+                self.clock_last = row
+        if not numbers:
+            return
+        self.decimals = decimals
+        self.rows.reserve(len(numbers), self.chars)
+        values = np.array(buf, dtype=float).reshape(len(numbers), len(self.keep))
+        self.rows.add(values, np.array(times) if t_col is not None else None,
+                      np.array(numbers, dtype=np.int64))

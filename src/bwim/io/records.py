@@ -12,15 +12,22 @@ Contract
   :class:`~bwim.errors.InputError` naming the file, the line and the column.
   :func:`write_csv_record` writes every number in its shortest exact form (``repr``), so
   that ``read_csv_record(write_csv_record(r))`` gives the same time and data bit for bit.
+* The record's wall clock (:attr:`bwim.Record.clock`, the date and time at record time 0)
+  is a comment line ``# clock = 2015-10-01T09:45:52.576000`` (ISO 8601) before the header
+  when it is known: :func:`read_csv_record` reads it from any ``#`` line before the header
+  of that form (a malformed one is refused, naming the line), and files without it (or
+  older bwim's) read with ``clock = None``; other readers skip it as a comment.
 * HDF5 (bwim's records, simulated or measured): :func:`write_record` /
   :func:`read_record` round-trip a :class:`~bwim.Record` exactly: time, data, sensors,
-  passages, truths, the VBI convergence and the simulation settings.
+  passages, truths, the VBI convergence, the simulation settings and the clock (an ISO
+  8601 attribute ``clock``; a file without it, as older bwim wrote, reads as None).
   :func:`write_records` / :func:`read_records` hold several records in one file
   (``records/0``, ``records/1``, …); ``read_records`` also reads a single-record file.
 * Every writer is atomic (:mod:`bwim.io.atomic`): no half-written file, ever.
 
 HDF5 layout of one record (a group, or the file root)::
 
+    attrs [clock] (ISO 8601 text, if known)
     time (n_t,)  data (n_t, n_sensors)
     sensors/ x y kind name
     passages/ count; 0/ attrs speed lane delay [track_width]; axle_spacings
@@ -35,7 +42,9 @@ from __future__ import annotations
 import csv
 import io
 import os
+import re
 from collections.abc import Iterator, Sequence
+from datetime import datetime
 from pathlib import Path
 
 import h5py
@@ -43,7 +52,7 @@ import numpy as np
 
 from bwim.errors import InputError
 from bwim.io import _hdf5 as h5
-from bwim.io._csv import check_time, decimal_resolution, read_numeric_csv
+from bwim.io._csv import check_time, decimal_resolution, open_regular, read_numeric_csv
 from bwim.io.atomic import atomic_open
 from bwim.records import Passage, Record, SimulationSettings, Truth, VBIConvergence
 from bwim.sensors import Sensor
@@ -59,6 +68,27 @@ __all__ = [
 
 
 # --- CSV ---------------------------------------------------------------------------------
+_CLOCK_LINE = re.compile(r"#\s*clock\s*=\s*(.*?)\s*")
+
+
+def _csv_clock(path: Path) -> datetime | None:
+    """The ``# clock = ...`` line before a CSV record's header, if there is one (the file
+    has been read once already: a regular file of bounded lines)."""
+    with open_regular(path) as raw, io.TextIOWrapper(raw, encoding="utf-8-sig") as f:
+        for k, line in enumerate(f, start=1):
+            s = line.strip()
+            if s and not s.startswith("#"):
+                return None                          # the header: no clock line before it
+            m = _CLOCK_LINE.fullmatch(s)
+            if m:
+                try:
+                    return datetime.fromisoformat(m.group(1))
+                except ValueError:
+                    raise InputError(f"{path}: line {k}: {m.group(1)[:40]!r} is not an ISO "
+                                     "8601 date and time (the record's clock)") from None
+    return None
+
+
 def read_csv_record(
     path: str | os.PathLike,
     sensors: Sequence[Sensor],
@@ -133,7 +163,7 @@ def read_csv_record(
         passages = (passage,)
     else:
         passages = tuple(passage)
-    return Record(time=t, data=data, sensors=sensors, passages=passages)
+    return Record(time=t, data=data, sensors=sensors, passages=passages, clock=_csv_clock(p))
 
 
 def _csv_lines(values: np.ndarray) -> Iterator[str]:
@@ -145,7 +175,8 @@ def _csv_lines(values: np.ndarray) -> Iterator[str]:
 def write_csv_record(
     record: Record, path: str | os.PathLike, *, time_column: str = "time"
 ) -> None:
-    """Write a record's time and readings as CSV (header: time, then sensor names).
+    """Write a record's time and readings as CSV (header: time, then sensor names), after
+    a ``# clock = ...`` line when the record's clock is known.
 
     Positions, passages and truths are not written (use :func:`write_record` for them).
     """
@@ -153,6 +184,8 @@ def write_csv_record(
     if time_column in names:
         raise InputError(f"a sensor is named like the time column {time_column!r}")
     buf = io.StringIO()
+    if record.clock is not None:
+        buf.write(f"# clock = {record.clock.isoformat()}\n")
     csv.writer(buf, lineterminator="\n").writerow([time_column, *names])
     with atomic_open(path, newline="") as f:
         f.write(buf.getvalue())
@@ -179,6 +212,8 @@ def _get_truth(g: h5py.Group) -> Truth:
 def _put_record(g: h5py.Group, record: Record) -> None:
     if not isinstance(record, Record):
         raise InputError(f"expected a bwim.Record, got {type(record).__name__}")
+    if record.clock is not None:
+        g.attrs["clock"] = record.clock.isoformat()
     g.create_dataset("time", data=record.time)
     g.create_dataset("data", data=record.data)
     h5.put_sensors(g, record.sensors)
@@ -210,10 +245,16 @@ def _get_record(g: h5py.Group) -> Record:
         sg = g["settings"]
         settings = SimulationSettings(approach=float(h5.attr(sg, "approach")),
                                       tail=float(h5.attr(sg, "tail")))
+    clock = g.attrs.get("clock")
+    if clock is not None:
+        if isinstance(clock, bytes):
+            clock = clock.decode("utf-8")
+        clock = datetime.fromisoformat(str(clock))  # ValueError: a damaged file
     return Record(
         time=h5.array(g, "time"), data=h5.array(g, "data"), sensors=h5.get_sensors(g),
         passages=h5.get_list(g, "passages", h5.get_passage),
         truths=h5.get_list(g, "truths", _get_truth), convergence=conv, settings=settings,
+        clock=clock,
     )
 
 
