@@ -29,8 +29,8 @@ Contract
   while the reduction exceeds ``snr_threshold²`` noise variances and ``min_height²`` of
   what the record's strongest axle gave (an axle ``min_height`` as tall as the largest:
   what the learned response misses of a big axle must not pass for a small one), and
-  its amplitude is at least ``min_height`` of the largest; (3) axles are grouped into vehicles (gaps larger than
-  ``max_axle_spacing``) and each vehicle's axle times, speed and amplitudes refined
+  its amplitude is at least ``min_height`` of the largest; (3) axles are grouped into
+  vehicles (gaps larger than ``max_axle_spacing``) and each vehicle's axle times, speed and amplitudes refined
   jointly (Levenberg–Marquardt, analytic Jacobian); (4) **backward check**: an axle
   whose removal costs less than the threshold, or closer than ``min_axle_spacing`` to
   another, is dropped and the vehicle refitted; one more pursuit step may add an axle
