@@ -23,20 +23,20 @@ Contract
   responses were learned: what identifies an axle is its own local peak; the slab's
   global bending, which depends on where the other axles and vehicles are, and any
   offset or drift, are left out.
-* Steps: (1) the speed, from the band-passed detectors' lag; (2) **matching pursuit**:
-  the axle time that most reduces the weighted misfit of both detectors together is added
-  and every amplitude refitted (non-negative least squares, both detectors in one),
-  while the reduction exceeds ``snr_threshold²`` noise variances and ``min_height²`` of
-  what the record's strongest axle gave (an axle ``min_height`` as tall as the largest:
-  what the learned response misses of a big axle must not pass for a small one), and
-  its amplitude is at least ``min_height`` of the largest; (3) axles are grouped into
-  vehicles (gaps larger than ``max_axle_spacing``) and each vehicle's axle times, speed and amplitudes refined
-  jointly (Levenberg–Marquardt, analytic Jacobian); (4) **backward check**: an axle
-  whose removal costs less than the threshold, or closer than ``min_axle_spacing`` to
-  another, is dropped and the vehicle refitted; one more pursuit step may add an axle
-  the first pass missed.  Merged peaks (a tridem 1.3 m apart under a 1 m wide response)
-  come apart because the fit knows the response; the detectors never "disagree" on the
-  count, since one fit counts for both: their agreement enters the confidence instead.
+* Steps: (1) the speed, from the band-passed detectors' lag; (2) **matching pursuit**: the
+  axle time that most reduces the weighted misfit of both detectors together is added and
+  every amplitude refitted (non-negative least squares, both detectors in one), while the
+  reduction exceeds ``snr_threshold²`` noise variances and ``min_height²`` of what the
+  record's strongest axle gave (an axle ``min_height`` as tall as the largest: what the
+  learned response misses of a big axle must not pass for a small one), and its amplitude
+  is at least ``min_height`` of the largest; (3) axles are grouped into vehicles (gaps
+  larger than ``max_axle_spacing``) and each vehicle's axle times, speed and amplitudes
+  refined jointly (Levenberg–Marquardt, analytic Jacobian); (4) **backward check**: an
+  axle whose removal costs less than the threshold, or closer than ``min_axle_spacing`` to
+  another, is dropped and the vehicle refitted; one more pursuit step may add an axle the
+  first pass missed. Merged peaks (a tridem 1.3 m apart under a 1 m wide response) come
+  apart because the fit knows the response; the detectors never "disagree" on the count,
+  since one fit counts for both: their agreement enters the confidence instead.
 * Confidence of a vehicle = ``c_snr × c_both``: ``c_snr = clip(√Δ / (2 snr_threshold),
   0.5, 1)`` with ``Δ`` the smallest misfit reduction (level variances) of its axles;
   ``c_both`` the share of its axles that each detector fitted alone sees with at least
