@@ -56,7 +56,8 @@ def test_the_issue_scenario_parses_and_builds(tmp_path):
     assert truck.static_axle_loads.sum() == pytest.approx(401426.0)
     fmt = build_logger_format(s)
     assert fmt.kinds["ad1"] is SensorKind.AXLE_DETECTOR
-    assert s.axle_detectors.distance == 3.0 and s.axle_detectors.channels == ("ad1", "ad2")
+    [pair] = s.axle_detectors  # the single [axle_detectors] table: one lane
+    assert pair.distance == 3.0 and pair.channels == ("ad1", "ad2")
 
 
 @pytest.mark.parametrize(("name", "delimiter", "header"), [

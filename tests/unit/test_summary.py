@@ -14,7 +14,7 @@ import pytest
 
 import bwim
 from bwim.accuracy import ReferenceRow, assess
-from bwim.detect import Detection, VehicleDetection
+from bwim.detect import VehicleDetection
 from bwim.errors import InputError
 from bwim.io.summary import COLUMNS, CONTRACT_COLUMNS, read_summary, write_summary
 from bwim.site import EventWeighing
@@ -118,16 +118,21 @@ def _vehicle(speed=20.0, spacings=(4.0,), lane=5.0):
 
 
 def test_event_rows_one_per_vehicle_none_with_weights_unless_weighed():
-    det = Detection(vehicles=(_vehicle(), _vehicle(spacings=(3.5, 1.3))),
-                    flags=("multiple_presence",))
-    ev = EventWeighing(weighed=False, detection=det, flags=det.flags,
-                       reason="multiple presence: 2 vehicles on the bridge, not weighed as "
-                       "one", clock=datetime(2026, 5, 14, 9, 0, 0))
+    from bwim.site import VehicleWeighing
+
+    a, b = _vehicle(), _vehicle(spacings=(3.5, 1.3))
+    why = "multiple presence: 2 vehicles on the bridge, not weighed as one"
+    ev = EventWeighing(weighed=False, reason=why, clock=datetime(2026, 5, 14, 9, 0, 0),
+                       vehicles=tuple(VehicleWeighing(vehicle=v, lane=1, direction="+x",
+                                                      weighed=False, reason=why,
+                                                      flags=("multiple_presence",))
+                                      for v in (a, b)))
     rows = ev.to_summary_rows("e.txt")
     assert [r.vehicle for r in rows] == [1, 2]
     assert all(r.status == "refused" and r.gvw is None for r in rows)
     assert [r.vehicle_class for r in rows] == ["11", "12"]
     assert rows[0].time == datetime(2026, 5, 14, 9, 0, 0, 500000)
+    assert rows[0].lane == 1 and rows[0].direction == "+x"
     assert ev.to_summary_row("e.txt") == rows[0]
     nothing = EventWeighing(weighed=False, reason="detection failed: no channel 'ad1'")
     [row] = nothing.to_summary_rows("e.txt")

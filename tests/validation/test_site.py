@@ -48,7 +48,8 @@ def site(day):
     truck_loads = [float(v) for v in scenario.vehicle.params["axle_loads"]]
     setup = SiteSetup(calibration_loads=truck_loads,
                       calibration_spacings=scenario.vehicle.params["axle_spacings"],
-                      detectors=("ad1", "ad2"), distance=scenario.axle_detectors.distance)
+                      detectors=("ad1", "ad2"),
+                      distance=scenario.axle_detectors[0].distance)
     runs = [load_record(p, scenario) for p in day.calibration]
     return scenario, calibrate_site(runs, setup)
 

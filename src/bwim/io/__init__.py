@@ -23,7 +23,9 @@ that describes an installation and reads its records (:func:`bwim.scenario.load_
 It never imports those.
 """
 
+from bwim.io._csv import open_regular
 from bwim.io.atomic import atomic_open, atomic_output, check_writable
+from bwim.io.clock import ClockSpec, name_timestamp
 from bwim.io.logger import LoggerFormat, read_logger
 from bwim.io.records import (
     read_csv_record,
@@ -46,10 +48,13 @@ from bwim.io.summary import read_summary, write_summary
 from bwim.io.toml_writer import to_toml
 
 __all__ = [
+    "ClockSpec",
     "LoggerFormat",
     "atomic_open",
     "atomic_output",
     "check_writable",
+    "name_timestamp",
+    "open_regular",
     "read_csv_record",
     "read_identification",
     "read_influence_line",

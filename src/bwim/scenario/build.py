@@ -37,13 +37,14 @@ from bwim.fe.bridge import Bridge
 from bwim.fe.girder import Girder, composite_section
 from bwim.fe.mesh import grid_lines
 from bwim.io._csv import read_numeric_csv
+from bwim.io.clock import ClockSpec
 from bwim.io.logger import LoggerFormat, read_logger
 from bwim.io.records import read_csv_record, read_record
 from bwim.records import Passage, Record, SimulationSettings
 from bwim.road import RoadProfile
 from bwim.scenario.specs import VEHICLE_TYPES, BridgeSpec, GirderSpec, Scenario
 from bwim.sensors import Sensor, SensorKind
-from bwim.site import SiteSetup
+from bwim.site import DetectorLane, DriftSetup, Lane, SiteSetup
 from bwim.vehicles import Vehicle, named
 from bwim.vehicles.types import Truck3D
 
@@ -264,22 +265,40 @@ def build_sensors(scenario: Scenario) -> list[Sensor]:
     return out
 
 
+def _clock_spec(scenario: Scenario) -> ClockSpec | None:
+    table = scenario.logger.clock
+    if table is None:
+        return None
+    with _context(f"{scenario.source}: [logger] clock"):
+        if table.none:
+            return ClockSpec(from_name=False)
+        return ClockSpec(pattern=table.pattern, column=table.column,
+                         date_column=table.date, format=table.format)
+
+
 def build_logger_format(scenario: Scenario) -> LoggerFormat:
     """The :class:`~bwim.io.LoggerFormat` of the scenario's ``[logger]`` section.
 
-    Gauges take their kinds from ``[[sensors]]``; the ``[axle_detectors]`` channels are
-    axle detectors.  Every named column must be a sensor or a detector.
+    Gauges take their kinds from ``[[sensors]]``; the ``[[axle_detectors]]`` channels are
+    axle detectors; the ``clock`` columns are the clock's.  Every named column must be one
+    of them.
     """
     spec = scenario.require("logger")
     src = f"{scenario.source}: [logger]"
     kinds: dict[str, SensorKind] = {s.name: s.kind for s in build_sensors(scenario)}
-    if scenario.axle_detectors is not None:
-        for name in scenario.axle_detectors.channels:
+    for det in scenario.axle_detectors:
+        for name in det.channels:
             if name in kinds:
                 raise InputError(f"{scenario.source}: [axle_detectors] channel {name!r} is "
                                  "also a [[sensors]] gauge")
             kinds[name] = SensorKind.AXLE_DETECTOR
-    channels = [c for c in spec.columns if c not in ("-", "time")]
+    clock = _clock_spec(scenario)
+    clock_columns = {c for c in ((clock.column, clock.date_column) if clock else ())
+                     if c is not None and c != "time"}
+    channels = [c for c in spec.columns if c not in ("-", "time") and c not in clock_columns]
+    for name in clock_columns:
+        if name not in spec.columns:
+            raise InputError(f"{src} clock: no column {name!r} in columns")
     for name in channels:
         if name not in kinds:
             raise InputError(f"{src} columns: {name!r} is neither a [[sensors]] name nor an "
@@ -294,22 +313,44 @@ def build_logger_format(scenario: Scenario) -> LoggerFormat:
     with _context(src):
         return LoggerFormat(columns=spec.columns, delimiter=delimiter, header=spec.header,
                             sampling_rate=spec.sampling_rate, scale=spec.scale,
-                            decimal=spec.decimal, kinds=kinds, skip_lines=spec.skip_lines)
+                            decimal=spec.decimal, kinds=kinds, skip_lines=spec.skip_lines,
+                            clock=clock)
 
 
 def build_site_setup(scenario: Scenario) -> SiteSetup:
-    """What the installation knows (:class:`bwim.site.SiteSetup`): the ``[axle_detectors]``
-    and the ``[vehicle]`` calibration truck's static axle loads and spacings."""
+    """What the installation knows (:class:`bwim.site.SiteSetup`): the
+    ``[[axle_detectors]]`` lanes, the ``[[lanes]]``, the ``[drift]`` choice and the
+    ``[vehicle]`` calibration truck's static axle loads and spacings."""
     truck = build_vehicle(scenario)
-    det = scenario.axle_detectors
+    lanes = []
+    for k, det in enumerate(scenario.axle_detectors, start=1):
+        with _context(f"{scenario.source}: [axle_detectors]"):
+            lanes.append(DetectorLane(channels=det.channels, distance=det.distance,
+                                      lane=det.lane if det.lane is not None else k,
+                                      direction=det.direction, position=det.position,
+                                      y=det.y, max_spacing=det.max_spacing))
+    cal = next((ln.lane for ln, det in zip(lanes, scenario.axle_detectors, strict=True)
+                if det.calibration), None)
+    traffic = [Lane(number=ln.number, y=ln.y, direction=ln.direction)
+               for ln in scenario.lanes]
+    drift = DriftSetup()
+    if scenario.drift is not None:
+        d = scenario.drift
+        with _context(f"{scenario.source}: [drift]"):
+            drift = DriftSetup(method=d.method, temperature=d.temperature,
+                               reference_class=d.reference_class,
+                               reference_load=None if d.reference_kN is None
+                               else d.reference_kN * 1e3)
+        if d.temperature is not None:
+            names = {s.name: s.kind for s in build_sensors(scenario)}
+            if names.get(d.temperature) is not SensorKind.TEMPERATURE:
+                raise InputError(f"{scenario.source}: [drift] temperature: no temperature "
+                                 f"channel {d.temperature!r} in [[sensors]] (kind = "
+                                 "\"temperature\")")
     with _context(f"{scenario.source}: [axle_detectors]"):
-        return SiteSetup(
-            calibration_loads=truck.static_axle_loads,
-            calibration_spacings=truck.axle_spacings,
-            detectors=None if det is None else det.channels,
-            distance=None if det is None else det.distance,
-            position=0.0 if det is None else det.position,
-            max_spacing=None if det is None else det.max_spacing)
+        return SiteSetup(calibration_loads=truck.static_axle_loads,
+                         calibration_spacings=truck.axle_spacings, lanes=tuple(lanes),
+                         traffic_lanes=tuple(traffic), calibration_lane=cal, drift=drift)
 
 
 def build_vehicle(scenario: Scenario) -> Vehicle:

@@ -23,6 +23,7 @@ from typing import Any
 
 from bwim.atomic import atomic_open
 from bwim.errors import InputError
+from bwim.io import open_regular
 from bwim.io.toml_writer import to_toml
 from bwim.scenario.checks import (
     At,
@@ -39,7 +40,9 @@ from bwim.scenario.specs import (
     AxleDetectorSpec,
     BridgeSpec,
     CalibrateSpec,
+    DriftSpec,
     IdentifySpec,
+    LaneSpec,
     LoggerSpec,
     RoadSpec,
     RunSpec,
@@ -53,7 +56,8 @@ from bwim.vehicles.types import Truck3D
 __all__ = ["dump_scenario", "load_scenario", "read_toml", "scenario_from_dict",
            "scenario_to_dict"]
 
-_SECTIONS = ("title", "bridge", "sensors", "logger", "axle_detectors", "vehicle", "road", "run",
+_SECTIONS = ("title", "bridge", "sensors", "logger", "axle_detectors", "lanes", "drift",
+             "vehicle", "road", "run",
              "identify", "calibrate")
 
 
@@ -155,17 +159,44 @@ def _parse_logger(table: Any, src: str) -> LoggerSpec:
     return spec
 
 
-def _parse_detectors(table: Any, src: str) -> AxleDetectorSpec:
-    at = At(src, "[axle_detectors]")
-    spec = parse_table(AxleDetectorSpec, table, at)
-    if len(spec.channels) != 2 or spec.channels[0] == spec.channels[1]:
-        raise at.error("channels must name two different logger channels, in the order "
-                       f"traffic meets them, got {list(spec.channels)}")
-    if not spec.distance > 0:
-        raise at.error(f"distance must be positive, got {spec.distance:g}")
-    if spec.max_spacing is not None and not spec.max_spacing > 0:
-        raise at.error(f"max_spacing must be positive, got {spec.max_spacing:g}")
-    return spec
+def _parse_detectors(value: Any, src: str) -> tuple[AxleDetectorSpec, ...]:
+    """``[axle_detectors]`` (one lane) or ``[[axle_detectors]]`` (one table per lane)."""
+    single = isinstance(value, dict)
+    specs = tables(AxleDetectorSpec, "axle_detectors")(value, At(src, "top level"))
+    seen_channels: dict[str, int] = {}
+    seen_lanes: dict[int, int] = {}
+    for k, spec in enumerate(specs, start=1):
+        at = At(src, "[axle_detectors]" if single else f"[[axle_detectors]] entry {k}")
+        if len(spec.channels) != 2 or spec.channels[0] == spec.channels[1]:
+            raise at.error("channels must name two different logger channels, in the order "
+                           f"traffic meets them, got {list(spec.channels)}")
+        if not spec.distance > 0:
+            raise at.error(f"distance must be positive, got {spec.distance:g}")
+        if spec.max_spacing is not None and not spec.max_spacing > 0:
+            raise at.error(f"max_spacing must be positive, got {spec.max_spacing:g}")
+        for ch in spec.channels:
+            if ch in seen_channels:
+                raise at.error(f"channel {ch!r} is already a detector of entry "
+                               f"{seen_channels[ch]}")
+            seen_channels[ch] = k
+        lane = spec.lane if spec.lane is not None else k
+        if lane in seen_lanes:
+            raise at.error(f"lane {lane} already has detectors (entry {seen_lanes[lane]})")
+        seen_lanes[lane] = k
+    if sum(1 for sp in specs if sp.calibration) > 1:
+        raise InputError(f"{src}: [[axle_detectors]]: calibration = true in more than one "
+                         "entry; the calibration truck drives one lane")
+    return specs
+
+
+def _parse_lanes(value: Any, src: str) -> tuple[LaneSpec, ...]:
+    specs = tables(LaneSpec, "lanes")(value, At(src, "top level"))
+    seen: set[int] = set()
+    for k, spec in enumerate(specs, start=1):
+        if spec.number in seen:
+            raise InputError(f"{src}: [[lanes]] entry {k}: lane {spec.number} appears twice")
+        seen.add(spec.number)
+    return specs
 
 
 def scenario_from_dict(
@@ -213,8 +244,10 @@ def scenario_from_dict(
         kw["logger"] = _parse_logger(doc["logger"], src)
     if "axle_detectors" in doc:
         kw["axle_detectors"] = _parse_detectors(doc["axle_detectors"], src)
+    if "lanes" in doc:
+        kw["lanes"] = _parse_lanes(doc["lanes"], src)
     for name, cls in (("run", RunSpec), ("identify", IdentifySpec),
-                      ("calibrate", CalibrateSpec)):
+                      ("calibrate", CalibrateSpec), ("drift", DriftSpec)):
         if name in doc:
             kw[name] = parse_table(cls, doc[name], At(src, f"[{name}]"))
     return Scenario(**kw, source=src, folder=None if folder is None else Path(folder))
@@ -234,12 +267,12 @@ def read_toml(path: str | os.PathLike) -> dict[str, Any]:
         unreadable file.
     """
     p = Path(path)
-    try:
-        data = p.read_bytes()
-    except FileNotFoundError:
-        raise InputError(f"{p}: no such file") from None
-    except OSError as exc:
-        raise InputError(f"{p}: cannot read: {(exc.strerror or str(exc)).lower()}") from None
+    with open_regular(p) as f:  # a folder, a FIFO or a device is refused, not waited on
+        try:
+            data = f.read()
+        except OSError as exc:
+            raise InputError(f"{p}: cannot read: {(exc.strerror or str(exc)).lower()}"
+                             ) from None
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as exc:
@@ -312,15 +345,23 @@ def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
         doc["bridge"] = {"kind": bridge.pop("kind"), **bridge}
     if scenario.sensors:
         doc["sensors"] = [_spec_dict(s) for s in scenario.sensors]
-    for name in ("logger", "axle_detectors"):
-        spec = getattr(scenario, name)
-        if spec is not None:
-            doc[name] = _spec_dict(spec)
+    if scenario.logger is not None:
+        doc["logger"] = _spec_dict(scenario.logger)
+        clock = scenario.logger.clock
+        if clock is not None:
+            doc["logger"]["clock"] = ("none" if clock.none else clock.pattern
+                                      if clock.pattern and not (clock.column or clock.date)
+                                      else {k: getattr(clock, k) for k in
+                                            ("pattern", "column", "date", "format")
+                                            if getattr(clock, k) is not None} or "name")
+    for name in ("axle_detectors", "lanes"):
+        if getattr(scenario, name):
+            doc[name] = [_spec_dict(sp) for sp in getattr(scenario, name)]
     if scenario.vehicle is not None:
         v = scenario.vehicle
         doc["vehicle"] = {"name": v.name} if v.name is not None else {
             "type": v.type, **_plain(v.params)}
-    for name in ("road", "run", "identify", "calibrate"):
+    for name in ("road", "run", "identify", "calibrate", "drift"):
         spec = getattr(scenario, name)
         if spec is not None:
             doc[name] = _spec_dict(spec)

@@ -58,9 +58,9 @@ from bwim.sensors import SensorKind
 from bwim.vehicles import NAMED_VEHICLES
 from bwim.vehicles.types import HalfCar, MovingForces, SprungMass, TractorSemitrailer, Truck3D
 
-__all__ = ["VEHICLE_TYPES", "AxleDetectorSpec", "BridgeSpec", "CalibrateSpec", "GirderSpec",
-           "IdentifySpec", "LoggerSpec", "RoadSpec", "RunSpec", "Scenario", "SectionSpec",
-           "SensorSpec", "VehicleSpec"]
+__all__ = ["DIRECTIONS", "VEHICLE_TYPES", "AxleDetectorSpec", "BridgeSpec", "CalibrateSpec",
+           "ClockTable", "DriftSpec", "GirderSpec", "IdentifySpec", "LaneSpec", "LoggerSpec",
+           "RoadSpec", "RunSpec", "Scenario", "SectionSpec", "SensorSpec", "VehicleSpec"]
 
 #: Vehicle classes by their scenario ``type``.
 VEHICLE_TYPES: Mapping[str, type] = MappingProxyType({
@@ -214,6 +214,37 @@ _DELIMITERS = (",", ";", "tab", "whitespace", "\t", " ")
 
 
 @dataclass(frozen=True, kw_only=True)
+class ClockTable:
+    """``[logger] clock``: a strptime ``pattern`` of the file name, or a clock ``column``
+    (with its ``date`` column and ``format``), or ``none`` (no clock): the arguments of
+    :class:`bwim.io.ClockSpec`."""
+
+    pattern: str | None = None
+    column: str | None = None
+    date: str | None = None
+    format: str | None = None
+    none: bool = False
+
+
+def _clock(v: Any, at: At) -> ClockTable:
+    if isinstance(v, str):
+        if v == "none":
+            return ClockTable(none=True)
+        if v == "name":
+            return ClockTable()
+        return ClockTable(pattern=v)
+    if not isinstance(v, dict):
+        raise at.expected('a file-name pattern, "name", "none" or a table {column, date, '
+                          'format}', v)
+    for key in v:
+        if key not in ("column", "date", "format", "pattern"):
+            raise at.error(f"unknown key {key!r}; allowed keys: column, date, format, "
+                           "pattern")
+    vals = {k: string(x, At(at.src, at.section, f"clock.{k}")) for k, x in v.items()}
+    return ClockTable(**vals)
+
+
+@dataclass(frozen=True, kw_only=True)
 class LoggerSpec:
     """The ``[logger]`` section: how a logger's text export is laid out
     (:class:`bwim.io.LoggerFormat`).  ``columns`` names every column in order (``"-"``
@@ -228,18 +259,61 @@ class LoggerSpec:
     scale: float | tuple[float, ...] = opt(number_or_numbers, 1.0)
     decimal: str = opt(choice(".", ","), ".")
     skip_lines: int = opt(integer, 0)
+    clock: ClockTable | None = opt(_clock)  # noqa: RUF009 (a field)
+    """Where each file's clock comes from (:class:`bwim.io.ClockSpec`): default, a
+    timestamp in the file name in a common form."""
+
+
+#: Travel directions in the bridge frame: +x (the frame's own) or −x.
+DIRECTIONS = ("+x", "-x")
 
 
 @dataclass(frozen=True, kw_only=True)
 class AxleDetectorSpec:
-    """The ``[axle_detectors]`` section: two logger channels that respond to each axle,
-    named in the order traffic meets them, ``distance`` m apart; ``position`` is the first
-    detector's x in the influence-line frame (default 0: lines are measured from it)."""
+    """One ``[[axle_detectors]]`` table (a lane's pair; the single ``[axle_detectors]``
+    table of one lane stays valid): two logger channels that respond to each axle, named
+    in the order that lane's traffic meets them, ``distance`` m apart; ``lane`` (its
+    number), ``direction`` ("+x" or "-x"), ``y`` the detectors' lateral position (m);
+    ``position`` is the first detector's x in the lines' frame (default: 0 for the lane
+    the calibration truck drives, whose first detector the lines are measured from;
+    ``distance`` for a −x lane whose pair is the same one mirrored); ``calibration`` marks
+    the lane of the calibration truck (default: the first table)."""
 
     channels: tuple[str, ...] = req(strings)
     distance: float = req(number)
-    position: float = opt(number, 0.0)
+    position: float | None = opt(number)
     max_spacing: float | None = opt(number)
+    lane: int | None = opt(int_from(1))
+    direction: str = opt(choice(*DIRECTIONS), "+x")
+    y: float | None = opt(number)
+    calibration: bool | None = opt(boolean)
+
+
+@dataclass(frozen=True, kw_only=True)
+class LaneSpec:
+    """One ``[[lanes]]`` table: a traffic lane (with or without axle detectors), so that a
+    vehicle found by the gauges' lateral position can be given its lane: ``number``, the
+    centre line's ``y`` (m) and the ``direction``."""
+
+    number: int = req(int_from(1))
+    y: float = req(number)
+    direction: str = opt(choice(*DIRECTIONS), "+x")
+
+
+@dataclass(frozen=True, kw_only=True)
+class DriftSpec:
+    """The ``[drift]`` section: how the drift of the strain-to-load ratio is corrected
+    (:mod:`bwim.site.drift`): ``method``; ``temperature``, the logger channel of a
+    temperature (°C) when the logger has one; for the traffic method the reference
+    ``reference_class`` (an axle-group code such as ``"113"``, default: the commonest
+    articulated class) and, where no traffic was weighed while the calibration holds, its
+    steering axle's nominal load ``reference_kN``."""
+
+    method: str = opt(choice("auto", "traffic", "temperature", "time_of_day", "trend",
+                             "none"), "auto")
+    temperature: str | None = opt(string)
+    reference_class: str | None = opt(string)
+    reference_kN: float | None = opt(at_least(1.0, strict=True))
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -379,7 +453,9 @@ class Scenario:
     bridge: BridgeSpec | None = None
     sensors: tuple[SensorSpec, ...] = ()
     logger: LoggerSpec | None = None
-    axle_detectors: AxleDetectorSpec | None = None
+    axle_detectors: tuple[AxleDetectorSpec, ...] = ()
+    lanes: tuple[LaneSpec, ...] = ()
+    drift: DriftSpec | None = None
     vehicle: VehicleSpec | None = None
     road: RoadSpec | None = None
     run: RunSpec | None = None

@@ -215,6 +215,7 @@ def weigh(
     lateral: float | None = None,
     baseline: str = "fit",
     scale_correction: bool = True,
+    scale: float | None = None,
     limits: Limits | None = None,
 ) -> Weighing:
     """Static axle and group weights of one vehicle, with plausibility flags.
@@ -241,8 +242,11 @@ def weigh(
     baseline : "fit", "pretrigger" or "none"
         How the channels' offsets are removed (module docstring).
     scale_correction : bool
-        Divide by the calibration's scale trend at ``record.clock_seconds()`` (no effect without
-        per-run factors).
+        Divide by the calibration's scale trend at ``record.clock_seconds()`` (no effect
+        without per-run factors).
+    scale : float, optional
+        Divide by this strain-to-load factor instead (a drift correction the caller made,
+        :mod:`bwim.site.drift`); the clock time is then the caller's to check.
     limits : Limits
         Plausibility thresholds.
 
@@ -252,7 +256,9 @@ def weigh(
     """
     event = _inputs(record, passage, calibration, groups=groups, combine=combine,
                     lateral=lateral, baseline=baseline, limits=limits)
-    design = _design(record, event, calibration, scale_correction)
+    if scale is not None and not (np.isfinite(scale) and scale > 0):
+        raise InputError(f"scale must be a positive factor, got {scale!r}")
+    design = _design(record, event, calibration, scale_correction, scale)
     centred = _centred(design, event)
     fit = _fit(design, centred, event, calibration)
     flags = _flags(event, design, centred, fit, calibration)
@@ -320,11 +326,12 @@ class _Design:
     on: np.ndarray  # (n_t,) an axle on the lines' support
     support: tuple[float, float]  # the lines' support, m
     clock_time: float  # record.clock_seconds(), s
-    scale: float  # the scale trend's factor at clock_time (1 without correction)
+    scale: float  # the factor the readings are divided by (1 without correction)
+    trend_used: bool  # the factor is the scale trend's at clock_time
 
 
 def _design(record: Record, event: _Inputs, calibration: MultiRunCalibration,
-            scale_correction: bool) -> _Design:
+            scale_correction: bool, scale: float | None = None) -> _Design:
     """The model of the readings: the lines at the vehicle's lateral covariate under each
     axle, summed by group, and the day's scale factor."""
     line = calibration.line
@@ -338,11 +345,15 @@ def _design(record: Record, event: _Inputs, calibration: MultiRunCalibration,
     Mg = np.einsum("kic,ig->kgc", M, event.groups.share)  # (n_t, n_groups, n_c)
     t0 = record.clock_seconds()
     trend = calibration.scale_trend
-    s = float(trend(t0)) if (scale_correction and trend is not None) else 1.0
+    if scale is not None:
+        s = float(scale)
+    else:
+        s = float(trend(t0)) if (scale_correction and trend is not None) else 1.0
     lo, hi = line.support
     on = ((pos > lo) & (pos < hi)).any(axis=1)
     return _Design(readings=E, positions=pos, groups=Mg, on=on, support=(lo, hi),
-                   clock_time=t0, scale=s)
+                   clock_time=t0, scale=s,
+                   trend_used=scale is None and scale_correction and trend is not None)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -446,7 +457,7 @@ def _flags(event: _Inputs, design: _Design, centred: _Centred, fit: _Fit,
     if not fit.misfit <= limits.misfit * fit.misfit_ref:
         flags.append("residual_high")
     t_lo, t_hi = calibration.time_span
-    if not t_lo <= design.clock_time <= t_hi:
+    if design.trend_used and not t_lo <= design.clock_time <= t_hi:
         flags.append("outside_calibration_time")
     if not event.lateral_ok:
         flags.append("lateral_extrapolated")

@@ -1,0 +1,386 @@
+"""A site's calibration from the calibration truck's runs: detectors' responses, lines of
+every gauge, and the drift models.
+
+Contract
+--------
+* :func:`calibrate_site` (named steps: responses, detection, runs, lines, drift):
+
+  1. **Responses** (``SiteSetup.detection`` ``"learned"`` or ``"auto"``): the calibration
+     lane's detectors' responses are learned from the runs with the truck's known
+     layout (:func:`bwim.detect.learn_responses`, which also checks the declared detector
+     distance against the truck's spacings); the other lanes' pairs take the same shape
+     with their own channels' sign, noise and gain ratio (measured on the runs: every
+     detector also feels the calibration truck).  ``"auto"`` falls back to separate
+     peaks, with a note, when the runs cannot teach a response.
+  2. **Detection** of every vehicle in every lane of each run (:mod:`bwim.site.lanes`).
+  3. **Runs**: a run is used when its lane holds exactly one vehicle whose axle count
+     and spacings are the truck's (within :data:`SPACING_TOLERANCE`) and no other
+     vehicle is on the span at the same time in any lane (then it is rejected with that
+     reason: "another vehicle on the bridge: lane 3, −x, 5 axles"); a used run keeps its
+     detected speed, arrival and lateral position with the truck's spacings.
+  4. **Lines** of every gauge from the used runs stacked (:func:`bwim.wim.calibrate_lines`:
+     per-run scale factors, their trend, outlier runs rejected with a reason).
+  5. **Drift**: the runs' factors over the time of day
+     (:class:`~bwim.site.drift.TimeOfDayDrift`, with their dates) and, with a
+     temperature channel (``DriftSetup.temperature``), against the runs' mean temperature
+     (:class:`~bwim.site.drift.TemperatureDrift`).
+
+  Without axle detectors the truck is found from the strain alone
+  (:func:`bwim.detect.detect_known_truck`, then ``strain_passes`` of lines and
+  re-detection): see :func:`calibrate_site`.
+* Raises :class:`~bwim.errors.InputError` when fewer than two runs are usable, naming
+  each run's reason.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from datetime import date
+from types import MappingProxyType
+
+import numpy as np
+
+from bwim.detect import (
+    Detection,
+    DetectorResponse,
+    LearnedResponses,
+    detect_from_strain,
+    detect_known_truck,
+    learn_responses,
+)
+from bwim.detect.response import band_pass, peak_polarity
+from bwim.detect.signals import robust_sigma
+from bwim.errors import InputError
+from bwim.records import Passage, Record
+from bwim.site.drift import TemperatureDrift, TimeOfDayDrift, seconds_of_day
+from bwim.site.lanes import EventDetection, detect_lanes
+from bwim.site.setup import SiteSetup
+from bwim.wim import MultiRunCalibration, calibrate_lines
+from bwim.wim.multirun import RunFit
+from bwim.wim.scale_trend import ScaleTrend
+
+__all__ = ["SPACING_TOLERANCE", "STRAIN_ONLY_PASSES", "SiteCalibration", "calibrate_site",
+           "gauge_names", "temperature_channel"]
+
+#: A calibration run whose detected axle spacings differ from the truck's by more than
+#: this (m) is rejected: the detection, not the truck, is wrong.
+SPACING_TOLERANCE = 0.3
+#: Without axle detectors: passes of (lines from the runs, runs re-detected against them).
+STRAIN_ONLY_PASSES = 2
+
+
+def gauge_names(record: Record) -> list[str]:
+    """The record's structural channels (strain, deflection)."""
+    return [s.name for s in record.sensors if s.kind.is_structural]
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class SiteCalibration:
+    """What :func:`calibrate_site` learned from the runs.
+
+    Attributes
+    ----------
+    lines : MultiRunCalibration
+        The lines, the runs' residuals, scale factors and rejections.
+    detections : tuple of Detection
+        What detection found in each run's calibration lane (same order as the records).
+    reasons : tuple of str
+        Why each run was left out ("" when it was used).
+    fits : tuple of (RunFit or None)
+        Each run against the lines (None for a run that detection left out).
+    setup : SiteSetup
+    responses : mapping of int to LearnedResponses
+        The detector lanes' responses (empty: detection by separate peaks).
+    time_of_day : TimeOfDayDrift or None
+        The runs' factors over the time of day.
+    temperature : TemperatureDrift or None
+        The runs' factors against their temperature (with a temperature channel).
+    notes : tuple of str
+        What was decided and why (a fallback, a distance offset).
+    """
+
+    lines: MultiRunCalibration
+    detections: tuple[Detection, ...]
+    reasons: tuple[str, ...]
+    fits: tuple[RunFit | None, ...]
+    setup: SiteSetup
+    responses: Mapping[int, LearnedResponses] = field(default_factory=dict)
+    time_of_day: TimeOfDayDrift | None = None
+    temperature: TemperatureDrift | None = None
+    notes: tuple[str, ...] = ()
+
+    @property
+    def n_used(self) -> int:
+        return sum(1 for r in self.reasons if not r)
+
+    @property
+    def dates(self) -> tuple[date, ...]:
+        """The calibration runs' dates (empty when their clock has no date)."""
+        return () if self.time_of_day is None else self.time_of_day.dates
+
+    def __repr__(self) -> str:
+        return (f"SiteCalibration({self.n_used} of {len(self.reasons)} runs used, "
+                f"{len(self.lines.channels)} channels, detection "
+                f"{'learned' if self.responses else 'peaks'}, lanes "
+                f"{[p.lane for p in self.setup.lanes]})")
+
+
+def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
+                   strain_passes: int = STRAIN_ONLY_PASSES) -> SiteCalibration:
+    """Detect the calibration truck in every run and calibrate the lines of every gauge
+    (see the module docstring).
+
+    Parameters
+    ----------
+    records : sequence of Record
+        Runs of the calibration truck (logger events), with clock time.
+    setup : SiteSetup
+    strain_passes : int
+        Without axle detectors: passes of (lines from the runs, every run re-detected
+        against them by :func:`bwim.detect.detect_from_strain` with the truck's spacings)
+        after the first estimate (:func:`bwim.detect.detect_known_truck`, line unknown);
+        more passes cost one strain-only detection per run each and reduce the speed
+        error (measured by ``tests/validation/test_site_strain_only.py``).
+
+    Returns
+    -------
+    SiteCalibration
+
+    Raises
+    ------
+    InputError
+        No records, or fewer than two usable runs (the reasons are in the message).
+    """
+    if records is None or len(records) == 0:
+        raise InputError("records: give at least one calibration run")
+    if not setup.lanes:
+        if int(strain_passes) < 0:
+            raise InputError(f"strain_passes must be >= 0, got {strain_passes!r}")
+        return _strain_only(records, setup, int(strain_passes))
+    notes: list[str] = []
+    responses = _responses(records, setup, notes)
+    events = [detect_lanes(rec, setup, responses=responses, gauges=gauge_names(rec))
+              for rec in records]
+    reasons, passages, kept = _truck_runs(events, setup)
+    cal = _site_calibration(records, setup,
+                            [e.by_lane.get(setup.calibration_lane, Detection()) for e in events],
+                            reasons, passages, kept)
+    return SiteCalibration(
+        lines=cal.lines, detections=cal.detections, reasons=cal.reasons, fits=cal.fits,
+        setup=setup, responses=MappingProxyType(dict(responses)),
+        time_of_day=_time_of_day(records, cal),
+        temperature=_temperature(records, cal, setup),
+        notes=tuple(notes))
+
+
+# --- 1. responses --------------------------------------------------------------------------
+def _responses(records: Sequence[Record], setup: SiteSetup, notes: list[str]
+               ) -> dict[int, LearnedResponses]:
+    if setup.detection == "peaks":
+        return {}
+    pair = setup.calibration_pair
+    try:
+        learned = learn_responses(records, pair.channels, pair.distance,
+                                  setup.calibration_spacings,
+                                  loads=setup.calibration_loads)
+    except InputError as exc:
+        if setup.detection == "learned" or "distance" in str(exc):
+            raise
+        notes.append(f"detection by separate peaks: the runs did not teach the detectors' "
+                     f"responses ({' '.join(str(exc).split())})")
+        return {}
+    if abs(learned.distance_offset) > 0.01 * pair.distance:
+        notes.append(f"the detectors' distance may be off by {learned.distance_offset:+.3f} m "
+                     f"(the truck's spacings against the declared {pair.distance:g} m)")
+    out = {pair.lane: learned}
+    for other in setup.lanes:
+        if other.lane != pair.lane:
+            out[other.lane] = _transferred(learned, other.channels, other.distance, records)
+    return out
+
+
+def _transferred(learned: LearnedResponses, channels: tuple[str, str], distance: float,
+                 records: Sequence[Record]) -> LearnedResponses:
+    """The calibration lane's response shape for another pair of detectors: each
+    channel's own sign, noise and (relative) gain from its band-passed readings in the
+    runs, which feel every vehicle on the deck."""
+    polarity, noise, size = [], [], []
+    for ch in channels:
+        y = np.concatenate([r.channels([ch]).data[:, 0] for r in records])
+        fs = records[0].sampling_rate
+        z = band_pass(y, fs)
+        polarity.append(float(peak_polarity(z[:, None])[0]))
+        noise.append(max(robust_sigma(np.diff(y)) / np.sqrt(2.0), 1e-300))
+        size.append(float(np.percentile(np.abs(z), 99.5)))
+    ref = learned.responses[0]
+    rel_misfit = ref.misfit / max(ref.noise, 1e-300)
+    resp = tuple(
+        DetectorResponse(channel=ch, u=r.u, k=r.k * r.sign * pol, noise=n,
+                         misfit=n * rel_misfit)
+        for ch, r, pol, n in zip(channels, learned.responses, polarity, noise, strict=True))
+    gain = np.array(size) / max(size[0], 1e-300)
+    amps = np.column_stack([np.ones(1), np.full(1, gain[1])])
+    return LearnedResponses(responses=resp, distance=distance, load_unit=learned.load_unit,
+                            amplitudes=amps, speeds=np.zeros(0), first_axle_times=np.zeros(0),
+                            residuals=np.zeros(0), reasons=(), distance_offset=0.0, nit=0)
+
+
+# --- 3. runs -------------------------------------------------------------------------------
+def _run_reason(ev: EventDetection, setup: SiteSetup) -> str:
+    """Why a calibration run's detection cannot be used ("" if it can)."""
+    lane = setup.calibration_lane or 1
+    own = [v for v in ev.vehicles if v.pair == lane and v.lane == lane]
+    others = [v for v in ev.vehicles if v not in own]
+    if not own:
+        det = ev.by_lane.get(lane)
+        why = det.message if det is not None and det.message else ev.message or "no axles"
+        return f"no vehicle detected ({why})"
+    if len(own) > 1:
+        return f"{len(own)} vehicles detected in lane {lane}, not one calibration truck"
+    truck = own[0]
+    busy = [w for w in others if w.window is not None and truck.window is not None
+            and w.window[0] < truck.window[1] and truck.window[0] < w.window[1]]
+    if busy:
+        shown = ", ".join(f"lane {w.lane}, {w.direction}, {w.vehicle.n_axles} axles"
+                          for w in busy)
+        return f"another vehicle on the bridge: {shown}"
+    n = setup.calibration_loads.size
+    p = truck.vehicle.passage
+    if p.n_axles != n:
+        return f"{p.n_axles} axles detected, the calibration truck has {n}"
+    dev = np.max(np.abs(p.axle_spacings - setup.calibration_spacings), initial=0.0)
+    if dev > SPACING_TOLERANCE:
+        return (f"detected axle spacings differ from the truck's by {dev:.2f} m "
+                f"(> {SPACING_TOLERANCE} m)")
+    return ""
+
+
+def _truck_runs(events: Sequence[EventDetection], setup: SiteSetup):
+    """Reasons and passages of the runs: the truck's layout is known exactly, so a usable
+    run keeps its detected speed, arrival and lateral position with the truck's
+    spacings."""
+    reasons, passages, kept = [], [], []
+    for k, ev in enumerate(events):
+        reason = _run_reason(ev, setup)
+        reasons.append(reason)
+        if not reason:
+            v = next(w for w in ev.vehicles if w.pair == (setup.calibration_lane or 1)).vehicle
+            p = v.passage
+            passages.append(Passage(speed=p.speed, lane=p.lane, delay=p.delay,
+                                    axle_spacings=setup.calibration_spacings,
+                                    track_width=p.track_width))
+            kept.append(k)
+    return reasons, passages, kept
+
+
+# --- 4. lines ------------------------------------------------------------------------------
+@dataclass(frozen=True, kw_only=True, eq=False)
+class _Lines:
+    lines: MultiRunCalibration
+    detections: tuple[Detection, ...]
+    reasons: tuple[str, ...]
+    fits: tuple[RunFit | None, ...]
+
+
+def _site_calibration(records, setup, detections, reasons, passages, kept) -> _Lines:
+    if len(kept) < 2:
+        shown = "; ".join(f"run {k + 1}: {r}" for k, r in enumerate(reasons) if r)
+        raise InputError(f"only {len(kept)} usable calibration run(s) of {len(records)}: "
+                         f"{shown}")
+    lines = calibrate_lines([records[k] for k in kept], passages, setup.calibration_loads,
+                            lateral=setup.lateral)
+    reasons = list(reasons)
+    fits: list[RunFit | None] = [None] * len(records)
+    for run in lines.runs:
+        fits[kept[run.index]] = run
+        if run.rejected:
+            reasons[kept[run.index]] = run.reason
+    return _Lines(lines=lines, detections=tuple(detections), reasons=tuple(reasons),
+                  fits=tuple(fits))
+
+
+# --- 5. drift ------------------------------------------------------------------------------
+def _used(records: Sequence[Record], cal: _Lines) -> list[tuple[Record, RunFit]]:
+    return [(rec, fit) for rec, fit, why in zip(records, cal.fits, cal.reasons, strict=True)
+            if fit is not None and not why and np.isfinite(fit.scale)]
+
+
+def _time_of_day(records: Sequence[Record], cal: _Lines) -> TimeOfDayDrift | None:
+    used = _used(records, cal)
+    if len(used) < 2:
+        return None
+    clocks = [rec.clock_at(rec.time[0]) for rec, _ in used]
+    if all(c is not None for c in clocks):
+        tod = [seconds_of_day(c) for c in clocks]
+        dates = tuple(sorted({c.date() for c in clocks}))
+    else:  # no date: the records' own clock of day
+        tod = [rec.clock_seconds() % 86400.0 for rec, _ in used]
+        dates = ()
+    factors = [fit.scale for _, fit in used]
+    return TimeOfDayDrift(trend=ScaleTrend.fit(tod, factors), dates=dates)
+
+
+def temperature_channel(record: Record, setup: SiteSetup) -> str | None:
+    """The record's temperature channel: the drift setup's, else its first channel of
+    kind ``temperature``; None without one."""
+    names = [s.name for s in record.sensors]
+    if setup.drift.temperature is not None:
+        return setup.drift.temperature if setup.drift.temperature in names else None
+    return next((s.name for s in record.sensors if s.kind.value == "temperature"), None)
+
+
+def _temperature(records: Sequence[Record], cal: _Lines, setup: SiteSetup
+                 ) -> TemperatureDrift | None:
+    used = _used(records, cal)
+    channels = {temperature_channel(rec, setup) for rec, _ in used}
+    if len(channels) != 1 or None in channels:
+        return None
+    channel = channels.pop()
+    temps = [float(np.mean(rec.channels([channel]).data)) for rec, _ in used]
+    try:
+        return TemperatureDrift.fit(temps, [fit.scale for _, fit in used])
+    except InputError:
+        return None
+
+
+# --- without axle detectors ----------------------------------------------------------------
+def _strain_only(records: Sequence[Record], setup: SiteSetup, passes: int) -> SiteCalibration:
+    """Calibration without axle detectors: the truck found from the strain (layout known),
+    then ``passes`` of (lines, runs re-detected against them)."""
+    gauges = gauge_names(records[0])
+    dets = list(detect_known_truck(records, setup.calibration_loads,
+                                   setup.calibration_spacings, gauges=gauges))
+    events = [_as_event(d, setup) for d in dets]
+    reasons, passages, kept = _truck_runs(events, setup)
+    for _ in range(passes):
+        if len(kept) < 2:
+            break
+        lines = calibrate_lines([records[k] for k in kept], passages,
+                                setup.calibration_loads, lateral=setup.lateral)
+        line = lines.line_at()
+        dets = []
+        for rec in records:
+            try:
+                det = detect_from_strain(rec, line, known_spacings=setup.calibration_spacings,
+                                         gauges=gauge_names(rec))
+            except InputError as exc:
+                det = Detection(message=f"detection failed: {exc}", method="strain")
+            dets.append(det)
+        events = [_as_event(d, setup) for d in dets]
+        reasons, passages, kept = _truck_runs(events, setup)
+    cal = _site_calibration(records, setup, dets, reasons, passages, kept)
+    return SiteCalibration(lines=cal.lines, detections=cal.detections, reasons=cal.reasons,
+                           fits=cal.fits, setup=setup, time_of_day=_time_of_day(records, cal),
+                           temperature=_temperature(records, cal, setup))
+
+
+def _as_event(det: Detection, setup: SiteSetup) -> EventDetection:
+    """A strain-only detection as the detection of the calibration lane."""
+    from bwim.site.lanes import LaneVehicle
+
+    lane = setup.calibration_lane or 1
+    return EventDetection(
+        vehicles=tuple(LaneVehicle(vehicle=v, lane=lane, direction="+x", pair=lane,
+                                   window=v.window) for v in det.vehicles),
+        by_lane={lane: det}, message=det.message)

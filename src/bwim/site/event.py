@@ -1,0 +1,423 @@
+"""One event of a site: every vehicle detected, each weighed or refused with its reason.
+
+Contract
+--------
+* :func:`weigh_event` finds every vehicle of the record in every lane
+  (:func:`bwim.site.lanes.detect_lanes`) and decides, vehicle by vehicle:
+
+  - a vehicle travelling the other way than the calibration truck is **counted, not
+    weighed** (no lines were calibrated for that direction): refused with that reason;
+  - a vehicle that shares the span with another vehicle travelling its way (side by side
+    or following) is refused (``multiple_presence``): one record cannot tell their weights
+    apart with lines of one vehicle;
+  - any other vehicle is weighed (:func:`bwim.wim.weigh`: gauges combined by generalised
+    least squares, axle groups as groups); one with a vehicle of the other direction on
+    the span at the same time is weighed and flagged ``multiple_presence`` (the fit's
+    residual check still refuses a weighing the other vehicle spoils);
+  - a weighing of quality ``"reject"`` (negative or absurd weights, a fit far worse than
+    the calibration's, a truncated record) gives no weights, only its flags and reason.
+
+  It never raises on a record it can read: every outcome is an :class:`EventWeighing`.
+* **Drift**: each weighed vehicle's weights are divided by the strain-to-load factor of
+  the setup's method (:mod:`bwim.site.drift`) at the vehicle's clock time: the
+  calibration runs' temperature regression at the record's mean temperature, the runs'
+  trend over the time of day, their trend over absolute time, or 1.  The traffic method
+  works on a whole batch's rows afterwards (:func:`bwim.site.correct_drift`); per event
+  it starts from the time of day.
+* With a calibrated FE model (``bridge``) the calibration lane's vehicle is weighed by
+  moving force identification instead (:func:`bwim.identify_forces` with
+  ``identify_options``): the gauges then need positions (x, y) in the model's frame and
+  the readings strain units (``[logger] scale``).
+* :class:`EventWeighing` keeps its first weighed vehicle (else the first in the
+  calibration lane) as the event's own (``weighed``, ``gvw``, ``weighing``...), and
+  every vehicle in ``vehicles``; :meth:`EventWeighing.to_summary_rows` gives one row each.
+* Units: N, m, s; readings in the logger's units.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from datetime import datetime, timedelta
+from datetime import time as dtime
+from typing import Any
+
+import numpy as np
+
+from bwim.classify import axle_configuration
+from bwim.detect import Detection, VehicleDetection, detect_from_strain
+from bwim.detect.result import FLAG_MULTIPLE_PRESENCE
+from bwim.errors import BwimError, InputError
+from bwim.fe.bridge import Bridge
+from bwim.mfi import ForceIdentification, identify_forces
+from bwim.plausibility import HARD_FLAGS
+from bwim.records import Passage, Record
+from bwim.site.calibrate import SiteCalibration, gauge_names, temperature_channel
+from bwim.site.lanes import EventDetection, LaneVehicle, detect_lanes
+from bwim.summary import SummaryRow
+from bwim.wim import Weighing, weigh
+
+__all__ = ["EventWeighing", "VehicleWeighing", "weigh_event"]
+
+#: What one event's detection or weighing may raise without ending a batch: bwim's own
+#: errors and the numerical failures of a degenerate record (a singular fit).
+_EVENT_ERRORS = (BwimError, ArithmeticError, ValueError, np.linalg.LinAlgError)
+
+
+def _why(exc: BaseException) -> str:
+    """An exception as one line (its type when it has no message)."""
+    return " ".join(str(exc).split()) or type(exc).__name__
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class VehicleWeighing:
+    """One vehicle of an event, weighed or not.
+
+    Attributes
+    ----------
+    vehicle : VehicleDetection
+    lane : int or None
+    direction : str
+    weighed : bool
+        True when ``weighing`` (or ``identification``) holds weights that passed the
+        plausibility checks.
+    reason : str
+        Why the vehicle was not weighed ("" when it was).
+    weighing : Weighing or None
+    identification : ForceIdentification or None
+    flags : tuple of str
+    drift_factor : float or None
+    drift_method : str
+    """
+
+    vehicle: VehicleDetection
+    lane: int | None
+    direction: str
+    weighed: bool
+    reason: str = ""
+    weighing: Weighing | None = None
+    identification: ForceIdentification | None = None
+    flags: tuple[str, ...] = ()
+    drift_factor: float | None = None
+    drift_method: str = ""
+
+    @property
+    def axle_weights(self) -> np.ndarray | None:
+        """Static axle weights, N (None unless weighed)."""
+        if not self.weighed:
+            return None
+        if self.identification is not None:
+            return self.identification.axle_weights
+        return self.weighing.axle_weights
+
+    @property
+    def gvw(self) -> float | None:
+        """Gross vehicle weight, N (None unless weighed)."""
+        if not self.weighed:
+            return None
+        if self.identification is not None:
+            return float(self.identification.gvw[0])
+        return self.weighing.gvw
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class EventWeighing:
+    """The outcome of one event (:func:`weigh_event`); never raised, always returned.
+
+    The event's own attributes are those of its principal vehicle (the first weighed,
+    else the first of the calibration lane); ``vehicles`` holds them all.
+
+    Attributes
+    ----------
+    weighed : bool
+        True when the principal vehicle holds weights that passed the plausibility checks.
+    reason : str
+        Why it was not weighed ("" when it was).
+    detection : Detection or None
+        The principal vehicle's lane's detection; None when detection itself failed.
+    weighing : Weighing or None
+    flags : tuple of str
+        Detection and weighing flags of the principal vehicle.
+    identification : ForceIdentification or None
+        When weighed by MFI with an FE model.
+    clock : datetime or None
+        The record's wall clock at record time 0 (:attr:`bwim.Record.clock`).
+    clock_of_day : bool
+        True when the record has no ``clock`` but its time axis is the clock time of day
+        (a logger that writes it in the time column: the axis does not start at 0).
+    drift_factor : float or None
+    drift_method : str
+    vehicles : tuple of VehicleWeighing
+        Every vehicle found, in order of arrival.
+    """
+
+    weighed: bool
+    reason: str = ""
+    detection: Detection | None = None
+    weighing: Weighing | None = None
+    flags: tuple[str, ...] = field(default_factory=tuple)
+    identification: ForceIdentification | None = None
+    clock: datetime | None = None
+    clock_of_day: bool = False
+    drift_factor: float | None = None
+    drift_method: str = ""
+    vehicles: tuple[VehicleWeighing, ...] = ()
+
+    @property
+    def method(self) -> str:
+        """``"mfi"`` (identified with an FE model) or ``"moses"`` (influence lines)."""
+        return "mfi" if self.identification is not None else "moses"
+
+    @property
+    def passage(self) -> Passage | None:
+        """The principal vehicle's passage (None when no single vehicle was found)."""
+        if self.detection is None or len(self.detection.vehicles) != 1:
+            return None
+        return self.detection.vehicles[0].passage
+
+    @property
+    def axle_weights(self) -> np.ndarray | None:
+        """Static axle weights, N (None unless weighed)."""
+        if not self.weighed:
+            return None
+        if self.identification is not None:
+            return self.identification.axle_weights
+        return self.weighing.axle_weights
+
+    @property
+    def gvw(self) -> float | None:
+        """Gross vehicle weight, N (None unless weighed)."""
+        if not self.weighed:
+            return None
+        if self.identification is not None:
+            return float(self.identification.gvw[0])
+        return self.weighing.gvw
+
+    def time_at(self, t: float) -> datetime | dtime | None:
+        """Wall-clock time of record time ``t`` (s): a datetime with the record's clock, a
+        time of day when the record's axis is one, else None."""
+        if self.clock is not None:
+            return self.clock + timedelta(seconds=float(t))
+        if self.clock_of_day and 0.0 <= t < 86400.0:
+            return (datetime.min + timedelta(seconds=float(t))).time()
+        return None
+
+    def to_summary_row(self, record: str) -> SummaryRow:
+        """The summary row of this event's principal vehicle, named ``record``."""
+        rows = self.to_summary_rows(record)
+        principal = next((k for k, v in enumerate(self.vehicles) if v.weighed), 0)
+        return rows[principal] if principal < len(rows) else rows[0]
+
+    def to_summary_rows(self, record: str) -> tuple[SummaryRow, ...]:
+        """One :class:`~bwim.summary.SummaryRow` per vehicle (at least one), named
+        ``record``: a weighed vehicle with its weights, every other refused with its
+        reason (no weight leaves without its plausibility checks)."""
+        if not self.vehicles:
+            return (SummaryRow(record=record, status="refused", flags=self.flags,
+                               reason=self.reason or "no vehicle found"),)
+        return tuple(self._row(record, k, v) for k, v in enumerate(self.vehicles))
+
+    def _row(self, record: str, k: int, vw: VehicleWeighing) -> SummaryRow:
+        v = vw.vehicle
+        p = v.passage
+        w, ident = vw.weighing, vw.identification
+        lateral = float(v.lateral) if np.isfinite(v.lateral) else None
+        if ident is not None:
+            residual, quality, lam = ident.residual, ident.vehicle_quality[0], ident.lam
+        elif w is not None:
+            residual, quality, lam = w.residual, w.quality, None
+        else:
+            residual, quality, lam = None, "", None
+        return SummaryRow(
+            record=record, vehicle=k + 1, status="weighed" if vw.weighed else "refused",
+            time=self.time_at(p.delay + (p.axle_offsets[0] if p.n_axles else 0.0)),
+            lane=vw.lane, direction=vw.direction, n_axles=p.n_axles, speed=p.speed,
+            axle_spacings=tuple(p.axle_spacings),
+            vehicle_class=axle_configuration(p.axle_spacings),
+            axle_weights=tuple(vw.axle_weights) if vw.weighed else (),
+            gvw=vw.gvw if vw.weighed else None,
+            group_weights=tuple(w.group_weights) if vw.weighed and w is not None else (),
+            flags=vw.flags, lateral=lateral,
+            lateral_unit=v.lateral_unit if lateral is not None else "",
+            confidence=v.confidence, residual=residual, quality=quality,
+            method=("mfi" if ident is not None else "moses") if (w or ident) else "",
+            drift_factor=vw.drift_factor, drift_method=vw.drift_method, lam=lam,
+            reason="" if vw.weighed else vw.reason)
+
+
+# --- weigh_event -------------------------------------------------------------------------
+def weigh_event(record: Record, calibration: SiteCalibration, *, bridge: Bridge | None = None,
+                identify_options: Mapping[str, Any] | None = None) -> EventWeighing:
+    """Detect and weigh every vehicle of one event (see the module docstring).
+
+    Never raises for a record it can read: detection or weighing failures come back as an
+    :class:`EventWeighing` with ``weighed=False`` and the reason.  The result carries the
+    record's clock (:meth:`EventWeighing.time_at`, the summary's ``time``).
+    """
+    t0 = float(record.time[0])
+    base = {"clock": record.clock, "clock_of_day": record.clock is None and 0.0 < t0 < 86400.0}
+    setup = calibration.setup
+    lines = calibration.lines
+    try:
+        if setup.lanes:
+            ev = detect_lanes(record, setup, responses=calibration.responses,
+                              span=lines.support, gauges=gauge_names(record))
+        else:
+            det = detect_from_strain(record, lines.line_at(), span=lines.support,
+                                     gauges=gauge_names(record))
+            ev = _single_lane(det, calibration)
+    except _EVENT_ERRORS as exc:
+        return EventWeighing(weighed=False, reason=f"detection failed: {_why(exc)}", **base)
+    if not ev.vehicles:
+        det = ev.by_lane.get(setup.calibration_lane or 1)
+        flags = (det.flags if det is not None else ()) or ("no_axles",)
+        why = (det.message if det is not None and det.message else ev.message) or \
+            "no axle found"
+        return EventWeighing(weighed=False, reason=why, detection=det, flags=flags, **base)
+    outcomes = tuple(_vehicle(record, ev, k, calibration, bridge, identify_options or {})
+                     for k in range(len(ev.vehicles)))
+    principal = next((o for o in outcomes if o.weighed), None) or next(
+        (o for o in outcomes if o.lane == setup.calibration_lane), outcomes[0])
+    pv = ev.vehicles[outcomes.index(principal)]
+    lane_det = ev.by_lane.get(pv.pair)
+    det = Detection(vehicles=(principal.vehicle,), flags=lane_det.flags if lane_det else (),
+                    message=lane_det.message if lane_det else "",
+                    method=lane_det.method if lane_det else "")
+    return EventWeighing(
+        weighed=principal.weighed, reason=principal.reason, detection=det,
+        weighing=principal.weighing, flags=principal.flags,
+        identification=principal.identification, drift_factor=principal.drift_factor,
+        drift_method=principal.drift_method, vehicles=outcomes, **base)
+
+
+def _single_lane(det: Detection, calibration: SiteCalibration) -> EventDetection:
+    """A strain-only detection as the calibration lane's."""
+    lane = calibration.setup.calibration_lane or 1
+    vehicles = tuple(LaneVehicle(vehicle=v, lane=lane, direction="+x", pair=lane,
+                                 window=v.window) for v in det.vehicles)
+    if len(vehicles) > 1:  # the strain alone cannot tell side-by-side from following
+        vehicles = tuple(dataclasses.replace(v, others=(lane,)) for v in vehicles)
+    return EventDetection(vehicles=vehicles, by_lane={lane: det}, message=det.message)
+
+
+def _vehicle(record: Record, ev: EventDetection, k: int, calibration: SiteCalibration,
+             bridge: Bridge | None, options: Mapping[str, Any]) -> VehicleWeighing:
+    """One vehicle's decision and weighing (see the module docstring)."""
+    setup = calibration.setup
+    lv = ev.vehicles[k]
+    v = lv.vehicle
+    flags = tuple(dict.fromkeys([*v.flags]))
+
+    def refused(reason: str, **kw) -> VehicleWeighing:
+        return VehicleWeighing(vehicle=v, lane=lv.lane, direction=lv.direction,
+                               weighed=False, reason=reason, flags=kw.pop("flags", flags),
+                               **kw)
+
+    cal_direction = setup.calibration_pair.direction if setup.calibration_pair else "+x"
+    if lv.direction != cal_direction:
+        return refused(f"counted, not weighed: no lines for lane {lv.lane} ({lv.direction}): "
+                       "the calibration truck drove the other way")
+    same_way = [w for j, w in enumerate(ev.vehicles) if j != k and w.direction == lv.direction
+                and w.lane is not None and lv.window is not None and w.window is not None
+                and w.window[0] < lv.window[1] and lv.window[0] < w.window[1]]
+    if same_way:
+        lanes = ", ".join(str(w.lane) for w in same_way)
+        return refused(f"multiple presence: {1 + len(same_way)} vehicles travelling "
+                       f"{lv.direction} on the bridge at once (lanes {lv.lane}, {lanes}), "
+                       "not weighed as one")
+    if FLAG_MULTIPLE_PRESENCE in flags and not lv.others:
+        return refused("multiple presence: two vehicles on the bridge at once, not "
+                       "weighed as one")
+    if "axle_count_mismatch" in flags:
+        return refused("the axle detectors disagree on the number of axles")
+    try:
+        factor, method, drift_flags = _drift_factor(record, v.passage, calibration)
+    except InputError as exc:
+        return refused(f"drift correction failed: {_why(exc)}")
+    if bridge is not None and lv.lane == setup.calibration_lane:
+        return _weigh_mfi(record, lv, flags, bridge, options, factor, method, drift_flags)
+    try:
+        w = weigh(record, v.passage, calibration.lines, combine=setup.combine,
+                  scale_correction=method == "trend", scale=None if method == "trend"
+                  else factor)
+    except _EVENT_ERRORS as exc:
+        return refused(f"weighing failed: {_why(exc)}")
+    flags = tuple(dict.fromkeys([*flags, *w.flags, *drift_flags]))
+    if method == "trend":
+        factor = w.scale_factor
+    common = {"vehicle": v, "lane": lv.lane, "direction": lv.direction, "weighing": w,
+              "flags": flags, "drift_factor": factor, "drift_method": method}
+    if w.quality == "reject":
+        hard = ", ".join(f for f in w.flags if f in HARD_FLAGS)
+        return VehicleWeighing(weighed=False, reason=f"implausible weighing ({hard})",
+                               **common)
+    return VehicleWeighing(weighed=True, **common)
+
+
+def _drift_factor(record: Record, passage: Passage, calibration: SiteCalibration
+                  ) -> tuple[float, str, tuple[str, ...]]:
+    """The strain-to-load factor of the setup's method at this vehicle (see the module
+    docstring): factor, method used, flags."""
+    setup = calibration.setup
+    method = setup.drift.method
+    lines = calibration.lines
+    if method == "none" or lines.scale_trend is None:
+        return 1.0, "none" if method == "none" else "", ()
+    if method == "trend":
+        return 1.0, "trend", ()
+    if method in ("temperature", "auto"):
+        channel = temperature_channel(record, setup)
+        if calibration.temperature is not None and channel is not None:
+            f, beyond = calibration.temperature.factor(
+                float(np.mean(record.channels([channel]).data)))
+            return f, "temperature", ("temperature_extrapolated",) if beyond else ()
+        if method == "temperature":
+            raise InputError("the temperature method needs a temperature channel in the "
+                             "runs and in the event ([drift] temperature)")
+    tod = calibration.time_of_day
+    if tod is None:
+        return 1.0, "", ()
+    when = record.clock_at(passage.delay)
+    f, outside = tod.factor(when if when is not None
+                            else record.clock_seconds(passage.delay))
+    return f, "time_of_day", ("outside_calibration_time",) if outside else ()
+
+
+def _weigh_mfi(record: Record, lv: LaneVehicle, flags: tuple[str, ...], bridge: Bridge,
+               options: Mapping[str, Any], factor: float, method: str,
+               drift_flags: tuple[str, ...]) -> VehicleWeighing:
+    """The detected vehicle weighed by moving force identification with ``bridge``."""
+    vehicle = lv.vehicle
+
+    def refused(reason: str) -> VehicleWeighing:
+        return VehicleWeighing(vehicle=vehicle, lane=lv.lane, direction=lv.direction,
+                               weighed=False, reason=reason, flags=flags)
+
+    gauges = [s for s in record.sensors if s.kind.is_structural]
+    if any(s.x is None or s.y is None for s in gauges):
+        return refused("weighing by MFI needs every gauge's position (x, y) in the scenario")
+    if vehicle.lateral_unit != "m" or not np.isfinite(vehicle.lateral):
+        return refused("weighing by MFI needs the vehicle's lane in metres (gauge y positions)")
+    rec = record.channels(gauges)
+    # the model's bridge is at rest before the first axle arrives: the logger's offsets
+    # are the readings' mean until then (the pre-trigger)
+    before = vehicle.passage.axle_x(rec.time)[:, 0] < 0.0
+    if np.count_nonzero(before) < 8:
+        return refused("weighing by MFI needs readings before the first axle reaches the "
+                       "bridge (a pre-trigger) to zero the gauges")
+    data = (rec.data - rec.data[before].mean(axis=0)) / factor
+    rec = dataclasses.replace(rec, data=data, passages=(vehicle.passage,))
+    try:
+        ident = identify_forces(bridge, rec, **options)
+    except _EVENT_ERRORS as exc:
+        return refused(f"weighing by MFI failed: {_why(exc)}")
+    flags = tuple(dict.fromkeys([*flags, *ident.vehicle_flags[0], *drift_flags]))
+    common = {"vehicle": vehicle, "lane": lv.lane, "direction": lv.direction,
+              "identification": ident, "flags": flags, "drift_factor": factor,
+              "drift_method": method}
+    if ident.vehicle_quality[0] == "reject":
+        hard = ", ".join(f for f in ident.vehicle_flags[0] if f in HARD_FLAGS)
+        return VehicleWeighing(weighed=False, reason=f"implausible weighing ({hard})",
+                               **common)
+    return VehicleWeighing(weighed=True, **common)

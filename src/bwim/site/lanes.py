@@ -1,0 +1,187 @@
+"""Vehicles in every lane of an event: each detector pair's detection, put together.
+
+Contract
+--------
+* :func:`detect_lanes` runs the axle detection of every detector lane of the setup on a
+  record (:func:`bwim.detect.detect_axles`, with that lane's learned responses when
+  there are: :mod:`bwim.detect.pursuit`) and returns an :class:`EventDetection`: every
+  vehicle found, in order of arrival, as a :class:`LaneVehicle` with its lane number and
+  direction.
+* Frames.  A +x lane's passages are in the lines' frame (its first detector at its
+  ``position``).  A −x lane's vehicles move the other way: their passages are in the
+  mirrored frame ``x' = −x`` (axle i at ``x' = v (t − delay) − a_i``, the first detector
+  at ``x' = −position``), where the span is ``(−x_end, −x_start)``; their windows on the
+  span are clock times, comparable across lanes.
+* A lane pair's detectors also feel vehicles of other lanes, weakly: a vehicle that two
+  pairs both report (its windows on the span overlap and the pairs' directions agree) is
+  kept once, from the pair of its own lane (the one whose ``y`` is nearer the vehicle's
+  lateral position in metres, else the one that saw it with the higher confidence).  A
+  vehicle whose lateral position (m) lies nearer another lane of its direction
+  (``SiteSetup.lane_of``) is given that lane's number.
+* **Multiple presence**: vehicles whose windows on the span overlap are each flagged
+  ``multiple_presence``; :attr:`LaneVehicle.others` names the lanes of the others.
+* Never raises for a record it can read: a lane whose detection fails contributes its
+  reason to ``message`` and no vehicle.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from bwim.detect import Detection, LearnedResponses, VehicleDetection, detect_axles
+from bwim.detect.result import FLAG_MULTIPLE_PRESENCE
+from bwim.errors import BwimError
+from bwim.records import Record
+from bwim.site.setup import DetectorLane, SiteSetup
+
+__all__ = ["EventDetection", "LaneVehicle", "detect_lanes"]
+
+#: What one lane's detection may raise without ending the event's detection.
+_ERRORS = (BwimError, ArithmeticError, ValueError, np.linalg.LinAlgError)
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class LaneVehicle:
+    """One vehicle of an event, with its lane.
+
+    Attributes
+    ----------
+    vehicle : VehicleDetection
+        Passage in its lane's frame (see the module docstring), lateral position, flags.
+    lane : int or None
+        Its lane's number.
+    direction : str
+        ``"+x"`` or ``"-x"``.
+    pair : int
+        The detector lane whose detectors found it.
+    window : (float, float) or None
+        Record times it enters and leaves the span.
+    others : tuple of int
+        The lanes of the other vehicles on the span at the same time.
+    """
+
+    vehicle: VehicleDetection
+    lane: int | None
+    direction: str
+    pair: int
+    window: tuple[float, float] | None
+    others: tuple[int, ...] = ()
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class EventDetection:
+    """Every vehicle of an event (see the module docstring).
+
+    Attributes
+    ----------
+    vehicles : tuple of LaneVehicle
+        In order of arrival on the span.
+    by_lane : mapping of int to Detection
+        Each detector lane's own detection.
+    message : str
+        Notes: why a lane found nothing or failed.
+    """
+
+    vehicles: tuple[LaneVehicle, ...]
+    by_lane: Mapping[int, Detection]
+    message: str = ""
+
+    @property
+    def flags(self) -> tuple[str, ...]:
+        return tuple(sorted({f for d in self.by_lane.values() for f in d.flags}
+                            | {f for v in self.vehicles for f in v.vehicle.flags}))
+
+
+def _frame(pair: DetectorLane, span: tuple[float, float] | None
+           ) -> tuple[float, tuple[float, float] | None]:
+    """Position and span of a lane's detection in its own frame."""
+    pos = float(pair.position or 0.0)
+    if pair.sign > 0:
+        return pos, span
+    return -pos, None if span is None else (-span[1], -span[0])
+
+
+def detect_lanes(record: Record, setup: SiteSetup, *,
+                 responses: Mapping[int, LearnedResponses] | None = None,
+                 span: tuple[float, float] | None = None, gauges: Sequence[str] = (),
+                 lanes: Sequence[int] | None = None) -> EventDetection:
+    """Every vehicle of ``record`` in every detector lane (see the module docstring).
+
+    ``responses`` by lane number (learned detection where given, peaks elsewhere);
+    ``span`` the lines' support in their frame; ``gauges`` the strain channels that give
+    the lateral position; ``lanes`` limits the detection to these detector lanes."""
+    responses = responses or {}
+    by_lane: dict[int, Detection] = {}
+    found: list[LaneVehicle] = []
+    notes: list[str] = []
+    for pair in setup.lanes:
+        if lanes is not None and pair.lane not in lanes:
+            continue
+        position, lane_span = _frame(pair, span)
+        options = {} if pair.max_spacing is None else {"max_axle_spacing": pair.max_spacing}
+        try:
+            det = detect_axles(record, pair.channels, pair.distance, position=position,
+                               span=lane_span, gauges=list(gauges),
+                               responses=responses.get(pair.lane), **options)
+        except _ERRORS as exc:
+            notes.append(f"lane {pair.lane}: detection failed: {' '.join(str(exc).split())}")
+            by_lane[pair.lane] = Detection(message=str(exc), method="")
+            continue
+        by_lane[pair.lane] = det
+        if not det.vehicles and det.message and pair.lane == setup.calibration_lane:
+            notes.append(f"lane {pair.lane}: {det.message}")
+        for v in det.vehicles:
+            lane = pair.lane
+            if v.lateral_unit == "m" and np.isfinite(v.lateral):
+                lane = setup.lane_of(v.lateral, pair.direction) or lane
+            found.append(LaneVehicle(vehicle=v, lane=lane, direction=pair.direction,
+                                     pair=pair.lane, window=v.window))
+    vehicles = _deduplicated(found, setup)
+    vehicles = _presence(vehicles)
+    return EventDetection(vehicles=tuple(vehicles), by_lane=by_lane, message="; ".join(notes))
+
+
+def _overlap(a: tuple[float, float] | None, b: tuple[float, float] | None) -> bool:
+    return a is not None and b is not None and a[0] < b[1] and b[0] < a[1]
+
+
+def _deduplicated(found: list[LaneVehicle], setup: SiteSetup) -> list[LaneVehicle]:
+    """One vehicle seen by two pairs of its direction kept once, from its own lane's."""
+    pairs = {p.lane: p for p in setup.lanes}
+    keep = [True] * len(found)
+    for i, a in enumerate(found):
+        for j in range(i + 1, len(found)):
+            b = found[j]
+            if not (keep[i] and keep[j]) or a.pair == b.pair or a.direction != b.direction:
+                continue
+            if not _overlap(a.window, b.window):
+                continue
+            drop = j if _own_pair_score(a, pairs) >= _own_pair_score(b, pairs) else i
+            keep[drop] = False
+    return [v for v, k in zip(found, keep, strict=True) if k]
+
+
+def _own_pair_score(v: LaneVehicle, pairs: Mapping[int, DetectorLane]) -> float:
+    """Higher for the pair a vehicle belongs to: lateral position near the pair's ``y``,
+    else the detection's confidence."""
+    y = pairs[v.pair].y
+    if y is not None and v.vehicle.lateral_unit == "m" and np.isfinite(v.vehicle.lateral):
+        return -abs(v.vehicle.lateral - y)
+    return v.vehicle.confidence - 10.0
+
+
+def _presence(vehicles: list[LaneVehicle]) -> list[LaneVehicle]:
+    out = []
+    for i, v in enumerate(vehicles):
+        others = tuple(w.lane if w.lane is not None else w.pair
+                       for j, w in enumerate(vehicles) if j != i and _overlap(v.window,
+                                                                              w.window))
+        veh = v.vehicle
+        if others and FLAG_MULTIPLE_PRESENCE not in veh.flags:
+            veh = dataclasses.replace(veh, flags=(*veh.flags, FLAG_MULTIPLE_PRESENCE))
+        out.append(dataclasses.replace(v, vehicle=veh, others=others))
+    return sorted(out, key=lambda w: (w.window or (np.inf,))[0])
