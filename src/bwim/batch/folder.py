@@ -52,12 +52,18 @@ class BatchFolder:
         Without ``resume``: start afresh over existing outputs.
     summary : path, optional
         The summary file (default ``folder/summary.csv``).
+    finalize : callable, optional
+        ``finalize(rows) -> rows``: a day-level step applied to every row before the
+        summary is written (e.g. the traffic's own drift correction,
+        :func:`bwim.site.correct_drift`); the manifest keeps the rows as they came.
     """
 
     save_every = 1.0
 
     def __init__(self, folder: str | Path, *, meta: dict[str, Any], resume: bool,
-                 force: bool, summary: str | Path | None = None) -> None:
+                 force: bool, summary: str | Path | None = None,
+                 finalize: Callable[[list[SummaryRow]], list[SummaryRow]] | None = None
+                 ) -> None:
         self.folder = Path(folder)
         self.summary = Path(summary) if summary is not None else self.folder / "summary.csv"
         if not resume:
@@ -69,6 +75,7 @@ class BatchFolder:
                              "scenario, calibration or model); resume it with the same "
                              "inputs, or use another folder (or --force without --resume)")
         self.manifest.meta = dict(meta)
+        self.finalize = finalize
         self._order: list[Path] = []
         self._last = time.perf_counter()
         self._cost = 0.0
@@ -93,7 +100,13 @@ class BatchFolder:
         self.maybe_save()
 
     def rows(self) -> list[SummaryRow]:
-        """Every row the folder holds: the inputs of this run in order, then the others."""
+        """Every row the folder holds: the inputs of this run in order, then the others;
+        through ``finalize`` when given."""
+        out = self.raw_rows()
+        return out if self.finalize is None else list(self.finalize(out))
+
+    def raw_rows(self) -> list[SummaryRow]:
+        """Every row as its input's processing gave it (the manifest's)."""
         by_source: dict[str, dict[str, Any]] = {}
         for entry in self.manifest.entries.values():
             by_source[str(Path(entry["source"]).resolve())] = entry
@@ -106,11 +119,12 @@ class BatchFolder:
             out.extend(from_cells(c) for c in by_source[key]["rows"])
         return out
 
-    def save(self) -> None:
-        """Rewrite the manifest and the summary (atomically)."""
+    def save(self, final: bool = False) -> None:
+        """Rewrite the manifest and the summary (atomically); a day-level ``finalize``
+        runs on the final save only (it needs every row)."""
         t = time.perf_counter()
         self.manifest.save()
-        write_summary(self.summary, self.rows())
+        write_summary(self.summary, self.rows() if final else self.raw_rows())
         self._last = time.perf_counter()
         self._cost = self._last - t
 
@@ -174,6 +188,6 @@ def run_into(folder: BatchFolder, items: Sequence[Item],
             if progress is not None:
                 progress(finished)
     finally:  # an interrupted run keeps what it finished (rerun with --resume)
-        folder.save()
+        folder.save(final=True)
     return BatchReport(n_inputs=len(items), n_done_before=skipped, rows=tuple(folder.rows()),
                        failures=tuple(failures), elapsed=time.perf_counter() - t0)

@@ -1,0 +1,359 @@
+"""The ``bwim`` command line.
+
+Contract
+--------
+``main(argv=None) -> int`` parses arguments, calls the library and prints; it holds no
+numerics.  The subcommands are one declarative table, :data:`COMMANDS` (name, handler,
+help, description, arguments), from which the parser is built; tables are printed with
+:class:`bwim.tables.Table`.  Bad input (a scenario, record or model file, an option, an
+output path) ends with a one-line message ``bwim: error: ...`` on stderr and exit code 2,
+never a traceback, and leaves no partial output file (every writer is atomic, outputs are
+checked before the work starts).  Progress bars (tqdm, on stderr) show only when stdout is
+a terminal.
+
+Subcommands:
+
+``simulate SCENARIO [-o RECORD] [--bridge MODEL]``
+    Simulate the scenario's crossing and write the record (``.h5`` or ``.csv``).
+``calibrate SCENARIO RECORD... [-o MODEL] [--method] [--jobs] [--seed]``
+    Calibrate the scenario's bridge (the starting model) from records of the scenario's
+    vehicle; write the model (TOML) and print start → calibrated ± uncertainty.
+``identify SCENARIO RECORD... [--bridge MODEL] [-o FOLDER|SUMMARY.csv] [--jobs|--scheduler]``
+    Moving force identification on each record (folders expanded), in parallel on
+    ``--jobs`` processes (this one and loky workers, each reading its records and
+    writing their results) or on a dask.distributed scheduler; a CSV summary (one row
+    per vehicle, one with the reason per failed record) and one HDF5 result per record,
+    written as each record finishes (the summary and ``manifest.json`` at most every
+    second or so).  A rerun skips the records done (``manifest.json``); ``--force``
+    starts afresh.  Exit code 0: all records done; 1: some failed; 2: bad input.
+
+Safety of outputs (:mod:`bwim.io.outputs`): an output that is one of the inputs is refused;
+an existing output file is refused unless ``--force``; an output folder is locked
+(``.bwim.lock``) for the run; SIGTERM ends a run like Ctrl-C (temporary files removed,
+worker processes stopped, exit code 130).  ``bwim --memory-limit SIZE COMMAND`` bounds the
+memory of the run (:mod:`bwim.limits`).
+``weigh SCENARIO RECORD... (--calibration-records REC... | --influence IL.h5) [-o FOLDER]``
+    Static weights by Moses' algorithm, the influence line calibrated from crossings of
+    the scenario's vehicle (and written) or read from a file.
+``accuracy SUMMARY.csv --reference REF.csv [--repeatability] [--environment]``
+    The COST 323 accuracy class per criterion and overall.
+``report RESULTS... -o REPORT.html``
+    A single-file HTML report (tables, embedded figures) of result files and folders.
+``demo [--out FOLDER] [--quick]``
+    The whole chain on the paper's slab bridge: simulate a calibration crossing,
+    calibrate, identify a second vehicle's forces with the calibrated model, weigh it by
+    Moses; a table against the truth, figures and ``report.html``.
+``reproduce {5.1,5.2,5.3,5.4,compare,all}``
+    The paper's experiments: tables with the paper's numbers beside ours, figures in
+    ``--out`` (default ``bwim-out/reproduce``).
+"""
+
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import os
+import sys
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+from bwim.calibration import Method
+from bwim.cli.batches import identify_command, weigh_command
+from bwim.cli.models import (
+    calibrate_command,
+    demo_command,
+    reproduce_command,
+    simulate_command,
+)
+from bwim.cli.results import accuracy_command, report_command
+from bwim.errors import BwimError
+
+__all__ = ["main"]
+
+
+# --- the parser: one declarative entry per command -------------------------------------------
+@dataclass(frozen=True)
+class Arg:
+    """One argument: its names (flags or a positional name) and its add_argument options."""
+
+    names: tuple[str, ...]
+    options: dict = field(default_factory=dict)
+
+    def updated(self, **options) -> Arg:
+        """This argument with more (or other) add_argument options, e.g. a command's help."""
+        return Arg(self.names, {**self.options, **options})
+
+
+def arg(*names: str, **options) -> Arg:
+    """An :class:`Arg`: ``arg("-o", "--output", default="x", help="...")``."""
+    return Arg(names, options)
+
+
+@dataclass(frozen=True)
+class OneOf:
+    """Mutually exclusive arguments (exactly one if ``required``)."""
+
+    args: tuple[Arg, ...]
+    required: bool = False
+
+
+@dataclass(frozen=True)
+class Command:
+    """A subcommand: name, handler, one-line help, description and arguments.
+
+    ``raw`` keeps the description's line breaks (its example line) in ``--help``.
+    """
+
+    name: str
+    run: Callable[[argparse.Namespace], int]
+    help: str
+    description: str
+    args: tuple[Arg | OneOf, ...]
+    raw: bool = True
+
+
+# Arguments several commands share, declared once; a command adds its own default and help.
+_SCENARIO = arg("scenario", metavar="SCENARIO.toml")
+_RECORDS = arg("records", nargs="+", metavar="RECORD")
+_OUTPUT = arg("-o", "--output")
+_BRIDGE = arg("--bridge", metavar="MODEL.toml")
+_REFERENCE = arg("--reference", metavar="REF.csv")
+_FORCE = arg("--force", action="store_true",
+             help="overwrite existing outputs (an input is never overwritten)")
+_PARALLEL = OneOf((arg("--jobs", type=int, default=1,
+                       help="worker processes on this machine (-1: all cores); default 1"),
+                   arg("--scheduler", metavar="ADDRESS",
+                       help="address of a dask.distributed scheduler, e.g. "
+                       "tcp://host:8786")))
+_RESUME = arg("--resume", action="store_true",
+              help="go on with the batch in OUT (its manifest.json): records done and "
+              "unchanged are kept, failed ones are tried again, rows of records not given "
+              "again are kept")
+
+COMMANDS: tuple[Command, ...] = (
+    Command(
+        "simulate", simulate_command,
+        "simulate a scenario's vehicle crossing and write the strain record",
+        "Simulate the scenario's vehicle crossing its bridge (vehicle-bridge interaction over "
+        "the road profile) and write what the sensors read.\n\n"
+        "  bwim simulate examples/paper_slab.toml -o crossing.h5",
+        (_SCENARIO.updated(help="the scenario file"),
+         _OUTPUT.updated(default="record.h5", metavar="RECORD",
+             help="output record: .h5 (with positions, passage and true forces) or .csv "
+             "(time and readings only); default record.h5"),
+         _BRIDGE.updated(
+             help="use this bridge model (e.g. a calibrated one) instead of the scenario's "
+             "[bridge]"),
+         _FORCE)),
+    Command(
+        "calibrate", calibrate_command,
+        "calibrate the bridge model from crossings of a truck of known weight",
+        "Calibrate the stiffness (E_x, E_y, …) and mass (mu) of the scenario's bridge from "
+        "strain records of the scenario's vehicle, the calibration truck of known static axle "
+        "loads.  The scenario's [bridge] is the starting model and its [calibrate] section "
+        "gives the defaults; the records must be crossings at the scenario's [run] speed, "
+        "lane and approach, over its [road].\n\n"
+        "  bwim calibrate examples/paper_slab.toml crossing.h5 -o calibrated.toml",
+        (_SCENARIO,
+         _RECORDS.updated(
+             help="records of the calibration truck (.h5 or .csv; folders expanded)"),
+         _OUTPUT.updated(default="calibrated.toml", metavar="MODEL.toml",
+             help="the calibrated bridge model (default calibrated.toml)"),
+         arg("--method", choices=[m.value for m in Method],
+             help="optimiser: ce = Cross-Entropy (the paper's), lm = Levenberg-Marquardt, "
+             "cma = CMA-ES (default: the scenario's, else ce)"),
+         arg("--jobs", type=int, help="worker processes for the populations"),
+         arg("--seed", type=int, help="random seed of the optimiser"),
+         arg("--mesh-correction", metavar="N|auto",
+             help="correct the model's discretisation error by a model bisected N times "
+             "(1-3), or as often as its sensors need (auto); default: the scenario's, "
+             "else none"),
+         _FORCE)),
+    Command(
+        "identify", identify_command,
+        "identify the moving axle forces and weights of vehicles (MFI)",
+        "Moving force identification: the time history of each axle's force, its static "
+        "weight and the gross vehicle weight, from each record and the bridge model (ideally "
+        "a calibrated one).  Many records run in parallel on this machine (--jobs) or on a "
+        "dask.distributed cluster (--scheduler).  Writes a CSV summary, one row per vehicle, "
+        "and <record>_forces.h5 per record, each as its record finishes; a record that "
+        "fails gets a summary row with its reason and the others go on; --resume goes on "
+        "with an interrupted batch.  Exit code 0: all records done, 1: some failed, 2: bad "
+        "input.\n\n"
+        "  bwim identify examples/paper_slab.toml records/ --bridge calibrated.toml -o out/",
+        (_SCENARIO.updated(
+             help="the scenario (sensor positions; passage of CSV records)"),
+         _RECORDS.updated(
+             help="records (.h5 or .csv) or folders of them"),
+         _BRIDGE.updated(
+             help="bridge model (default: the scenario's [bridge])"),
+         _OUTPUT.updated(default="bwim-out/identify", metavar="OUT",
+             help="a results folder, or summary.csv (results beside it); default "
+             "bwim-out/identify"),
+         _PARALLEL,
+         _RESUME,
+         _FORCE)),
+    Command(
+        "weigh", weigh_command,
+        "static weights by Moses' algorithm from influence lines",
+        "Static axle weights and GVW by Moses' algorithm, one summary.csv row per record "
+        "(record, n_axles, speed_m_s, axle_spacings_m, axle_weights_kN, gvw_kN, flags, ...); "
+        "a record that cannot be weighed gets a row with its reason, and the exit code is 1 "
+        "if a record failed.  No weight is written without its plausibility checks.\n"
+        "With a scenario that has [logger] (a real installation's logger files): each "
+        "vehicle is detected (axle detectors, or the strain alone), every gauge's influence "
+        "line is calibrated from the calibration truck's runs (speed, lateral position and "
+        "drift of each run found from the data), and traffic is weighed with the gauges "
+        "combined.  Otherwise the records carry their passages and one line is calibrated "
+        "from crossings of the scenario's vehicle or read from a file.\n\n"
+        "  bwim weigh site.toml events/ --calibration-records calibration/ -o out/\n"
+        "  bwim weigh examples/paper_slab.toml truck.h5 --calibration-records crossing.h5",
+        (_SCENARIO,
+         _RECORDS.updated(
+             help="records of the vehicles to weigh: logger files of any extension with a "
+             "[logger] scenario, else .h5 or .csv; folders expanded"),
+         OneOf((arg("--calibration-records", nargs="+", metavar="REC",
+                    help="crossings of the scenario's vehicle to calibrate the influence "
+                    "line from"),
+                arg("--influence", metavar="IL.h5", help="a saved influence line")),
+               required=True),
+         _OUTPUT.updated(default="bwim-out/weigh", metavar="FOLDER",
+             help="results folder (default bwim-out/weigh)"),
+         _PARALLEL,
+         _RESUME,
+         _BRIDGE.updated(
+             help="logger files only: weigh each detected vehicle by moving force "
+             "identification with this (calibrated) bridge model instead of Moses; the "
+             "gauges need x and y, and the first detector's position its x on the bridge"),
+         _FORCE)),
+    Command(
+        "accuracy", accuracy_command,
+        "COST 323 accuracy classes of weights against statically weighed references",
+        "The COST 323 European WIM specification's accuracy class per criterion (gross "
+        "weight, group of axles, single axle, axle of a group) and overall, from a weigh "
+        "summary and a reference of the same vehicles' static weights (CSV with the columns "
+        "record, n_axles, axle_spacings_m, axle_weights_kN, gvw_kN; lists ';'-separated).\n\n"
+        "  bwim accuracy out/summary.csv --reference static_weights.csv",
+        (arg("summary", metavar="SUMMARY.csv", help="a summary written by bwim weigh"),
+         _REFERENCE.updated(required=True,
+             help="static weights of the same vehicles (by record name)"),
+         arg("--repeatability", choices=["r1", "r2", "RR1", "RR2"], default="RR2",
+             help="test conditions: r1/r2 repeatability (one or a few vehicles passing many "
+             "times), RR1/RR2 reproducibility (a few vehicles / a sample of traffic); "
+             "default RR2"),
+         arg("--environment", choices=["I", "II", "III"], default="I",
+             help="environmental conditions: I repeatable (a day or so), II limited "
+             "reproducibility, III full (seasons); default I"),
+         arg("--strict", action="store_true",
+             help="a reference record absent from the summary is an error"),
+         _OUTPUT.updated(metavar="TABLE.csv", help="also write the table as CSV"),
+         _FORCE)),
+    Command(
+        "report", report_command,
+        "a single-file HTML report of result files",
+        "A self-contained HTML page (figures embedded) of result files: force "
+        "identifications, static weights, influence lines, records (.h5), bridge models "
+        "(.toml) and summaries (.csv); folders are expanded.\n\n"
+        "  bwim report out/ -o report.html",
+        (arg("results", nargs="+", metavar="RESULTS"),
+         _OUTPUT.updated(default="report.html", metavar="REPORT.html",
+             help="default report.html"),
+         arg("--title", default="bwim report", help="the page title"),
+         _REFERENCE.updated(
+             help="static weights of the weighed vehicles: adds the COST 323 accuracy "
+             "classes of each weigh summary.csv among the results"),
+         _FORCE)),
+    Command(
+        "demo", demo_command,
+        "the whole chain on the paper's slab bridge, in under a minute",
+        "On the paper's 12 m × 8 m slab: simulate a calibration crossing, calibrate E_x, E_y "
+        "and mu from a wrong start by Cross-Entropy, identify a second vehicle's axle forces "
+        "with the calibrated model and weigh it by Moses; print the results against the truth "
+        "and write figures and report.html to --out.",
+        (arg("--modes", type=int, default=6, help="natural frequencies to print (default 6)"),
+         arg("--out", default="bwim-out", help="output folder (default bwim-out)"),
+         arg("--seed", type=int, default=0, help="seed of the calibration"),
+         arg("--jobs", type=int, default=1, help="worker processes for calibration"),
+         arg("--quick", action="store_true",
+             help="a smaller, faster calibration (for tests)"))),
+    Command(
+        "reproduce", reproduce_command,
+        "the paper's experiments with its numbers side by side",
+        "Reproduce Dowling, OBrien & González (2012) §5: 5.1 identical elements, 5.2 noise, "
+        "5.3 sixteen zones, 5.4 beam-and-slab bridge, and a comparison of optimisers "
+        "('compare').  Full runs take minutes (5.3 the longest); --quick runs small versions.",
+        (arg("case", choices=["5.1", "5.2", "5.3", "5.4", "compare", "all"]),
+         arg("--quick", action="store_true", help="small, fast versions"),
+         arg("--out", default="bwim-out/reproduce", help="folder for the figures"),
+         arg("--jobs", type=int, default=1, help="worker processes for populations"),
+         arg("--no-figures", action="store_true", help="tables only")),
+        raw=False),
+)
+
+
+def _add(parser, item: Arg | OneOf) -> None:
+    """Add ``item`` to ``parser`` (an ArgumentParser or a mutually exclusive group)."""
+    if isinstance(item, OneOf):
+        group = parser.add_mutually_exclusive_group(required=item.required)
+        for a in item.args:
+            _add(group, a)
+    else:
+        parser.add_argument(*item.names, **item.options)
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="bwim",
+        description="Calibrated, dynamic Bridge Weigh-in-Motion: simulate crossings, "
+        "calibrate the bridge's FE model from a truck of known weight, identify the moving "
+        "axle forces of other vehicles, weigh them statically (Moses), report.",
+        epilog="Scenario files (TOML) describe the bridge, the sensors, the vehicle, the "
+        "road and the run; see examples/paper_slab.toml.  Units are SI.",
+    )
+    p.add_argument("--memory-limit", metavar="SIZE",
+                   help="most memory a command may use, e.g. 4G, 800M or 0.25 (a fraction "
+                   "of the machine's); default: the BWIM_MEMORY_LIMIT environment variable, "
+                   "else half the machine's memory")
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for c in COMMANDS:
+        fmt = {"formatter_class": argparse.RawDescriptionHelpFormatter} if c.raw else {}
+        s = sub.add_parser(c.name, help=c.help, description=c.description, **fmt)
+        for item in c.args:
+            _add(s, item)
+        s.set_defaults(run=c.run)
+    return p
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the ``bwim`` command; returns the exit code."""
+    from bwim.io.outputs import signals_as_interrupt
+    from bwim.limits import ENV_VAR, parse_size
+
+    for stream in (sys.stdout, sys.stderr):  # file names that are not UTF-8 print too
+        with contextlib.suppress(AttributeError, ValueError, OSError):
+            stream.reconfigure(errors="backslashreplace")
+    parser = _parser()
+    args = parser.parse_args(argv)
+    saved = os.environ.get(ENV_VAR)
+    try:
+        if args.memory_limit is not None:
+            parse_size(args.memory_limit)  # a one-line error if it is not a size
+            os.environ[ENV_VAR] = args.memory_limit
+        with signals_as_interrupt():
+            return int(args.run(args))
+    except BwimError as exc:
+        message = " ".join(str(exc).split()) or type(exc).__name__
+        print(f"bwim: error: {message}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("bwim: interrupted (the records finished so far are kept; rerun to go on)",
+              file=sys.stderr)
+        return 130
+    finally:
+        if saved is None:
+            os.environ.pop(ENV_VAR, None)
+        else:
+            os.environ[ENV_VAR] = saved
+
+

@@ -1,0 +1,7 @@
+"""``python -m bwim.cli``."""
+
+import sys
+
+from bwim.cli import main
+
+sys.exit(main())

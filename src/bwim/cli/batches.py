@@ -1,0 +1,300 @@
+"""The batch commands: identify (moving force identification) and weigh (a site's logger
+files, or records with their passages): the library's batch engine (:mod:`bwim.batch`)
+with outputs, progress and tables."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+from bwim.cli.common import (
+    Progress,
+    bridge_of,
+    check_jobs,
+    display_name,
+    load_records,
+    locked,
+    out_file,
+    out_folder,
+    record_paths,
+    unique_stems,
+    write_csv,
+)
+from bwim.errors import InputError
+from bwim.tables import Table, format_kn, format_kn_each
+
+__all__ = ["identify_command", "weigh_command"]
+
+
+# --- batches: identify and weigh -------------------------------------------------------------
+def _meta(command: str, **inputs) -> dict:
+    """What a batch is, for its manifest: the command and its inputs' identities."""
+    from bwim.io.outputs import file_key
+
+    def key(p):
+        if p is None:
+            return None
+        try:
+            return file_key(p)
+        except OSError:  # reported by the command's own reading, with its message
+            return str(p)
+
+    return {"command": command, **{k: [key(p) for p in v] if isinstance(v, list) else key(v)
+                                   for k, v in inputs.items()}}
+
+
+def _read(scenario):
+    """The batch's reader of one record (picklable: it goes to worker processes)."""
+    from functools import partial
+
+    from bwim.scenario import load_record
+
+    return partial(load_record, scenario=scenario)
+
+
+def _run_batch(folder, items, run, desc: str):
+    """Run a batch into its folder with a progress display; its report."""
+    from bwim.batch import run_into
+
+    with Progress(len(items), desc) as progress:
+        return run_into(folder, items, run, progress=progress)
+
+
+def _report_failures(report) -> int:
+    """Print each failed record on stderr; the batch's exit code."""
+    from bwim.io.outputs import EXIT_FAILED, EXIT_OK
+
+    for name, reason in report.failures:
+        print(f"bwim: {name} failed: {reason}", file=sys.stderr)
+    if report.failures:
+        print(f"bwim: {len(report.failures)} of {report.n_inputs} record(s) failed (see the "
+              "summary's reason column)", file=sys.stderr)
+        return EXIT_FAILED
+    return EXIT_OK
+
+
+def _done_before(report) -> str:
+    return f" ({report.n_done_before} done before)" if report.n_done_before else ""
+
+
+def identify_command(args: argparse.Namespace) -> int:
+    from bwim.batch import BatchFolder, Item, executor_for, identify_records
+    from bwim.io.outputs import refuse_input_overwrite
+    from bwim.scenario import load_scenario
+
+    check_jobs(args.jobs)
+    out = Path(args.output)
+    if out.suffix.lower() == ".csv":
+        summary = out_file(out)
+        folder = summary.parent
+    else:
+        folder = out_folder(out)
+        summary = folder / "summary.csv"
+    paths = record_paths(args.records)
+    inputs = [args.scenario, *([args.bridge] if args.bridge else []), *paths]
+    items = [Item(name=display_name(p), source=p, target=folder / f"{stem}_forces.h5")
+             for p, stem in zip(paths, unique_stems(paths), strict=True)]
+    refuse_input_overwrite([summary, *(it.target for it in items)], inputs)
+    with locked(folder):
+        scenario = load_scenario(args.scenario)
+        bridge = bridge_of(args, scenario)
+        batch = BatchFolder(folder, resume=args.resume, force=args.force, summary=summary,
+                            meta=_meta("identify", scenario=args.scenario, bridge=args.bridge))
+        kwargs = scenario.identify.kwargs() if scenario.identify is not None else {}
+        executor = executor_for(args.jobs, args.scheduler)
+        report = _run_batch(batch, items, lambda todo: identify_records(
+            todo, bridge, read=_read(scenario), options=kwargs, executor=executor,
+            keep=False), "identifying forces")
+    shown = [(r.record, r.vehicle, format_kn_each(r.axle_weights) if r.weighed else
+              r.reason, format_kn(r.gvw) if r.weighed else "",
+              "" if r.lam is None else f"{r.lam:.4g}") for r in report.rows]
+    print(Table(f"Moving force identification, {len(paths)} record(s){_done_before(report)}, "
+                f"{report.elapsed:.1f} s:",
+                ("record", "vehicle", "axle weights (kN)", "GVW (kN)", "λ"), shown).render())
+    print(f"summary: {summary}\nforces: {folder}/<record>_forces.h5")
+    return _report_failures(report)
+
+
+def _unique_names(paths: Sequence[Path]) -> None:
+    """The summary names each record by its file name: two files of one name (from two
+    folders) would be confused, in the summary, by ``--resume`` and by the accuracy."""
+    seen: dict[str, Path] = {}
+    for p in paths:
+        if p.name in seen:
+            raise InputError(f"two records are named {p.name!r} ({seen[p.name]} and {p}); "
+                             "the summary names records by file name: rename one")
+        seen[p.name] = p
+
+
+def _calibrate_site(paths: Sequence[Path], scenario, folder: Path):
+    """Lines from the calibration truck's logger events; a table of the runs."""
+    from bwim.io import write_influence_line
+    from bwim.scenario import build_site_setup, load_record
+    from bwim.site import calibrate_site
+
+    setup = build_site_setup(scenario)
+    records, used, unread = [], [], []
+    for p in paths:
+        try:
+            records.append(load_record(p, scenario))
+            used.append(p)
+        except InputError as exc:
+            unread.append((p.name, str(exc)))
+    if not records and unread:
+        raise InputError(f"no calibration run could be read; {unread[0][0]}: {unread[0][1]}")
+    site = calibrate_site(records, setup)
+    rows = []
+    for p, det, reason, fit in zip(used, site.detections, site.reasons, site.fits,
+                                   strict=True):
+        v = det.vehicles[0].passage if len(det.vehicles) == 1 else None
+        rows.append((p.name, "" if v is None else f"{v.speed:.2f}",
+                     "" if v is None else f"{v.lane:.2f}",
+                     "" if fit is None else f"{fit.scale:.4f}",
+                     "" if fit is None else f"{fit.residual:.3g}",
+                     reason or "used"))
+    rows += [(name, "", "", "", "", f"unreadable: {msg}") for name, msg in unread]
+    header = ("run", "speed (m/s)", "lateral", "scale", "residual", "status")
+    write_csv(folder / "calibration_runs.csv", header, rows)
+    print(Table(f"Calibration runs ({site.n_used} of {len(paths)} used):", header,
+                rows).render())
+    write_influence_line(site.lines.line_at(), folder / "influence_lines.h5")
+    return site
+
+
+def _print_drift(site, fit) -> None:
+    """One line on how the day's drift of the strain-to-load ratio was corrected."""
+    method = site.setup.drift.method
+    if fit is not None:
+        days = ", ".join(f"{d}: {n}" for d, n in sorted(fit.counts.items()))
+        print(f"drift: the traffic's own reference (class {fit.reference_class} steering "
+              f"axle, nominal {fit.nominal / 1e3:.1f} kN from the {fit.nominal_source}; "
+              f"reference vehicles per date {days})")
+    elif site.temperature is not None and method in ("auto", "temperature"):
+        t = site.temperature
+        print(f"drift: temperature (factor {t.intercept:.3f} {t.slope:+.4f}/°C about "
+              f"{t.reference:.1f} °C, the runs' residual {t.residual:.3f})")
+    elif method in ("auto", "traffic", "time_of_day") and site.time_of_day is not None:
+        print("drift: the calibration runs' factor over the time of day (vehicles on other "
+              "dates are flagged outside_calibration_time)")
+    else:
+        print(f"drift: {method}")
+    for note in site.notes:
+        print(f"note: {note}")
+
+
+def _print_weighed(report, title: str) -> None:
+    rows = report.rows
+    shown = [(r.record, r.vehicle, r.n_axles or "",
+              ", ".join(format_kn_each(r.axle_weights)) if r.weighed else "-",
+              format_kn(r.gvw) if r.weighed else "-",
+              ";".join(r.flags) if r.weighed else r.reason) for r in rows[:20]]
+    print(Table(title, ("record", "vehicle", "axles", "axle weights (kN)", "GVW (kN)",
+                        "flags / reason"), shown).render())
+    if len(rows) > 20:
+        print(f"... {len(rows) - 20} more in the summary")
+
+
+def _weigh_site(args: argparse.Namespace, scenario, folder: Path, batch) -> int:
+    """``bwim weigh`` on a real installation's logger files (scenario with [logger])."""
+    from bwim.batch import Item, executor_for, weigh_events
+
+    if not args.calibration_records:
+        raise InputError("weighing logger files needs --calibration-records (runs of the "
+                         "calibration truck)")
+    paths = record_paths(args.records, any_suffix=True)
+    bridge = options = None
+    if args.bridge:
+        from bwim.scenario import load_bridge
+
+        bridge = load_bridge(args.bridge)
+        options = scenario.identify.kwargs() if scenario.identify is not None else {}
+    site = _calibrate_site(record_paths(args.calibration_records, any_suffix=True),
+                           scenario, folder)
+    drift_fits: list = []
+
+    def finalize(rows):  # the traffic's own drift correction needs the whole day
+        from bwim.site import correct_drift
+
+        out, fit = correct_drift(rows, site)
+        drift_fits[:] = [fit]
+        return out
+
+    batch.finalize = finalize
+    executor = executor_for(args.jobs, args.scheduler)
+    report = _run_batch(batch, [Item(name=display_name(p), source=p) for p in paths],
+                        lambda todo: weigh_events(todo, site, read=_read(scenario),
+                                                  bridge=bridge, identify_options=options,
+                                                  executor=executor, keep=False), "weighing")
+    print(f"{len(paths)} event(s){_done_before(report)} in {report.elapsed:.1f} s: "
+          f"{report.count('weighed')} vehicle(s) weighed, {report.count('refused')} not "
+          f"weighed (flagged), {report.count('failed')} record(s) failed")
+    _print_drift(site, drift_fits[0] if drift_fits else None)
+    _print_weighed(report, "Static weights (moving force identification with the FE "
+                   "model):" if bridge else "Static weights (multi-run influence lines, "
+                   "gauges combined):")
+    print(f"summary: {batch.summary}")
+    return _report_failures(report)
+
+
+def weigh_command(args: argparse.Namespace) -> int:
+    from bwim.batch import BatchFolder
+    from bwim.io.outputs import refuse_existing, refuse_input_overwrite
+    from bwim.scenario import load_scenario
+
+    check_jobs(args.jobs)
+    folder = out_folder(args.output)
+    scenario = load_scenario(args.scenario)
+    site = scenario.logger is not None
+    paths = record_paths(args.records, any_suffix=site)
+    _unique_names(paths)
+    cal = (record_paths(args.calibration_records, any_suffix=site)
+           if args.calibration_records else [])
+    outputs = ([folder / "calibration_runs.csv", folder / "influence_lines.h5"] if site
+               else [folder / "influence_line.h5"])
+    refuse_input_overwrite([folder / "summary.csv", *outputs],
+                           [args.scenario, *paths, *cal,
+                            *([args.influence] if args.influence else []),
+                            *([args.bridge] if args.bridge else [])])
+    with locked(folder):
+        if not args.resume and not (site is False and args.influence):
+            for p in outputs:  # no output of a command replaced without --force
+                refuse_existing(p, force=args.force)
+        batch = BatchFolder(folder, resume=args.resume, force=args.force, meta=_meta(
+            "weigh", scenario=args.scenario, calibration=sorted(cal, key=str),
+            influence=args.influence, bridge=args.bridge))
+        if site:
+            return _weigh_site(args, scenario, folder, batch)
+        return _weigh_moses(args, scenario, folder, batch, paths, cal)
+
+
+def _weigh_moses(args: argparse.Namespace, scenario, folder: Path, batch, paths, cal) -> int:
+    """``bwim weigh`` on records with their passages (simulated, or a [run] scenario)."""
+    from bwim.batch import Item, executor_for, weigh_records
+    from bwim.io import read_influence_line, write_influence_line
+    from bwim.scenario import build_vehicle
+    from bwim.wim import calibrate_influence_line
+
+    if args.bridge:
+        raise InputError("--bridge weighs logger files by MFI (a scenario with [logger]); "
+                         "for records with their passages use bwim identify")
+    if args.influence:
+        il = read_influence_line(args.influence)
+        print(f"influence line: {args.influence}")
+    else:
+        il = calibrate_influence_line(load_records(cal, scenario), build_vehicle(scenario))
+        target = folder / "influence_line.h5"
+        write_influence_line(il, target)
+        print(f"influence line calibrated from {len(cal)} crossing(s) "
+              f"(residual {il.residual:.3g}): {target}")
+    items = [Item(name=display_name(p), source=p, target=folder / f"{stem}_static.h5")
+             for p, stem in zip(paths, unique_stems(paths), strict=True)]
+    executor = executor_for(args.jobs, args.scheduler)
+    report = _run_batch(batch, items, lambda todo: weigh_records(
+        todo, il, read=_read(scenario), executor=executor, keep=False), "weighing")
+    _print_weighed(report, f"Static weights (Moses){_done_before(report)}:")
+    print(f"summary: {batch.summary}\nweights: {folder}/<record>_static.h5")
+    return _report_failures(report)
+
+

@@ -1,0 +1,178 @@
+"""What the commands share: outputs checked before work, record paths, progress on
+stderr, small writers."""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import os
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+from bwim.errors import InputError
+
+__all__ = ["RECORD_SUFFIXES", "CalibrationProgress", "Progress", "bar", "bridge_of", "check_jobs",
+           "display_name", "load_records", "locked", "out_file", "out_folder", "quiet",
+           "record_paths", "unique_stems", "write_csv"]
+
+RECORD_SUFFIXES = (".h5", ".hdf5", ".hdf", ".csv", ".txt")
+
+
+def quiet() -> bool:
+    return not sys.stdout.isatty()
+
+
+def bar(total: int | None, desc: str):
+    from tqdm import tqdm
+
+    return tqdm(total=total, desc=desc, disable=quiet(), file=sys.stderr, leave=False)
+
+
+class Progress:
+    """A batch's progress on stderr: a bar (count, total, rate, ETA) on a terminal, else a
+    plain line every :attr:`every` seconds.  ``progress(n)``: n items finished so far."""
+
+    every = 10.0
+
+    def __init__(self, total: int, desc: str) -> None:
+        self.total, self.desc = total, desc
+        self.tty = sys.stderr.isatty()
+        self.bar = bar(total, desc) if self.tty and total > 1 else None
+        self.t0 = self.last = time.perf_counter()
+        self.start = self.n = 0
+
+    def __call__(self, n: int) -> None:
+        if self.n == 0 and self.start == 0 and n > 0 and self.last == self.t0:
+            self.start = n  # done before: not part of the rate
+        if self.bar is not None:
+            self.bar.update(n - self.n)
+        self.n = n
+        now = time.perf_counter()
+        if not self.tty and self.total > 1 and now - self.last >= self.every:
+            self.last = now
+            rate = (n - self.start) / max(now - self.t0, 1e-9)
+            eta = (self.total - n) / rate if rate > 0 else float("nan")
+            print(f"bwim: {self.desc}: {n}/{self.total} ({100 * n / self.total:.0f} %), "
+                  f"{rate:.3g}/s, ETA {eta / 60:.1f} min", file=sys.stderr, flush=True)
+
+    def __enter__(self) -> Progress:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+def out_file(path: str | Path, suffixes: Sequence[str] | None = None, *,
+              inputs: Sequence[str | Path] = (), force: bool = True) -> Path:
+    """An output file that can be written (checked before any work): not one of the
+    ``inputs``, and not an existing file unless ``force``."""
+    from bwim.io import check_writable
+    from bwim.io.outputs import refuse_existing, refuse_input_overwrite
+
+    p = Path(path)
+    if suffixes is not None and p.suffix.lower() not in suffixes:
+        raise InputError(f"{p}: unknown output format {p.suffix!r}; use "
+                         f"{' or '.join(suffixes)}")
+    refuse_input_overwrite([p], inputs)
+    check_writable(p)
+    return refuse_existing(p, force=force)
+
+
+def out_folder(path: str | Path) -> Path:
+    """An output folder, created if needed, that can be written."""
+    from bwim.io import check_writable
+
+    p = Path(path)
+    if p.exists() and not p.is_dir():
+        raise InputError(f"cannot write in {p}: it is a file, not a folder")
+    try:
+        p.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"cannot create the folder {p}: {exc.strerror or exc}") from None
+    check_writable(p / "summary.csv")
+    return p
+
+
+def locked(folder: Path):
+    """The output folder's lock for this run (:class:`bwim.io.outputs.OutputLock`)."""
+    from bwim.io.outputs import OutputLock
+
+    return OutputLock(folder)
+
+
+def record_paths(items: Sequence[str], *, any_suffix: bool = False) -> list[Path]:
+    """Record files, folders expanded to the records they hold (sorted); with
+    ``any_suffix`` (a logger's exports) every file of a folder."""
+    from bwim.io.paths import expand_paths
+
+    return expand_paths(items, None if any_suffix else RECORD_SUFFIXES, what="records")
+
+
+def load_records(paths: Sequence[Path], scenario) -> list:
+    from bwim.scenario import load_record
+
+    records = []
+    with bar(len(paths) if len(paths) > 1 else None, "reading records") as progress:
+        for p in paths:
+            records.append(load_record(p, scenario))
+            progress.update()
+    return records
+
+
+def check_jobs(jobs: int | None) -> None:
+    if jobs is not None and jobs < 1 and jobs != -1:
+        raise InputError(f"--jobs must be a positive number or -1 (all cores), got {jobs}")
+
+
+def display_name(path: Path) -> str:
+    """A file name as text that can be printed and written (a name that is not valid
+    UTF-8 shows its odd bytes as U+FFFD)."""
+    return os.fsencode(path.name).decode("utf-8", "replace")
+
+
+def unique_stems(paths: Sequence[Path]) -> list[str]:
+    seen: dict[str, int] = {}
+    out = []
+    for p in paths:
+        n = seen.get(p.stem, 0)
+        seen[p.stem] = n + 1
+        out.append(p.stem if n == 0 else f"{p.stem}_{n + 1}")
+    return out
+
+
+def bridge_of(args: argparse.Namespace, scenario):
+    from bwim.scenario import build_bridge, load_bridge
+
+    return load_bridge(args.bridge) if args.bridge else build_bridge(scenario)
+
+
+def write_csv(path: Path, header: Sequence[str], rows: Sequence[Sequence]) -> None:
+    from bwim.io import atomic_open
+
+    with atomic_open(path, newline="") as f:
+        w = csv.writer(f, lineterminator="\n")
+        w.writerow(header)
+        w.writerows(rows)
+
+
+class CalibrationProgress:
+    """A tqdm bar fed by ``calibrate``'s callback: one tick per optimiser iteration."""
+
+    def __init__(self) -> None:
+        self.bar = bar(None, "calibrating")
+        self.stage = None
+
+    def __call__(self, stage: str, iteration: int, best: float) -> None:
+        if stage != self.stage:
+            self.stage = stage
+            self.bar.set_description(f"calibrating: {stage}")
+        self.bar.set_postfix(best=f"{best:.3g}", refresh=False)
+        self.bar.update()
+
+    def close(self) -> None:
+        self.bar.close()
+
+

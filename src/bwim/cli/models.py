@@ -1,0 +1,199 @@
+"""The model commands: simulate, calibrate, demo, reproduce."""
+
+from __future__ import annotations
+
+import argparse
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+from bwim.cli.common import (
+    CalibrationProgress,
+    bridge_of,
+    check_jobs,
+    load_records,
+    locked,
+    out_file,
+    out_folder,
+    record_paths,
+)
+from bwim.errors import InputError
+from bwim.tables import Table, format_kn, format_kn_each, format_pct, param_values
+
+__all__ = ["calibrate_command", "demo_command", "reproduce_command", "simulate_command"]
+
+
+# --- simulate --------------------------------------------------------------------------------
+def simulate_command(args: argparse.Namespace) -> int:
+    from bwim.io import write_csv_record, write_record
+    from bwim.scenario import load_scenario, simulate_scenario
+
+    out = out_file(args.output, (".h5", ".hdf5", ".hdf", ".csv"),
+                    inputs=[args.scenario, *([args.bridge] if args.bridge else [])],
+                    force=args.force)
+    scenario = load_scenario(args.scenario)
+    bridge = bridge_of(args, scenario) if args.bridge else None
+    t0 = time.perf_counter()
+    record = simulate_scenario(scenario, bridge=bridge)
+    if out.suffix.lower() == ".csv":
+        write_csv_record(record, out)
+    else:
+        write_record(record, out)
+    p = record.passage
+    print(f"simulated {scenario.title or scenario.source}: {p.n_axles}-axle vehicle at "
+          f"{p.speed:g} m/s in lane {p.lane:g} m, {len(record.sensors)} channels × "
+          f"{record.time.size} samples at {record.sampling_rate:g} Hz "
+          f"({time.perf_counter() - t0:.1f} s)")
+    if record.truths:
+        print("true static axle loads (kN): "
+              f"{', '.join(format_kn_each(record.truth.static_axle_loads))}; "
+              f"GVW {format_kn(record.truth.gvw)} kN")
+    print(f"record: {out}")
+    return 0
+
+
+# --- calibrate -------------------------------------------------------------------------------
+def calibrate_command(args: argparse.Namespace) -> int:
+    from bwim.calibration import calibrate
+    from bwim.scenario import build_bridge, build_road, build_vehicle, load_scenario, save_bridge
+
+    check_jobs(args.jobs)
+    paths = record_paths(args.records)
+    out = out_file(args.output, (".toml",), inputs=[args.scenario, *paths],
+                    force=args.force)
+    scenario = load_scenario(args.scenario)
+    start = build_bridge(scenario)
+    vehicle = build_vehicle(scenario)
+    road = build_road(scenario)
+    records = load_records(paths, scenario)
+    kwargs = scenario.calibrate.kwargs() if scenario.calibrate is not None else {}
+    for key in ("method", "seed"):
+        if getattr(args, key) is not None:
+            kwargs[key] = getattr(args, key)
+    if args.jobs is not None:
+        kwargs["n_jobs"] = args.jobs
+    if args.mesh_correction is not None:
+        mc = args.mesh_correction.strip().lower()
+        kwargs["mesh_correction"] = int(mc) if mc.isdigit() else mc
+    progress = CalibrationProgress()
+    try:
+        cal = calibrate(start, records, vehicle, road=road, callback=progress, **kwargs)
+    finally:
+        progress.close()
+    # with the mesh correction the parameters are the finer model's: save that model
+    saved = cal.bridge if cal.mesh_correction is None else cal.mesh_correction.bridge
+    save_bridge(saved, out, title=f"calibrated from {len(records)} record(s) of "
+                f"{scenario.title or scenario.source}")
+    rows = [(name, f"{s0:.5g}", f"{v:.5g}", f"± {u:.3g}", format_pct(v, s0))
+            for name, v, s0, u in param_values(cal.params, start.params, cal.uncertainty)]
+    print(Table(f"Calibrated parameters (SI: Pa, kg/m²), {len(records)} record(s):",
+                ("parameter", "start", "calibrated", "uncertainty", "change %"),
+                rows).render())
+    print()
+    print(Table("", ("stage", "unknowns", "evaluations", "time (s)"),
+                [(s.name, ", ".join(s.labels), s.nfev, f"{s.wall_time:.1f}")
+                 for s in cal.stages]).render())
+    print(f"\nidentifiability: {cal.identifiability.summary().replace(chr(10), '; ')}")
+    if cal.mesh_correction is not None:
+        nx, ny = cal.mesh_correction.mesh
+        print(f"{cal.mesh_correction.summary()}\nthe calibrated model is saved on the "
+              f"{nx}x{ny} mesh the corrected parameters belong to")
+    if cal.discretisation is not None:
+        print(f"mesh check: {cal.discretisation.summary().replace(chr(10), '; ')}")
+    print(f"{cal.nfev} evaluations, wall time {cal.wall_time:.1f} s")
+    print(f"calibrated model: {out}")
+    return 0
+
+
+# --- demo ------------------------------------------------------------------------------------
+def write_figures(figures: dict, folder: Path, *, prefix: str = "", dpi: int) -> list[Path]:
+    """Each named figure as ``folder/<prefix><name>.png`` (atomically); the paths."""
+    from bwim.io import atomic_output
+
+    paths = []
+    for name, fig in figures.items():
+        target = folder / f"{prefix}{name}.png"
+        with atomic_output(target) as tmp:
+            fig.savefig(tmp, format="png", dpi=dpi)
+        paths.append(target)
+    return paths
+
+
+def demo_command(args: argparse.Namespace) -> int:
+    from bwim.paper.demo import MAX_MODES
+
+    if not 1 <= args.modes <= MAX_MODES:
+        raise InputError(f"--modes must be between 1 and {MAX_MODES}, got {args.modes}")
+    check_jobs(args.jobs)
+    out = out_folder(args.out)
+    with locked(out):
+        return _demo_run(args, out)
+
+
+def _demo_run(args: argparse.Namespace, out: Path) -> int:
+    from bwim.io import (
+        write_identification,
+        write_influence_line,
+        write_record,
+        write_static_weights,
+    )
+    from bwim.paper.demo import REPORT_INTRO, REPORT_TITLE, run_demo
+    from bwim.report import figure_files, write_report
+    from bwim.scenario import save_bridge
+
+    t0 = time.perf_counter()
+    progress = CalibrationProgress()
+    try:
+        demo = run_demo(quick=args.quick, seed=args.seed, n_jobs=args.jobs, n_modes=args.modes,
+                        callback=progress, echo=lambda text: print(text, flush=True))
+    finally:
+        progress.close()
+    save_bridge(demo.calibration.bridge, out / "calibrated_bridge.toml",
+                title="bwim demo: calibrated")
+    write_record(demo.calibration_record, out / "calibration_crossing.h5")
+    write_record(demo.second_record, out / "second_vehicle.h5")
+    write_identification(demo.identified, out / "second_vehicle_forces.h5")
+    write_static_weights(demo.moses, out / "second_vehicle_static.h5")
+    write_influence_line(demo.influence_line, out / "influence_line.h5")
+    sections = demo.sections()
+    write_figures(figure_files(sections), out, dpi=100)
+    page = write_report(out / "report.html", sections, title=REPORT_TITLE, intro=REPORT_INTRO)
+    print(f"\nfiles in {out}: calibrated_bridge.toml, records, results (.h5), figures (.png)")
+    print(f"report: {page}")
+    print(f"demo took {time.perf_counter() - t0:.1f} s")
+    return 0
+
+
+# --- reproduce -------------------------------------------------------------------------------
+def reproduce_command(args: argparse.Namespace) -> int:
+    from bwim.io import check_writable
+    from bwim.paper import reproduce
+
+    names = list(reproduce.CASES) if args.case == "all" else [args.case]
+    check_jobs(args.jobs)
+    out = out_folder(args.out)
+    check_writable(out / ".probe")
+    with locked(out):
+        _reproduce_cases(args, names, out)
+    return 0
+
+
+def _reproduce_cases(args: argparse.Namespace, names: Sequence[str], out: Path) -> None:
+    from bwim.paper import reproduce
+
+    t0 = time.perf_counter()
+    for name in names:
+        print(f"== reproducing {name}{' (quick)' if args.quick else ''} ==", flush=True)
+        kwargs = {"quick": args.quick}
+        if name != "compare":
+            kwargs["n_jobs"] = args.jobs
+        report = reproduce.CASES[name](**kwargs)
+        print(report.render(), flush=True)
+        if not args.no_figures:
+            for target in write_figures(report.figures(), out,
+                                         prefix=f"{name.replace('.', '_')}_", dpi=110):
+                print(f"  figure: {target}")
+        print()
+    print(f"total {time.perf_counter() - t0:.1f} s")
+
+
