@@ -96,7 +96,8 @@ def dp_gains(model: MFIModel, lam: float, weights: np.ndarray) -> DPGains:
     initial = lam if model.f_carry == 0.0 else 0.0  # zeroth order penalises f_0 too
     # pseudo-inverse: a force that never reaches the deck during the record is unobservable;
     # it gets the minimum-norm value 0, as in the batch least-squares solution
-    R0_ff_inv = np.linalg.pinv(R[nz:, nz:] + initial * np.eye(nf), rcond=1e-12, hermitian=True)
+    E = model.x0_map
+    R0_ff_inv = np.linalg.pinv(E.T @ R @ E + initial * np.eye(nf), rcond=1e-12, hermitian=True)
     return DPGains(K=K, G=G, A=A, R0_ff_inv=R0_ff_inv, lam=lam)
 
 
@@ -115,7 +116,8 @@ def solve_with_gains(model: MFIModel, gains: DPGains, d: np.ndarray,
         g[k] = gains.G[k] @ s[nz:]
         s = gains.A[k].T @ s - QWd[k]
     X = np.zeros((N, model.n_x))
-    X[0, nz:] = -gains.R0_ff_inv @ s[nz:]
+    E = model.x0_map
+    X[0] = E @ (-gains.R0_ff_inv @ (E.T @ s))
     r = np.empty((N - 1, nf))
     Hs = model.H_all
     for k in range(N - 1):
@@ -150,7 +152,7 @@ def solve_batch(
     N, nz, nf, nx = model.n_steps, model.n_z, model.n_f, model.n_x
     n_u = nf + (N - 1) * nf
     Mk = np.zeros((nx, n_u))
-    Mk[nz:, :nf] = np.eye(nf)
+    Mk[:, :nf] = model.x0_map
     rows, rhs = [], []
     sw = np.sqrt(W)[:, None]
     for k in range(N):
@@ -167,7 +169,7 @@ def solve_batch(
     u = np.linalg.lstsq(A, b, rcond=None)[0]
     r = u[nf:].reshape(N - 1, nf)
     X = np.zeros((N, nx))
-    X[0, nz:] = u[:nf]
+    X[0] = model.x0_map @ u[:nf]
     for k in range(N - 1):
         X[k + 1] = model.H(k) @ X[k]
         X[k + 1, nz:] += r[k]
@@ -326,11 +328,11 @@ def _sweep_chunk(model: MFIModel, lams: np.ndarray, d: np.ndarray, W: np.ndarray
         sn -= QWd[k]
         s, sn = sn, s
     initial = lams if c == 0.0 else np.zeros(L)  # zeroth order penalises f_0 too
-    R0_inv = np.linalg.pinv(R[:, nz:, nz:] + initial[:, None, None] * np.eye(nf),
+    E = model.x0_map
+    R0_inv = np.linalg.pinv(E.T @ R @ E + initial[:, None, None] * np.eye(nf),
                             rcond=1e-12, hermitian=True)
     X = np.empty((N, L, nx))
-    X[0, :, :nz] = 0.0
-    X[0, :, nz:] = -(R0_inv @ s[:, nz:, None])[:, :, 0]
+    X[0] = -(R0_inv @ (s @ E)[:, :, None])[:, :, 0] @ E.T
     r = np.empty((N - 1, L, nf))
     for k in range(N - 1):
         xk = X[k]
