@@ -33,13 +33,13 @@ from bwim.errors import InputError, parse_enum
 from bwim.fe.bridge import Bridge
 from bwim.fe.modal import select_modes
 from bwim.limits import check_memory
-from bwim.mfi.dp import SWEEP_CHUNK_BYTES, Solution, sweep
-from bwim.mfi.lcurve import LCurve, gcv, lcurve_search
+from bwim.mfi.dp import Solution, sweep
+from bwim.mfi.lcurve import CoarseProblem, LCurve, gcv, lcurve_search
 from bwim.mfi.statespace import ForceUnknowns, MFIModel, Order, build_model, force_layout
 from bwim.plausibility import Limits, ordered_flags, quality_of, weight_flags
 from bwim.records import Passage, Record
 
-__all__ = ["BAND_FACTOR", "DEFAULT_MAX_MODES", "MAX_RESIDUAL", "ForceIdentification",
+__all__ = ["BAND_FACTOR", "COARSE_RATE", "DEFAULT_MAX_MODES", "MAX_RESIDUAL", "ForceIdentification",
            "identify_forces", "record_band"]
 
 #: Relative residual of the identified forces' readings above which a vehicle's weights
@@ -57,6 +57,10 @@ BAND_FACTOR = 2.0
 
 #: Welch segment length (samples) of :func:`record_band`: about 8 Hz bins at 1 kHz.
 BAND_SEGMENT = 128
+
+#: The L-curve's bracketing pass runs on the record decimated to at least this rate (Hz),
+#: when that divides the sampling rate by two or more (:func:`_coarse_problem`).
+COARSE_RATE = 250.0
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -189,8 +193,10 @@ def identify_forces(
         Include the truncated modes' static response in the readings model.
     lam_range, n_lam
         Scaled λ range of the L-curve (and the GCV search interval), and the number of λ
-        solved for the L-curve: half on a coarse log grid over the range, half within one
-        coarse spacing of its corner (:func:`bwim.mfi.lcurve.lcurve_search`).
+        of the L-curve search (:func:`bwim.mfi.lcurve.lcurve_search`): half on a coarse
+        log grid over the range (on the record decimated to about :data:`COARSE_RATE`
+        when it is sampled at least twice as fast), half within one coarse spacing of its
+        corner on the record's model (more when the corner sits at an end of that grid).
     central : float
         Fraction of each axle's time on the deck used for its static weight.
     """
@@ -236,21 +242,21 @@ def identify_forces(
     W = np.ones(model.n_s) if w is None else w
     curve = None
     windows = _central_windows(record.passages, bridge.length, central)
+    sol = None
     if isinstance(lam, str):
         if lam == "lcurve":
             n_coarse = max(4, n_lam // 2)
-            weighed = np.stack([(record.time >= windows[a, 0]) & (record.time <= windows[a, 1])
-                                for a in axles], axis=1)  # (n_t, n_f)
-
-            def compressive(X: np.ndarray) -> np.ndarray:
-                """Per λ: every force positive where its axle is weighed."""
-                return np.all((X[:, :, model.n_z:] > 0) | ~weighed[None], axis=(1, 2))
-
             # first order only: its λ → ∞ limit is constant forces (the static weights),
             # zeroth order's is zero force, which no sign test can tell from a good answer
-            curve = lcurve_search(model, d_scaled, W, lam_range, n_coarse=n_coarse,
-                                  n_fine=max(n_lam - n_coarse, 0),
-                                  admissible=compressive if order is Order.FIRST else None)
+            weighed = _weighed(record.time, windows, axles) if order is Order.FIRST else None
+            coarse = _coarse_problem(bridge, record, modes, d_scale, W, weighed,
+                                     unknowns=unknowns, order=order,
+                                     static_correction=static_correction)
+            search = lcurve_search(model, d_scaled, W, lam_range, n_coarse=n_coarse,
+                                   n_fine=max(n_lam - n_coarse, 0),
+                                   admissible=_compressive(weighed),
+                                   coarse=coarse if n_lam - n_coarse >= 4 else None)
+            curve, sol = search.curve, search.solution
             lam_s = curve.corner_scaled
         elif lam == "gcv":
             lam_s = gcv(model, d_scaled, W, lam_range)
@@ -260,11 +266,52 @@ def identify_forces(
         if not np.isfinite(lam) or lam <= 0:
             raise InputError(f"lam must be positive, got {lam!r}")
         lam_s = model.lam_scaled(float(lam))
-    best = sweep(model, d_scaled, [lam_s], W, keep=True)
-    sol = Solution(X=best.X[0], r=best.r[0], residual_norm=float(best.residual_norm[0]),
-                   seminorm=float(best.seminorm[0]))
+    if sol is None:
+        best = sweep(model, d_scaled, [lam_s], W, keep=True)
+        sol = Solution(X=best.X[0], r=best.r[0], residual_norm=float(best.residual_norm[0]),
+                       seminorm=float(best.seminorm[0]))
     ident = _result(model, sol, record, unknowns, order, lam_s, curve, windows)
     return replace(ident, n_modes=modes.n)
+
+
+def _weighed(time: np.ndarray, windows: np.ndarray, axles: np.ndarray) -> np.ndarray:
+    """Whether each force's axle is weighed at each time, shape (n_t, n_f)."""
+    return np.stack([(time >= windows[a, 0]) & (time <= windows[a, 1]) for a in axles],
+                    axis=1)
+
+
+def _compressive(weighed: np.ndarray | None):
+    """The L-curve's admissibility test: per λ, every force positive where its axle is
+    weighed (``forces``: scaled, (n_λ, n_t, n_f)); None without ``weighed``."""
+    if weighed is None:
+        return None
+
+    def admissible(forces: np.ndarray) -> np.ndarray:
+        return np.all((forces > 0) | ~weighed[None], axis=(1, 2))
+
+    return admissible
+
+
+def _coarse_problem(bridge: Bridge, record: Record, modes, d_scale: float, W: np.ndarray,
+                    weighed: np.ndarray | None, **build) -> CoarseProblem | None:
+    """The record decimated by the largest integer ``m`` with ``fs / m`` ≥
+    :data:`COARSE_RATE` (anti-alias FIR filter, zero phase), on the modes below a quarter
+    of its rate (at most those of the record's model), for the L-curve's bracketing pass;
+    None when ``m < 2``."""
+    from scipy import signal
+
+    fs = record.sampling_rate
+    m = int(np.floor(fs / COARSE_RATE * (1 + 1e-9)))
+    if m < 2 or record.time.size < 64 * m:
+        return None
+    fs_c = fs / m
+    below = int(np.searchsorted(modes.frequencies, fs_c / 4, side="right"))
+    data = signal.decimate(record.data, m, ftype="fir", axis=0, zero_phase=True)
+    rec = Record(time=record.time[::m], data=data, sensors=record.sensors,
+                 passages=record.passages)
+    model = build_model(bridge, bridge.modes(max(below, 1)), rec, d_scale, **build)
+    return CoarseProblem(model=model, d=data / d_scale, weights=W,
+                         admissible=_compressive(None if weighed is None else weighed[::m]))
 
 
 def _central_windows(passages, length: float, central: float) -> np.ndarray:
@@ -350,9 +397,9 @@ def _check_arguments(bridge, record, n_modes, lam, weights, lam_range, n_lam, ce
     n_t = float(record.time.size)
     if isinstance(lam, str) and lam == "gcv":  # GCV keeps the Riccati gains of every step
         need = n_t * n_x * n_x * 8.0 * 3
-    else:  # the stacked sweep: model arrays + feedback of one λ chunk (issue 15)
-        need = 8.0 * n_t * (3 * n_x * n_f + 2 * n_s * n_f + 8 * (n_x + n_s)) \
-            + SWEEP_CHUNK_BYTES
+    else:  # the model arrays, and the stacked sweep of one λ with its trajectory kept
+        need = 8.0 * n_t * (3 * n_x * n_f + 2 * n_s * n_f + 8 * (n_x + n_s)
+                            + (n_x + 1) * (2 * n_f + 3) + n_x * n_f + 2 * n_s + 4 * n_f)
     check_memory(need, f"identifying the forces of a record of {record.time.size} samples")
 
 

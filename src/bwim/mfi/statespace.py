@@ -223,6 +223,17 @@ def _mode_blocks(omega: np.ndarray, zeta: np.ndarray, dt: float):
     return P, h0, h1
 
 
+def _rows_times(rows, shapes: np.ndarray) -> np.ndarray:
+    """``N Φ`` for point rows ``N`` (p points, k entries each) as one sparse product,
+    shape (p, n_m)."""
+    import scipy.sparse as sp
+
+    p, k = rows.vals.shape
+    mat = sp.csr_matrix((rows.vals.ravel(), rows.dofs.ravel(), np.arange(0, p * k + 1, k)),
+                        shape=(p, shapes.shape[0]))
+    return np.asarray(mat @ shapes)
+
+
 def force_layout(passages: Sequence[Passage], unknowns: ForceUnknowns):
     """Force positions: per force (n_f) its passage index, axle index and lateral list.
 
@@ -280,13 +291,13 @@ def build_model(
         for y in ys_of[f]:
             yy = np.full(inside.sum(), y) if bridge.is_plate else None
             rows = bridge.model.point_rows(x[inside], yy)
-            g = np.einsum("pk,pkm->pm", rows.vals, modes.shapes[rows.dofs]) * share
+            g = _rows_times(rows, modes.shapes) * share
             G[inside, :, f] += g
             if inf is not None:
                 Dphys[inside, :, f] += share * inf.at(x[inside], yy) - g @ (
                     s_phi / modes.omega**2).T
     # scales: the force that gives the peak strain, modal coordinates by their static share
-    static_per_force = np.einsum("sm,m,kmf->ksf", s_phi, 1.0 / modes.omega**2, G) + Dphys
+    static_per_force = np.matmul(s_phi / modes.omega**2, G) + Dphys
     peak = np.abs(static_per_force).max()
     if peak == 0.0:
         raise InputError("no force crosses the bridge during the record")
@@ -306,7 +317,7 @@ def build_model(
     gamma = np.concatenate([hg[:, 0][None, :, None] * G, hg[:, 1][None, :, None] * G], axis=1)
     lam1 = np.concatenate([h1[:, 0][None, :, None] * G, h1[:, 1][None, :, None] * G],
                           axis=1)  # Λ₁ G_k, (N, 2 n_m, n_f)
-    Dphys += np.einsum("sm,kmf->ksf", s_phi, lam1[:, :n_m])
+    Dphys += np.matmul(s_phi, lam1[:, :n_m])
     # scaling: X = Dx X̃ with Dx = diag(z_scale, f_scale)
     P_s = P * z_scale[None, :] / z_scale[:, None]
     gamma_s = gamma * f_scale / z_scale[None, :, None]
