@@ -58,7 +58,7 @@ BAND_FACTOR = 2.0
 #: Welch segment length (samples) of :func:`record_band`: about 8 Hz bins at 1 kHz.
 BAND_SEGMENT = 128
 
-#: The L-curve's bracketing pass runs on the record decimated to at least this rate (Hz),
+#: The L-curve's bracketing pass runs on every m-th sample, at least this rate (Hz),
 #: when that divides the sampling rate by two or more (:func:`_coarse_problem`).
 COARSE_RATE = 250.0
 
@@ -194,9 +194,10 @@ def identify_forces(
     lam_range, n_lam
         Scaled λ range of the L-curve (and the GCV search interval), and the number of λ
         of the L-curve search (:func:`bwim.mfi.lcurve.lcurve_search`): half on a coarse
-        log grid over the range (on the record decimated to about :data:`COARSE_RATE`
-        when it is sampled at least twice as fast), half within one coarse spacing of its
-        corner on the record's model (more when the corner sits at an end of that grid).
+        log grid over the range (on every m-th sample, about :data:`COARSE_RATE`, when
+        the record is sampled at least twice as fast), half within one coarse spacing of
+        its corner on the record's model (more when the corner sits at an end of that
+        grid).
     central : float
         Fraction of each axle's time on the deck used for its static weight.
     """
@@ -294,19 +295,17 @@ def _compressive(weighed: np.ndarray | None):
 
 def _coarse_problem(bridge: Bridge, record: Record, modes, d_scale: float, W: np.ndarray,
                     weighed: np.ndarray | None, **build) -> CoarseProblem | None:
-    """The record decimated by the largest integer ``m`` with ``fs / m`` ≥
-    :data:`COARSE_RATE` (anti-alias FIR filter, zero phase), on the modes below a quarter
-    of its rate (at most those of the record's model), for the L-curve's bracketing pass;
-    None when ``m < 2``."""
-    from scipy import signal
-
+    """Every ``m``-th sample of the record, ``m`` the largest integer with ``fs / m`` ≥
+    :data:`COARSE_RATE`, on the modes below a quarter of that rate (at most those of the
+    record's model), for the L-curve's bracketing pass; None when ``m < 2``.  The samples
+    are taken as they are (no anti-alias filter): the gauge noise keeps its level per
+    sample, which is what places the corner."""
     fs = record.sampling_rate
     m = int(np.floor(fs / COARSE_RATE * (1 + 1e-9)))
     if m < 2 or record.time.size < 64 * m:
         return None
-    fs_c = fs / m
-    below = int(np.searchsorted(modes.frequencies, fs_c / 4, side="right"))
-    data = signal.decimate(record.data, m, ftype="fir", axis=0, zero_phase=True)
+    below = int(np.searchsorted(modes.frequencies, fs / m / 4, side="right"))
+    data = record.data[::m]
     rec = Record(time=record.time[::m], data=data, sensors=record.sensors,
                  passages=record.passages)
     model = build_model(bridge, bridge.modes(max(below, 1)), rec, d_scale, **build)

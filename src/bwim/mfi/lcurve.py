@@ -14,8 +14,8 @@ Contract
   either side of it is solved on the record's model with the trajectories kept, and the
   answer is the fine λ nearest to the corner located on the fine grid: its trajectory is
   the identification, so no λ is solved twice.  The coarse pass may run on a cheaper
-  model of the same record (:class:`CoarseProblem`: the record decimated in time, λ
-  carried over in physical units), whose corner is then only an estimate: while the
+  model of the same record (:class:`CoarseProblem`: every m-th sample, on fewer modes,
+  λ carried over in physical units), whose corner is then only an estimate: while the
   corner sits at an end of the fine grid, the grid is extended there (at most
   :data:`MAX_EXTENSIONS` times).  Without a coarse problem the corner is located on the
   union of both grids.  The chosen λ lies within half a fine spacing of the located
@@ -145,7 +145,7 @@ MAX_EXTENSIONS = 4
 @dataclass(frozen=True, kw_only=True, eq=False)
 class CoarseProblem:
     """A cheaper model of the same record on which :func:`lcurve_search` brackets the
-    corner (e.g. the record decimated in time, with the modes its rate allows).
+    corner (e.g. every m-th sample, on the modes that rate allows).
 
     Attributes
     ----------
@@ -244,12 +244,17 @@ def lcurve_search(model: MFIModel, d, weights, lam_range: tuple[float, float], *
         # fine grid, extend the grid there by half as many λ at the same spacing
         n_ext = max(2, n_fine // 2)
         for _ in range(MAX_EXTENSIONS):
-            t_all = np.sort(np.concatenate(grids))
-            low_end = t_best <= t_all[1] + 1e-9 * h and (lo is None or lo <= t_all[0])
-            if low_end and t_all[0] - h > t_min:
-                t_new = t_all[0] - h * np.arange(1, n_ext + 1)
-            elif t_best >= t_all[-2] - 1e-9 * h and t_all[-1] + h < t_max:
-                t_new = t_all[-1] + h * np.arange(1, n_ext + 1)
+            # an end is open when the corner sits next to it or the curvature there is
+            # above the interior's (the corner lies beyond it)
+            inner = kappa[1:-1][t[1:-1] >= (lo if lo is not None else -np.inf) - 1e-12]
+            top = inner.max() if inner.size else -np.inf
+            low_open = (t_best <= t[1] + 1e-9 * h or kappa[0] > top) and \
+                (lo is None or lo <= t[0]) and t[0] - h > t_min
+            high_open = (t_best >= t[-2] - 1e-9 * h or kappa[-1] > top) and t[-1] + h < t_max
+            if low_open:
+                t_new = t[0] - h * np.arange(1, n_ext + 1)
+            elif high_open:
+                t_new = t[-1] + h * np.arange(1, n_ext + 1)
             else:
                 break
             t_new = t_new[(t_new > t_min) & (t_new < t_max)]
