@@ -2,19 +2,22 @@
 
 Contract
 --------
-Minimise over the initial forces ``f_0`` (the bridge starts at rest, ``z_0 = 0``) and the
-unknowns ``r_0 … r_{N−2}``::
+Minimise over the initial forces ``f_0`` (the bridge starts at rest: ``X_0 = E f_0`` with
+``E`` = :attr:`~bwim.mfi.statespace.MFIModel.x0_map`) and the unknowns ``r_0 … r_{N−2}``
+(docs/theory.md §4; Dowling et al. (2012) eqs. (2) and (3))::
 
     J = Σ_k ‖W^{1/2} (d_k − Q_k X_k)‖² + λ Σ_k ‖r_k‖² [+ λ ‖f_0‖²],   X_{k+1} = H_k X_k + T r_k
 
 In first order ``f_0`` is free (only force *changes* are penalised); in zeroth order
 ``r_k = f_{k+1}`` and ``f_0`` is penalised like every other force value.
 
-* :func:`solve_dp` is Bellman's recursion (THEORY §4): cost-to-go
+* :func:`solve_dp` is Bellman's recursion (docs/theory.md §4): cost-to-go
   ``V_k(X) = Xᵀ R_k X + 2 s_kᵀ X + const`` backwards, then the optimal ``r_k = −K_k X_k −
   g_k`` forwards.  O(N) time and memory in the record length.  The gains do not depend on
   the data: :func:`dp_gains` computes them once and :func:`solve_with_gains` reuses them
   for further data vectors (GCV probes).
+* :func:`sweep` runs the same recursion for many λ at once (the L-curve), in O(N) time
+  and memory per λ, within the memory limit.
 * :func:`solve_batch` stacks the whole problem as one dense least-squares system; it is
   O(N³) and exists to check the recursion (they agree to round-off).
 * Everything is in the model's scaled units.
@@ -81,14 +84,15 @@ def dp_gains(model: MFIModel, lam: float, weights: np.ndarray) -> DPGains:
     QWQ = model.qwq(weights)
     Hs = model.H_all
     lam_eye = lam * np.eye(nf)
-    R = QWQ[N - 1]
+    R = QWQ[N - 1]  # docs/theory.md §4: R_N = QᵀWQ
     for k in range(N - 2, -1, -1):
-        H = Hs[k]
-        Gk = np.linalg.inv(lam_eye + R[nz:, nz:])
-        Kk = Gk @ (R[nz:] @ H)
+        H = Hs[k]  # Dowling et al. (2012) eq. (2): X_{k+1} = H_k X_k + T r_k
+        Gk = np.linalg.inv(lam_eye + R[nz:, nz:])  # docs/theory.md §4: G_k = (λI + TᵀRT)⁻¹
+        Kk = Gk @ (R[nz:] @ H)  # docs/theory.md §4: K_k = G_k Tᵀ R_{k+1} H_k
         Ak = A[k]
         Ak[:] = H
         Ak[nz:] -= Kk
+        # docs/theory.md §4: R_k = QᵀWQ + H_kᵀ R_{k+1} (H_k − T K_k), symmetrised
         R = H.T @ (R @ Ak)
         R += R.T
         R *= 0.5
@@ -112,23 +116,24 @@ def solve_with_gains(model: MFIModel, gains: DPGains, d: np.ndarray,
     QWd = model.qwd(W, d)
     # data-dependent backward pass: s_k and g_k
     g = np.empty((N - 1, nf))
-    s = -QWd[N - 1]
+    s = -QWd[N - 1]  # docs/theory.md §4: s_N = −QᵀW d_N
     for k in range(N - 2, -1, -1):
-        g[k] = gains.G[k] @ s[nz:]
-        s = gains.A[k].T @ s - QWd[k]
+        g[k] = gains.G[k] @ s[nz:]  # docs/theory.md §4: g_k = G_k Tᵀ s_{k+1}
+        s = gains.A[k].T @ s - QWd[k]  # docs/theory.md §4: s_k = −QᵀWd_k + (H − TK)ᵀ s_{k+1}
     X = np.zeros((N, model.n_x))
     E = model.x0_map
     X[0] = E @ (-gains.R0_ff_inv @ (E.T @ s))
     r = np.empty((N - 1, nf))
     Hs = model.H_all
-    for k in range(N - 1):
-        r[k] = -gains.K[k] @ X[k] - g[k]
-        X[k + 1] = Hs[k] @ X[k]
+    for k in range(N - 1):  # docs/theory.md §4, forward pass
+        r[k] = -gains.K[k] @ X[k] - g[k]  # r_k = −K_k X_k − g_k
+        X[k + 1] = Hs[k] @ X[k]  # Dowling et al. (2012) eq. (2)
         X[k + 1, nz:] += r[k]
     return _finish(model, X, r, d, W)
 
 
 def _finish(model, X, r, d, W) -> Solution:
+    # Dowling et al. (2012) eq. (3): the readings ε_k = Q X_k
     fit = X[:, : model.n_z] @ model.Qz.T + np.einsum("ksf,kf->ks", model.D, X[:, model.n_z:])
     res = np.sqrt(np.sum(W * (d - fit) ** 2))
     return Solution(X=X, r=r, residual_norm=float(res), seminorm=float(np.linalg.norm(r)))
@@ -163,6 +168,7 @@ def solve_batch(
             Mk = model.H(k) @ Mk
             Mk[nz:, nf + k * nf: nf + (k + 1) * nf] += np.eye(nf)
     first = 0 if model.f_carry == 0.0 else nf  # zeroth order penalises f_0 too
+    # docs/theory.md §4 (Tikhonov functional): J = Σ ‖W^{1/2}(d_k − Q X_k)‖² + λ Σ ‖r_k‖²
     reg = np.zeros((n_u - first, n_u))
     reg[:, first:] = np.sqrt(lam) * np.eye(n_u - first)
     A = np.vstack([*rows, reg])
@@ -344,7 +350,9 @@ def _sweep_chunk(model: MFIModel, lams: np.ndarray, d: np.ndarray, W: np.ndarray
     X[:, :, nx] = 1.0
     X[0, :, :nx] = -(R0_inv @ (R[:, :nx, nx] @ E)[:, :, None])[:, :, 0] @ E.T
     r = np.empty((N - 1, L, nf))
-    for k in range(N - 1):  # forward: r_k = −K̃_k [X_k; 1], X_{k+1} = H_k X_k + T r_k
+    # docs/theory.md §4 forward pass: r_k = −K̃_k [X_k; 1] and Dowling et al. (2012)
+    # eq. (2), X_{k+1} = H_k X_k + T r_k
+    for k in range(N - 1):
         xk = X[k]
         rk = r[k]
         np.matmul(K[k], xk[:, :, None], out=rk[:, :, None])
@@ -357,7 +365,7 @@ def _sweep_chunk(model: MFIModel, lams: np.ndarray, d: np.ndarray, W: np.ndarray
             nxt[:, nz:nx] = rk
     del K
     res = np.empty(L)
-    for j in range(L):  # ρ = ‖W^{1/2}(d − Q X)‖, one λ at a time (memory)
+    for j in range(L):  # ρ = ‖W^{1/2}(d − Q X)‖ (Dowling et al. (2012) eq. (3)), per λ
         fit = X[:, j, :nz] @ Qz.T
         fit += np.matmul(model.D, X[:, j, nz:nx, None])[:, :, 0]
         fit -= d

@@ -26,9 +26,9 @@ Contract
   is not a candidate.  The corner is sought on the λ at and above the
   smallest λ from which every grid λ is admissible (the whole grid when all are; its
   largest λ when none is).  Without it, a nearly flat L-curve (the response below the
-  gauge noise at every frequency but the quasi-static) puts the maximum curvature on a
-  spurious kink at the small-λ end: measured force RMS errors of 80–250 % and weights off
-  by up to 24 % at 5 % gauge noise (``benchmarks/mfi_accuracy.py``, λ rules).
+  gauge noise at every frequency but the quasi-static) can put the maximum curvature on
+  a spurious kink at the small-λ end, where the forces are wild and tensile
+  (``benchmarks/mfi_accuracy.py``, λ rules, measures both rules).
 * :func:`gcv` minimises ``G(λ) = n ‖ỹ − ŷ‖² / (n − tr A_λ)²`` with the trace of the
   influence matrix estimated by Hutchinson's method (Rademacher probes with a fixed seed);
   each probe reuses the λ's DP gains.
