@@ -58,6 +58,11 @@ BAND_FACTOR = 2.0
 #: Welch segment length (samples) of :func:`record_band`: about 8 Hz bins at 1 kHz.
 BAND_SEGMENT = 128
 
+#: Models with at most this many modes solve the L-curve's fine grid over twice the
+#: window (two coarse spacings either side, the same spacing): their λ cost little
+#: beside one pass of the recursion, and a wider window spares extending it.
+SMALL_MODEL_MODES = 4
+
 #: The L-curve's bracketing pass runs on every m-th sample, at least this rate (Hz),
 #: when that divides the sampling rate by two or more (:func:`_coarse_problem`).
 COARSE_RATE = 250.0
@@ -197,7 +202,8 @@ def identify_forces(
         log grid over the range (on every m-th sample, about :data:`COARSE_RATE`, when
         the record is sampled at least twice as fast), half within one coarse spacing of
         its corner on the record's model (more when the corner sits at an end of that
-        grid).
+        grid, and twice as many over twice the width for models of at most
+        :data:`SMALL_MODEL_MODES` modes).
     central : float
         Fraction of each axle's time on the deck used for its static weight.
     """
@@ -253,10 +259,13 @@ def identify_forces(
             coarse = _coarse_problem(bridge, record, modes, d_scale, W, weighed,
                                      unknowns=unknowns, order=order,
                                      static_correction=static_correction)
+            n_fine = max(n_lam - n_coarse, 0)
+            # a small model's λ cost little beside a pass: twice the window, same spacing
+            window = 2 if modes.n <= SMALL_MODEL_MODES and coarse is not None else 1
             search = lcurve_search(model, d_scaled, W, lam_range, n_coarse=n_coarse,
-                                   n_fine=max(n_lam - n_coarse, 0),
+                                   n_fine=window * n_fine + window - 1,
                                    admissible=_compressive(weighed),
-                                   coarse=coarse if n_lam - n_coarse >= 4 else None)
+                                   coarse=coarse if n_fine >= 4 else None, window=window)
             curve, sol = search.curve, search.solution
             lam_s = curve.corner_scaled
         elif lam == "gcv":

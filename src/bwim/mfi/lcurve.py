@@ -10,16 +10,16 @@ Contract
   docs/theory.md §4, L-curve), found on a cubic-spline interpolant of the two curves so
   that it is not tied to the grid.
 * :func:`lcurve_search` finds it coarse-to-fine in two stacked passes: a coarse log grid
-  over the whole range brackets the corner, then a fine grid within one coarse spacing
-  either side of it is solved on the record's model with the trajectories kept, and the
-  answer is the fine λ nearest to the corner located on the fine grid: its trajectory is
-  the identification, so no λ is solved twice.  The coarse pass may run on a cheaper
-  model of the same record (:class:`CoarseProblem`: every m-th sample, on fewer modes,
-  λ carried over in physical units), whose corner is then only an estimate: while the
-  corner sits at an end of the fine grid, the grid is extended there (at most
-  :data:`MAX_EXTENSIONS` times).  Without a coarse problem the corner is located on the
-  union of both grids.  The chosen λ lies within half a fine spacing of the located
-  corner.
+  over the whole range brackets the corner, then a fine grid within one (or ``window``)
+  coarse spacing either side of it is solved on the record's model with the
+  trajectories kept, and the answer is the fine λ nearest to the corner located on the
+  fine grid: its trajectory is the identification, so no λ is solved twice.  The coarse
+  pass may run on a cheaper model of the same record (:class:`CoarseProblem`: every m-th
+  sample, on fewer modes, λ carried over in physical units), whose corner is then only
+  an estimate: while the corner sits at an end of the fine grid, or the curvature there
+  is above the interior's, the grid is extended there (at most :data:`MAX_EXTENSIONS`
+  times).  Without a coarse problem the corner is located on the union of both grids.
+  The chosen λ lies within half a fine spacing of the located corner.
 * Admissible λ (``admissible=``, given by :func:`~bwim.mfi.identify_forces` for first
   order, whose λ → ∞ limit is constant forces: the static weights): tyre forces are
   compressive, so a λ whose identified forces turn tensile where the forces are weighed
@@ -184,22 +184,21 @@ def _solution(sw, i: int) -> Solution:
                     seminorm=float(sw.seminorm[i]))
 
 
-def _fine_grid(t0: float, step: float, t_min: float, t_max: float, n: int) -> np.ndarray:
-    """``n`` log λ strictly inside one coarse ``step`` either side of ``t0`` (clipped to
-    the range)."""
-    lo, hi = max(t0 - step, t_min), min(t0 + step, t_max)
+def _fine_grid(t0: float, half: float, t_min: float, t_max: float, n: int) -> np.ndarray:
+    """``n`` log λ strictly inside ``half`` either side of ``t0`` (clipped to the range)."""
+    lo, hi = max(t0 - half, t_min), min(t0 + half, t_max)
     return np.linspace(lo, hi, n + 2)[1:-1]
 
 
 def lcurve_search(model: MFIModel, d, weights, lam_range: tuple[float, float], *,
                   n_coarse: int = 8, n_fine: int = 8, admissible=None,
-                  coarse: CoarseProblem | None = None) -> CornerSearch:
+                  coarse: CoarseProblem | None = None, window: int = 1) -> CornerSearch:
     """Coarse-to-fine L-curve in two stacked passes (module docstring).
 
     ``n_coarse`` log-spaced λ over ``lam_range`` (scaled) bracket the corner, on
     ``coarse`` when given (λ carried over in physical units) or on ``model``; then
-    ``n_fine`` λ strictly within one coarse spacing either side of that corner are solved
-    on ``model`` with their trajectories kept.  The corner is located on the fine grid
+    ``n_fine`` λ strictly within ``window`` coarse spacings either side of that corner are
+    solved on ``model`` with their trajectories kept.  The corner is located on the fine grid
     (with ``coarse``) or on the union of both grids, and the chosen λ is the fine λ
     nearest to it: its trajectory is the answer, no further solve.  ``admissible(forces)
     -> bool per λ`` (scaled forces, (n_λ, N, n_f)) restricts the corner."""
@@ -217,7 +216,7 @@ def lcurve_search(model: MFIModel, d, weights, lam_range: tuple[float, float], *
         ok_c = c_ok(first.forces) if c_ok is not None else None
     _, t0 = _corner(t_c, first.residual_norm, first.seminorm, _lowest_admissible(t_c, ok_c))
     step = t_c[1] - t_c[0]
-    t_f = _fine_grid(t0, step, t_min, t_max, n_fine)
+    t_f = _fine_grid(t0, window * step, t_min, t_max, n_fine)
     h = t_f[1] - t_f[0] if t_f.size > 1 else step
     if coarse is None and np.min(np.abs(t_f[:, None] - t_c[None, :])) < 1e-3 * h:
         t_f = t_f + 0.25 * h  # keep clear of the coarse nodes (the spline needs distinct points)
