@@ -39,8 +39,8 @@ from bwim.mfi.statespace import ForceUnknowns, MFIModel, Order, build_model, for
 from bwim.plausibility import Limits, ordered_flags, quality_of, weight_flags
 from bwim.records import Passage, Record
 
-__all__ = ["BAND_FACTOR", "COARSE_RATE", "DEFAULT_MAX_MODES", "MAX_RESIDUAL", "ForceIdentification",
-           "identify_forces", "record_band"]
+__all__ = ["BAND_FACTOR", "COARSE_RATE", "DEFAULT_MAX_MODES", "MAX_RESIDUAL",
+           "SMALL_MODEL_MODES", "ForceIdentification", "identify_forces", "record_band"]
 
 #: Relative residual of the identified forces' readings above which a vehicle's weights
 #: are ``residual_high``: MFI reproduces a crossing of the model's own bridge to the noise
@@ -408,6 +408,8 @@ def _check_arguments(bridge, record, n_modes, lam, weights, lam_range, n_lam, ce
     else:  # the model arrays, and the stacked sweep of one λ with its trajectory kept
         need = 8.0 * n_t * (3 * n_x * n_f + 2 * n_s * n_f + 8 * (n_x + n_s)
                             + (n_x + 1) * (2 * n_f + 3) + n_x * n_f + 2 * n_s + 4 * n_f)
+        if isinstance(lam, str):  # the L-curve keeps the fine λ's trajectories (and joins them)
+            need += 8.0 * n_t * (n_x + 2 * n_f) * 2 * (n_lam + 1)
     check_memory(need, f"identifying the forces of a record of {record.time.size} samples")
 
 

@@ -257,6 +257,8 @@ def lcurve_search(model: MFIModel, d, weights, lam_range: tuple[float, float], *
             else:
                 break
             t_new = t_new[(t_new > t_min) & (t_new < t_max)]
+            if not t_new.size:
+                break
             fine.append(sweep(model, d, np.exp(t_new), weights, keep=True))
             grids.append(t_new)
             t, rho, eta, ok, lo, kappa, t_best = located()
