@@ -100,7 +100,7 @@ def test_constant_moving_forces_with_few_modes(n_modes):
 def test_long_beam_fast_crossing():
     """A 40 m beam crossed at 40 m/s sampled at 200 Hz (0.2 m per step), two forces 4 m
     apart, same-model data (algebra only).  Measured: +0.03 / −0.03 %; the zero-order hold
-    gave +8.9 / −7.9 %."""
+    gave +5.3 / −5.1 %."""
     beam = bwim.Bridge.beam(length=40.0, n_elements=40, E=3.5e10, I=1.39, mu=18358.0,
                             z_bottom=1.0)
     sensors = [bwim.Sensor(x=x) for x in (13.3, 26.7)]
