@@ -2,19 +2,22 @@
 
 Contract
 --------
-Minimise over the initial forces ``f_0`` (the bridge starts at rest, ``z_0 = 0``) and the
-unknowns ``r_0 … r_{N−2}``::
+Minimise over the initial forces ``f_0`` (the bridge starts at rest: ``X_0 = E f_0`` with
+``E`` = :attr:`~bwim.mfi.statespace.MFIModel.x0_map`) and the unknowns ``r_0 … r_{N−2}``
+(docs/theory.md §4; Dowling et al. (2012) eqs. (2) and (3))::
 
     J = Σ_k ‖W^{1/2} (d_k − Q_k X_k)‖² + λ Σ_k ‖r_k‖² [+ λ ‖f_0‖²],   X_{k+1} = H_k X_k + T r_k
 
 In first order ``f_0`` is free (only force *changes* are penalised); in zeroth order
 ``r_k = f_{k+1}`` and ``f_0`` is penalised like every other force value.
 
-* :func:`solve_dp` is Bellman's recursion (THEORY §4): cost-to-go
+* :func:`solve_dp` is Bellman's recursion (docs/theory.md §4): cost-to-go
   ``V_k(X) = Xᵀ R_k X + 2 s_kᵀ X + const`` backwards, then the optimal ``r_k = −K_k X_k −
   g_k`` forwards.  O(N) time and memory in the record length.  The gains do not depend on
   the data: :func:`dp_gains` computes them once and :func:`solve_with_gains` reuses them
   for further data vectors (GCV probes).
+* :func:`sweep` runs the same recursion for many λ at once (the L-curve), in O(N) time
+  and memory per λ, within the memory limit.
 * :func:`solve_batch` stacks the whole problem as one dense least-squares system; it is
   O(N³) and exists to check the recursion (they agree to round-off).
 * Everything is in the model's scaled units.
@@ -27,10 +30,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from bwim.errors import InputError
+from bwim.limits import check_memory, memory_limit
 from bwim.mfi.statespace import MFIModel
 
 __all__ = ["BLOCK_MIN_MODES", "DPGains", "Solution", "Sweep", "dp_gains", "solve_batch", "solve_dp",
-           "solve_with_gains", "sweep"]
+           "solve_with_gains", "sweep", "sweep_bytes"]
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -80,14 +84,15 @@ def dp_gains(model: MFIModel, lam: float, weights: np.ndarray) -> DPGains:
     QWQ = model.qwq(weights)
     Hs = model.H_all
     lam_eye = lam * np.eye(nf)
-    R = QWQ[N - 1]
+    R = QWQ[N - 1]  # docs/theory.md §4: R_N = QᵀWQ
     for k in range(N - 2, -1, -1):
-        H = Hs[k]
-        Gk = np.linalg.inv(lam_eye + R[nz:, nz:])
-        Kk = Gk @ (R[nz:] @ H)
+        H = Hs[k]  # Dowling et al. (2012) eq. (2): X_{k+1} = H_k X_k + T r_k
+        Gk = np.linalg.inv(lam_eye + R[nz:, nz:])  # docs/theory.md §4: G_k = (λI + TᵀRT)⁻¹
+        Kk = Gk @ (R[nz:] @ H)  # docs/theory.md §4: K_k = G_k Tᵀ R_{k+1} H_k
         Ak = A[k]
         Ak[:] = H
         Ak[nz:] -= Kk
+        # docs/theory.md §4: R_k = QᵀWQ + H_kᵀ R_{k+1} (H_k − T K_k), symmetrised
         R = H.T @ (R @ Ak)
         R += R.T
         R *= 0.5
@@ -96,7 +101,8 @@ def dp_gains(model: MFIModel, lam: float, weights: np.ndarray) -> DPGains:
     initial = lam if model.f_carry == 0.0 else 0.0  # zeroth order penalises f_0 too
     # pseudo-inverse: a force that never reaches the deck during the record is unobservable;
     # it gets the minimum-norm value 0, as in the batch least-squares solution
-    R0_ff_inv = np.linalg.pinv(R[nz:, nz:] + initial * np.eye(nf), rcond=1e-12, hermitian=True)
+    E = model.x0_map
+    R0_ff_inv = np.linalg.pinv(E.T @ R @ E + initial * np.eye(nf), rcond=1e-12, hermitian=True)
     return DPGains(K=K, G=G, A=A, R0_ff_inv=R0_ff_inv, lam=lam)
 
 
@@ -110,22 +116,24 @@ def solve_with_gains(model: MFIModel, gains: DPGains, d: np.ndarray,
     QWd = model.qwd(W, d)
     # data-dependent backward pass: s_k and g_k
     g = np.empty((N - 1, nf))
-    s = -QWd[N - 1]
+    s = -QWd[N - 1]  # docs/theory.md §4: s_N = −QᵀW d_N
     for k in range(N - 2, -1, -1):
-        g[k] = gains.G[k] @ s[nz:]
-        s = gains.A[k].T @ s - QWd[k]
+        g[k] = gains.G[k] @ s[nz:]  # docs/theory.md §4: g_k = G_k Tᵀ s_{k+1}
+        s = gains.A[k].T @ s - QWd[k]  # docs/theory.md §4: s_k = −QᵀWd_k + (H − TK)ᵀ s_{k+1}
     X = np.zeros((N, model.n_x))
-    X[0, nz:] = -gains.R0_ff_inv @ s[nz:]
+    E = model.x0_map
+    X[0] = E @ (-gains.R0_ff_inv @ (E.T @ s))
     r = np.empty((N - 1, nf))
     Hs = model.H_all
-    for k in range(N - 1):
-        r[k] = -gains.K[k] @ X[k] - g[k]
-        X[k + 1] = Hs[k] @ X[k]
+    for k in range(N - 1):  # docs/theory.md §4, forward pass
+        r[k] = -gains.K[k] @ X[k] - g[k]  # r_k = −K_k X_k − g_k
+        X[k + 1] = Hs[k] @ X[k]  # Dowling et al. (2012) eq. (2)
         X[k + 1, nz:] += r[k]
     return _finish(model, X, r, d, W)
 
 
 def _finish(model, X, r, d, W) -> Solution:
+    # Dowling et al. (2012) eq. (3): the readings ε_k = Q X_k
     fit = X[:, : model.n_z] @ model.Qz.T + np.einsum("ksf,kf->ks", model.D, X[:, model.n_z:])
     res = np.sqrt(np.sum(W * (d - fit) ** 2))
     return Solution(X=X, r=r, residual_norm=float(res), seminorm=float(np.linalg.norm(r)))
@@ -150,7 +158,7 @@ def solve_batch(
     N, nz, nf, nx = model.n_steps, model.n_z, model.n_f, model.n_x
     n_u = nf + (N - 1) * nf
     Mk = np.zeros((nx, n_u))
-    Mk[nz:, :nf] = np.eye(nf)
+    Mk[:, :nf] = model.x0_map
     rows, rhs = [], []
     sw = np.sqrt(W)[:, None]
     for k in range(N):
@@ -160,6 +168,7 @@ def solve_batch(
             Mk = model.H(k) @ Mk
             Mk[nz:, nf + k * nf: nf + (k + 1) * nf] += np.eye(nf)
     first = 0 if model.f_carry == 0.0 else nf  # zeroth order penalises f_0 too
+    # docs/theory.md §4 (Tikhonov functional): J = Σ ‖W^{1/2}(d_k − Q X_k)‖² + λ Σ ‖r_k‖²
     reg = np.zeros((n_u - first, n_u))
     reg[:, first:] = np.sqrt(lam) * np.eye(n_u - first)
     A = np.vstack([*rows, reg])
@@ -167,7 +176,7 @@ def solve_batch(
     u = np.linalg.lstsq(A, b, rcond=None)[0]
     r = u[nf:].reshape(N - 1, nf)
     X = np.zeros((N, nx))
-    X[0, nz:] = u[:nf]
+    X[0] = model.x0_map @ u[:nf]
     for k in range(N - 1):
         X[k + 1] = model.H(k) @ X[k]
         X[k + 1, nz:] += r[k]
@@ -175,11 +184,17 @@ def solve_batch(
 
 
 # --------------------------------------------------------------------------------------
-# All λ in one stacked pass (issue 15)
+# All λ in one stacked pass (issue 15), chunked by the memory limit (issue 23)
 # --------------------------------------------------------------------------------------
 
-#: Bytes of stored feedback (K, g and the trajectories) per chunk of λ in :func:`sweep`.
-SWEEP_CHUNK_BYTES = 48 * 2**20
+#: Share of the memory limit (:func:`bwim.limits.memory_limit`) that :func:`sweep` may
+#: hold; the λ are split into as few chunks as fit in it.
+SWEEP_MEMORY_SHARE = 0.5
+
+#: Steps between two symmetrisations of the stacked cost-to-go Hessians in :func:`sweep`
+#: (round-off leaves them a few ulp from symmetric per step; the closed-loop recursion
+#: does not amplify it).
+SYM_EVERY = 16
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -194,6 +209,8 @@ class Sweep:
     X : ndarray (n_lam, N, n_x) or None
         The trajectories when asked for (``keep=True``).
     r : ndarray (n_lam, N − 1, n_f) or None
+    forces : ndarray (n_lam, N, n_f) or None
+        The scaled forces, when asked for (``keep=True`` or ``keep_forces=True``).
     """
 
     lam: np.ndarray
@@ -201,13 +218,12 @@ class Sweep:
     seminorm: np.ndarray
     X: np.ndarray | None
     r: np.ndarray | None
+    forces: np.ndarray | None = None
 
 
 #: From this many modes the products with P go by its 2 × 2 blocks; below, one dense
-#: product costs less than the blocks' six element-wise operations (numpy's per-call
-#: overhead dominates small arrays).  Measured crossover (one BLAS thread, 1–2.5 s
-#: records): 20 modes 0.42 s dense against 0.59 s by blocks, 36 modes 2.9 against 3.1 s,
-#: 40 about equal, 45 modes 4.7 against 4.2 s.
+#: product costs less than the blocks' six element-wise operations on strided views
+#: (numpy's per-call and per-row overhead dominates these small arrays).
 BLOCK_MIN_MODES = 40
 
 
@@ -265,118 +281,143 @@ class _PBlocks:
 
 
 def _sweep_chunk(model: MFIModel, lams: np.ndarray, d: np.ndarray, W: np.ndarray,
-                 keep: bool, block_min_modes: int):
+                 keep: bool, keep_forces: bool, block_min_modes: int):
+    """One stacked pass for the λ in ``lams``.  The cost-to-go is carried in augmented
+    form, ``V_k(X) = [X; 1]ᵀ R̃_k [X; 1]`` with ``R̃ = [[R, s], [sᵀ, c]]``, so that the
+    Riccati step of docs/theory.md §4 updates ``R_k``, ``s_k`` and the constant together
+    and one solve gives both ``K_k`` and ``g_k`` (``K̃ = [K, g]``, ``r_k = −K̃ [X_k; 1]``)."""
     N, nz, nf, nx = model.n_steps, model.n_z, model.n_f, model.n_x
+    na = nx + 1
     L = lams.size
     c = model.f_carry
-    pb = _PBlocks(model.P, L * nx, block_min_modes)
-    gam = model.gamma
-    gamT = np.ascontiguousarray(gam.transpose(0, 2, 1))
+    pb = _PBlocks(model.P, L * na, block_min_modes)
     Qz = model.Qz
     WQz = W[:, None] * Qz
-    qzz = Qz.T @ WQz
-    cross = np.einsum("sz,ksf->kzf", WQz, model.D)  # (N, nz, nf)
-    crossT = np.ascontiguousarray(cross.transpose(0, 2, 1))
-    qff = np.einsum("ksf,s,ksg->kfg", model.D, W, model.D)
     QWd = model.qwd(W, d)
+    # Q̃_k = [[QᵀWQ, −QᵀWd], [−dᵀWQ, dᵀWd]]: its modal block is constant, the columns
+    # of [f; 1] change with the step
+    qcol = np.empty((N, na, nf + 1))
+    np.matmul(WQz.T, model.D, out=qcol[:, :nz, :nf])
+    np.matmul(np.swapaxes(model.D * W[:, None], 1, 2), model.D, out=qcol[:, nz:nx, :nf])
+    qcol[:, :nx, nf] = -QWd
+    qcol[:, nx, :nf] = -QWd[:, nz:]
+    qcol[:, nx, nf] = (d * d) @ W
+    Qt = np.zeros((na, na))
+    Qt[:nz, :nz] = Qz.T @ WQz
+    Hf = np.empty((N, nx, nf))  # the force columns of H_k: [Γ_k; c I]
+    Hf[:, :nz] = model.gamma
+    Hf[:, nz:] = c * np.eye(nf)
     lam_eye = lams[:, None, None] * np.eye(nf)
-    K = np.empty((N - 1, L, nf, nx))
-    g = np.empty((N - 1, L, nf))
-    R = np.empty((L, nx, nx))
-    R[:, :nz, :nz] = qzz
-    R[:, :nz, nz:] = cross[N - 1]
-    R[:, nz:, :nz] = crossT[N - 1]
-    R[:, nz:, nz:] = qff[N - 1]
-    s = np.broadcast_to(-QWd[N - 1], (L, nx)).copy()
-    RH = np.empty((L, nx, nx))
-    Rn = np.empty((L, nx, nx))
-    MK = np.empty((L, nx, nx))
-    sn = np.empty((L, nx))
+    K = np.empty((N - 1, L, nf, na))  # −K̃_k
+    R = np.empty((L, na, na))
+    Qt[:, nz:] = qcol[N - 1]
+    Qt[nz:, :] = qcol[N - 1].T
+    R[:] = Qt
+    RH = np.empty((L, na, na))
+    Rn = np.empty((L, na, na))
+    MK = np.empty((L, na, na))
+    S = np.empty((L, nf, nf))
     for k in range(N - 2, -1, -1):
-        # R H with H = [[P, Γ], [0, c I]]
+        # docs/theory.md §4 (Bellman): R̃ H̃_k with H̃ = [[P, Γ_k, 0], [0, c I, 0], [0, 0, 1]]
         pb.right(R[:, :, :nz], RH[:, :, :nz])
-        np.matmul(R[:, :, :nz], gam[k], out=RH[:, :, nz:])
-        if c:
-            RH[:, :, nz:] += R[:, :, nz:]
-        M = RH[:, nz:, :]  # Tᵀ R H
-        Gk = np.linalg.inv(lam_eye + R[:, nz:, nz:])
-        Kk = np.matmul(Gk, M, out=K[k])
-        sf = s[:, nz:]
-        np.matmul(Gk, sf[:, :, None], out=g[k][:, :, None])
-        # R_k = Hᵀ R H − Mᵀ G M + QᵀWQ, symmetrised
+        np.matmul(R[:, :, :nx], Hf[k], out=RH[:, :, nz:nx])
+        RH[:, :, nx] = R[:, :, nx]
+        M = RH[:, nz:nx, :]  # T̃ᵀ R̃ H̃
+        # G_k = (λ I + Tᵀ R T)⁻¹, [K_k, g_k] = G_k Tᵀ [R H, s]
+        np.add(R[:, nz:nx, nz:nx], lam_eye, out=S)
+        Kk = np.matmul(np.linalg.inv(S), M, out=K[k])
+        np.negative(Kk, out=Kk)
+        # R̃_k = Q̃_k + H̃ᵀ R̃ H̃ − M̃ᵀ G M̃
         pb.left_t(RH[:, :nz, :], Rn[:, :nz, :])
-        np.matmul(gamT[k], RH[:, :nz, :], out=Rn[:, nz:, :])
-        if c:
-            Rn[:, nz:, :] += M
+        np.matmul(Hf[k].T, RH[:, :nx, :], out=Rn[:, nz:nx, :])
+        Rn[:, nx, :] = RH[:, nx, :]
         np.matmul(np.swapaxes(M, 1, 2), Kk, out=MK)
-        Rn -= MK
-        np.add(Rn, np.swapaxes(Rn, 1, 2), out=R)
-        R *= 0.5
-        R[:, :nz, :nz] += qzz
-        R[:, :nz, nz:] += cross[k]
-        R[:, nz:, :nz] += crossT[k]
-        R[:, nz:, nz:] += qff[k]
-        # s_k = Aᵀ s − QᵀW d with A = H − T K
-        sz = s[:, :nz]
-        pb.right(sz, sn[:, :nz])
-        np.matmul(sz, gam[k], out=sn[:, nz:])
-        if c:
-            sn[:, nz:] += sf
-        sn -= (sf[:, None, :] @ Kk)[:, 0, :]
-        sn -= QWd[k]
-        s, sn = sn, s
-    initial = lams if c == 0.0 else np.zeros(L)  # zeroth order penalises f_0 too
-    R0_inv = np.linalg.pinv(R[:, nz:, nz:] + initial[:, None, None] * np.eye(nf),
+        Rn += MK
+        Qt[:, nz:] = qcol[k]
+        Qt[nz:, :] = qcol[k].T
+        if k % SYM_EVERY == 0:
+            np.add(Rn, np.swapaxes(Rn, 1, 2), out=R)
+            R *= 0.5
+            R += Qt
+        else:
+            np.add(Rn, Qt, out=R)
+    # the initial forces minimise V_0 over X_0 = E f_0 (zeroth order penalises f_0 too)
+    initial = lams if c == 0.0 else np.zeros(L)
+    E = model.x0_map
+    R0_inv = np.linalg.pinv(E.T @ R[:, :nx, :nx] @ E + initial[:, None, None] * np.eye(nf),
                             rcond=1e-12, hermitian=True)
-    X = np.empty((N, L, nx))
-    X[0, :, :nz] = 0.0
-    X[0, :, nz:] = -(R0_inv @ s[:, nz:, None])[:, :, 0]
+    X = np.empty((N, L, na))
+    X[:, :, nx] = 1.0
+    X[0, :, :nx] = -(R0_inv @ (R[:, :nx, nx] @ E)[:, :, None])[:, :, 0] @ E.T
     r = np.empty((N - 1, L, nf))
+    # docs/theory.md §4 forward pass: r_k = −K̃_k [X_k; 1] and Dowling et al. (2012)
+    # eq. (2), X_{k+1} = H_k X_k + T r_k
     for k in range(N - 1):
         xk = X[k]
         rk = r[k]
         np.matmul(K[k], xk[:, :, None], out=rk[:, :, None])
-        rk += g[k]
-        np.negative(rk, out=rk)
         nxt = X[k + 1]
         pb.right(xk[:, :nz], nxt[:, :nz], transpose=True)
-        nxt[:, :nz] += xk[:, nz:] @ gamT[k]
+        nxt[:, :nz] += xk[:, nz:nx] @ model.gamma[k].T
         if c:
-            np.add(xk[:, nz:], rk, out=nxt[:, nz:])
+            np.add(xk[:, nz:nx], rk, out=nxt[:, nz:nx])
         else:
-            nxt[:, nz:] = rk
-    fit = X[:, :, :nz] @ Qz.T + np.einsum("ksf,klf->kls", model.D, X[:, :, nz:])
-    res = np.sqrt(np.einsum("kls,s->l", (d[:, None, :] - fit) ** 2, W))
+            nxt[:, nz:nx] = rk
+    del K
+    res = np.empty(L)
+    for j in range(L):  # ρ = ‖W^{1/2}(d − Q X)‖ (Dowling et al. (2012) eq. (3)), per λ
+        fit = X[:, j, :nz] @ Qz.T
+        fit += np.matmul(model.D, X[:, j, nz:nx, None])[:, :, 0]
+        fit -= d
+        fit *= fit
+        res[j] = np.sqrt(fit.sum(axis=0) @ W)
     eta = np.sqrt(np.einsum("klf,klf->l", r, r))
-    if keep:
-        return res, eta, X.transpose(1, 0, 2).copy(), r.transpose(1, 0, 2).copy()
-    return res, eta, None, None
+    Xk = X[:, :, :nx].transpose(1, 0, 2).copy() if keep else None
+    rk = r.transpose(1, 0, 2).copy() if keep else None
+    fk = X[:, :, nz:nx].transpose(1, 0, 2).copy() if keep or keep_forces else None
+    return res, eta, Xk, rk, fk
+
+
+def sweep_bytes(model: MFIModel, n_lam: int, *, keep: bool = False,
+                keep_forces: bool = False) -> float:
+    """Bytes :func:`sweep` holds for ``n_lam`` λ in one chunk: the per-step model arrays
+    it builds once, and per λ the feedback gains, the trajectory, the seminorm's
+    increments and what is kept."""
+    N, nf, nx, ns = model.n_steps, model.n_f, model.n_x, model.n_s
+    fixed = N * ((nx + 1) * (nf + 1) + nx * nf + nx + 2 * ns)
+    per_lam = N * (nf * (nx + 1) + (nx + 1) + nf + (nx + nf if keep else 0)
+                   + (nf if keep or keep_forces else 0))
+    return 8.0 * (fixed + n_lam * per_lam)
 
 
 def sweep(model: MFIModel, d: np.ndarray, lams, weights: np.ndarray | None = None, *,
-          keep: bool = False, block_min_modes: int = BLOCK_MIN_MODES) -> Sweep:
+          keep: bool = False, keep_forces: bool = False,
+          block_min_modes: int = BLOCK_MIN_MODES) -> Sweep:
     """Solve for every λ in ``lams`` (scaled) in one stacked pass of the recursion.
 
-    The Riccati recursion, the data pass and the forward pass run once over the time axis
-    with the λ axis batched; products with the modal transition use its per-mode 2 × 2
-    blocks from ``block_min_modes`` modes (:data:`BLOCK_MIN_MODES`; dense below), and
-    ``Q_kᵀ W Q_k`` is assembled per step from its constant modal block and the small
-    static-correction blocks.  Memory is O(N n_λ n_f n_x), bounded by splitting
-    λ into chunks of :data:`SWEEP_CHUNK_BYTES`.  Same minimiser as :func:`solve_dp`
-    (they agree to round-off)."""
+    The Riccati recursion (in augmented form, with the data term), the forward pass and
+    the norms run once over the time axis with the λ axis batched; products with the
+    modal transition use its per-mode 2 × 2 blocks from ``block_min_modes`` modes
+    (:data:`BLOCK_MIN_MODES`; dense below).  Time and memory are O(N n_λ) in the record
+    length N; the λ are split into as few chunks as fit in :data:`SWEEP_MEMORY_SHARE` of
+    the memory limit (:func:`sweep_bytes`; one λ that does not fit raises
+    :class:`~bwim.errors.InputError`).  Same minimiser as :func:`solve_dp` (they agree to
+    round-off)."""
     d, W = _check(model, d, weights)
     lams = np.atleast_1d(np.asarray(lams, dtype=float))
     if lams.ndim != 1 or lams.size == 0 or not np.all(np.isfinite(lams)) or np.any(lams <= 0):
         raise InputError("lams must be a non-empty 1-D array of positive numbers")
-    per_lam = 8 * model.n_steps * (model.n_f * model.n_x + model.n_f
-                                   + (model.n_x + model.n_f if keep else 0)
-                                   + 2 * model.n_x + 2 * model.n_s)
-    step = max(1, int(SWEEP_CHUNK_BYTES // per_lam))
-    parts = [_sweep_chunk(model, lams[i:i + step], d, W, keep, block_min_modes)
+    opts = {"keep": keep, "keep_forces": keep_forces}
+    check_memory(sweep_bytes(model, 1, **opts),
+                 f"the force identification of a record of {model.n_steps} samples")
+    one = sweep_bytes(model, 1, **opts) - sweep_bytes(model, 0, **opts)
+    room = SWEEP_MEMORY_SHARE * memory_limit() - sweep_bytes(model, 0, **opts)
+    step = max(1, int(room // one))
+    parts = [_sweep_chunk(model, lams[i:i + step], d, W, keep, keep_forces, block_min_modes)
              for i in range(0, lams.size, step)]
-    return Sweep(
-        lam=lams.copy(), residual_norm=np.concatenate([p[0] for p in parts]),
-        seminorm=np.concatenate([p[1] for p in parts]),
-        X=np.concatenate([p[2] for p in parts]) if keep else None,
-        r=np.concatenate([p[3] for p in parts]) if keep else None,
-    )
+
+    def joined(i):
+        return np.concatenate([p[i] for p in parts]) if parts[0][i] is not None else None
+
+    return Sweep(lam=lams.copy(), residual_norm=joined(0), seminorm=joined(1), X=joined(2),
+                 r=joined(3), forces=joined(4))

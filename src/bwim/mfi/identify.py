@@ -5,7 +5,7 @@ Contract
 * Input: a bridge model (exact or calibrated), a :class:`~bwim.records.Record` with its
   sensors and the vehicle passage(s) (speed, lane, axle spacings, track width, delay).
 * The forces are identified by first-order Tikhonov regularisation solved by dynamic
-  programming (González, Rowley & OBrien 2008; THEORY §4) on ``n_modes`` modes with the
+  programming (González, Rowley & OBrien 2008; docs/theory.md §4) on ``n_modes`` modes with the
   static correction of the truncated modes, λ by the L-curve (default), GCV, or given
   (physical units: strain m/m, force rate N/s for first order, force N for zeroth).
 * The model order (``n_modes=None``) comes from the record: the modes up to the first
@@ -15,8 +15,8 @@ Contract
   below fs/4 (:func:`record_band`); the truncated modes enter through the static
   correction.  This holds with the L-curve λ (the default); with GCV or a given λ the
   order stays at :data:`DEFAULT_MAX_MODES` below fs/4, because GCV picks far too small a
-  λ on low-order models of records with per-channel noise (measured on the paper
-  crossing, 5 % noise: force RMS error 22 % at 5 modes against 3.3 % at 18).
+  λ on low-order models of records with per-channel noise (``benchmarks/mfi_accuracy.py``
+  compares the two rules).
 * Unknowns are per wheel or per axle (``unknowns="auto"``: wheels when the strain sensors
   sit at two or more transverse positions on a plate, else axles).  Axle force = sum of
   its wheels.  Static axle weight = mean identified axle force over the central
@@ -33,15 +33,15 @@ from bwim.errors import InputError, parse_enum
 from bwim.fe.bridge import Bridge
 from bwim.fe.modal import select_modes
 from bwim.limits import check_memory
-from bwim.mfi.dp import SWEEP_CHUNK_BYTES, Solution, sweep
-from bwim.mfi.lcurve import LCurve, gcv, lcurve_search
+from bwim.mfi.dp import Solution, sweep
+from bwim.mfi.lcurve import CoarseProblem, LCurve, gcv, lcurve_search
 from bwim.mfi.statespace import ForceUnknowns, MFIModel, Order, build_model, force_layout
 from bwim.plausibility import Limits, ordered_flags, quality_of, weight_flags
 from bwim.records import Passage, Record
 from bwim.summary import SummaryRow
 
-__all__ = ["BAND_FACTOR", "DEFAULT_MAX_MODES", "MAX_RESIDUAL", "ForceIdentification",
-           "identify_forces", "record_band"]
+__all__ = ["BAND_FACTOR", "COARSE_RATE", "DEFAULT_MAX_MODES", "MAX_RESIDUAL",
+           "SMALL_MODEL_MODES", "ForceIdentification", "identify_forces", "record_band"]
 
 #: Relative residual of the identified forces' readings above which a vehicle's weights
 #: are ``residual_high``: MFI reproduces a crossing of the model's own bridge to the noise
@@ -58,6 +58,15 @@ BAND_FACTOR = 2.0
 
 #: Welch segment length (samples) of :func:`record_band`: about 8 Hz bins at 1 kHz.
 BAND_SEGMENT = 128
+
+#: Models with at most this many modes solve the L-curve's fine grid over twice the
+#: window (two coarse spacings either side, the same spacing): their λ cost little
+#: beside one pass of the recursion, and a wider window spares extending it.
+SMALL_MODEL_MODES = 4
+
+#: The L-curve's bracketing pass runs on every m-th sample, at least this rate (Hz),
+#: when that divides the sampling rate by two or more (:func:`_coarse_problem`).
+COARSE_RATE = 250.0
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -212,8 +221,12 @@ def identify_forces(
         Include the truncated modes' static response in the readings model.
     lam_range, n_lam
         Scaled λ range of the L-curve (and the GCV search interval), and the number of λ
-        solved for the L-curve: half on a coarse log grid over the range, half within one
-        coarse spacing of its corner (:func:`bwim.mfi.lcurve.lcurve_search`).
+        of the L-curve search (:func:`bwim.mfi.lcurve.lcurve_search`): half on a coarse
+        log grid over the range (on every m-th sample, about :data:`COARSE_RATE`, when
+        the record is sampled at least twice as fast), half within one coarse spacing of
+        its corner on the record's model (more when the corner sits at an end of that
+        grid, and twice as many over twice the width for models of at most
+        :data:`SMALL_MODEL_MODES` modes).
     central : float
         Fraction of each axle's time on the deck used for its static weight.
     """
@@ -259,21 +272,24 @@ def identify_forces(
     W = np.ones(model.n_s) if w is None else w
     curve = None
     windows = _central_windows(record.passages, bridge.length, central)
+    sol = None
     if isinstance(lam, str):
         if lam == "lcurve":
             n_coarse = max(4, n_lam // 2)
-            weighed = np.stack([(record.time >= windows[a, 0]) & (record.time <= windows[a, 1])
-                                for a in axles], axis=1)  # (n_t, n_f)
-
-            def compressive(X: np.ndarray) -> np.ndarray:
-                """Per λ: every force positive where its axle is weighed."""
-                return np.all((X[:, :, model.n_z:] > 0) | ~weighed[None], axis=(1, 2))
-
             # first order only: its λ → ∞ limit is constant forces (the static weights),
             # zeroth order's is zero force, which no sign test can tell from a good answer
-            curve = lcurve_search(model, d_scaled, W, lam_range, n_coarse=n_coarse,
-                                  n_fine=max(n_lam - n_coarse, 0),
-                                  admissible=compressive if order is Order.FIRST else None)
+            weighed = _weighed(record.time, windows, axles) if order is Order.FIRST else None
+            coarse = _coarse_problem(bridge, record, modes, d_scale, W, weighed,
+                                     unknowns=unknowns, order=order,
+                                     static_correction=static_correction)
+            n_fine = max(n_lam - n_coarse, 0)
+            # a small model's λ cost little beside a pass: twice the window, same spacing
+            window = 2 if modes.n <= SMALL_MODEL_MODES and coarse is not None else 1
+            search = lcurve_search(model, d_scaled, W, lam_range, n_coarse=n_coarse,
+                                   n_fine=window * n_fine + window - 1,
+                                   admissible=_compressive(weighed),
+                                   coarse=coarse if n_fine >= 4 else None, window=window)
+            curve, sol = search.curve, search.solution
             lam_s = curve.corner_scaled
         elif lam == "gcv":
             lam_s = gcv(model, d_scaled, W, lam_range)
@@ -283,11 +299,50 @@ def identify_forces(
         if not np.isfinite(lam) or lam <= 0:
             raise InputError(f"lam must be positive, got {lam!r}")
         lam_s = model.lam_scaled(float(lam))
-    best = sweep(model, d_scaled, [lam_s], W, keep=True)
-    sol = Solution(X=best.X[0], r=best.r[0], residual_norm=float(best.residual_norm[0]),
-                   seminorm=float(best.seminorm[0]))
+    if sol is None:
+        best = sweep(model, d_scaled, [lam_s], W, keep=True)
+        sol = Solution(X=best.X[0], r=best.r[0], residual_norm=float(best.residual_norm[0]),
+                       seminorm=float(best.seminorm[0]))
     ident = _result(model, sol, record, unknowns, order, lam_s, curve, windows)
     return replace(ident, n_modes=modes.n)
+
+
+def _weighed(time: np.ndarray, windows: np.ndarray, axles: np.ndarray) -> np.ndarray:
+    """Whether each force's axle is weighed at each time, shape (n_t, n_f)."""
+    return np.stack([(time >= windows[a, 0]) & (time <= windows[a, 1]) for a in axles],
+                    axis=1)
+
+
+def _compressive(weighed: np.ndarray | None):
+    """The L-curve's admissibility test: per λ, every force positive where its axle is
+    weighed (``forces``: scaled, (n_λ, n_t, n_f)); None without ``weighed``."""
+    if weighed is None:
+        return None
+
+    def admissible(forces: np.ndarray) -> np.ndarray:
+        return np.all((forces > 0) | ~weighed[None], axis=(1, 2))
+
+    return admissible
+
+
+def _coarse_problem(bridge: Bridge, record: Record, modes, d_scale: float, W: np.ndarray,
+                    weighed: np.ndarray | None, **build) -> CoarseProblem | None:
+    """Every ``m``-th sample of the record, ``m`` the largest integer with ``fs / m`` ≥
+    :data:`COARSE_RATE`, on the modes below a quarter of that rate (at most those of the
+    record's model), for the L-curve's bracketing pass; None when ``m < 2``.  The samples
+    are taken as they are (no anti-alias filter): the gauge noise keeps its level per
+    sample, which is what places the corner."""
+    fs = record.sampling_rate
+    m = int(np.floor(fs / COARSE_RATE * (1 + 1e-9)))
+    if m < 2 or record.time.size < 64 * m:
+        return None
+    below = int(np.searchsorted(modes.frequencies, fs / m / 4, side="right"))
+    data = record.data[::m]
+    rec = Record(time=record.time[::m], data=data, sensors=record.sensors,
+                 passages=record.passages)
+    model = build_model(bridge, bridge.modes(max(below, 1)), rec, d_scale, **build)
+    return CoarseProblem(model=model, d=data / d_scale, weights=W,
+                         admissible=_compressive(None if weighed is None else weighed[::m]))
 
 
 def _central_windows(passages, length: float, central: float) -> np.ndarray:
@@ -373,9 +428,11 @@ def _check_arguments(bridge, record, n_modes, lam, weights, lam_range, n_lam, ce
     n_t = float(record.time.size)
     if isinstance(lam, str) and lam == "gcv":  # GCV keeps the Riccati gains of every step
         need = n_t * n_x * n_x * 8.0 * 3
-    else:  # the stacked sweep: model arrays + feedback of one λ chunk (issue 15)
-        need = 8.0 * n_t * (3 * n_x * n_f + 2 * n_s * n_f + 8 * (n_x + n_s)) \
-            + SWEEP_CHUNK_BYTES
+    else:  # the model arrays, and the stacked sweep of one λ with its trajectory kept
+        need = 8.0 * n_t * (3 * n_x * n_f + 2 * n_s * n_f + 8 * (n_x + n_s)
+                            + (n_x + 1) * (2 * n_f + 3) + n_x * n_f + 2 * n_s + 4 * n_f)
+        if isinstance(lam, str):  # the L-curve keeps the fine λ's trajectories (and joins them)
+            need += 8.0 * n_t * (n_x + 2 * n_f) * 2 * (n_lam + 1)
     check_memory(need, f"identifying the forces of a record of {record.time.size} samples")
 
 

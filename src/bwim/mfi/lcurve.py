@@ -4,21 +4,31 @@ Contract
 --------
 * :func:`lcurve` solves on a log grid of λ and returns the residual norms ρ(λ) and the
   seminorms η(λ) (scaled units); all λ of the grid go through one stacked pass of the
-  recursion (:func:`bwim.mfi.dp.sweep`).  :func:`lcurve_search` is coarse-to-fine: a coarse
-  grid over the whole range, then a fine grid within one coarse spacing of its corner,
-  the corner being located again on the union of both grids.  The corner is the maximum curvature of
-  ``(log ρ, log η)`` parametrised by ``log λ`` (Hansen 1992; the paper uses Busby &
-  Trujillo's definition, the same curvature), found on a cubic-spline interpolant of the
-  two curves so that it is not tied to the grid.
+  recursion (:func:`bwim.mfi.dp.sweep`).
+* The corner is the maximum curvature of ``(log ρ, log η)`` parametrised by ``log λ``
+  (Hansen 1992; the paper uses Busby & Trujillo's definition, the same curvature; see
+  docs/theory.md §4, L-curve), found on a cubic-spline interpolant of the two curves so
+  that it is not tied to the grid.
+* :func:`lcurve_search` finds it coarse-to-fine in two stacked passes: a coarse log grid
+  over the whole range brackets the corner, then a fine grid within one (or ``window``)
+  coarse spacing either side of it is solved on the record's model with the
+  trajectories kept, and the answer is the fine λ nearest to the corner located on the
+  fine grid: its trajectory is the identification, so no λ is solved twice.  The coarse
+  pass may run on a cheaper model of the same record (:class:`CoarseProblem`: every m-th
+  sample, on fewer modes, λ carried over in physical units), whose corner is then only
+  an estimate: while the corner sits at an end of the fine grid, or the curvature there
+  is above the interior's, the grid is extended there (at most :data:`MAX_EXTENSIONS`
+  times).  Without a coarse problem the corner is located on the union of both grids.
+  The chosen λ lies within half a fine spacing of the located corner.
 * Admissible λ (``admissible=``, given by :func:`~bwim.mfi.identify_forces` for first
   order, whose λ → ∞ limit is constant forces: the static weights): tyre forces are
   compressive, so a λ whose identified forces turn tensile where the forces are weighed
   is not a candidate.  The corner is sought on the λ at and above the
   smallest λ from which every grid λ is admissible (the whole grid when all are; its
   largest λ when none is).  Without it, a nearly flat L-curve (the response below the
-  gauge noise at every frequency but the quasi-static) puts the maximum curvature on a
-  spurious kink at the small-λ end: measured force RMS errors of 80–250 % and weights off
-  by up to 24 % at 5 % gauge noise (``benchmarks/mfi_accuracy.py``, λ rules).
+  gauge noise at every frequency but the quasi-static) can put the maximum curvature on
+  a spurious kink at the small-λ end, where the forces are wild and tensile
+  (``benchmarks/mfi_accuracy.py``, λ rules, measures both rules).
 * :func:`gcv` minimises ``G(λ) = n ‖ỹ − ŷ‖² / (n − tr A_λ)²`` with the trace of the
   influence matrix estimated by Hutchinson's method (Rademacher probes with a fixed seed);
   each probe reuses the λ's DP gains.
@@ -32,10 +42,10 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 from scipy.optimize import minimize_scalar
 
-from bwim.mfi.dp import dp_gains, solve_with_gains, sweep
+from bwim.mfi.dp import Solution, dp_gains, solve_with_gains, sweep
 from bwim.mfi.statespace import MFIModel
 
-__all__ = ["LCurve", "gcv", "lcurve", "lcurve_search"]
+__all__ = ["CoarseProblem", "CornerSearch", "LCurve", "gcv", "lcurve", "lcurve_search"]
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -127,41 +137,147 @@ def lcurve(model: MFIModel, d, weights, lam_grid_scaled: np.ndarray) -> LCurve:
     return _curve(model, lam_grid_scaled, rho, eta, kappa, t_best)
 
 
+#: At most this many extensions of the fine grid when the corner sits at one of its ends
+#: (:func:`lcurve_search` with a coarse problem).
+MAX_EXTENSIONS = 4
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class CoarseProblem:
+    """A cheaper model of the same record on which :func:`lcurve_search` brackets the
+    corner (e.g. every m-th sample, on the modes that rate allows).
+
+    Attributes
+    ----------
+    model : MFIModel
+    d : ndarray (N_c, n_s)
+        Its scaled data.
+    weights : ndarray (n_s,)
+    admissible : callable or None
+        ``admissible(forces) -> bool per λ`` on its scaled forces (n_λ, N_c, n_f).
+    """
+
+    model: MFIModel
+    d: np.ndarray
+    weights: np.ndarray
+    admissible: object = None
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class CornerSearch:
+    """The L-curve of :func:`lcurve_search` and the solution at its corner.
+
+    Attributes
+    ----------
+    curve : LCurve
+        The λ solved on the record's model, their norms and the corner.
+    solution : Solution
+        The trajectory at ``curve.corner_scaled`` (scaled units).
+    """
+
+    curve: LCurve
+    solution: Solution
+
+
+def _solution(sw, i: int) -> Solution:
+    return Solution(X=sw.X[i], r=sw.r[i], residual_norm=float(sw.residual_norm[i]),
+                    seminorm=float(sw.seminorm[i]))
+
+
+def _fine_grid(t0: float, half: float, t_min: float, t_max: float, n: int) -> np.ndarray:
+    """``n`` log λ strictly inside ``half`` either side of ``t0`` (clipped to the range)."""
+    lo, hi = max(t0 - half, t_min), min(t0 + half, t_max)
+    return np.linspace(lo, hi, n + 2)[1:-1]
+
+
 def lcurve_search(model: MFIModel, d, weights, lam_range: tuple[float, float], *,
-                  n_coarse: int = 8, n_fine: int = 8, admissible=None) -> LCurve:
-    """Coarse-to-fine L-curve: ``n_coarse`` log-spaced λ over ``lam_range`` (scaled),
-    then ``n_fine`` more strictly within one coarse spacing either side of the coarse
-    corner; the corner is located on the union of both grids.  ``admissible(X) -> bool
-    per λ`` (X: the sweep's trajectories, (n_λ, N, n_x)) restricts the corner (module
-    docstring)."""
-    keep = admissible is not None
-    coarse = np.geomspace(lam_range[0], lam_range[1], n_coarse)
-    first = sweep(model, d, coarse, weights, keep=keep)
-    t_c = np.log(coarse)
-    ok_c = admissible(first.X) if keep else None
-    _, t0 = _corner(t_c, first.residual_norm, first.seminorm,
-                    _lowest_admissible(t_c, ok_c))
+                  n_coarse: int = 8, n_fine: int = 8, admissible=None,
+                  coarse: CoarseProblem | None = None, window: int = 1) -> CornerSearch:
+    """Coarse-to-fine L-curve in two stacked passes (module docstring).
+
+    ``n_coarse`` log-spaced λ over ``lam_range`` (scaled) bracket the corner, on
+    ``coarse`` when given (λ carried over in physical units) or on ``model``; then
+    ``n_fine`` λ strictly within ``window`` coarse spacings either side of that corner are
+    solved on ``model`` with their trajectories kept.  The corner is located on the fine grid
+    (with ``coarse``) or on the union of both grids, and the chosen λ is the fine λ
+    nearest to it: its trajectory is the answer, no further solve.  ``admissible(forces)
+    -> bool per λ`` (scaled forces, (n_λ, N, n_f)) restricts the corner."""
+    keep_f = admissible is not None
+    t_min, t_max = np.log(lam_range[0]), np.log(lam_range[1])
+    t_c = np.linspace(t_min, t_max, n_coarse)
+    if coarse is None:
+        first = sweep(model, d, np.exp(t_c), weights, keep_forces=keep_f)
+        ok_c = admissible(first.forces) if keep_f else None
+    else:
+        lam_c = [coarse.model.lam_scaled(model.lam_physical(v)) for v in np.exp(t_c)]
+        c_ok = coarse.admissible
+        first = sweep(coarse.model, coarse.d, lam_c, coarse.weights,
+                      keep_forces=c_ok is not None)
+        ok_c = c_ok(first.forces) if c_ok is not None else None
+    _, t0 = _corner(t_c, first.residual_norm, first.seminorm, _lowest_admissible(t_c, ok_c))
     step = t_c[1] - t_c[0]
-    lo, hi = max(t0 - step, t_c[0]), min(t0 + step, t_c[-1])
-    t_f = np.linspace(lo, hi, n_fine + 2)[1:-1]
-    h = (hi - lo) / (n_fine + 1)
-    if n_fine and np.min(np.abs(t_f[:, None] - t_c[None, :])) < 1e-3 * h:
-        t_f += 0.25 * h  # keep clear of the coarse nodes (the spline needs distinct points)
-    rho_f = eta_f = np.empty(0)
-    ok_f = np.empty(0, dtype=bool)
-    if t_f.size:
-        second = sweep(model, d, np.exp(t_f), weights, keep=keep)
-        rho_f, eta_f = second.residual_norm, second.seminorm
-        if keep:
-            ok_f = admissible(second.X)
-    t = np.concatenate([t_c, t_f])
-    order = np.argsort(t)
-    t = t[order]
-    rho = np.concatenate([first.residual_norm, rho_f])[order]
-    eta = np.concatenate([first.seminorm, eta_f])[order]
-    ok = np.concatenate([ok_c, ok_f])[order] if keep else None
-    kappa, t_best = _corner(t, rho, eta, _lowest_admissible(t, ok))
-    return _curve(model, np.exp(t), rho, eta, kappa, t_best, ok)
+    t_f = _fine_grid(t0, window * step, t_min, t_max, n_fine)
+    h = t_f[1] - t_f[0] if t_f.size > 1 else step
+    if coarse is None and np.min(np.abs(t_f[:, None] - t_c[None, :])) < 1e-3 * h:
+        t_f = t_f + 0.25 * h  # keep clear of the coarse nodes (the spline needs distinct points)
+    fine = [sweep(model, d, np.exp(t_f), weights, keep=True)]
+    grids = [t_f]
+
+    def located():
+        t = np.concatenate(grids if coarse is not None else [t_c, *grids])
+        parts = ([] if coarse is not None else [first]) + fine
+        rho = np.concatenate([p.residual_norm for p in parts])
+        eta = np.concatenate([p.seminorm for p in parts])
+        ok = (np.concatenate(([] if coarse is not None else [ok_c])
+                             + [admissible(p.forces) for p in fine]) if keep_f else None)
+        o = np.argsort(t)
+        t, rho, eta = t[o], rho[o], eta[o]
+        ok = ok[o] if keep_f else None
+        lo = _lowest_admissible(t, ok)
+        kappa, t_best = _corner(t, rho, eta, lo)
+        return t, rho, eta, ok, lo, kappa, t_best
+
+    t, rho, eta, ok, lo, kappa, t_best = located()
+    if coarse is not None:
+        # the coarse model's corner is an estimate: while the corner sits at an end of the
+        # fine grid, extend the grid there by half as many λ at the same spacing
+        n_ext = max(2, n_fine // 2)
+        for _ in range(MAX_EXTENSIONS):
+            # an end is open when the corner sits next to it or the curvature there is
+            # above the interior's (the corner lies beyond it)
+            inner = kappa[1:-1][t[1:-1] >= (lo if lo is not None else -np.inf) - 1e-12]
+            top = inner.max() if inner.size else -np.inf
+            low_open = (t_best <= t[1] + 1e-9 * h or kappa[0] > top) and \
+                (lo is None or lo <= t[0]) and t[0] - h > t_min
+            high_open = (t_best >= t[-2] - 1e-9 * h or kappa[-1] > top) and t[-1] + h < t_max
+            if low_open:
+                t_new = t[0] - h * np.arange(1, n_ext + 1)
+            elif high_open:
+                t_new = t[-1] + h * np.arange(1, n_ext + 1)
+            else:
+                break
+            t_new = t_new[(t_new > t_min) & (t_new < t_max)]
+            if not t_new.size:
+                break
+            fine.append(sweep(model, d, np.exp(t_new), weights, keep=True))
+            grids.append(t_new)
+            t, rho, eta, ok, lo, kappa, t_best = located()
+    # the answer: the solved fine λ nearest to the corner (among the admissible ones)
+    nodes = np.concatenate(grids)
+    which = np.concatenate([np.full(g.size, i) for i, g in enumerate(grids)])
+    index = np.concatenate([np.arange(g.size) for g in grids])
+    cand = nodes >= (lo if lo is not None else -np.inf) - 1e-12
+    if not cand.any():
+        cand[:] = True
+    dist = np.where(cand, np.abs(nodes - t_best), np.inf)
+    j = int(np.argmin(dist))
+    if dist[j] <= 0.5 * h * (1 + 1e-9):
+        t_best = float(nodes[j])
+        sol = _solution(fine[which[j]], index[j])
+    else:  # the corner lies outside the fine grid: solve at it
+        sol = _solution(sweep(model, d, [np.exp(t_best)], weights, keep=True), 0)
+    curve = _curve(model, np.exp(t), rho, eta, kappa, t_best, ok)
+    return CornerSearch(curve=curve, solution=sol)
 
 
 def gcv(model: MFIModel, d, weights, bounds_scaled: tuple[float, float], *, probes: int = 8,

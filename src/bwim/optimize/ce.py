@@ -3,7 +3,7 @@
 Contract
 --------
 * :class:`CrossEntropy` minimises an objective over ℝⁿ through an ask/tell interface over
-  whole populations (THEORY.md §6; Dowling, OBrien & González 2012, §4).  The sampling
+  whole populations (docs/theory.md §6; Dowling, OBrien & González 2012, §4).  The sampling
   distribution is independent normals N(m_i, σ_i²); each iteration draws ``population``
   trials, the caller evaluates them, and the mean and standard deviation of each
   parameter's elite trials become the next m_i, σ_i (optionally smoothed with the old
@@ -327,6 +327,7 @@ class CrossEntropy:
                 i = int(np.flatnonzero(m == 0)[0])
                 raise InputError("std must be given when mean has zero entries (the default "
                                  f"0.3·|mean| would be 0 at index {i})")
+            # docs/theory.md §6 step 1; Dowling et al. (2012) §4: σ = 0.3 × mean
             s = 0.3 * np.abs(m)
         else:
             s = _vector("std", std, n)
@@ -334,7 +335,8 @@ class CrossEntropy:
                 raise InputError(f"std must be finite and > 0, got {_show(std)}")
         self._population = check_int("population", population, 2)
         self._rho = _unit_weight("elite_fraction", elite_fraction)
-        # ⌈ρk⌉, forgiving the rounding of ρ (0.05·200 is 10.000000000000002 in binary)
+        # docs/theory.md §6 step 4: the elite set is the ⌈ρk⌉ best trials (Dowling et al.
+        # (2012) §4: ρ = 0.05), forgiving the rounding of ρ (0.05·200 is 10.000000000000002)
         self._n_elite = max(1, math.ceil(self._rho * self._population * (1.0 - 1e-12)))
         if bounds is None:
             lo, hi = np.full(n, -np.inf), np.full(n, np.inf)
@@ -483,6 +485,7 @@ class CrossEntropy:
             Trials, each inside the bounds.
         """
         self._check_running("ask")
+        # docs/theory.md §6 step 2: k trials from N(m_i, σ_i²), kept inside the bounds
         return _sample_truncated(self._rng, self._mean, self._std, self._lo, self._hi,
                                  self._population)
 
@@ -516,18 +519,21 @@ class CrossEntropy:
         if finite.any():
             i = int(np.argmin(np.where(finite, totals, np.inf)))
             best = float(totals[i])
-            if best < self._best_fun:
+            if best < self._best_fun:  # docs/theory.md §6 step 6: best trial of the run
                 self._best_fun = best
                 self._best_x = X[i].copy()
                 self._best_parts = None if self._neighbours is None else values[i].copy()
 
-        if self._neighbours is None:
+        if self._neighbours is None:  # docs/theory.md §6 step 4: one elite set for all
             mask = np.broadcast_to(elite_mask(totals, self._n_elite), (self.n_params, k))
         else:
+            # docs/theory.md §6, sub-structured CE; Dowling et al. (2012) §4.1 (Figure 3):
+            # each parameter's elite set is the union of its neighbouring parts' elites
             mask = parameter_elite_masks(values, self._neighbours, self._n_elite)
         m_el, s_el, count = masked_mean_std(X, mask)
         have = count > 0
         self._elite_std = np.where(have, s_el, self._elite_std)
+        # docs/theory.md §6 step 5: elite mean and standard deviation (optionally smoothed)
         new_m = self._alpha * m_el + (1.0 - self._alpha) * self._mean
         new_s = self._beta * s_el + (1.0 - self._beta) * self._std
         # a convex combination of points inside the bounds is inside; clip against rounding
@@ -537,6 +543,8 @@ class CrossEntropy:
         converged = False
         if math.isfinite(best):
             prev = self._previous
+            # docs/theory.md §6 step 7; Dowling et al. (2012) §4: the best objective changed
+            # by less than the tolerance (2.5 %) since the previous iteration
             if prev is not None and abs(best - prev) <= self._tol * abs(prev) + self._atol:
                 converged = True
                 self._conv_iters.append(self._nit)
@@ -555,6 +563,8 @@ class CrossEntropy:
         self._stop = self._stop_reasons()
 
     def _inject(self) -> None:
+        # docs/theory.md §6 step 7; Dowling et al. (2012) §4 (Botev & Kroese): variance
+        # injection after the j-th convergence, σ_i = c_j |m_i| with c_j decreasing from 0.3
         j = min(len(self._conv_iters), len(self._injection)) - 1
         if self._injection_scale is None:
             scale = np.maximum(np.abs(self._mean), self._std0)
