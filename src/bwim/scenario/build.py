@@ -512,7 +512,7 @@ def load_record(
         return _with_run_settings(read_record(p), scenario)
     if scenario is not None and scenario.logger is not None:
         # a logger's export, any extension: the [logger] section says how it is laid out
-        sensors = [s for s in build_sensors(scenario) if s.x is not None]
+        sensors = build_sensors(scenario)  # their y (and x) travel with the readings
         return _with_run_settings(
             read_logger(p, build_logger_format(scenario), sensors=sensors or None), scenario)
     if suffix not in _CSV_SUFFIXES:

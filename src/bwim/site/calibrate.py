@@ -17,7 +17,10 @@ Contract
      and spacings are the truck's (within :data:`SPACING_TOLERANCE`) and no other
      vehicle is on the span at the same time in any lane (then it is rejected with that
      reason: "another vehicle on the bridge: lane 3, −x, 5 axles"); a used run keeps its
-     detected speed, arrival and lateral position with the truck's spacings.
+     detected speed, arrival and lateral position with the truck's spacings.  The span
+     is the lines' support, so this takes two passes: first the runs with no other
+     vehicle in the record at all give provisional lines, then every run is judged with
+     their support.
   4. **Lines** of every gauge from the used runs stacked (:func:`bwim.wim.calibrate_lines`:
      per-run scale factors, their trend, outlier runs rejected with a reason).
   5. **Drift**: the runs' factors over the time of day
@@ -160,9 +163,18 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
         return _strain_only(records, setup, int(strain_passes))
     notes: list[str] = []
     responses = _responses(records, setup, notes)
+    # pass 1, the span unknown: runs with no other vehicle anywhere in the record
     events = [detect_lanes(rec, setup, responses=responses, gauges=gauge_names(rec))
               for rec in records]
-    reasons, passages, kept = _truck_runs(events, setup)
+    reasons, passages, kept = _truck_runs(events, setup, strict=True)
+    if len(kept) >= 2:
+        span = _site_calibration(records, setup, [Detection()] * len(records), reasons,
+                                 passages, kept).lines.support
+        # pass 2: with the lines' support, another vehicle counts when it is on the span
+        # at the same time as the truck
+        events = [detect_lanes(rec, setup, responses=responses, span=span,
+                               gauges=gauge_names(rec)) for rec in records]
+        reasons, passages, kept = _truck_runs(events, setup)
     cal = _site_calibration(records, setup,
                             [e.by_lane.get(setup.calibration_lane, Detection()) for e in events],
                             reasons, passages, kept)
@@ -221,14 +233,15 @@ def _transferred(learned: LearnedResponses, channels: tuple[str, str], distance:
         for ch, r, pol, n in zip(channels, learned.responses, polarity, noise, strict=True))
     gain = np.array(size) / max(size[0], 1e-300)
     amps = np.column_stack([np.ones(1), np.full(1, gain[1])])
-    return LearnedResponses(responses=resp, distance=distance, load_unit=learned.load_unit,
+    return LearnedResponses(responses=resp, distance=distance,
                             amplitudes=amps, speeds=np.zeros(0), first_axle_times=np.zeros(0),
                             residuals=np.zeros(0), reasons=(), distance_offset=0.0, nit=0)
 
 
 # --- 3. runs -------------------------------------------------------------------------------
-def _run_reason(ev: EventDetection, setup: SiteSetup) -> str:
-    """Why a calibration run's detection cannot be used ("" if it can)."""
+def _run_reason(ev: EventDetection, setup: SiteSetup, strict: bool = False) -> str:
+    """Why a calibration run's detection cannot be used ("" if it can); ``strict``: any
+    other vehicle in the record is one too many (the span is not known yet)."""
     lane = setup.calibration_lane or 1
     own = [v for v in ev.vehicles if v.pair == lane and v.lane == lane]
     others = [v for v in ev.vehicles if v not in own]
@@ -239,8 +252,9 @@ def _run_reason(ev: EventDetection, setup: SiteSetup) -> str:
     if len(own) > 1:
         return f"{len(own)} vehicles detected in lane {lane}, not one calibration truck"
     truck = own[0]
-    busy = [w for w in others if w.window is not None and truck.window is not None
-            and w.window[0] < truck.window[1] and truck.window[0] < w.window[1]]
+    busy = others if strict else [
+        w for w in others if w.window is not None and truck.window is not None
+        and w.window[0] < truck.window[1] and truck.window[0] < w.window[1]]
     if busy:
         shown = ", ".join(f"lane {w.lane}, {w.direction}, {w.vehicle.n_axles} axles"
                           for w in busy)
@@ -256,13 +270,13 @@ def _run_reason(ev: EventDetection, setup: SiteSetup) -> str:
     return ""
 
 
-def _truck_runs(events: Sequence[EventDetection], setup: SiteSetup):
+def _truck_runs(events: Sequence[EventDetection], setup: SiteSetup, strict: bool = False):
     """Reasons and passages of the runs: the truck's layout is known exactly, so a usable
     run keeps its detected speed, arrival and lateral position with the truck's
     spacings."""
     reasons, passages, kept = [], [], []
     for k, ev in enumerate(events):
-        reason = _run_reason(ev, setup)
+        reason = _run_reason(ev, setup, strict)
         reasons.append(reason)
         if not reason:
             v = next(w for w in ev.vehicles if w.pair == (setup.calibration_lane or 1)).vehicle

@@ -12,12 +12,15 @@ Contract
   mirrored frame ``x' = −x`` (axle i at ``x' = v (t − delay) − a_i``, the first detector
   at ``x' = −position``), where the span is ``(−x_end, −x_start)``; their windows on the
   span are clock times, comparable across lanes.
-* A lane pair's detectors also feel vehicles of other lanes, weakly: a vehicle that two
-  pairs both report (its windows on the span overlap and the pairs' directions agree) is
-  kept once, from the pair of its own lane (the one whose ``y`` is nearer the vehicle's
-  lateral position in metres, else the one that saw it with the higher confidence).  A
-  vehicle whose lateral position (m) lies nearer another lane of its direction
-  (``SiteSetup.lane_of``) is given that lane's number.
+* A lane pair's detectors also feel vehicles of other lanes, weakly: a single axle found
+  by a pair other than the calibration lane's, or a vehicle whose lateral position (m)
+  lies clearly in a lane of the other direction (beyond three quarters of the way from
+  the pair's ``y`` to that lane's centre), is a trace of a vehicle the other way and is
+  left to that lane's detectors; a vehicle that two pairs of one direction both report
+  (its windows on the span overlap) is kept once, from the pair of its own lane (the
+  one whose ``y`` is nearer the vehicle's lateral position in metres, else the one that
+  saw it with the higher confidence).  A vehicle whose lateral position (m) lies nearer
+  another lane of its direction (``SiteSetup.lane_of``) is given that lane's number.
 * **Multiple presence**: vehicles whose windows on the span overlap are each flagged
   ``multiple_presence``; :attr:`LaneVehicle.others` names the lanes of the others.
 * Never raises for a record it can read: a lane whose detection fails contributes its
@@ -136,6 +139,10 @@ def detect_lanes(record: Record, setup: SiteSetup, *,
             notes.append(f"lane {pair.lane}: {det.message}")
         for v in det.vehicles:
             lane = pair.lane
+            if _echo(v, pair, setup):
+                notes.append(f"lane {pair.lane}: a {v.n_axles}-axle trace of a vehicle in a "
+                             "lane the other way, left to that lane's detectors")
+                continue
             if v.lateral_unit == "m" and np.isfinite(v.lateral):
                 lane = setup.lane_of(v.lateral, pair.direction) or lane
             found.append(LaneVehicle(vehicle=v, lane=lane, direction=pair.direction,
@@ -143,6 +150,22 @@ def detect_lanes(record: Record, setup: SiteSetup, *,
     vehicles = _deduplicated(found, setup)
     vehicles = _presence(vehicles)
     return EventDetection(vehicles=tuple(vehicles), by_lane=by_lane, message="; ".join(notes))
+
+
+def _echo(v: VehicleDetection, pair: DetectorLane, setup: SiteSetup) -> bool:
+    """Whether a vehicle a pair reports is a trace of a vehicle the other way: a single
+    axle found by a pair other than the calibration lane's, or a vehicle whose lateral
+    position (m) lies clearly in a lane of the other direction (beyond three quarters of
+    the way from the pair's y to that lane's centre)."""
+    if v.n_axles < 2 and pair.lane != setup.calibration_lane:
+        return True
+    if pair.y is None or v.lateral_unit != "m" or not np.isfinite(v.lateral):
+        return False
+    nearest = setup.lane_of(v.lateral)
+    if nearest is None or setup.direction_of(nearest) == pair.direction:
+        return False
+    centre = setup.centres()[nearest][0]
+    return abs(v.lateral - pair.y) > 0.75 * abs(centre - pair.y)
 
 
 def _overlap(a: tuple[float, float] | None, b: tuple[float, float] | None) -> bool:

@@ -231,14 +231,27 @@ class SiteSetup:
         """The calibration truck's lane's detectors (None without detectors)."""
         return next((ln for ln in self.lanes if ln.lane == self.calibration_lane), None)
 
-    def lane_of(self, y: float, direction: str) -> int | None:
+    def lane_of(self, y: float, direction: str | None = None) -> int | None:
         """The number of the lane whose centre line is nearest ``y`` (m) among the lanes
-        of that direction (detector lanes by their ``y``, and ``traffic_lanes``); None
-        without any."""
-        centres = {ln.number: ln.y for ln in self.traffic_lanes if ln.direction == direction}
-        for ln in self.lanes:
-            if ln.direction == direction and ln.y is not None:
-                centres.setdefault(ln.lane, ln.y)
+        of that direction (every lane when None; detector lanes by their ``y``, and
+        ``traffic_lanes``); None without any."""
+        centres = self.centres(direction)
         if not centres or not np.isfinite(y):
             return None
-        return min(centres, key=lambda n: abs(centres[n] - y))
+        return min(centres, key=lambda n: abs(centres[n][0] - y))
+
+    def direction_of(self, lane: int) -> str | None:
+        """A lane's direction (None for a lane the setup does not know)."""
+        hit = self.centres(None).get(lane)
+        if hit is not None:
+            return hit[1]
+        return next((ln.direction for ln in self.lanes if ln.lane == lane), None)
+
+    def centres(self, direction: str | None = None) -> dict[int, tuple[float, str]]:
+        """Known lane centre lines (m) and directions by lane number."""
+        centres = {ln.number: (ln.y, ln.direction) for ln in self.traffic_lanes
+                   if direction in (None, ln.direction)}
+        for ln in self.lanes:
+            if direction in (None, ln.direction) and ln.y is not None:
+                centres.setdefault(ln.lane, (ln.y, ln.direction))
+        return centres
