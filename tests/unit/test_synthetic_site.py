@@ -17,6 +17,8 @@ from bwim.conventions import GRAVITY
 from bwim.errors import InputError
 from bwim.fe.modal import select_modes
 from bwim.io.logger import LoggerFormat, read_logger
+from bwim.scenario import load_record, load_scenario
+from bwim.sensors import SensorKind
 from bwim.synthetic import SHORT_SPAN_4_LANE, make_test_day
 from bwim.synthetic.layout import AxleDetector, Lane, SiteLayout
 from bwim.synthetic.sitedays import make_site_days
@@ -130,6 +132,18 @@ def test_logger_reader_reads_every_file_with_the_scenario_columns(day):
         rec = read_logger(path, fmt)
         assert rec.data.shape[1] == 17 and rec.time[0] == 0.0
         assert rec.sampling_rate == pytest.approx(FS, rel=1e-12)
+
+
+def test_the_written_scenario_loads_its_files_with_the_temperature(day):
+    """The scenario as written (temperature channel declared as a plain name) builds its
+    sensors and loads a record through bwim.scenario: temp_C arrives as a temperature
+    channel, the gauges with their y in metres."""
+    d, _ = day
+    scenario = load_scenario(d.scenario)
+    rec = load_record(d.traffic[0], scenario)
+    kinds = {s.name: s.kind for s in rec.sensors}
+    assert kinds["temp_C"] is SensorKind.TEMPERATURE
+    assert [s.y for s in rec.sensors if s.name == "s01"] == [4.5]
 
 
 def test_opposite_traffic_in_half_of_the_calibration_runs(day):

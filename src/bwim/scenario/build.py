@@ -202,7 +202,7 @@ def _entry_names(entry, grid: list[tuple], at: str) -> list[str]:
     names = []
     for i, (kind, x, y) in enumerate(grid):
         try:
-            names.append(entry.name.format(kind=kind, short=_SHORT[kind], x=x, y=y, i=i))
+            names.append(entry.name.format(kind=kind, short=_SHORT.get(kind, kind), x=x, y=y, i=i))
         except (KeyError, IndexError, ValueError, AttributeError, TypeError) as exc:
             raise InputError(f"{at} name: bad template {entry.name!r} ({exc}); fields are "
                              "kind, short, x, y, i") from None
