@@ -373,10 +373,14 @@ def _detect_learned(record: Record, detectors: Sequence[str], distance: float,
                          f"apart, not {distance:g} m")
     method = "learned responses"
     y = record.channels(list(detectors)).data
+    names = {s.name for s in record.sensors}
+    g = (record.channels(list(responses.gauges)).data
+         if responses.gauges and all(n in names for n in responses.gauges) else None)
     estimates = pursue_axles(record.time, y, responses, speed_range=opts.speed_range,
                              min_axle_spacing=opts.min_axle_spacing,
                              max_axle_spacing=opts.max_axle_spacing,
-                             snr_threshold=snr_threshold, min_height=max(min_height, 0.1))
+                             snr_threshold=snr_threshold, min_height=max(min_height, 0.1),
+                             gauges=g)
     if not estimates:
         return Detection(flags=(FLAG_NO_AXLES,), method=method,
                          message=f"no axle found: nothing on {detectors[0]} and "

@@ -2,45 +2,50 @@
 
 Contract
 --------
-* Input: the two detector channels of a record and their learned responses
+* Input: the two detector channels of a record (and, when the responses were learned
+  with gauges, those gauges) and their learned responses
   (:class:`~bwim.detect.response.LearnedResponses`).  Model of each vehicle's axles,
   both detectors at once::
 
-      y_d(t) = c_d(t) + Σ_i A_id K_d(v (t − τ_i) − D_d) + e,   D_1 = 0, D_2 = D,
+      y_d(t) = Σ_i A_id K_d(v (t − τ_i) − D_d) + n_d(t) + e,   D_1 = 0, D_2 = D,
 
-  ``τ_i`` the time axle ``i`` passes detector 1, ``v`` the vehicle's speed,
-  ``A_id = g_d a_i`` its amplitude at each detector (``a_i ≥ 0`` one per axle, ``g_d`` the
-  detectors' gains as learned: a lane's two detectors lie on one line across the lane,
-  so they see every axle through the same tyres and lateral position, and what one
-  detector shows without the other, such as a tyre force's dynamics while it passes, is
-  not taken for an axle), ``c_d`` a
-  slowly varying baseline (offset, drift, the span's bending) and noise ``e``, each
-  channel weighted by its level (:attr:`~bwim.detect.response.DetectorResponse.level`:
-  its noise, or what the learned response missed of the calibration truck's axles if
-  that is more).  Readings and model are **high-passed in space**
-  (:func:`~bwim.detect.response.high_pass` over
-  :data:`~bwim.detect.response.HIGH_PASS` m of travel at the vehicle's speed), as the
-  responses were learned: what identifies an axle is its own local peak; the slab's
-  global bending, which depends on where the other axles and vehicles are, and any
-  offset or drift, are left out.
-* Steps: (1) the speed, from the band-passed detectors' lag; (2) **matching pursuit**: the
-  axle time that most reduces the weighted misfit of both detectors together is added and
-  every amplitude refitted (non-negative least squares, both detectors in one), while the
-  reduction exceeds ``snr_threshold²`` noise variances and ``min_height²`` of what the
-  record's strongest axle gave (an axle ``min_height`` as tall as the largest: what the
-  learned response misses of a big axle must not pass for a small one), and its amplitude
-  is at least ``min_height`` of the largest; (3) axles are grouped into vehicles (gaps
-  larger than ``max_axle_spacing``) and each vehicle's axle times, speed and amplitudes
-  refined jointly (Levenberg–Marquardt, analytic Jacobian); (4) **backward check**: an
-  axle whose removal costs less than the threshold, or closer than ``min_axle_spacing`` to
-  another, is dropped and the vehicle refitted; one more pursuit step may add an axle the
-  first pass missed. Merged peaks (a tridem 1.3 m apart under a 1 m wide response) come
-  apart because the fit knows the response; the detectors never "disagree" on the count,
-  since one fit counts for both: their agreement enters the confidence instead.
+  ``τ_i`` the time axle ``i`` passes detector 1, ``v`` the vehicle's speed, ``A_id`` its
+  amplitude at each detector (free: an axle's dynamic force differs at the two instants
+  it passes them), ``n_d`` the slowly varying rest: with gauges
+  ``β_d b_d(t) + c_d + s_d t`` (the span's bending as the gauges read it, an offset and a
+  drift, all fitted); without, readings and model are high-passed in space
+  (:func:`~bwim.detect.response.high_pass` over :data:`~bwim.detect.response.HIGH_PASS`
+  m of travel at the record's first speed estimate).  Each channel is weighted by its
+  level (:attr:`~bwim.detect.response.DetectorResponse.level`: its noise, or what the
+  learned response missed of the calibration truck's axles if that is more).
+* An axle is seen by **both** detectors: its amplitudes, in the detectors' learned gain
+  ratio ``ρ``, may differ by the dynamics only: ``|ln(A_2 / (ρ A_1))|`` at most
+  :data:`RATIO_SPREADS` times the spread the calibration runs showed (at least
+  :data:`MIN_RATIO_BOUND`).  What one detector shows without the other (a tyre force's
+  dynamics while it passes) is not an axle.
+* Steps: (1) the speed, from the lag of the band-passed detectors (less their bending);
+  (2) **matching pursuit**: the axle time whose response, in the gain ratio at both
+  detectors, best matches the residual is added and every amplitude refitted
+  (non-negative least squares per detector, the rest projected out), while the misfit
+  falls by more than ``snr_threshold²`` level variances and :data:`GAIN_SHARE` of what
+  the record's strongest axle gave, the axle reaches ``min_height`` of the largest at
+  both detectors and both see it; (3) axles are grouped into vehicles (gaps larger than
+  ``max_axle_spacing``) and each vehicle's axle times and speed refined (variable
+  projection: amplitudes and rest by linear least squares inside a Levenberg–Marquardt
+  loop on times and speed); (4) **backward check**: an axle whose removal costs less than
+  the threshold, that one detector does not see, or closer than the smallest spacing to
+  another is dropped and the vehicle refitted; one more pursuit step may add an axle the
+  first pass missed; (5) an axle group (axles less than :data:`GROUP_SPACING` apart) with
+  uneven spacings is also tried evenly spaced over its length (a tridem's merged peaks
+  have one shape), the better fit kept.  The smallest spacing is the larger of
+  ``min_axle_spacing`` and :data:`MIN_SPACING_WIDTH` of the responses' width: closer
+  peaks are one axle whose force changed while it passed.  The detectors never
+  "disagree" on the count, since one fit counts for both: their agreement enters the
+  confidence instead.
 * Confidence of a vehicle = ``c_snr × c_both``: ``c_snr = clip(√Δ / (2 snr_threshold),
   0.5, 1)`` with ``Δ`` the smallest misfit reduction (level variances) of its axles;
-  ``c_both`` the share of its axles that each detector fitted alone sees with at least
-  0.4 of the joint amplitude, at least 0.5.
+  ``c_both`` the mean over its axles of ``exp(−½ (ln(A_2 / (ρ A_1)) / (2 s))²)``, ``s``
+  the learned spread (at least ``MIN_RATIO_BOUND / RATIO_SPREADS``), at least 0.5.
 * Times in s, distances in m, speeds in m/s.
 """
 
@@ -49,7 +54,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import least_squares, nnls
+from scipy.optimize import nnls
 
 from .assemble import VehicleEstimate
 from .response import (
@@ -61,69 +66,125 @@ from .response import (
     xcorr_lag,
 )
 
-__all__ = ["pursue_axles"]
+__all__ = ["GAIN_SHARE", "GROUP_SPACING", "MIN_RATIO_BOUND", "MIN_SPACING_WIDTH",
+           "RATIO_SPREADS", "pursue_axles"]
 
 #: An upper bound on the axles of one record.
 MAX_AXLES = 40
 #: Samples a vehicle's fit looks at beyond its first and last axle, m of travel.
-REACH = 4.0
+REACH = 2.0
+#: An axle's two amplitudes may differ from the gain ratio by this many learned spreads.
+RATIO_SPREADS = 4.0
+#: ... and at least by this factor (natural log: a factor 2).
+MIN_RATIO_BOUND = float(np.log(2.0))
+#: An axle must lower the misfit by this share of what the record's strongest axle did.
+GAIN_SHARE = 0.04
+#: Axles closer than this share of the responses' width (at half height) are one axle
+#: whose force changed while it passed.
+MIN_SPACING_WIDTH = 0.8
+#: A new axle is looked for no closer to one already found than this share of the
+#: smallest spacing (the refinement moves them apart).
+EXCLUDE = 0.5
+#: Axles closer than this (m) form a group (tandem, tridem) whose even spacing is tried.
+GROUP_SPACING = 2.2
+#: Spacings of a group differing by more than this ratio are "uneven".
+UNEVEN = 1.15
+#: Levenberg–Marquardt iterations of a refinement, at most.
+MAX_LM = 30
 
 
 @dataclass(frozen=True, eq=False)
 class _Problem:
-    """One record's two channels, high-passed and weighted, and the high-passed
-    responses in space."""
+    """One record's two channels, weighted, their rest's columns and the responses."""
 
     t: np.ndarray
-    y: np.ndarray  # (n_t, 2) high-passed, weighted (level units)
+    y: np.ndarray  # (n_t, 2) weighted (level units); high-passed without gauges
+    rest: tuple[np.ndarray, np.ndarray]  # per detector (n_t, k) weighted columns
+    q_rest: tuple[np.ndarray, np.ndarray]  # their orthonormal bases (all samples)
     w: np.ndarray  # (2,) 1 / level
-    ratio: np.ndarray  # (2,) the detectors' gains relative to the first
+    ratio: float  # the second detector's gain over the first's
+    bound: float  # largest |ln(A_2 / (ratio A_1))| of an axle
+    spread: float  # learned spread of that log ratio
     shift: tuple[float, float]  # D_d
-    grids: tuple  # per detector (u, K_hp, dK_hp/du)
+    grids: tuple  # per detector (u, K, dK/du), high-passed without gauges
     fs: float
 
     def atoms(self, taus: np.ndarray, v: float, rows: slice | np.ndarray = slice(None),
               slopes: bool = False):
-        """Per detector the weighted columns K_hp(v (t − τ_i) − D_d), (n_rows, n); with
-        ``slopes`` also their slopes dK_hp/du at the same points."""
+        """Per detector the weighted columns K(v (t − τ_i) − D_d), (n_rows, n); with
+        ``slopes`` also their slopes dK/du at the same points."""
         t = self.t[rows]
         out, der = [], []
         for c, (u, k, dk) in enumerate(self.grids):
             x = v * (t[:, None] - taus[None, :]) - self.shift[c]
-            scale = self.w[c] * self.ratio[c]
-            out.append(np.interp(x, u, k, left=0.0, right=0.0) * scale)
+            out.append(np.interp(x, u, k, left=0.0, right=0.0) * self.w[c])
             if slopes:
-                der.append(np.interp(x, u, dk, left=0.0, right=0.0) * scale)
+                der.append(np.interp(x, u, dk, left=0.0, right=0.0) * self.w[c])
         return (out, der) if slopes else out
 
-    def fit(self, taus: np.ndarray, v: float, rows: slice | np.ndarray = slice(None)
-            ) -> tuple[np.ndarray, float, np.ndarray]:
-        """One amplitude ≥ 0 per axle (both detectors, in their gains' ratio), the
-        misfit, the residual (rows)."""
-        y = self.y[rows]
-        if not taus.size:
-            return np.zeros(0), float(np.sum(y**2)), y.copy()
-        X = self.atoms(taus, v, rows)
-        a, _ = nnls(np.vstack(X), np.concatenate([y[:, 0], y[:, 1]]))
-        res = y - np.column_stack([X[0] @ a, X[1] @ a])
-        return a, float(np.sum(res**2)), res
+    def fit(self, taus: np.ndarray, v: float) -> tuple[np.ndarray, float, np.ndarray]:
+        """Over the whole record: amplitudes ≥ 0 per axle and detector (n, 2, reading
+        units of each detector), the misfit and the residual with each detector's rest
+        projected out."""
+        X = self.atoms(taus, v) if taus.size else None
+        amps = np.zeros((taus.size, 2))
+        res = np.empty_like(self.y)
+        for c in range(2):
+            Q = self.q_rest[c]
+            yc = self.y[:, c] - Q @ (Q.T @ self.y[:, c])
+            if taus.size:
+                Xc = X[c] - Q @ (Q.T @ X[c])
+                amps[:, c], _ = nnls(Xc, yc)
+                res[:, c] = yc - Xc @ amps[:, c]
+            else:
+                res[:, c] = yc
+        return amps, float(np.sum(res**2)), res
 
-    def separate(self, taus: np.ndarray, v: float, rows) -> np.ndarray:
-        """Each detector's own amplitudes ≥ 0 (n, 2), in units of the first's gain."""
-        y = self.y[rows]
-        return np.column_stack([nnls(X, y[:, c])[0]
-                                for c, X in enumerate(self.atoms(taus, v, rows))])
+    def log_ratio(self, amps: np.ndarray) -> np.ndarray:
+        """``ln(A_2 / (ratio A_1))`` per axle (±inf where one detector sees nothing)."""
+        a1 = np.maximum(amps[:, 0], 0.0)
+        a2 = np.maximum(amps[:, 1], 0.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            r = np.log(a2 / (self.ratio * a1))
+        return np.where(np.isnan(r), np.inf, r)
+
+    def seen_by_both(self, amps: np.ndarray) -> np.ndarray:
+        return np.abs(self.log_ratio(amps)) <= self.bound
 
 
-def _problem(t: np.ndarray, y: np.ndarray, learned: LearnedResponses, v: float) -> _Problem:
+@dataclass(frozen=True, eq=False)
+class _Fit:
+    """A vehicle's fit on its window: times, speed, amplitudes (n, 2), misfit, each axle's
+    removal cost (level variances)."""
+
+    taus: np.ndarray
+    v: float
+    amps: np.ndarray
+    chi: float
+    gains: np.ndarray
+
+
+def _problem(t: np.ndarray, y: np.ndarray, gauges: np.ndarray | None,
+             learned: LearnedResponses, v: float) -> _Problem:
     fs = 1.0 / float(np.median(np.diff(t)))
     w = 1.0 / np.array([max(r.level, 1e-300) for r in learned.responses])
+    spread = float(learned.amplitude_spread)
+    bound = max(RATIO_SPREADS * spread, MIN_RATIO_BOUND)
+    common = dict(t=t, w=w, ratio=float(learned.gain_ratio), bound=bound, spread=spread,
+                  shift=(0.0, learned.distance), fs=fs)
+    if learned.gauges and gauges is not None:
+        g = gauges - gauges.mean(axis=0)
+        tc = t - t.mean()
+        tc = tc / max(float(np.ptp(tc)), 1e-300)
+        rest = tuple(np.column_stack([g @ r.bending, np.ones_like(tc), tc]) * w[c]
+                     for c, r in enumerate(learned.responses))
+        return _Problem(y=(y - y.mean(axis=0)) * w, rest=rest,
+                        q_rest=tuple(np.linalg.qr(r)[0] for r in rest),
+                        grids=tuple(r.padded() for r in learned.responses), **common)
     y_hp = high_pass(y, HIGH_PASS / v * fs) * w
-    amps = np.abs(learned.amplitudes)
-    ratio = float(np.median(amps[:, 1] / np.maximum(amps[:, 0], 1e-300)))
-    return _Problem(t=t, y=y_hp, w=w, ratio=np.array([1.0, ratio]),
-                    shift=(0.0, learned.distance),
-                    grids=tuple(r.high_passed() for r in learned.responses), fs=fs)
+    empty = np.zeros((t.size, 0))
+    return _Problem(y=y_hp, rest=(empty, empty), q_rest=(empty, empty),
+                    grids=tuple(r.high_passed() for r in learned.responses), **common)
 
 
 def _speed(y: np.ndarray, fs: float, distance: float, speed_range: tuple[float, float]
@@ -137,8 +198,8 @@ def _speed(y: np.ndarray, fs: float, distance: float, speed_range: tuple[float, 
 
 def _best_new(pb: _Problem, res: np.ndarray, v: float, taken: np.ndarray, min_gap: float
               ) -> float:
-    """The axle time whose atoms (both detectors, each its own amplitude ≥ 0) most reduce
-    the residual ``res`` (all samples)."""
+    """The axle time whose atoms (both detectors, one amplitude in their gain ratio) best
+    match the residual ``res`` (all samples)."""
     n = pb.t.size
     corr = np.zeros(n)
     energy = 0.0
@@ -146,8 +207,9 @@ def _best_new(pb: _Problem, res: np.ndarray, v: float, taken: np.ndarray, min_ga
         d = pb.shift[c]
         m_lo = int(np.floor((u[0] + d) / v * pb.fs)) - 1
         m_hi = int(np.ceil((u[-1] + d) / v * pb.fs)) + 1
+        scale = pb.w[c] * (pb.ratio if c else 1.0)
         atom = np.interp(v * np.arange(m_lo, m_hi + 1) / pb.fs - d, u, k, left=0.0,
-                         right=0.0) * pb.w[c] * pb.ratio[c]
+                         right=0.0) * scale
         energy += float(atom @ atom)
         lo, hi = max(0, -m_lo), max(0, m_hi)
         r = np.concatenate([np.zeros(lo), res[:, c], np.zeros(hi)])
@@ -160,53 +222,70 @@ def _best_new(pb: _Problem, res: np.ndarray, v: float, taken: np.ndarray, min_ga
 
 def pursue_axles(record_time: np.ndarray, y: np.ndarray, learned: LearnedResponses, *,
                  speed_range: tuple[float, float], min_axle_spacing: float,
-                 max_axle_spacing: float, snr_threshold: float, min_height: float
-                 ) -> list[VehicleEstimate]:
+                 max_axle_spacing: float, snr_threshold: float, min_height: float,
+                 gauges: np.ndarray | None = None) -> list[VehicleEstimate]:
     """Vehicles of one record (see the module docstring).
 
-    ``y`` (n_t, 2) are the two detector channels (in the responses' order), ``record_time``
+    ``y`` (n_t, 2) are the two detector channels (in the responses' order), ``gauges``
+    (n_t, n_gauges) the channels of ``learned.gauges`` (None: high-pass), ``record_time``
     their times.  Returns the vehicles' estimates (empty when no axle stands out)."""
     t = np.asarray(record_time, dtype=float)
+    y = np.asarray(y, dtype=float)
     fs = 1.0 / float(np.median(np.diff(t)))
-    v0 = _speed(y, fs, learned.distance, speed_range)
+    if not (learned.gauges and gauges is not None):
+        gauges = None
+    if gauges is not None:
+        g = np.asarray(gauges, dtype=float)
+        g = g - g.mean(axis=0)
+        bend = np.column_stack([g @ r.bending for r in learned.responses])
+        v0 = _speed(y - bend, fs, learned.distance, speed_range)
+    else:
+        v0 = _speed(y, fs, learned.distance, speed_range)
     if v0 is None:
         return []
-    pb = _problem(t, np.asarray(y, dtype=float), learned, v0)
+    pb = _problem(t, y, gauges, learned, v0)
     thr2 = snr_threshold**2
+    min_sp = max(min_axle_spacing, MIN_SPACING_WIDTH * float(np.mean(
+        [r.fwhm for r in learned.responses])))
     taus = np.zeros(0)
     _, chi, res = pb.fit(taus, v0)
     first = 0.0
-    for _ in range(MAX_AXLES):
-        tk = _best_new(pb, res, v0, taus, min_axle_spacing)
+    refused = np.zeros(0)  # candidates one detector does not see: not tried again
+    for _ in range(2 * MAX_AXLES):
+        tk = _best_new(pb, res, v0, np.append(taus, refused), EXCLUDE * min_sp)
         trial = np.sort(np.append(taus, tk))
         amps, chi_new, res_new = pb.fit(trial, v0)
         gain = chi - chi_new
         first = max(first, gain)
-        if gain < max(thr2, min_height**2 * first) or not _tall(amps, trial, tk, min_height):
+        if gain < max(thr2, GAIN_SHARE * first) or taus.size >= MAX_AXLES:
             break
+        if not _acceptable(pb, amps, trial, tk, min_height):
+            refused = np.append(refused, tk)
+            continue
         taus, chi, res = trial, chi_new, res_new
     if taus.size == 0:
         return []
-    limit = max(thr2, min_height**2 * first)
+    limit = max(thr2, GAIN_SHARE * first)
     out = []
     for group in _groups(taus, v0, max_axle_spacing):
-        veh = _check(pb, *_refine(pb, group, v0), limit, min_axle_spacing, min_height,
-                     snr_threshold)
+        veh = _vehicle(pb, group, v0, limit, min_sp, min_height, snr_threshold)
         if veh is not None:
             out.append(veh)
     return out
 
 
-def _tall(amps: np.ndarray, taus: np.ndarray, tk: float, min_height: float) -> bool:
-    """Whether the axle at ``tk`` reaches ``min_height`` of the largest amplitude at one
-    detector at least."""
+def _acceptable(pb: _Problem, amps: np.ndarray, taus: np.ndarray, tk: float,
+                min_height: float) -> bool:
+    """Whether the axle at ``tk`` reaches ``min_height`` of the largest amplitude at both
+    detectors and both see it in the gain ratio."""
     i = int(np.flatnonzero(taus == tk)[0])
-    return bool(_relative(amps)[i] >= min_height)
+    return bool(_relative(amps)[i].min() >= min_height and pb.seen_by_both(amps)[i])
 
 
 def _relative(amps: np.ndarray) -> np.ndarray:
-    top = float(amps.max()) if amps.size else 0.0
-    return amps / top if top > 0 else amps
+    """Amplitudes over each detector's largest, (n, 2)."""
+    top = amps.max(axis=0) if amps.size else np.zeros(2)
+    return amps / np.where(top > 0, top, 1.0)
 
 
 def _groups(taus: np.ndarray, v: float, max_spacing: float) -> list[np.ndarray]:
@@ -217,92 +296,180 @@ def _groups(taus: np.ndarray, v: float, max_spacing: float) -> list[np.ndarray]:
 def _window(pb: _Problem, taus: np.ndarray, v: float) -> np.ndarray:
     """Samples from REACH m of travel before the first axle reaches detector 1 to REACH m
     after the last leaves detector 2."""
-    return np.flatnonzero((pb.t >= taus[0] - REACH / v)
-                          & (pb.t <= taus[-1] + (pb.shift[1] + REACH) / v))
+    lo = np.searchsorted(pb.t, taus.min() - REACH / v)
+    hi = np.searchsorted(pb.t, taus.max() + (pb.shift[1] + REACH) / v, side="right")
+    return np.arange(lo, hi)
 
 
-def _refine(pb: _Problem, taus: np.ndarray, v0: float) -> tuple[np.ndarray, float]:
-    """The vehicle's axle times and speed, jointly with its amplitudes (free in sign here:
-    the non-negative amplitudes are refitted after), analytic Jacobian."""
+def _solve(pb: _Problem, taus: np.ndarray, v: float, rows: np.ndarray, slopes: bool):
+    """Per detector the least-squares amplitudes and rest on ``rows`` (free in sign), the
+    residual; with ``slopes`` the variable-projection Jacobian (Kaufman) of the residual
+    with respect to (τ_1 … τ_n, v), and each axle's removal cost."""
     n = taus.size
-    rows = _window(pb, taus, v0)
-    y = pb.y[rows]
-    amps, _, _ = pb.fit(taus, v0, rows)
-
-    def unpack(p):
-        return p[:n], p[n], p[n + 1:]
-
-    def resid(p: np.ndarray) -> np.ndarray:
-        tt, v, a = unpack(p)
-        X = pb.atoms(tt, v, rows)
-        return np.concatenate([y[:, c] - X[c] @ a for c in range(2)])
-
-    def jac(p: np.ndarray) -> np.ndarray:
-        tt, v, a = unpack(p)
-        X, dX = pb.atoms(tt, v, rows, slopes=True)
-        dt = pb.t[rows][:, None] - tt[None, :]
-        blocks = []
-        for c in range(2):
-            J = np.zeros((rows.size, 2 * n + 1))
-            J[:, :n] = dX[c] * a * v  # d/dτ_i of −a K(v (t − τ_i) − D)
-            J[:, n] = -(dX[c] * dt) @ a
-            J[:, n + 1:] = -X[c]
-            blocks.append(J)
-        return np.vstack(blocks)
-
-    p0 = np.concatenate([taus, [v0], amps])
-    sol = least_squares(resid, p0, jac=jac, method="lm",
-                        x_scale=np.concatenate([np.full(n, 2e-3), [0.02 * v0],
-                                                np.maximum(amps, 1e-3)]))
-    tt, v, _ = unpack(sol.x)
-    order = np.argsort(tt)
-    return tt[order], float(v)
+    if slopes:
+        X, dX = pb.atoms(taus, v, rows, slopes=True)
+    else:
+        X = pb.atoms(taus, v, rows)
+    dt = pb.t[rows][:, None] - taus[None, :]
+    res, jac, amps, gains = [], [], np.zeros((n, 2)), np.zeros(n)
+    for c in range(2):
+        M = np.hstack([X[c], pb.rest[c][rows]])
+        Q, R = np.linalg.qr(M)
+        yc = pb.y[rows, c]
+        qy = Q.T @ yc
+        try:
+            coef = np.linalg.solve(R, qy)
+            Rinv = np.linalg.inv(R)
+        except np.linalg.LinAlgError:
+            coef = np.linalg.lstsq(M, yc, rcond=None)[0]
+            Rinv = np.linalg.pinv(R)
+        r = yc - Q @ qy
+        res.append(r)
+        a = coef[:n]
+        amps[:, c] = a
+        # removing regressor i raises the misfit by coef_i² / [(MᵀM)⁻¹]_ii
+        diag = np.sum(Rinv[:n] ** 2, axis=1)
+        gains += a**2 / np.maximum(diag, 1e-300)
+        if slopes:
+            D = np.empty((rows.size, n + 1))
+            D[:, :n] = -v * dX[c] * a  # ∂(X a)/∂τ_i
+            D[:, n] = (dX[c] * dt) @ a  # ∂(X a)/∂v
+            jac.append(-(D - Q @ (Q.T @ D)))
+    return np.concatenate(res), (np.vstack(jac) if slopes else None), amps, gains
 
 
-def _gains(pb: _Problem, taus: np.ndarray, v: float, chi: float, rows) -> np.ndarray:
-    """How much the misfit rises when each axle is left out (noise variances)."""
-    return np.array([pb.fit(np.delete(taus, i), v, rows)[1] - chi for i in range(taus.size)])
-
-
-def _check(pb: _Problem, taus: np.ndarray, v: float, limit: float, min_spacing: float,
-           min_height: float, snr_threshold: float) -> VehicleEstimate | None:
-    """Backward elimination and one more pursuit step; the vehicle's estimate."""
-    for _ in range(4):
-        changed = False
-        while taus.size > 1 and np.min(np.diff(taus)) * v < min_spacing:
-            i = int(np.argmin(np.diff(taus)))
-            taus = np.delete(taus, i + 1)
-            changed = True
-        rows = _window(pb, taus, v)
-        amps, chi, _ = pb.fit(taus, v, rows)
-        weak = (_gains(pb, taus, v, chi, rows) < limit) | (_relative(amps) < min_height)
-        if weak.any() and taus.size > 1:
-            taus = np.delete(taus, int(np.flatnonzero(weak)[0]))
-            changed = True
-        else:
-            _, _, res = pb.fit(taus, v)
-            tk = _best_new(pb, res, v, taus, min_spacing)
-            if taus[0] - REACH / v <= tk <= taus[-1] + REACH / v:
-                trial = np.sort(np.append(taus, tk))
-                rows2 = _window(pb, trial, v)
-                amps2, chi2, _ = pb.fit(trial, v, rows2)
-                _, chi1, _ = pb.fit(taus, v, rows2)
-                if chi1 - chi2 >= limit and _tall(amps2, trial, tk, min_height):
-                    taus = trial
-                    changed = True
-        if not changed:
-            break
-        taus, v = _refine(pb, taus, v)
-    if taus.size == 0:
-        return None
+def _refine(pb: _Problem, taus: np.ndarray, v: float) -> _Fit:
+    """The vehicle's axle times and speed by Levenberg–Marquardt on the variable
+    projection (amplitudes and rest by least squares inside), on a fixed window."""
+    taus = np.sort(np.asarray(taus, dtype=float))
     rows = _window(pb, taus, v)
-    amps, chi, _ = pb.fit(taus, v, rows)
-    gains = _gains(pb, taus, v, chi, rows)
-    snr = float(np.sqrt(max(float(gains.min()), 0.0)))
+    p = np.append(taus, v)
+    r, J, amps, gains = _solve(pb, taus, v, rows, True)
+    cost = float(r @ r)
+    lam = 1e-3
+    scale = np.append(np.full(taus.size, 1.0 / v), 1.0 / v)  # τ in s, v in m/s: metres
+    for _ in range(MAX_LM):
+        Js = J * scale
+        A = Js.T @ Js
+        g = Js.T @ r
+        improved = False
+        for _ in range(8):
+            step = -np.linalg.solve(A + lam * np.diag(np.diag(A) + 1e-12), g) * scale
+            trial = p + step
+            tt, vv = np.sort(trial[:-1]), trial[-1]
+            if vv <= 0:
+                lam *= 10.0
+                continue
+            r2, J2, amps2, gains2 = _solve(pb, tt, vv, rows, True)
+            c2 = float(r2 @ r2)
+            if c2 < cost:
+                rel = (cost - c2) / max(cost, 1e-300)
+                p, r, J, amps, gains, cost = np.append(tt, vv), r2, J2, amps2, gains2, c2
+                lam = max(lam / 3.0, 1e-7)
+                improved = True
+                break
+            lam *= 10.0
+        if not improved or rel < 1e-6 or np.max(np.abs(step[:-1])) * p[-1] < 1e-4:
+            break
+    return _Fit(taus=p[:-1], v=float(p[-1]), amps=amps, chi=cost, gains=gains)
+
+
+def _drop_close(fit: _Fit, min_sp: float) -> np.ndarray | None:
+    """The times without the weaker of the closest pair closer than ``min_sp``; None if
+    none is that close."""
+    if fit.taus.size < 2:
+        return None
+    d = np.diff(fit.taus) * fit.v
+    i = int(np.argmin(d))
+    if d[i] >= min_sp:
+        return None
+    weaker = i if fit.gains[i] < fit.gains[i + 1] else i + 1
+    return np.delete(fit.taus, weaker)
+
+
+def _vehicle(pb: _Problem, taus: np.ndarray, v: float, limit: float, min_sp: float,
+             min_height: float, snr_threshold: float) -> VehicleEstimate | None:
+    """Refinement, backward check, one more pursuit step and the groups' even spacing;
+    the vehicle's estimate."""
+    fit = _refine(pb, taus, v)
+    tried_even = False
+    for _ in range(3 * MAX_AXLES):
+        close = _drop_close(fit, min_sp)
+        if close is not None:
+            fit = _refine(pb, close, fit.v)
+            continue
+        weak = ((fit.gains < limit) | (_relative(fit.amps).min(axis=1) < min_height)
+                | ~pb.seen_by_both(fit.amps))
+        if weak.any() and fit.taus.size > 1:
+            i = int(np.argmin(np.where(weak, fit.gains, np.inf)))
+            fit = _refine(pb, np.delete(fit.taus, i), fit.v)
+            continue
+        added = _add_one(pb, fit, limit, min_sp, min_height)
+        if added is not None:
+            fit = added
+            continue
+        if not tried_even:
+            tried_even = True
+            even = _even_groups(pb, fit)
+            if even is not None:
+                fit = even
+                continue
+        break
+    if fit.taus.size == 0 or not pb.seen_by_both(fit.amps).any():
+        return None
+    snr = float(np.sqrt(max(float(fit.gains.min()), 0.0)))
     c_snr = float(np.clip(snr / (2.0 * snr_threshold), 0.5, 1.0))
-    own = pb.separate(taus, v, rows)  # each detector alone: does it see the axle?
-    seen = (own / np.maximum(amps[:, None], 1e-300) >= 0.4).all(axis=1)
-    c_both = max(0.5, float(np.mean(seen)))
-    det_times = np.column_stack([taus, taus + pb.shift[1] / v])
-    return VehicleEstimate(times=taus, speed=v, confidence=c_snr * c_both,
-                           amplitudes=_relative(amps), snr=snr, detector_times=det_times)
+    lr = np.minimum(np.abs(pb.log_ratio(fit.amps)), 1e3)
+    s = max(pb.spread, MIN_RATIO_BOUND / RATIO_SPREADS)
+    c_both = max(0.5, float(np.mean(np.exp(-0.5 * (lr / (2 * s)) ** 2))))
+    det_times = np.column_stack([fit.taus, fit.taus + pb.shift[1] / fit.v])
+    rel = np.maximum(fit.amps[:, 0], 0.0) + np.maximum(fit.amps[:, 1], 0.0) / pb.ratio
+    return VehicleEstimate(times=fit.taus, speed=fit.v, confidence=c_snr * c_both,
+                           amplitudes=rel / max(float(rel.max()), 1e-300), snr=snr,
+                           detector_times=det_times)
+
+
+def _add_one(pb: _Problem, fit: _Fit, limit: float, min_sp: float, min_height: float
+             ) -> _Fit | None:
+    """The vehicle with one more axle where the residual calls for one, if that axle
+    lowers the misfit by ``limit`` and passes the checks; else None."""
+    _, _, res = pb.fit(fit.taus, fit.v)
+    tk = _best_new(pb, res, fit.v, fit.taus, EXCLUDE * min_sp)
+    if not fit.taus[0] - REACH / fit.v <= tk <= fit.taus[-1] + REACH / fit.v:
+        return None
+    trial = _refine(pb, np.append(fit.taus, tk), fit.v)
+    rows = _window(pb, trial.taus, trial.v)  # compared on one window
+    chi_base = float(np.sum(_solve(pb, fit.taus, fit.v, rows, False)[0] ** 2))
+    if chi_base - trial.chi < limit:
+        return None
+    d = np.diff(trial.taus) * trial.v
+    if (d.size and d.min() < min_sp) or (_relative(trial.amps).min() < min_height) \
+            or not pb.seen_by_both(trial.amps).all() or trial.gains.min() < limit:
+        return None
+    return trial
+
+
+def _even_groups(pb: _Problem, fit: _Fit) -> _Fit | None:
+    """The fit with every unevenly spaced axle group (≥ 3 axles) re-started evenly spaced
+    over its length, if that fits better; else None."""
+    taus, v = fit.taus, fit.v
+    if taus.size < 3:
+        return None
+    d = np.diff(taus) * v
+    cuts = np.flatnonzero(d > GROUP_SPACING) + 1
+    start = taus.copy()
+    changed = False
+    for g in np.split(np.arange(taus.size), cuts):
+        if g.size < 3:
+            continue
+        gd = d[g[:-1]]
+        if gd.max() <= UNEVEN * gd.min():
+            continue
+        start[g] = np.linspace(taus[g[0]], taus[g[-1]], g.size)
+        changed = True
+    if not changed:
+        return None
+    trial = _refine(pb, start, v)
+    rows = _window(pb, trial.taus, trial.v)
+    chi_old = float(np.sum(_solve(pb, taus, v, rows, False)[0] ** 2))
+    return trial if trial.chi < chi_old * (1.0 - 1e-9) else None
