@@ -85,12 +85,17 @@ MIN_SPACING_WIDTH = 0.8
 #: A new axle is looked for no closer to one already found than this share of the
 #: smallest spacing (the refinement moves them apart).
 EXCLUDE = 0.5
-#: Axles closer than this (m) form a group (tandem, tridem) whose even spacing is tried.
+#: Axles closer than this (m) form a group (tandem, tridem) whose count is chosen again.
 GROUP_SPACING = 2.2
-#: Spacings of a group differing by more than this ratio are "uneven".
-UNEVEN = 1.15
+#: Most axles of a group.
+GROUP_AXLES = 4
+#: Samples per response width (at half height) a vehicle's fit keeps at least.
+WINDOW_SAMPLES = 10
 #: Levenberg–Marquardt iterations of a refinement, at most.
-MAX_LM = 30
+MAX_LM = 15
+#: ... which stops when the misfit falls by less than this share (or the times move by
+#: less than 2 mm of travel).
+CONVERGED = 1e-3
 
 
 @dataclass(frozen=True, eq=False)
@@ -108,18 +113,25 @@ class _Problem:
     shift: tuple[float, float]  # D_d
     grids: tuple  # per detector (u, K, dK/du), high-passed without gauges
     fs: float
+    step: int  # every step-th sample in a vehicle's window
 
     def atoms(self, taus: np.ndarray, v: float, rows: slice | np.ndarray = slice(None),
               slopes: bool = False):
-        """Per detector the weighted columns K(v (t − τ_i) − D_d), (n_rows, n); with
-        ``slopes`` also their slopes dK/du at the same points."""
+        """Per detector the weighted columns K(v (t − τ_i) − D_d), (n_rows, n), K linear
+        between its ordinates; with ``slopes`` also their slopes dK/du (of the linear
+        pieces) at the same points."""
         t = self.t[rows]
         out, der = [], []
-        for c, (u, k, dk) in enumerate(self.grids):
-            x = v * (t[:, None] - taus[None, :]) - self.shift[c]
-            out.append(np.interp(x, u, k, left=0.0, right=0.0) * self.w[c])
+        for c, (u, k, _) in enumerate(self.grids):
+            du = u[1] - u[0]
+            x = (v * (t[:, None] - taus[None, :]) - self.shift[c] - u[0]) / du
+            inside = (x >= 0.0) & (x < u.size - 1)
+            j = np.where(inside, x, 0.0).astype(np.intp)
+            f = x - j
+            k0, k1 = k[j], k[j + 1]
+            out.append(np.where(inside, k0 + f * (k1 - k0), 0.0) * self.w[c])
             if slopes:
-                der.append(np.interp(x, u, dk, left=0.0, right=0.0) * self.w[c])
+                der.append(np.where(inside, k1 - k0, 0.0) * (self.w[c] / du))
         return (out, der) if slopes else out
 
     def fit(self, taus: np.ndarray, v: float) -> tuple[np.ndarray, float, np.ndarray]:
@@ -170,8 +182,12 @@ def _problem(t: np.ndarray, y: np.ndarray, gauges: np.ndarray | None,
     w = 1.0 / np.array([max(r.level, 1e-300) for r in learned.responses])
     spread = float(learned.amplitude_spread)
     bound = max(RATIO_SPREADS * spread, MIN_RATIO_BOUND)
+    # a vehicle's fit samples every step-th reading: at least WINDOW_SAMPLES per response
+    # width at half height (the response is smooth on that scale)
+    width = min(r.fwhm for r in learned.responses) / v * fs
+    step = max(1, int(width // WINDOW_SAMPLES))
     common = dict(t=t, w=w, ratio=float(learned.gain_ratio), bound=bound, spread=spread,
-                  shift=(0.0, learned.distance), fs=fs)
+                  shift=(0.0, learned.distance), fs=fs, step=step)
     if learned.gauges and gauges is not None:
         g = gauges - gauges.mean(axis=0)
         tc = t - t.mean()
@@ -298,44 +314,45 @@ def _window(pb: _Problem, taus: np.ndarray, v: float) -> np.ndarray:
     after the last leaves detector 2."""
     lo = np.searchsorted(pb.t, taus.min() - REACH / v)
     hi = np.searchsorted(pb.t, taus.max() + (pb.shift[1] + REACH) / v, side="right")
-    return np.arange(lo, hi)
+    return np.arange(lo, hi, pb.step)
 
 
 def _solve(pb: _Problem, taus: np.ndarray, v: float, rows: np.ndarray, slopes: bool):
     """Per detector the least-squares amplitudes and rest on ``rows`` (free in sign), the
     residual; with ``slopes`` the variable-projection Jacobian (Kaufman) of the residual
-    with respect to (τ_1 … τ_n, v), and each axle's removal cost."""
+    with respect to (τ_1 … τ_n, v); each axle's removal cost.  Residual and costs are
+    scaled by the window's sampling step (misfits of all samples)."""
     n = taus.size
     if slopes:
         X, dX = pb.atoms(taus, v, rows, slopes=True)
     else:
         X = pb.atoms(taus, v, rows)
-    dt = pb.t[rows][:, None] - taus[None, :]
     res, jac, amps, gains = [], [], np.zeros((n, 2)), np.zeros(n)
     for c in range(2):
         M = np.hstack([X[c], pb.rest[c][rows]])
-        Q, R = np.linalg.qr(M)
         yc = pb.y[rows, c]
-        qy = Q.T @ yc
+        G = M.T @ M
+        G.flat[::G.shape[0] + 1] += 1e-12 * (np.trace(G) / G.shape[0] + 1e-300)
         try:
-            coef = np.linalg.solve(R, qy)
-            Rinv = np.linalg.inv(R)
+            Ginv = np.linalg.inv(G)
         except np.linalg.LinAlgError:
-            coef = np.linalg.lstsq(M, yc, rcond=None)[0]
-            Rinv = np.linalg.pinv(R)
-        r = yc - Q @ qy
+            Ginv = np.linalg.pinv(G)
+        coef = Ginv @ (M.T @ yc)
+        r = yc - M @ coef
         res.append(r)
         a = coef[:n]
         amps[:, c] = a
         # removing regressor i raises the misfit by coef_i² / [(MᵀM)⁻¹]_ii
-        diag = np.sum(Rinv[:n] ** 2, axis=1)
-        gains += a**2 / np.maximum(diag, 1e-300)
+        gains += a**2 / np.maximum(np.diag(Ginv)[:n], 1e-300)
         if slopes:
             D = np.empty((rows.size, n + 1))
             D[:, :n] = -v * dX[c] * a  # ∂(X a)/∂τ_i
-            D[:, n] = (dX[c] * dt) @ a  # ∂(X a)/∂v
-            jac.append(-(D - Q @ (Q.T @ D)))
-    return np.concatenate(res), (np.vstack(jac) if slopes else None), amps, gains
+            D[:, n] = (dX[c] * (pb.t[rows][:, None] - taus[None, :])) @ a  # ∂(X a)/∂v
+            jac.append(M @ (Ginv @ (M.T @ D)) - D)
+    # every step-th sample: scaled to the misfit of all samples
+    k = np.sqrt(pb.step)
+    return (np.concatenate(res) * k, (np.vstack(jac) * k if slopes else None), amps,
+            gains * pb.step)
 
 
 def _refine(pb: _Problem, taus: np.ndarray, v: float) -> _Fit:
@@ -369,7 +386,7 @@ def _refine(pb: _Problem, taus: np.ndarray, v: float) -> _Fit:
                 improved = True
                 break
             lam *= 10.0
-        if not improved or rel < 1e-6 or np.max(np.abs(step[:-1])) * p[-1] < 1e-4:
+        if not improved or rel < CONVERGED or np.max(np.abs(step[:-1])) * p[-1] < 2e-3:
             break
     return _Fit(taus=p[:-1], v=float(p[-1]), amps=amps, chi=cost, gains=gains)
 
@@ -391,9 +408,11 @@ def _vehicle(pb: _Problem, taus: np.ndarray, v: float, limit: float, min_sp: flo
              min_height: float, snr_threshold: float) -> VehicleEstimate | None:
     """Refinement, backward check, one more pursuit step and the groups' even spacing;
     the vehicle's estimate."""
-    fit = _refine(pb, taus, v)
-    tried_even = False
-    for _ in range(3 * MAX_AXLES):
+    fit = _refine(pb, _prune(pb, taus, v, limit), v)
+    grouped = _group_search(pb, fit, limit, min_sp)
+    if grouped is not None:
+        fit = _refine(pb, grouped, fit.v)
+    for _ in range(MAX_AXLES):
         close = _drop_close(fit, min_sp)
         if close is not None:
             fit = _refine(pb, close, fit.v)
@@ -404,16 +423,6 @@ def _vehicle(pb: _Problem, taus: np.ndarray, v: float, limit: float, min_sp: flo
             i = int(np.argmin(np.where(weak, fit.gains, np.inf)))
             fit = _refine(pb, np.delete(fit.taus, i), fit.v)
             continue
-        added = _add_one(pb, fit, limit, min_sp, min_height)
-        if added is not None:
-            fit = added
-            continue
-        if not tried_even:
-            tried_even = True
-            even = _even_groups(pb, fit)
-            if even is not None:
-                fit = even
-                continue
         break
     if fit.taus.size == 0 or not pb.seen_by_both(fit.amps).any():
         return None
@@ -429,47 +438,123 @@ def _vehicle(pb: _Problem, taus: np.ndarray, v: float, limit: float, min_sp: flo
                            detector_times=det_times)
 
 
-def _add_one(pb: _Problem, fit: _Fit, limit: float, min_sp: float, min_height: float
-             ) -> _Fit | None:
-    """The vehicle with one more axle where the residual calls for one, if that axle
-    lowers the misfit by ``limit`` and passes the checks; else None."""
-    _, _, res = pb.fit(fit.taus, fit.v)
-    tk = _best_new(pb, res, fit.v, fit.taus, EXCLUDE * min_sp)
-    if not fit.taus[0] - REACH / fit.v <= tk <= fit.taus[-1] + REACH / fit.v:
-        return None
-    trial = _refine(pb, np.append(fit.taus, tk), fit.v)
-    rows = _window(pb, trial.taus, trial.v)  # compared on one window
-    chi_base = float(np.sum(_solve(pb, fit.taus, fit.v, rows, False)[0] ** 2))
-    if chi_base - trial.chi < limit:
-        return None
-    d = np.diff(trial.taus) * trial.v
-    if (d.size and d.min() < min_sp) or (_relative(trial.amps).min() < min_height) \
-            or not pb.seen_by_both(trial.amps).all() or trial.gains.min() < limit:
-        return None
-    return trial
+def _prune(pb: _Problem, taus: np.ndarray, v: float, limit: float) -> np.ndarray:
+    """The pursuit's axles less, one by one, the weakest while it lowers the misfit by
+    less than ``limit``, at the pursuit's times and speed (a cheap first pass before the
+    refinement; the amplitudes' checks wait for the refined speed)."""
+    while taus.size > 1:
+        gains = _solve(pb, taus, v, _window(pb, taus, v), False)[3]
+        if gains.min() >= limit:
+            break
+        taus = np.delete(taus, int(np.argmin(gains)))
+    return taus
 
 
-def _even_groups(pb: _Problem, fit: _Fit) -> _Fit | None:
-    """The fit with every unevenly spaced axle group (≥ 3 axles) re-started evenly spaced
-    over its length, if that fits better; else None."""
+def _templates(pb: _Problem, v: float) -> list[tuple[int, np.ndarray, np.ndarray]]:
+    """Per detector the weighted response of an axle passing detector 1 at sample 0, on
+    the samples where it is not zero: (first sample offset, values, autocorrelation)."""
+    out = []
+    for c, (u, k, _) in enumerate(pb.grids):
+        d = pb.shift[c]
+        j0 = int(np.ceil((u[0] + d) / v * pb.fs))
+        j1 = int(np.floor((u[-1] + d) / v * pb.fs))
+        h = np.interp(v * np.arange(j0, j1 + 1) / pb.fs - d, u, k) * pb.w[c]
+        out.append((j0, h, np.correlate(h, h, mode="full")[h.size - 1:]))
+    return out
+
+
+def _group_search(pb: _Problem, fit: _Fit, limit: float, min_sp: float
+                  ) -> np.ndarray | None:
+    """Each axle group of the vehicle (axles less than GROUP_SPACING apart) chosen again
+    among 1 … GROUP_AXLES evenly spaced axles, anywhere within a metre of it, at the
+    vehicle's speed: the most axles such that each more lowers the misfit by ``limit``
+    and both detectors see every axle.  Fast: with the other axles and the rest fitted and
+    taken off, a group's misfit needs only the readings' correlation with one axle's response and
+    that response's autocorrelation (sample grid).  The new times, or None."""
     taus, v = fit.taus, fit.v
-    if taus.size < 3:
-        return None
-    d = np.diff(taus) * v
-    cuts = np.flatnonzero(d > GROUP_SPACING) + 1
-    start = taus.copy()
-    changed = False
-    for g in np.split(np.arange(taus.size), cuts):
-        if g.size < 3:
+    n = taus.size
+    lo = int(np.searchsorted(pb.t, taus.min() - REACH / v))
+    hi = int(np.searchsorted(pb.t, taus.max() + (pb.shift[1] + REACH) / v, side="right"))
+    rows = np.arange(lo, hi)
+    X = pb.atoms(taus, v, rows)
+    local, parts = [], []
+    for c in range(2):
+        M = np.hstack([X[c], pb.rest[c][rows]])
+        coef = np.linalg.lstsq(M, pb.y[rows, c], rcond=None)[0]
+        local.append(pb.y[rows, c] - pb.rest[c][rows] @ coef[n:])
+        parts.append(X[c] * coef[:n])
+    tpl = _templates(pb, v)
+    at = np.round((taus - pb.t[lo]) * pb.fs).astype(int)  # axles' samples in the window
+    reach = round(1.0 / v * pb.fs)
+    s_min = max(1, int(np.ceil(min_sp / v * pb.fs)))
+    s_max = int(np.floor(GROUP_SPACING / v * pb.fs))
+    out, changed = [], False
+    for g in np.split(np.arange(n), np.flatnonzero(np.diff(taus) * v > GROUP_SPACING) + 1):
+        others = np.setdiff1d(np.arange(n), g)
+        corr, auto = [], []
+        first = max(at[g[0]] - reach, 0)
+        last = min(at[g[-1]] + reach, rows.size - 1)
+        for c, (j0, h, r) in enumerate(tpl):
+            z = local[c] - parts[c][:, others].sum(axis=1)
+            # correlation with an axle at sample m: Σ_j z[m + j0 + j] h[j]
+            full = np.zeros(rows.size)
+            m = np.arange(rows.size)
+            ok = (m + j0 >= 0) & (m + j0 + h.size <= rows.size)
+            if ok.any():
+                mm = m[ok]
+                cc = np.correlate(z, h, mode="valid")  # index q: Σ_j z[q + j] h[j]
+                full[mm] = cc[mm + j0]
+            corr.append(full)
+            auto.append(np.concatenate([r, np.zeros(max(0, s_max * GROUP_AXLES - r.size + 1))]))
+        best = None
+        for k in range(1, GROUP_AXLES + 1):
+            hyp = _hypotheses(first, last, k, s_min, s_max)
+            if hyp.shape[0] == 0:
+                break
+            explained, amps = _explained(hyp, corr, auto)
+            positive = np.all(amps > 0, axis=(1, 2))
+            with np.errstate(divide="ignore", invalid="ignore"):
+                lr = np.log(amps[..., 1] / (pb.ratio * amps[..., 0]))
+            valid = positive & np.all(np.abs(np.where(positive[:, None], lr, np.inf))
+                                      <= pb.bound, axis=1)
+            if not valid.any():
+                break
+            j = int(np.argmax(np.where(valid, explained, -np.inf)))
+            if best is not None and explained[j] - best[0] < limit:
+                break
+            best = (float(explained[j]), hyp[j])
+        if best is None:
+            out.extend(taus[g])
             continue
-        gd = d[g[:-1]]
-        if gd.max() <= UNEVEN * gd.min():
-            continue
-        start[g] = np.linspace(taus[g[0]], taus[g[-1]], g.size)
-        changed = True
-    if not changed:
-        return None
-    trial = _refine(pb, start, v)
-    rows = _window(pb, trial.taus, trial.v)
-    chi_old = float(np.sum(_solve(pb, taus, v, rows, False)[0] ** 2))
-    return trial if trial.chi < chi_old * (1.0 - 1e-9) else None
+        new = pb.t[lo + best[1]]
+        changed |= new.size != g.size or bool(np.any(np.abs(new - taus[g]) * v > 0.05))
+        out.extend(new)
+    return np.sort(np.array(out)) if changed else None
+
+
+def _hypotheses(first: int, last: int, k: int, s_min: int, s_max: int) -> np.ndarray:
+    """Sample indices (n_hyp, k) of k evenly spaced axles between ``first`` and ``last``
+    (spacings s_min … s_max samples)."""
+    if k == 1:
+        return np.arange(first, last + 1)[:, None]
+    hyps = []
+    for sp in range(s_min, s_max + 1):
+        starts = np.arange(first, last - (k - 1) * sp + 1)
+        if starts.size:
+            hyps.append(starts[:, None] + sp * np.arange(k)[None, :])
+    return np.vstack(hyps) if hyps else np.zeros((0, k), dtype=int)
+
+
+def _explained(hyp: np.ndarray, corr, auto) -> tuple[np.ndarray, np.ndarray]:
+    """Misfit each hypothesis removes (both detectors) and its amplitudes (n_hyp, k, 2)."""
+    k = hyp.shape[1]
+    lag = np.abs(hyp[:, :, None] - hyp[:, None, :])
+    total = np.zeros(hyp.shape[0])
+    amps = np.zeros((*hyp.shape, 2))
+    for c in range(2):
+        b = corr[c][hyp]
+        G = auto[c][lag] + 1e-12 * auto[c][0] * np.eye(k)
+        a = np.linalg.solve(G, b[..., None])[..., 0]
+        total += np.sum(a * b, axis=1)
+        amps[..., c] = a
+    return total, amps
