@@ -51,10 +51,12 @@ Contract
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import nnls
+from scipy.signal import find_peaks
 
 from .assemble import VehicleEstimate
 from .response import (
@@ -62,7 +64,6 @@ from .response import (
     LearnedResponses,
     band_pass,
     high_pass,
-    peak_polarity,
     xcorr_lag,
 )
 
@@ -77,16 +78,39 @@ REACH = 2.0
 RATIO_SPREADS = 4.0
 #: ... and at least by this factor (natural log: a factor 2).
 MIN_RATIO_BOUND = float(np.log(2.0))
+#: In the pursuit, the second detector's atom of an axle may be off the first speed
+#: estimate by this share of the lag between the detectors.
+SPEED_SLACK = 0.08
+#: A refined speed this far (share) from the first estimate calls for the groups to be
+#: chosen again at it.
+REGROUP = 0.01
 #: An axle must lower the misfit by this share of what the record's strongest axle did.
 GAIN_SHARE = 0.04
+#: ... and, one more in an axle group, by this many times the vehicle's residual per
+#: sample (the dynamic force of its tyres, beyond what the calibration truck showed) and
+#: this share of the group's residual.
+LEVEL_GAIN = 150.0
+RESIDUAL_SHARE = 1.0 / 3.0
 #: Axles closer than this share of the responses' width (at half height) are one axle
 #: whose force changed while it passed.
 MIN_SPACING_WIDTH = 0.8
 #: A new axle is looked for no closer to one already found than this share of the
 #: smallest spacing (the refinement moves them apart).
 EXCLUDE = 0.5
-#: Axles closer than this (m) form a group (tandem, tridem) whose count is chosen again.
+#: Largest spacing within an axle group (tandem, tridem) whose count is chosen again, m.
 GROUP_SPACING = 2.2
+#: Axle groups are cut where the detectors' readings dip below this share of the lower
+#: neighbouring peak (a 1.3 m tandem under a 1.2 m wide response dips to about 0.8, axles
+#: 2.2 m apart to about 0.2).
+GROUP_DIP = 0.5
+#: An axle group spans where the readings exceed this share of its highest peak (an
+#: axle's response falls to it about 0.65 m away) ...
+GROUP_EXTENT = 0.3
+#: ... and this much more each side, m.
+SEGMENT_MARGIN = 0.3
+#: Peaks of the readings lower than this share of the highest, or rising less above
+#: their surroundings, do not start a group.
+PEAK_FLOOR = 0.1
 #: Most axles of a group.
 GROUP_AXLES = 4
 #: Samples per response width (at half height) a vehicle's fit keeps at least.
@@ -203,21 +227,24 @@ def _problem(t: np.ndarray, y: np.ndarray, gauges: np.ndarray | None,
                     grids=tuple(r.high_passed() for r in learned.responses), **common)
 
 
-def _speed(y: np.ndarray, fs: float, distance: float, speed_range: tuple[float, float]
-           ) -> float | None:
-    z = band_pass(y, fs)
-    z = z * peak_polarity(z)
+def _speed(y: np.ndarray, fs: float, distance: float, speed_range: tuple[float, float],
+           sign: np.ndarray) -> float | None:
+    """Speed from the lag of the band-passed detectors (made positive by the responses'
+    ``sign``), None if they do not correlate in the speed range."""
+    z = band_pass(y, fs) * sign
     lag = xcorr_lag(z[:, 0], z[:, 1], np.floor(distance / speed_range[1] * fs),
                     np.ceil(distance / speed_range[0] * fs))
     return None if lag is None else distance / (lag / fs)
 
 
-def _best_new(pb: _Problem, res: np.ndarray, v: float, taken: np.ndarray, min_gap: float
-              ) -> float:
+def _best_new(pb: _Problem, res: np.ndarray, v: float, taken: np.ndarray, min_gap: float,
+              slack: int = 0) -> tuple[float, float]:
     """The axle time whose atoms (both detectors, one amplitude in their gain ratio) best
-    match the residual ``res`` (all samples)."""
+    match the residual ``res`` (all samples); the second detector's atom may be up to
+    ``slack`` samples off the speed ``v``.  Returns the time at detector 1 and the time
+    the second detector's atom says (both at detector 1 for the speed ``v``)."""
     n = pb.t.size
-    corr = np.zeros(n)
+    corr = []
     energy = 0.0
     for c, (u, k, _) in enumerate(pb.grids):
         d = pb.shift[c]
@@ -229,11 +256,19 @@ def _best_new(pb: _Problem, res: np.ndarray, v: float, taken: np.ndarray, min_ga
         energy += float(atom @ atom)
         lo, hi = max(0, -m_lo), max(0, m_hi)
         r = np.concatenate([np.zeros(lo), res[:, c], np.zeros(hi)])
-        corr += np.correlate(r, atom, mode="valid")[m_lo + lo:m_lo + lo + n]
-    score = np.maximum(corr, 0.0) ** 2 / max(energy, 1e-300)
+        corr.append(np.correlate(r, atom, mode="valid")[m_lo + lo:m_lo + lo + n])
+    if slack:
+        padded = np.concatenate([np.full(slack, -np.inf), corr[1], np.full(slack, -np.inf)])
+        stack = np.lib.stride_tricks.sliding_window_view(padded, 2 * slack + 1)
+        off = np.argmax(stack, axis=1) - slack
+        c2 = corr[1][np.arange(n) + off]
+    else:
+        off, c2 = np.zeros(n, dtype=int), corr[1]
+    score = np.maximum(corr[0] + c2, 0.0) ** 2 / max(energy, 1e-300)
     for tk in taken:  # not on an axle already found
         score[np.abs(pb.t - tk) < min_gap / v] = 0.0
-    return float(pb.t[int(np.argmax(score))])
+    m = int(np.argmax(score))
+    return float(pb.t[m]), float(pb.t[m + off[m]])
 
 
 def pursue_axles(record_time: np.ndarray, y: np.ndarray, learned: LearnedResponses, *,
@@ -254,48 +289,101 @@ def pursue_axles(record_time: np.ndarray, y: np.ndarray, learned: LearnedRespons
         g = np.asarray(gauges, dtype=float)
         g = g - g.mean(axis=0)
         bend = np.column_stack([g @ r.bending for r in learned.responses])
-        v0 = _speed(y - bend, fs, learned.distance, speed_range)
+        y0 = y - bend
     else:
-        v0 = _speed(y, fs, learned.distance, speed_range)
+        y0 = y
+    v0 = _speed(y0, fs, learned.distance, speed_range,
+                np.array([r.sign for r in learned.responses]))
     if v0 is None:
         return []
     pb = _problem(t, y, gauges, learned, v0)
     thr2 = snr_threshold**2
     min_sp = max(min_axle_spacing, MIN_SPACING_WIDTH * float(np.mean(
         [r.fwhm for r in learned.responses])))
-    taus = np.zeros(0)
-    _, chi, res = pb.fit(taus, v0)
+    omp = _Pursuit(pb, v0)
     first = 0.0
     refused = np.zeros(0)  # candidates one detector does not see: not tried again
+    lag = learned.distance / v0
+    slack = int(np.ceil(SPEED_SLACK * lag * fs))
     for _ in range(2 * MAX_AXLES):
-        tk = _best_new(pb, res, v0, np.append(taus, refused), EXCLUDE * min_sp)
-        trial = np.sort(np.append(taus, tk))
-        amps, chi_new, res_new = pb.fit(trial, v0)
-        gain = chi - chi_new
+        tk, tk2 = _best_new(pb, omp.res, v0, np.append(omp.taus, refused),
+                            EXCLUDE * min_sp, slack)
+        amps, chi_new, state = omp.trial(tk, tk2)
+        gain = omp.chi - chi_new
         first = max(first, gain)
-        if gain < max(thr2, GAIN_SHARE * first) or taus.size >= MAX_AXLES:
+        if gain < max(thr2, GAIN_SHARE * first) or omp.taus.size >= MAX_AXLES:
             break
-        if not _acceptable(pb, amps, trial, tk, min_height):
+        if not _acceptable(pb, amps, min_height):
             refused = np.append(refused, tk)
             continue
-        taus, chi, res = trial, chi_new, res_new
+        omp.accept(tk, tk2, chi_new, state)
+    order = np.argsort(omp.taus)
+    taus = omp.taus[order]
+    lags = lag + omp.taus2[order] - taus  # each axle's own lag between the detectors
     if taus.size == 0:
         return []
     limit = max(thr2, GAIN_SHARE * first)
     out = []
-    for group in _groups(taus, v0, max_axle_spacing):
-        veh = _vehicle(pb, group, v0, limit, min_sp, min_height, snr_threshold)
+    for group in np.split(np.arange(taus.size),
+                          np.flatnonzero(np.diff(taus) * v0 > max_axle_spacing) + 1):
+        # the vehicle's speed from its axles' lags, weighted by their amplitudes
+        v = learned.distance / float(np.median(lags[group]))
+        if not speed_range[0] <= v <= speed_range[1]:
+            v = v0
+        veh = _vehicle(pb, taus[group], v, limit, min_sp, min_height, snr_threshold)
         if veh is not None:
             out.append(veh)
     return out
 
 
-def _acceptable(pb: _Problem, amps: np.ndarray, taus: np.ndarray, tk: float,
-                min_height: float) -> bool:
-    """Whether the axle at ``tk`` reaches ``min_height`` of the largest amplitude at both
-    detectors and both see it in the gain ratio."""
-    i = int(np.flatnonzero(taus == tk)[0])
-    return bool(_relative(amps)[i].min() >= min_height and pb.seen_by_both(amps)[i])
+def _acceptable(pb: _Problem, amps: np.ndarray, min_height: float) -> bool:
+    """Whether the last axle of ``amps`` reaches ``min_height`` of the largest amplitude
+    at both detectors (the gain ratio is checked on the refined vehicle: merged peaks
+    explained in part share their amplitudes unevenly between the detectors)."""
+    return bool(_relative(amps)[-1].min() >= min_height)
+
+
+class _Pursuit:
+    """Orthogonal matching pursuit over the whole record: the axles' responses with each
+    detector's rest projected out, their Gram matrix and least-squares amplitudes kept up
+    to date as axles are added."""
+
+    def __init__(self, pb: _Problem, v: float):
+        self.pb, self.v = pb, v
+        self.taus = np.zeros(0)  # at detector 1
+        self.taus2 = np.zeros(0)  # the second detector's, less D / v
+        self.y = []
+        for c in range(2):
+            Q = pb.q_rest[c]
+            self.y.append(pb.y[:, c] - Q @ (Q.T @ pb.y[:, c]))
+        self.cols = [np.zeros((pb.t.size, 0)), np.zeros((pb.t.size, 0))]
+        self.res = np.column_stack(self.y)
+        self.chi = float(np.sum(self.res**2))
+
+    def trial(self, tk: float, tk2: float):
+        """Amplitudes (n + 1, 2; the new axle last), misfit and state with an axle at
+        ``tk`` added (at ``tk2`` for the second detector)."""
+        new = [self.pb.atoms(np.array([tk]), self.v)[0],
+               self.pb.atoms(np.array([tk2]), self.v)[1]]
+        cols, amps, res = [], np.zeros((self.taus.size + 1, 2)), np.empty_like(self.res)
+        for c in range(2):
+            Q = self.pb.q_rest[c]
+            x = new[c][:, 0]
+            x = x - Q @ (Q.T @ x)
+            X = np.column_stack([self.cols[c], x])
+            G = X.T @ X
+            G.flat[::G.shape[0] + 1] += 1e-12 * (np.trace(G) / G.shape[0] + 1e-300)
+            a = np.linalg.solve(G, X.T @ self.y[c])
+            amps[:, c] = a
+            res[:, c] = self.y[c] - X @ a
+            cols.append(X)
+        return amps, float(np.sum(res**2)), (cols, res)
+
+    def accept(self, tk: float, tk2: float, chi: float, state) -> None:
+        self.cols, self.res = state
+        self.taus = np.append(self.taus, tk)
+        self.taus2 = np.append(self.taus2, tk2)
+        self.chi = chi
 
 
 def _relative(amps: np.ndarray) -> np.ndarray:
@@ -408,10 +496,14 @@ def _vehicle(pb: _Problem, taus: np.ndarray, v: float, limit: float, min_sp: flo
              min_height: float, snr_threshold: float) -> VehicleEstimate | None:
     """Refinement, backward check, one more pursuit step and the groups' even spacing;
     the vehicle's estimate."""
-    fit = _refine(pb, _prune(pb, taus, v, limit), v)
-    grouped = _group_search(pb, fit, limit, min_sp)
-    if grouped is not None:
-        fit = _refine(pb, grouped, fit.v)
+    kept = _prune(pb, taus, v, limit)
+    grouped = _group_search(pb, kept, v, limit, min_sp, slack=True)
+    fit = _refine(pb, kept if grouped is None else grouped, v)
+    if abs(fit.v / v - 1.0) > REGROUP:
+        grouped = _group_search(pb, _prune(pb, fit.taus, fit.v, limit, both=True), fit.v,
+                                limit, min_sp)
+        if grouped is not None:
+            fit = _refine(pb, grouped, fit.v)
     for _ in range(MAX_AXLES):
         close = _drop_close(fit, min_sp)
         if close is not None:
@@ -438,15 +530,19 @@ def _vehicle(pb: _Problem, taus: np.ndarray, v: float, limit: float, min_sp: flo
                            detector_times=det_times)
 
 
-def _prune(pb: _Problem, taus: np.ndarray, v: float, limit: float) -> np.ndarray:
-    """The pursuit's axles less, one by one, the weakest while it lowers the misfit by
-    less than ``limit``, at the pursuit's times and speed (a cheap first pass before the
-    refinement; the amplitudes' checks wait for the refined speed)."""
+def _prune(pb: _Problem, taus: np.ndarray, v: float, limit: float, both: bool = False
+           ) -> np.ndarray:
+    """``taus`` less, one by one, the weakest axle while it lowers the misfit by less
+    than ``limit`` (or, with ``both``, one detector does not see it), at the given times
+    and speed: a cheap pass without refinement."""
     while taus.size > 1:
-        gains = _solve(pb, taus, v, _window(pb, taus, v), False)[3]
-        if gains.min() >= limit:
+        _, _, amps, gains = _solve(pb, taus, v, _window(pb, taus, v), False)
+        weak = gains < limit
+        if both:
+            weak |= ~pb.seen_by_both(amps)
+        if not weak.any():
             break
-        taus = np.delete(taus, int(np.argmin(gains)))
+        taus = np.delete(taus, int(np.argmin(np.where(weak, gains, np.inf))))
     return taus
 
 
@@ -463,15 +559,17 @@ def _templates(pb: _Problem, v: float) -> list[tuple[int, np.ndarray, np.ndarray
     return out
 
 
-def _group_search(pb: _Problem, fit: _Fit, limit: float, min_sp: float
-                  ) -> np.ndarray | None:
+def _group_search(pb: _Problem, taus: np.ndarray, v: float, limit: float, min_sp: float,
+                  slack: bool = False) -> np.ndarray | None:
     """Each axle group of the vehicle (axles less than GROUP_SPACING apart) chosen again
     among 1 … GROUP_AXLES evenly spaced axles, anywhere within a metre of it, at the
     vehicle's speed: the most axles such that each more lowers the misfit by ``limit``
     and both detectors see every axle.  Fast: with the other axles and the rest fitted and
-    taken off, a group's misfit needs only the readings' correlation with one axle's response and
-    that response's autocorrelation (sample grid).  The new times, or None."""
-    taus, v = fit.taus, fit.v
+    taken off, a group's misfit needs only the readings' correlation with one axle's
+    response and that response's autocorrelation (on the window's sampling grid).  The new
+    times, or None.  With ``slack`` (a first speed estimate) the second detector's
+    readings of each group may lag by up to SPEED_SLACK of the lag more or less (the
+    offset that best fits one axle, kept for more)."""
     n = taus.size
     lo = int(np.searchsorted(pb.t, taus.min() - REACH / v))
     hi = int(np.searchsorted(pb.t, taus.max() + (pb.shift[1] + REACH) / v, side="right"))
@@ -483,19 +581,28 @@ def _group_search(pb: _Problem, fit: _Fit, limit: float, min_sp: float
         coef = np.linalg.lstsq(M, pb.y[rows, c], rcond=None)[0]
         local.append(pb.y[rows, c] - pb.rest[c][rows] @ coef[n:])
         parts.append(X[c] * coef[:n])
+    resid = [local[c] - parts[c].sum(axis=1) for c in range(2)]
+    r_total = sum(float(r @ r) for r in resid)
+    n_samples = 2 * rows.size
     tpl = _templates(pb, v)
-    at = np.round((taus - pb.t[lo]) * pb.fs).astype(int)  # axles' samples in the window
-    reach = round(1.0 / v * pb.fs)
-    s_min = max(1, int(np.ceil(min_sp / v * pb.fs)))
-    s_max = int(np.floor(GROUP_SPACING / v * pb.fs))
+    st = pb.step  # hypotheses on every st-th sample
+    at = np.round((taus - pb.t[lo]) * pb.fs / st).astype(int)  # axles' grid points
+    margin = round(SEGMENT_MARGIN / v * pb.fs)
+    s_min = max(1, int(np.ceil(min_sp / v * pb.fs / st)))
+    s_max = int(np.floor(GROUP_SPACING / v * pb.fs / st))
+    n_grid = (rows.size - 1) // st + 1
     out, changed = [], False
-    for g in np.split(np.arange(n), np.flatnonzero(np.diff(taus) * v > GROUP_SPACING) + 1):
+    for first, last in _segments(pb, local, v, margin, st):
+        g = np.flatnonzero((at >= first) & (at <= last))
         others = np.setdiff1d(np.arange(n), g)
         corr, auto = [], []
-        first = max(at[g[0]] - reach, 0)
-        last = min(at[g[-1]] + reach, rows.size - 1)
+        first, last = max(first, 0), min(last, n_grid - 1)
+        energy = r_inside = 0.0  # the group's readings and residual where it acts
         for c, (j0, h, r) in enumerate(tpl):
             z = local[c] - parts[c][:, others].sum(axis=1)
+            a, b = max(first * st + j0, 0), min(last * st + j0 + h.size, rows.size)
+            energy += float(z[a:b] @ z[a:b])
+            r_inside += float(resid[c][a:b] @ resid[c][a:b])
             # correlation with an axle at sample m: Σ_j z[m + j0 + j] h[j]
             full = np.zeros(rows.size)
             m = np.arange(rows.size)
@@ -504,8 +611,12 @@ def _group_search(pb: _Problem, fit: _Fit, limit: float, min_sp: float
                 mm = m[ok]
                 cc = np.correlate(z, h, mode="valid")  # index q: Σ_j z[q + j] h[j]
                 full[mm] = cc[mm + j0]
-            corr.append(full)
+            corr.append(full[::st])
+            r = r[::st]
             auto.append(np.concatenate([r, np.zeros(max(0, s_max * GROUP_AXLES - r.size + 1))]))
+        if slack:
+            corr[1] = _best_offset(corr, auto, first, last,
+                                   int(np.ceil(SPEED_SLACK * pb.shift[1] / v * pb.fs / st)))
         best = None
         for k in range(1, GROUP_AXLES + 1):
             hyp = _hypotheses(first, last, k, s_min, s_max)
@@ -520,16 +631,80 @@ def _group_search(pb: _Problem, fit: _Fit, limit: float, min_sp: float
             if not valid.any():
                 break
             j = int(np.argmax(np.where(valid, explained, -np.inf)))
-            if best is not None and explained[j] - best[0] < limit:
-                break
+            if best is not None:
+                gain = explained[j] - best[0]
+                left = energy - best[0]  # the group's residual with one axle fewer
+                level = (r_total - r_inside + left) / n_samples
+                if gain < limit or gain < LEVEL_GAIN * level or gain < RESIDUAL_SHARE * left:
+                    break
             best = (float(explained[j]), hyp[j])
         if best is None:
             out.extend(taus[g])
             continue
-        new = pb.t[lo + best[1]]
+        new = pb.t[lo + st * best[1]]
         changed |= new.size != g.size or bool(np.any(np.abs(new - taus[g]) * v > 0.05))
         out.extend(new)
+    kept = np.setdiff1d(np.arange(n), np.flatnonzero(np.isin(at, np.concatenate(
+        [np.arange(a, b + 1) for a, b in _segments(pb, local, v, margin, st)] or
+        [np.zeros(0, dtype=int)]))))
+    changed |= kept.size < n  # axles outside every segment: noise the pursuit took
     return np.sort(np.array(out)) if changed else None
+
+
+def _segments(pb: _Problem, local, v: float, margin: int, st: int) -> list[tuple[int, int]]:
+    """The vehicle's axle groups in its window: (first, last) grid points where a group's
+    axles may be.  Both detectors' local readings (the second's moved back by the lag,
+    each over its largest) are added; groups are cut where their sum dips below GROUP_DIP
+    of the lower of the two peaks beside, and span where the sum exceeds GROUP_EXTENT of
+    their highest, ``margin`` samples more each side (not past a cut)."""
+    lag = round(pb.shift[1] / v * pb.fs)
+    e = np.zeros(local[0].size)
+    for c, r in enumerate(pb.grids):
+        z = local[c] * np.sign(r[1][int(np.argmax(np.abs(r[1])))])
+        z = np.maximum(z, 0.0)
+        top = float(z.max())
+        if top <= 0:
+            continue
+        shift = lag if c else 0
+        e[:e.size - shift] += z[shift:] / top
+    if not e.max() > 0:
+        return []
+    floor = PEAK_FLOOR * float(e.max())
+    peaks, _ = find_peaks(e, height=floor, prominence=floor)
+    if peaks.size == 0:
+        return []
+    cuts = [0]
+    for a, b in itertools.pairwise(peaks):
+        m = a + int(np.argmin(e[a:b + 1]))
+        if e[m] < GROUP_DIP * min(e[a], e[b]):
+            cuts.append(m)
+    cuts.append(e.size - 1)
+    out = []
+    for a, b in itertools.pairwise(cuts):
+        part = e[a:b + 1]
+        above = np.flatnonzero(part >= GROUP_EXTENT * float(part.max()))
+        lo = max(a + int(above[0]) - margin, a)
+        hi = min(a + int(above[-1]) + margin, b)
+        out.append((lo // st, hi // st))
+    return out
+
+
+def _best_offset(corr, auto, first: int, last: int, reach: int) -> np.ndarray:
+    """The second detector's correlations shifted by the offset (at most ``reach`` grid
+    points) with which one axle between ``first`` and ``last`` fits best."""
+    hyp = np.arange(first, last + 1)[:, None]
+    best, shifted = -np.inf, corr[1]
+    for off in range(-reach, reach + 1):
+        c2 = np.zeros_like(corr[1])
+        if off >= 0:
+            c2[:c2.size - off] = corr[1][off:]
+        else:
+            c2[-off:] = corr[1][:off]
+        explained, amps = _explained(hyp, [corr[0], c2], auto)
+        ok = np.all(amps > 0, axis=(1, 2))
+        if ok.any() and explained[ok].max() > best:
+            best, shifted = float(explained[ok].max()), c2
+    return shifted
 
 
 def _hypotheses(first: int, last: int, k: int, s_min: int, s_max: int) -> np.ndarray:

@@ -453,25 +453,38 @@ class _Design:
         return x[:p], own
 
 
+def _mirror(m: int) -> np.ndarray:
+    """(m, ⌈m/2⌉) matrix spreading the ordinates of one half (centre last) of a symmetric
+    response over its m interior ordinates (m odd: the centre is a node)."""
+    half = (m + 1) // 2
+    S = np.zeros((m, half))
+    for j in range(m):
+        S[j, min(j, m - 1 - j)] = 1.0
+    return S
+
+
 def _learn_kernel(runs: Sequence[_Run], offsets: np.ndarray, amps: np.ndarray,
                   d_shift: float, col: int, grid: np.ndarray, ell: float, noise: float,
-                  gauge_mode: bool) -> tuple[np.ndarray, np.ndarray]:
-    """K on ``grid`` (zero at its ends) and the gauge weights for fixed amplitudes
-    ``amps`` (n_runs, n_axles): least squares on the hat functions, smoothed."""
+                  gauge_mode: bool, symmetric: bool) -> tuple[np.ndarray, np.ndarray]:
+    """K on ``grid`` (zero at its ends; even about u = 0 if ``symmetric``) and the gauge
+    weights for fixed amplitudes ``amps`` (n_runs, n_axles): least squares on the hat
+    functions, smoothed."""
     h = grid[1] - grid[0]
     n = grid.size - 1
     n_g = runs[0].g.shape[1]
+    S = _mirror(n - 1) if symmetric else np.eye(n - 1)
+    m = S.shape[1]
     shared, own = [], []
     for r, a in zip(runs, amps, strict=True):
-        G = hat_design(_positions(r, offsets, d_shift), a, grid[0], h, n).toarray()
+        G = hat_design(_positions(r, offsets, d_shift), a, grid[0], h, n) @ S
         shared.append(np.hstack([_transform(r, G, gauge_mode), r.g]))
         own.append(r.nuisance if gauge_mode else np.zeros((r.t.size, 0)))
-    pen = np.zeros((n - 1 + n_g, n - 1 + n_g))
+    pen = np.zeros((m + n_g, m + n_g))
     if ell > 0:
-        pen[:n - 1, :n - 1] = _smoothing(n - 1, ell, h)
-    pen[n - 1:, n - 1:] = GAUGE_RIDGE * np.eye(n_g)
+        pen[:m, :m] = S.T @ _smoothing(n - 1, ell, h) @ S
+    pen[m:, m:] = GAUGE_RIDGE * np.eye(n_g)
     x, _ = _Design(runs, col, gauge_mode).solve(shared, own, pen, noise)
-    return np.concatenate([[0.0], x[:n - 1], [0.0]]), x[n - 1:]
+    return np.concatenate([[0.0], S @ x[:m], [0.0]]), x[m:]
 
 
 def _atoms(run: _Run, offsets: np.ndarray, d_shift: float, grid: np.ndarray,
@@ -550,7 +563,7 @@ def learn_responses(records: Sequence[Record], detectors: Sequence[str], distanc
                     gauges: Sequence[str] | str | None = "auto",
                     speed_range: tuple[float, float] = (5.0, 40.0),
                     smoothing: float = 0.05, spacing: float | None = None,
-                    iterations: int = 4) -> LearnedResponses:
+                    iterations: int = 4, symmetric: bool = True) -> LearnedResponses:
     """Each detector's response to one axle, from runs of a truck with known ``spacings``.
 
     Parameters
@@ -622,6 +635,7 @@ def learn_responses(records: Sequence[Record], detectors: Sequence[str], distanc
     noise = np.where(noise > 0, noise, 1.0)
     h = spacing if spacing is not None else max(runs[k].v / recs[k].sampling_rate for k in used)
     n = max(int(np.ceil(2 * NEAR / require_positive("spacing", h))), 4)
+    n += n % 2  # even: u = 0 is a node
     grid = -NEAR + 2 * NEAR / n * np.arange(n + 1)
 
     kernels = [(grid, _bump(grid)), (grid, _bump(grid))]
@@ -637,7 +651,7 @@ def learn_responses(records: Sequence[Record], detectors: Sequence[str], distanc
                 amps, weights[c] = _learn_amplitudes(active, offs, grid, kernels[c][1], shift,
                                                      c, noise[c], gauge_mode)
                 kk, weights[c] = _learn_kernel(active, offs, amps, shift, c, grid, smoothing,
-                                               noise[c], gauge_mode)
+                                               noise[c], gauge_mode, symmetric)
                 kernels[c] = (grid, kk)
         # anchor: detector 1's response peaks at u = 0 (it defines where the axles are,
         # so the runs' times follow it).  Detector 2's stays where the runs put it with
@@ -646,7 +660,9 @@ def learn_responses(records: Sequence[Record], detectors: Sequence[str], distanc
         # high-pass left of the truck's bending, and its peak is the declared distance.
         for c, (g, kk) in enumerate(kernels):
             at, top = _peak(g, kk)
-            if c == 0 or not gauge_mode:
+            if symmetric:
+                at = 0.0
+            elif c == 0 or not gauge_mode:
                 kk = np.interp(g + at, g, kk, left=0.0, right=0.0)
             if c == 0:
                 for k in used:
