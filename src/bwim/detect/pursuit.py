@@ -81,11 +81,11 @@ MIN_RATIO_BOUND = float(np.log(2.0))
 #: In the pursuit, the second detector's atom of an axle may be off the first speed
 #: estimate by this share of the lag between the detectors.
 SPEED_SLACK = 0.08
-#: A refined speed this far (share) from the first estimate calls for the groups to be
-#: chosen again at it.
-REGROUP = 0.01
+#: The pursuit stops at an axle lowering the misfit by less than this share of what the
+#: record's strongest did (the axle groups are chosen again after).
+PURSUIT_SHARE = 0.1
 #: An axle must lower the misfit by this share of what the record's strongest axle did.
-GAIN_SHARE = 0.04
+GAIN_SHARE = 0.02
 #: ... and, one more in an axle group, by this many times the vehicle's residual per
 #: sample (the dynamic force of its tyres, beyond what the calibration truck showed) and
 #: this share of the group's residual.
@@ -114,12 +114,14 @@ PEAK_FLOOR = 0.1
 #: Most axles of a group.
 GROUP_AXLES = 4
 #: Samples per response width (at half height) a vehicle's fit keeps at least.
-WINDOW_SAMPLES = 10
+WINDOW_SAMPLES = 9
 #: Levenberg–Marquardt iterations of a refinement, at most.
 MAX_LM = 15
+#: ... of the first, which sets the speed at which the axle groups are chosen.
+FIRST_LM = 4
 #: ... which stops when the misfit falls by less than this share (or the times move by
 #: less than 2 mm of travel).
-CONVERGED = 1e-3
+CONVERGED = 3e-3
 
 
 @dataclass(frozen=True, eq=False)
@@ -136,6 +138,7 @@ class _Problem:
     spread: float  # learned spread of that log ratio
     shift: tuple[float, float]  # D_d
     grids: tuple  # per detector (u, K, dK/du), high-passed without gauges
+    steps: tuple  # per detector K's differences between ordinates (0 after the last)
     fs: float
     step: int  # every step-th sample in a vehicle's window
 
@@ -148,14 +151,14 @@ class _Problem:
         out, der = [], []
         for c, (u, k, _) in enumerate(self.grids):
             du = u[1] - u[0]
-            x = (v * (t[:, None] - taus[None, :]) - self.shift[c] - u[0]) / du
-            inside = (x >= 0.0) & (x < u.size - 1)
-            j = np.where(inside, x, 0.0).astype(np.intp)
-            f = x - j
-            k0, k1 = k[j], k[j + 1]
-            out.append(np.where(inside, k0 + f * (k1 - k0), 0.0) * self.w[c])
+            x = (v * (t[:, None] - taus[None, :]) - (self.shift[c] + u[0])) * (1.0 / du)
+            np.clip(x, 0.0, u.size - 1.000001, out=x)  # the grids end in zeros
+            j = x.astype(np.intp)
+            x -= j
+            step = self.steps[c][j]
+            out.append((k[j] + x * step) * self.w[c])
             if slopes:
-                der.append(np.where(inside, k1 - k0, 0.0) * (self.w[c] / du))
+                der.append(step * (self.w[c] / du))
         return (out, der) if slopes else out
 
     def fit(self, taus: np.ndarray, v: float) -> tuple[np.ndarray, float, np.ndarray]:
@@ -218,13 +221,15 @@ def _problem(t: np.ndarray, y: np.ndarray, gauges: np.ndarray | None,
         tc = tc / max(float(np.ptp(tc)), 1e-300)
         rest = tuple(np.column_stack([g @ r.bending, np.ones_like(tc), tc]) * w[c]
                      for c, r in enumerate(learned.responses))
+        grids = tuple(r.padded() for r in learned.responses)
         return _Problem(y=(y - y.mean(axis=0)) * w, rest=rest,
-                        q_rest=tuple(np.linalg.qr(r)[0] for r in rest),
-                        grids=tuple(r.padded() for r in learned.responses), **common)
+                        q_rest=tuple(np.linalg.qr(r)[0] for r in rest), grids=grids,
+                        steps=tuple(np.append(np.diff(g[1]), 0.0) for g in grids), **common)
     y_hp = high_pass(y, HIGH_PASS / v * fs) * w
     empty = np.zeros((t.size, 0))
-    return _Problem(y=y_hp, rest=(empty, empty), q_rest=(empty, empty),
-                    grids=tuple(r.high_passed() for r in learned.responses), **common)
+    grids = tuple(r.high_passed() for r in learned.responses)
+    return _Problem(y=y_hp, rest=(empty, empty), q_rest=(empty, empty), grids=grids,
+                    steps=tuple(np.append(np.diff(g[1]), 0.0) for g in grids), **common)
 
 
 def _speed(y: np.ndarray, fs: float, distance: float, speed_range: tuple[float, float],
@@ -311,7 +316,7 @@ def pursue_axles(record_time: np.ndarray, y: np.ndarray, learned: LearnedRespons
         amps, chi_new, state = omp.trial(tk, tk2)
         gain = omp.chi - chi_new
         first = max(first, gain)
-        if gain < max(thr2, GAIN_SHARE * first) or omp.taus.size >= MAX_AXLES:
+        if gain < max(thr2, PURSUIT_SHARE * first) or omp.taus.size >= MAX_AXLES:
             break
         if not _acceptable(pb, amps, min_height):
             refused = np.append(refused, tk)
@@ -324,13 +329,18 @@ def pursue_axles(record_time: np.ndarray, y: np.ndarray, learned: LearnedRespons
         return []
     limit = max(thr2, GAIN_SHARE * first)
     out = []
-    for group in np.split(np.arange(taus.size),
-                          np.flatnonzero(np.diff(taus) * v0 > max_axle_spacing) + 1):
-        # the vehicle's speed from its axles' lags, weighted by their amplitudes
+    groups = np.split(np.arange(taus.size),
+                      np.flatnonzero(np.diff(taus) * v0 > max_axle_spacing) + 1)
+    # each vehicle's axles may lie between the midpoints to its neighbours' (the pursuit
+    # may have missed some: the axle groups are found again there)
+    edges = [t[0]] + [0.5 * (taus[a[-1]] + taus[b[0]]) for a, b in itertools.pairwise(groups)] + [t[-1]]
+    for k, group in enumerate(groups):
+        # the vehicle's speed from its axles' lags
         v = learned.distance / float(np.median(lags[group]))
         if not speed_range[0] <= v <= speed_range[1]:
             v = v0
-        veh = _vehicle(pb, taus[group], v, limit, min_sp, min_height, snr_threshold)
+        veh = _vehicle(pb, taus[group], v, limit, min_sp, min_height, snr_threshold,
+                       (edges[k], edges[k + 1]))
         if veh is not None:
             out.append(veh)
     return out
@@ -443,7 +453,7 @@ def _solve(pb: _Problem, taus: np.ndarray, v: float, rows: np.ndarray, slopes: b
             gains * pb.step)
 
 
-def _refine(pb: _Problem, taus: np.ndarray, v: float) -> _Fit:
+def _refine(pb: _Problem, taus: np.ndarray, v: float, iterations: int = MAX_LM) -> _Fit:
     """The vehicle's axle times and speed by Levenberg–Marquardt on the variable
     projection (amplitudes and rest by least squares inside), on a fixed window."""
     taus = np.sort(np.asarray(taus, dtype=float))
@@ -453,7 +463,7 @@ def _refine(pb: _Problem, taus: np.ndarray, v: float) -> _Fit:
     cost = float(r @ r)
     lam = 1e-3
     scale = np.append(np.full(taus.size, 1.0 / v), 1.0 / v)  # τ in s, v in m/s: metres
-    for _ in range(MAX_LM):
+    for _ in range(iterations):
         Js = J * scale
         A = Js.T @ Js
         g = Js.T @ r
@@ -474,7 +484,7 @@ def _refine(pb: _Problem, taus: np.ndarray, v: float) -> _Fit:
                 improved = True
                 break
             lam *= 10.0
-        if not improved or rel < CONVERGED or np.max(np.abs(step[:-1])) * p[-1] < 2e-3:
+        if not improved or rel < CONVERGED or np.max(np.abs(step[:-1])) * p[-1] < 5e-3:
             break
     return _Fit(taus=p[:-1], v=float(p[-1]), amps=amps, chi=cost, gains=gains)
 
@@ -493,17 +503,16 @@ def _drop_close(fit: _Fit, min_sp: float) -> np.ndarray | None:
 
 
 def _vehicle(pb: _Problem, taus: np.ndarray, v: float, limit: float, min_sp: float,
-             min_height: float, snr_threshold: float) -> VehicleEstimate | None:
-    """Refinement, backward check, one more pursuit step and the groups' even spacing;
-    the vehicle's estimate."""
-    kept = _prune(pb, taus, v, limit)
-    grouped = _group_search(pb, kept, v, limit, min_sp, slack=True)
-    fit = _refine(pb, kept if grouped is None else grouped, v)
-    if abs(fit.v / v - 1.0) > REGROUP:
-        grouped = _group_search(pb, _prune(pb, fit.taus, fit.v, limit, both=True), fit.v,
-                                limit, min_sp)
-        if grouped is not None:
-            fit = _refine(pb, grouped, fit.v)
+             min_height: float, snr_threshold: float, span: tuple[float, float]
+             ) -> VehicleEstimate | None:
+    """A first refinement (the speed), the axle groups chosen again in ``span`` (record
+    times at detector 1), the final refinement and backward check; the vehicle's
+    estimate."""
+    fit = _refine(pb, _prune(pb, taus, v, limit), v, FIRST_LM)
+    kept = _prune(pb, fit.taus, fit.v, limit, both=True)
+    grouped = _group_search(pb, kept, fit.v, limit, min_sp, span)
+    if grouped is not None or kept.size < fit.taus.size:
+        fit = _refine(pb, kept if grouped is None else grouped, fit.v)
     for _ in range(MAX_AXLES):
         close = _drop_close(fit, min_sp)
         if close is not None:
@@ -560,19 +569,18 @@ def _templates(pb: _Problem, v: float) -> list[tuple[int, np.ndarray, np.ndarray
 
 
 def _group_search(pb: _Problem, taus: np.ndarray, v: float, limit: float, min_sp: float,
-                  slack: bool = False) -> np.ndarray | None:
-    """Each axle group of the vehicle (axles less than GROUP_SPACING apart) chosen again
-    among 1 … GROUP_AXLES evenly spaced axles, anywhere within a metre of it, at the
+                  span: tuple[float, float]) -> np.ndarray | None:
+    """Each axle group of the vehicle (where the detectors' readings, with the rest and
+    the other groups' axles fitted and taken off, stand out between dips: see
+    :func:`_segments`) chosen again among 1 … GROUP_AXLES evenly spaced axles at the
     vehicle's speed: the most axles such that each more lowers the misfit by ``limit``
     and both detectors see every axle.  Fast: with the other axles and the rest fitted and
     taken off, a group's misfit needs only the readings' correlation with one axle's
     response and that response's autocorrelation (on the window's sampling grid).  The new
-    times, or None.  With ``slack`` (a first speed estimate) the second detector's
-    readings of each group may lag by up to SPEED_SLACK of the lag more or less (the
-    offset that best fits one axle, kept for more)."""
+    times, or None."""
     n = taus.size
-    lo = int(np.searchsorted(pb.t, taus.min() - REACH / v))
-    hi = int(np.searchsorted(pb.t, taus.max() + (pb.shift[1] + REACH) / v, side="right"))
+    lo = int(np.searchsorted(pb.t, span[0] - REACH / v))
+    hi = int(np.searchsorted(pb.t, span[1] + (pb.shift[1] + REACH) / v, side="right"))
     rows = np.arange(lo, hi)
     X = pb.atoms(taus, v, rows)
     local, parts = [], []
@@ -592,7 +600,8 @@ def _group_search(pb: _Problem, taus: np.ndarray, v: float, limit: float, min_sp
     s_max = int(np.floor(GROUP_SPACING / v * pb.fs / st))
     n_grid = (rows.size - 1) // st + 1
     out, changed = [], False
-    for first, last in _segments(pb, local, v, margin, st):
+    segments = _segments(pb, local, v, margin, st)
+    for first, last in segments:
         g = np.flatnonzero((at >= first) & (at <= last))
         others = np.setdiff1d(np.arange(n), g)
         corr, auto = [], []
@@ -614,9 +623,6 @@ def _group_search(pb: _Problem, taus: np.ndarray, v: float, limit: float, min_sp
             corr.append(full[::st])
             r = r[::st]
             auto.append(np.concatenate([r, np.zeros(max(0, s_max * GROUP_AXLES - r.size + 1))]))
-        if slack:
-            corr[1] = _best_offset(corr, auto, first, last,
-                                   int(np.ceil(SPEED_SLACK * pb.shift[1] / v * pb.fs / st)))
         best = None
         for k in range(1, GROUP_AXLES + 1):
             hyp = _hypotheses(first, last, k, s_min, s_max)
@@ -641,13 +647,13 @@ def _group_search(pb: _Problem, taus: np.ndarray, v: float, limit: float, min_sp
         if best is None:
             out.extend(taus[g])
             continue
-        new = pb.t[lo + st * best[1]]
-        changed |= new.size != g.size or bool(np.any(np.abs(new - taus[g]) * v > 0.05))
-        out.extend(new)
-    kept = np.setdiff1d(np.arange(n), np.flatnonzero(np.isin(at, np.concatenate(
-        [np.arange(a, b + 1) for a, b in _segments(pb, local, v, margin, st)] or
-        [np.zeros(0, dtype=int)]))))
-    changed |= kept.size < n  # axles outside every segment: noise the pursuit took
+        if best[1].size == g.size:
+            out.extend(taus[g])  # the count stands: the refined times stay
+            continue
+        out.extend(pb.t[lo + st * best[1]])
+        changed = True
+    # axles outside every segment: noise the pursuit took
+    changed |= not all(any(a <= m <= b for a, b in segments) for m in at)
     return np.sort(np.array(out)) if changed else None
 
 
@@ -689,24 +695,6 @@ def _segments(pb: _Problem, local, v: float, margin: int, st: int) -> list[tuple
     return out
 
 
-def _best_offset(corr, auto, first: int, last: int, reach: int) -> np.ndarray:
-    """The second detector's correlations shifted by the offset (at most ``reach`` grid
-    points) with which one axle between ``first`` and ``last`` fits best."""
-    hyp = np.arange(first, last + 1)[:, None]
-    best, shifted = -np.inf, corr[1]
-    for off in range(-reach, reach + 1):
-        c2 = np.zeros_like(corr[1])
-        if off >= 0:
-            c2[:c2.size - off] = corr[1][off:]
-        else:
-            c2[-off:] = corr[1][:off]
-        explained, amps = _explained(hyp, [corr[0], c2], auto)
-        ok = np.all(amps > 0, axis=(1, 2))
-        if ok.any() and explained[ok].max() > best:
-            best, shifted = float(explained[ok].max()), c2
-    return shifted
-
-
 def _hypotheses(first: int, last: int, k: int, s_min: int, s_max: int) -> np.ndarray:
     """Sample indices (n_hyp, k) of k evenly spaced axles between ``first`` and ``last``
     (spacings s_min … s_max samples)."""
@@ -723,6 +711,10 @@ def _hypotheses(first: int, last: int, k: int, s_min: int, s_max: int) -> np.nda
 def _explained(hyp: np.ndarray, corr, auto) -> tuple[np.ndarray, np.ndarray]:
     """Misfit each hypothesis removes (both detectors) and its amplitudes (n_hyp, k, 2)."""
     k = hyp.shape[1]
+    if k == 1:
+        b = np.stack([corr[0][hyp[:, 0]], corr[1][hyp[:, 0]]], axis=-1)  # (n_hyp, 2)
+        a = b / np.array([max(auto[0][0], 1e-300), max(auto[1][0], 1e-300)])
+        return np.sum(a * b, axis=1), a[:, None, :]
     lag = np.abs(hyp[:, :, None] - hyp[:, None, :])
     total = np.zeros(hyp.shape[0])
     amps = np.zeros((*hyp.shape, 2))

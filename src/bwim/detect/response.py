@@ -563,7 +563,8 @@ def learn_responses(records: Sequence[Record], detectors: Sequence[str], distanc
                     gauges: Sequence[str] | str | None = "auto",
                     speed_range: tuple[float, float] = (5.0, 40.0),
                     smoothing: float = 0.05, spacing: float | None = None,
-                    iterations: int = 4, symmetric: bool = True) -> LearnedResponses:
+                    iterations: int = 4, symmetric: bool | None = None
+                    ) -> LearnedResponses:
     """Each detector's response to one axle, from runs of a truck with known ``spacings``.
 
     Parameters
@@ -590,6 +591,13 @@ def learn_responses(records: Sequence[Record], detectors: Sequence[str], distanc
         sample.
     iterations : int
         Outer cycles of (responses and amplitudes, then each run's timing and speed).
+    symmetric : bool, optional
+        Learn responses even about the detector (``K(−u) = K(u)``): a tyre's local effect
+        on a detector in a uniform slab is, and the calibration truck's own dynamic
+        forces at the detectors, the same in every run, then cannot skew the responses
+        (nor the speeds measured with them).  Default: with gauges; not without (the
+        high-passed response also holds what the high-pass leaves of the truck's bending,
+        which is not even).
 
     Returns
     -------
@@ -616,6 +624,7 @@ def learn_responses(records: Sequence[Record], detectors: Sequence[str], distanc
         raise InputError(f"iterations must be >= 1, got {iterations!r}")
     gnames = resolve_gauges(recs[0], chans, gauges)
     gauge_mode = bool(gnames)
+    symmetric = gauge_mode if symmetric is None else bool(symmetric)
 
     runs: list[_Run | None] = []
     reasons = [""] * len(recs)
