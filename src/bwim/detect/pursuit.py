@@ -1,4 +1,4 @@
-"""Axles from two wide-response detectors by sparse deconvolution (matching pursuit).
+"""Axles from two wide-response detectors by sparse deconvolution.
 
 Contract
 --------
@@ -11,37 +11,48 @@ Contract
 
   ``τ_i`` the time axle ``i`` passes detector 1, ``v`` the vehicle's speed, ``A_id`` its
   amplitude at each detector (free: an axle's dynamic force differs at the two instants
-  it passes them), ``n_d`` the slowly varying rest: with gauges
-  ``β_d b_d(t) + c_d + s_d t`` (the span's bending as the gauges read it, an offset and a
-  drift, all fitted); without, readings and model are high-passed in space
-  (:func:`~bwim.detect.response.high_pass` over :data:`~bwim.detect.response.HIGH_PASS`
-  m of travel at the record's first speed estimate).  Each channel is weighted by its
-  level (:attr:`~bwim.detect.response.DetectorResponse.level`: its noise, or what the
-  learned response missed of the calibration truck's axles if that is more).
+  it passes them), ``n_d`` the rest: with gauges ``β_d b_d(t) + c_d + s_d t`` (the span's
+  bending as the gauges read it, an offset and a drift, all fitted); without, readings
+  and model are high-passed in space (:func:`~bwim.detect.response.high_pass` over
+  :data:`~bwim.detect.response.HIGH_PASS` m of travel at the record's first speed
+  estimate).  Each channel is weighted by its level
+  (:attr:`~bwim.detect.response.DetectorResponse.level`: what the learned response
+  missed of the calibration truck's axles, or the noise if more): misfits below are in
+  these units ("level variances").
 * An axle is seen by **both** detectors: its amplitudes, in the detectors' learned gain
   ratio ``ρ``, may differ by the dynamics only: ``|ln(A_2 / (ρ A_1))|`` at most
   :data:`RATIO_SPREADS` times the spread the calibration runs showed (at least
-  :data:`MIN_RATIO_BOUND`).  What one detector shows without the other (a tyre force's
-  dynamics while it passes) is not an axle.
-* Steps: (1) the speed, from the lag of the band-passed detectors (less their bending);
-  (2) **matching pursuit**: the axle time whose response, in the gain ratio at both
-  detectors, best matches the residual is added and every amplitude refitted
-  (non-negative least squares per detector, the rest projected out), while the misfit
-  falls by more than ``snr_threshold²`` level variances and :data:`GAIN_SHARE` of what
-  the record's strongest axle gave, the axle reaches ``min_height`` of the largest at
-  both detectors and both see it; (3) axles are grouped into vehicles (gaps larger than
-  ``max_axle_spacing``) and each vehicle's axle times and speed refined (variable
-  projection: amplitudes and rest by linear least squares inside a Levenberg–Marquardt
-  loop on times and speed); (4) **backward check**: an axle whose removal costs less than
-  the threshold, that one detector does not see, or closer than the smallest spacing to
-  another is dropped and the vehicle refitted; one more pursuit step may add an axle the
-  first pass missed; (5) an axle group (axles less than :data:`GROUP_SPACING` apart) with
-  uneven spacings is also tried evenly spaced over its length (a tridem's merged peaks
-  have one shape), the better fit kept.  The smallest spacing is the larger of
-  ``min_axle_spacing`` and :data:`MIN_SPACING_WIDTH` of the responses' width: closer
-  peaks are one axle whose force changed while it passed.  The detectors never
-  "disagree" on the count, since one fit counts for both: their agreement enters the
-  confidence instead.
+  :data:`MIN_RATIO_BOUND`); each reaches ``min_height`` of that detector's largest.
+  What one detector shows without the other (a tyre force's dynamics while it passes) is
+  not an axle.  The detectors never "disagree" on the count: one fit counts for both.
+* Steps.  (1) A first speed from the lag of the band-passed detectors (less their
+  bending).  (2) **Orthogonal matching pursuit** over the record: the axle whose
+  response, in the gain ratio at both detectors (the second's allowed
+  :data:`SPEED_SLACK` of the lag off), best matches the residual is added and all
+  amplitudes refitted, while the misfit falls by more than ``snr_threshold²`` and
+  :data:`PURSUIT_SHARE` of the strongest axle's fall.  (3) Axles more than
+  ``max_axle_spacing`` apart start new vehicles; a vehicle's speed is the median of its
+  axles' own lags.  (4) Per vehicle: axles lowering the misfit by less than the
+  **threshold** (``snr_threshold²`` and :data:`GAIN_SHARE` of the strongest axle's fall)
+  are pruned, times and speed refined (Levenberg–Marquardt on the variable projection:
+  amplitudes and rest by linear least squares inside, analytic Jacobian after Kaufman),
+  axles one detector does not see pruned.  (5) **Axle groups chosen again**: with the
+  rest fitted and taken off, both detectors' readings (the second's moved back by the
+  lag) are cut into groups where they dip below :data:`GROUP_DIP` of the lower
+  neighbouring peak, over the vehicle's whole span (an axle the pursuit missed is found
+  here); each group is chosen among 1 … :data:`GROUP_AXLES` evenly spaced axles
+  (spacings from the smallest to :data:`GROUP_SPACING`, all positions on the window's
+  sampling grid: a group's misfit needs only the readings' correlation with one axle's
+  response and that response's autocorrelation), the most axles such that each more
+  lowers the misfit by the threshold, by :data:`LEVEL_GAIN` times the vehicle's residual
+  per sample (dynamic tyre forces beyond the calibration truck's make spurious splits
+  cheaper) and by :data:`RESIDUAL_SHARE` of the group's residual, and both detectors see
+  every axle; a group whose count stands keeps its refined times.  (6) The vehicle is
+  refined again, then axles closer than the smallest spacing (the weaker goes), below
+  the threshold, lower than ``min_height`` or unseen by one detector are dropped one by
+  one, refining after each.  The smallest spacing is the larger of ``min_axle_spacing``
+  and :data:`MIN_SPACING_WIDTH` of the responses' width: closer peaks are one axle whose
+  force changed while it passed.
 * Confidence of a vehicle = ``c_snr × c_both``: ``c_snr = clip(√Δ / (2 snr_threshold),
   0.5, 1)`` with ``Δ`` the smallest misfit reduction (level variances) of its axles;
   ``c_both`` the mean over its axles of ``exp(−½ (ln(A_2 / (ρ A_1)) / (2 s))²)``, ``s``
@@ -55,7 +66,6 @@ import itertools
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import nnls
 from scipy.signal import find_peaks
 
 from .assemble import VehicleEstimate
@@ -67,8 +77,9 @@ from .response import (
     xcorr_lag,
 )
 
-__all__ = ["GAIN_SHARE", "GROUP_SPACING", "MIN_RATIO_BOUND", "MIN_SPACING_WIDTH",
-           "RATIO_SPREADS", "pursue_axles"]
+__all__ = ["GAIN_SHARE", "GROUP_AXLES", "GROUP_DIP", "GROUP_SPACING", "LEVEL_GAIN",
+           "MIN_RATIO_BOUND", "MIN_SPACING_WIDTH", "PURSUIT_SHARE", "RATIO_SPREADS",
+           "RESIDUAL_SHARE", "SPEED_SLACK", "pursue_axles"]
 
 #: An upper bound on the axles of one record.
 MAX_AXLES = 40
@@ -120,7 +131,7 @@ MAX_LM = 15
 #: ... of the first, which sets the speed at which the axle groups are chosen.
 FIRST_LM = 4
 #: ... which stops when the misfit falls by less than this share (or the times move by
-#: less than 2 mm of travel).
+#: less than 5 mm of travel).
 CONVERGED = 3e-3
 
 
@@ -160,24 +171,6 @@ class _Problem:
             if slopes:
                 der.append(step * (self.w[c] / du))
         return (out, der) if slopes else out
-
-    def fit(self, taus: np.ndarray, v: float) -> tuple[np.ndarray, float, np.ndarray]:
-        """Over the whole record: amplitudes ≥ 0 per axle and detector (n, 2, reading
-        units of each detector), the misfit and the residual with each detector's rest
-        projected out."""
-        X = self.atoms(taus, v) if taus.size else None
-        amps = np.zeros((taus.size, 2))
-        res = np.empty_like(self.y)
-        for c in range(2):
-            Q = self.q_rest[c]
-            yc = self.y[:, c] - Q @ (Q.T @ self.y[:, c])
-            if taus.size:
-                Xc = X[c] - Q @ (Q.T @ X[c])
-                amps[:, c], _ = nnls(Xc, yc)
-                res[:, c] = yc - Xc @ amps[:, c]
-            else:
-                res[:, c] = yc
-        return amps, float(np.sum(res**2)), res
 
     def log_ratio(self, amps: np.ndarray) -> np.ndarray:
         """``ln(A_2 / (ratio A_1))`` per axle (±inf where one detector sees nothing)."""
@@ -333,7 +326,8 @@ def pursue_axles(record_time: np.ndarray, y: np.ndarray, learned: LearnedRespons
                       np.flatnonzero(np.diff(taus) * v0 > max_axle_spacing) + 1)
     # each vehicle's axles may lie between the midpoints to its neighbours' (the pursuit
     # may have missed some: the axle groups are found again there)
-    edges = [t[0]] + [0.5 * (taus[a[-1]] + taus[b[0]]) for a, b in itertools.pairwise(groups)] + [t[-1]]
+    edges = [t[0], *(0.5 * (taus[a[-1]] + taus[b[0]])
+                     for a, b in itertools.pairwise(groups)), t[-1]]
     for k, group in enumerate(groups):
         # the vehicle's speed from its axles' lags
         v = learned.distance / float(np.median(lags[group]))
@@ -400,11 +394,6 @@ def _relative(amps: np.ndarray) -> np.ndarray:
     """Amplitudes over each detector's largest, (n, 2)."""
     top = amps.max(axis=0) if amps.size else np.zeros(2)
     return amps / np.where(top > 0, top, 1.0)
-
-
-def _groups(taus: np.ndarray, v: float, max_spacing: float) -> list[np.ndarray]:
-    taus = np.sort(taus)
-    return np.split(taus, np.flatnonzero(np.diff(taus) * v > max_spacing) + 1)
 
 
 def _window(pb: _Problem, taus: np.ndarray, v: float) -> np.ndarray:

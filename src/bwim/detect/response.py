@@ -28,18 +28,26 @@ Contract
 * :func:`learn_responses` fits both detectors' responses to the runs of a calibration
   truck whose axle spacings ``a_i`` are known.  Reading of detector ``d`` in run ``r``::
 
-      y_rd(t) = Σ_i A_rid K_d(v_r (t − τ_r) − a_i − D_d) + β b_d(t) + c_rd + s_rd t + e,
+      y_rd(t) = Σ_i A_rid K_d(v_r (t − τ_r) − a_i − D_d) + b_d(t) + c_rd + s_rd t + e,
 
   ``D_1 = 0``, ``D_2 = D``, ``v_r`` the run's speed, ``τ_r`` when its first axle passes
   detector 1, ``A_rid`` each axle's amplitude in each run at each detector (free: the
   tyres' dynamic forces differ from run to run and from one detector to the next).  For
   fixed amplitudes ``K_d`` (with the gauge weights and offsets) is linear least squares on
   the matrix method's hat functions with a light second-difference smoothing; for fixed
-  responses the amplitudes are linear least squares (alternated); each response is
-  re-centred on its peak; then each run's ``(τ_r, v_r)`` is refitted to both detectors at
-  once by nonlinear least squares (the declared distance ``D`` sets the speeds), and the
-  cycle repeated.  The known spacing of two separate axles checks ``D`` independently of
-  the responses' shapes (the time between their peaks at detector 1): the difference is
+  responses the amplitudes are linear least squares (alternated); then each run's
+  ``(τ_r, v_r)`` is refitted to both detectors at once by nonlinear least squares (the
+  known spacings set the speeds), and the cycle repeated.  With ``symmetric`` (the
+  default with gauges) each response is even about its detector: ``K_d(−u) = K_d(u)``
+  (a tyre's local effect on a detector in a uniform slab is; and then the calibration
+  truck's own dynamic forces at the detectors, much the same in every run, cannot skew
+  the responses nor the traffic speeds measured with them).  Otherwise detector 1's
+  response is re-centred on its peak (it defines where the axles are; the runs' times
+  follow it) and, without gauges, detector 2's too (its peak is the declared distance; a
+  high-passed response also holds what the high-pass leaves of the truck's bending);
+  with gauges and ``symmetric=False`` detector 2's response stays where the runs put it.
+  The known spacing of two separate axles checks ``D`` independently of the responses'
+  shapes (the time between their peaks at detector 1): the difference is
   :attr:`LearnedResponses.distance_offset`; beyond :data:`DISTANCE_TOLERANCE` of ``D``
   the calibration is refused.
 * From the amplitudes: the detectors' **gain ratio** ``ρ`` (median of ``A_ri2 / A_ri1``)
