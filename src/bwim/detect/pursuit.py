@@ -44,9 +44,9 @@ Contract
   (spacings from the smallest to :data:`GROUP_SPACING`, all positions on the window's
   sampling grid: a group's misfit needs only the readings' correlation with one axle's
   response and that response's autocorrelation), the most axles such that each more
-  lowers the misfit by the threshold, by :data:`LEVEL_GAIN` times the vehicle's residual
-  per sample (dynamic tyre forces beyond the calibration truck's make spurious splits
-  cheaper) and by :data:`RESIDUAL_SHARE` of the group's residual, and both detectors see
+  lowers the misfit by the threshold and by :data:`LEVEL_GAIN` times the vehicle's
+  residual per sample (dynamic tyre forces beyond the calibration truck's make spurious
+  splits cheaper), and both detectors see
   every axle; a group whose count stands keeps its refined times.  (6) The vehicle is
   refined again, then axles closer than the smallest spacing (the weaker goes), below
   the threshold, lower than ``min_height`` or unseen by one detector are dropped one by
@@ -79,7 +79,7 @@ from .response import (
 
 __all__ = ["GAIN_SHARE", "GROUP_AXLES", "GROUP_DIP", "GROUP_SPACING", "LEVEL_GAIN",
            "MIN_RATIO_BOUND", "MIN_SPACING_WIDTH", "PURSUIT_SHARE", "RATIO_SPREADS",
-           "RESIDUAL_SHARE", "SPEED_SLACK", "pursue_axles"]
+           "SPEED_SLACK", "pursue_axles"]
 
 #: An upper bound on the axles of one record.
 MAX_AXLES = 40
@@ -87,8 +87,8 @@ MAX_AXLES = 40
 REACH = 2.0
 #: An axle's two amplitudes may differ from the gain ratio by this many learned spreads.
 RATIO_SPREADS = 4.0
-#: ... and at least by this factor (natural log: a factor 2).
-MIN_RATIO_BOUND = float(np.log(2.0))
+#: ... and at least by this factor (natural log: a factor 3).
+MIN_RATIO_BOUND = float(np.log(3.0))
 #: In the pursuit, the second detector's atom of an axle may be off the first speed
 #: estimate by this share of the lag between the detectors.
 SPEED_SLACK = 0.08
@@ -98,10 +98,11 @@ PURSUIT_SHARE = 0.1
 #: An axle must lower the misfit by this share of what the record's strongest axle did.
 GAIN_SHARE = 0.02
 #: ... and, one more in an axle group, by this many times the vehicle's residual per
-#: sample (the dynamic force of its tyres, beyond what the calibration truck showed) and
-#: this share of the group's residual.
-LEVEL_GAIN = 150.0
-RESIDUAL_SHARE = 1.0 / 3.0
+#: sample (the dynamic force of its tyres, beyond what the calibration truck showed).
+LEVEL_GAIN = 180.0
+#: ... times this for a fourth axle in a group (groups of four are rare; a tridem's
+#: dynamic forces make a fourth axle cheaper).
+RARE_GROUP = 1.5
 #: Axles closer than this share of the responses' width (at half height) are one axle
 #: whose force changed while it passed.
 MIN_SPACING_WIDTH = 0.8
@@ -113,7 +114,7 @@ GROUP_SPACING = 2.2
 #: Axle groups are cut where the detectors' readings dip below this share of the lower
 #: neighbouring peak (a 1.3 m tandem under a 1.2 m wide response dips to about 0.8, axles
 #: 2.2 m apart to about 0.2).
-GROUP_DIP = 0.5
+GROUP_DIP = 0.25
 #: An axle group spans where the readings exceed this share of its highest peak (an
 #: axle's response falls to it about 0.65 m away) ...
 GROUP_EXTENT = 0.3
@@ -154,13 +155,17 @@ class _Problem:
     step: int  # every step-th sample in a vehicle's window
 
     def atoms(self, taus: np.ndarray, v: float, rows: slice | np.ndarray = slice(None),
-              slopes: bool = False):
+              slopes: bool = False, only: int | None = None):
         """Per detector the weighted columns K(v (t − τ_i) − D_d), (n_rows, n), K linear
         between its ordinates; with ``slopes`` also their slopes dK/du (of the linear
-        pieces) at the same points."""
+        pieces) at the same points; with ``only`` that detector's (None for the other)."""
         t = self.t[rows]
         out, der = [], []
         for c, (u, k, _) in enumerate(self.grids):
+            if only is not None and c != only:
+                out.append(None)
+                der.append(None)
+                continue
             du = u[1] - u[0]
             x = (v * (t[:, None] - taus[None, :]) - (self.shift[c] + u[0])) * (1.0 / du)
             np.clip(x, 0.0, u.size - 1.000001, out=x)  # the grids end in zeros
@@ -367,8 +372,8 @@ class _Pursuit:
     def trial(self, tk: float, tk2: float):
         """Amplitudes (n + 1, 2; the new axle last), misfit and state with an axle at
         ``tk`` added (at ``tk2`` for the second detector)."""
-        new = [self.pb.atoms(np.array([tk]), self.v)[0],
-               self.pb.atoms(np.array([tk2]), self.v)[1]]
+        new = [self.pb.atoms(np.array([tk]), self.v, only=0)[0],
+               self.pb.atoms(np.array([tk2]), self.v, only=1)[1]]
         cols, amps, res = [], np.zeros((self.taus.size + 1, 2)), np.empty_like(self.res)
         for c in range(2):
             Q = self.pb.q_rest[c]
@@ -601,15 +606,18 @@ def _group_search(pb: _Problem, taus: np.ndarray, v: float, limit: float, min_sp
             a, b = max(first * st + j0, 0), min(last * st + j0 + h.size, rows.size)
             energy += float(z[a:b] @ z[a:b])
             r_inside += float(resid[c][a:b] @ resid[c][a:b])
-            # correlation with an axle at sample m: Σ_j z[m + j0 + j] h[j]
-            full = np.zeros(rows.size)
-            m = np.arange(rows.size)
-            ok = (m + j0 >= 0) & (m + j0 + h.size <= rows.size)
-            if ok.any():
-                mm = m[ok]
-                cc = np.correlate(z, h, mode="valid")  # index q: Σ_j z[q + j] h[j]
-                full[mm] = cc[mm + j0]
-            corr.append(full[::st])
+            # correlation with an axle at grid point m (sample st m), on the segment:
+            # Σ_j z[st m + j0 + j] h[j], zero where the response leaves the window
+            full = np.zeros(n_grid)
+            q0 = max(first * st + j0, 0)
+            q1 = min(last * st + j0, rows.size - h.size)
+            if q1 >= q0:
+                cc = np.correlate(z[q0:q1 + h.size], h, mode="valid")  # q = q0 … q1
+                m = np.arange(first, last + 1)
+                q = st * m + j0
+                ok = (q >= q0) & (q <= q1)
+                full[m[ok]] = cc[q[ok] - q0]
+            corr.append(full)
             r = r[::st]
             auto.append(np.concatenate([r, np.zeros(max(0, s_max * GROUP_AXLES - r.size + 1))]))
         best = None
@@ -630,7 +638,8 @@ def _group_search(pb: _Problem, taus: np.ndarray, v: float, limit: float, min_sp
                 gain = explained[j] - best[0]
                 left = energy - best[0]  # the group's residual with one axle fewer
                 level = (r_total - r_inside + left) / n_samples
-                if gain < limit or gain < LEVEL_GAIN * level or gain < RESIDUAL_SHARE * left:
+                rare = RARE_GROUP if k > 3 else 1.0
+                if gain < limit or gain < LEVEL_GAIN * rare * level:
                     break
             best = (float(explained[j]), hyp[j])
         if best is None:
