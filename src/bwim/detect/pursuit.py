@@ -646,8 +646,12 @@ def _group_search(pb: _Problem, taus: np.ndarray, v: float, limit: float, min_sp
             out.extend(taus[g])
             continue
         if best[1].size == g.size:
-            out.extend(taus[g])  # the count stands: the refined times stay
-            continue
+            # the count stands: the refined times stay unless they fit worse by more
+            # than the threshold (two of a tridem's axles on one merged peak)
+            mine = np.clip(at[g], first, last)[None, :]
+            if _explained(mine, corr, auto)[0][0] > best[0] - limit:
+                out.extend(taus[g])
+                continue
         out.extend(pb.t[lo + st * best[1]])
         changed = True
     # axles outside every segment: noise the pursuit took
