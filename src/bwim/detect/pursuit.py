@@ -580,10 +580,13 @@ def _group_search(pb: _Problem, taus: np.ndarray, v: float, limit: float, min_sp
     local, parts = [], []
     for c in range(2):
         M = np.hstack([X[c], pb.rest[c][rows]])
-        coef = np.linalg.lstsq(M, pb.y[rows, c], rcond=None)[0]
+        G = M.T @ M
+        G.flat[::G.shape[0] + 1] += 1e-12 * (np.trace(G) / G.shape[0] + 1e-300)
+        coef = np.linalg.solve(G, M.T @ pb.y[rows, c])
         local.append(pb.y[rows, c] - pb.rest[c][rows] @ coef[n:])
         parts.append(X[c] * coef[:n])
-    resid = [local[c] - parts[c].sum(axis=1) for c in range(2)]
+    fitted = [p.sum(axis=1) for p in parts]
+    resid = [local[c] - fitted[c] for c in range(2)]
     r_total = sum(float(r @ r) for r in resid)
     n_samples = 2 * rows.size
     tpl = _templates(pb, v)
@@ -597,12 +600,11 @@ def _group_search(pb: _Problem, taus: np.ndarray, v: float, limit: float, min_sp
     segments = _segments(pb, local, v, margin, st)
     for first, last in segments:
         g = np.flatnonzero((at >= first) & (at <= last))
-        others = np.setdiff1d(np.arange(n), g)
         corr, auto = [], []
         first, last = max(first, 0), min(last, n_grid - 1)
         energy = r_inside = 0.0  # the group's readings and residual where it acts
         for c, (j0, h, r) in enumerate(tpl):
-            z = local[c] - parts[c][:, others].sum(axis=1)
+            z = local[c] - fitted[c] + parts[c][:, g].sum(axis=1)  # less the others
             a, b = max(first * st + j0, 0), min(last * st + j0 + h.size, rows.size)
             energy += float(z[a:b] @ z[a:b])
             r_inside += float(resid[c][a:b] @ resid[c][a:b])
@@ -702,12 +704,9 @@ def _hypotheses(first: int, last: int, k: int, s_min: int, s_max: int) -> np.nda
     (spacings s_min … s_max samples)."""
     if k == 1:
         return np.arange(first, last + 1)[:, None]
-    hyps = []
-    for sp in range(s_min, s_max + 1):
-        starts = np.arange(first, last - (k - 1) * sp + 1)
-        if starts.size:
-            hyps.append(starts[:, None] + sp * np.arange(k)[None, :])
-    return np.vstack(hyps) if hyps else np.zeros((0, k), dtype=int)
+    start, sp = np.nonzero(np.arange(first, last + 1)[:, None]
+                           + (k - 1) * np.arange(s_min, s_max + 1)[None, :] <= last)
+    return (first + start)[:, None] + (s_min + sp)[:, None] * np.arange(k)[None, :]
 
 
 def _explained(hyp: np.ndarray, corr, auto) -> tuple[np.ndarray, np.ndarray]:
