@@ -43,12 +43,12 @@ N_TRAFFIC = 120
 
 def _floor(learned, rec, row) -> float:
     """Speed error (%) of the refinement started from the true axle times and speed."""
-    import bwim.detect.pursuit as pursuit
+    from bwim.detect.vehicle_fit import make_problem, refine
 
     taus, v, _ = site_axles(row)
     g = rec.channels(list(learned.gauges)).data
-    pb = pursuit._problem(rec.time, rec.channels(["ad1", "ad2"]).data, g, learned, v)
-    return 100.0 * (pursuit._refine(pb, taus, v).v / v - 1.0)
+    pb = make_problem(rec.time, rec.channels(["ad1", "ad2"]).data, g, learned, v)
+    return 100.0 * (refine(pb, taus, v).v / v - 1.0)
 
 
 def run_seed(seed: int, folder: Path) -> dict:

@@ -131,12 +131,12 @@ def _same_model(taus, v, amps, n=700, seed=0):
     """Readings of the model itself: responses at ``taus`` (detector 1) and ``v``,
     amplitudes (n, 2) in reading units, a bending of 12 random-walk gauges read with
     weights −0.2, offsets; no noise."""
-    import bwim.detect.pursuit as P
+    from bwim.detect.vehicle_fit import make_problem
 
     t = np.arange(n) / FS
     learned = _gaussian_responses([f"g{j}" for j in range(12)])
     g = np.random.default_rng(seed).standard_normal((n, 12)).cumsum(axis=0)
-    pb = P._problem(t, np.zeros((n, 2)), g, learned, v)
+    pb = make_problem(t, np.zeros((n, 2)), g, learned, v)
     y = np.column_stack([X @ amps[:, c] for c, X in enumerate(pb.atoms(taus, v))]) / pb.w
     y = y + (g - g.mean(axis=0)) @ np.full((12, 1), -0.2) + np.array([3.0, -1.0])
     return t, y, g, learned
@@ -146,7 +146,7 @@ def test_group_misfit_from_correlations():
     """The misfit a group hypothesis removes, from the readings' correlation with one
     response and the response's autocorrelation, equals least squares on the explicit
     shifted responses (np.linalg.lstsq), k = 1, 2, 3, both detectors."""
-    import bwim.detect.pursuit as P
+    from bwim.detect.groups import explained
 
     rng = np.random.default_rng(3)
     h = [np.exp(-0.5 * ((np.arange(31) - 15) / 5.0) ** 2), np.hanning(25)]
@@ -155,7 +155,7 @@ def test_group_misfit_from_correlations():
     auto = [np.concatenate([np.correlate(x, x, mode="full")[x.size - 1:], np.zeros(200)])
             for x in h]
     for hyp in (np.array([[40]]), np.array([[30, 52], [60, 70]]), np.array([[10, 33, 56]])):
-        total, amps = P._explained(hyp, corr, auto)
+        total, amps = explained(hyp, corr, auto)
         for j, row in enumerate(hyp):
             expect = 0.0
             for c in range(2):
@@ -173,21 +173,21 @@ def test_removal_costs_and_refinement():
     explicit refit without it, and the variable-projection Levenberg-Marquardt recovers
     the axle times (< 0.05 ms) and speed (< 1e-4) from a start 4 ms and 2 % off, with the
     rest (the bending of 12 gauges, offsets, drift) fitted."""
-    import bwim.detect.pursuit as P
+    from bwim.detect.vehicle_fit import make_problem, refine, solve
 
     v = 21.0
     taus = 0.3 + np.array([0.0, 3.6, 9.6, 10.9]) / v
     amps = np.array([[20.0, 5.5], [40.0, 9.0], [25.0, 7.0], [24.0, 5.0]])
     t, y, g, learned = _same_model(taus, v, amps)
-    pb = P._problem(t, y, g, learned, v)
+    pb = make_problem(t, y, g, learned, v)
     rows = np.arange(t.size)
-    res, _, a, costs = P._solve(pb, taus, v, rows, False)
+    res, _, a, costs = solve(pb, taus, v, rows, False)
     assert float(res @ res) < 1e-16 * float(np.sum(pb.y**2))
     np.testing.assert_allclose(a, amps, rtol=1e-6)
     for i in range(taus.size):
-        r_i = P._solve(pb, np.delete(taus, i), v, rows, False)[0]
+        r_i = solve(pb, np.delete(taus, i), v, rows, False)[0]
         assert costs[i] == pytest.approx(float(r_i @ r_i - res @ res), rel=1e-6)
-    fit = P._refine(pb, taus + 0.004, 1.02 * v)
+    fit = refine(pb, taus + 0.004, 1.02 * v)
     np.testing.assert_allclose(fit.taus, taus, atol=5e-5)
     assert fit.v == pytest.approx(v, rel=1e-4)
 
@@ -195,13 +195,13 @@ def test_removal_costs_and_refinement():
 def test_pursuit_counts_same_model_axles():
     """Same-model readings of a 2+3 artic with a tridem 1.3 m apart (algebra): the whole
     chain (pursuit, groups, refinement) finds the five axles and the speed."""
-    import bwim.detect.pursuit as P
+    from bwim.detect.pursuit import pursue_axles
 
     v = 23.0
     offs = np.array([0.0, 3.5, 9.5, 10.8, 12.1])
     amps = np.array([[15.0, 4.0], [40.0, 10.0], [22.0, 5.5], [22.0, 5.5], [22.0, 5.5]])
     t, y, g, learned = _same_model(0.3 + offs / v, v, amps, n=800)
-    out = P.pursue_axles(t, y, learned, speed_range=(5.0, 40.0), min_axle_spacing=0.8,
+    out = pursue_axles(t, y, learned, speed_range=(5.0, 40.0), min_axle_spacing=0.8,
                          max_axle_spacing=12.0, snr_threshold=6.0, min_height=0.1, gauges=g)
     assert len(out) == 1 and out[0].times.size == 5
     np.testing.assert_allclose((out[0].times - out[0].times[0]) * out[0].speed, offs,
