@@ -13,6 +13,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from benchmarks import (  # noqa: E402
     bench_batch,
     bench_calibration,
+    bench_detect_site,
     bench_fe,
     bench_logger,
     bench_mfi,
@@ -40,6 +41,7 @@ def main() -> None:
     bench_logger.main([])
     bench_site.main()
     bench_mismatch.main()
+    bench_detect_site.main([])
 
 
 if __name__ == "__main__":

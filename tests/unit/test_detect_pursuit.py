@@ -15,7 +15,7 @@ from bwim.detect import detect_axles
 from bwim.detect.response import learn_responses
 from bwim.errors import InputError
 
-from tests.detect_data import CAL_LOADS, CAL_SPACINGS, DISTANCE, wide_record
+from tests.detect_data import CAL_LOADS, CAL_SPACINGS, DISTANCE, FS, wide_record
 
 #: (spacings m, loads N) of traffic trucks: 2+1 rigid, 2+3 artic, 3+3 artic, 2-axle, 2+2
 TRUCKS = (((3.6, 1.35), (60e3, 90e3, 90e3)),
@@ -106,3 +106,121 @@ def test_a_wrong_detector_distance_is_refused():
     runs, _ = _runs(n=5)
     with pytest.raises(InputError, match=r"distance of 2\.5 m contradicts.*give 3\.0"):
         learn_responses(runs, ("ad1", "ad2"), 2.5, CAL_SPACINGS, loads=CAL_LOADS)
+
+
+# --- the pieces of the fit (algebra: same-model data, references are plain least squares) --
+def _gaussian_responses(gauges=()):
+    """Two detectors with Gaussian responses of 1.2 m at half height (K(0) = 1), gains
+    4 apart, levels 1: a LearnedResponses assembled by hand (not learned)."""
+    from bwim.detect.response import DetectorResponse, LearnedResponses
+
+    u = np.linspace(-1.5, 1.5, 61)
+    k = np.exp(-4 * np.log(2) * (u / 1.2) ** 2)
+    k[[0, -1]] = 0.0
+    n_g = len(gauges)
+    resp = tuple(DetectorResponse(channel=c, u=u, k=k, noise=1.0, misfit=1.0,
+                                  bending=-0.2 * np.ones(n_g)) for c in ("ad1", "ad2"))
+    return LearnedResponses(responses=resp, distance=DISTANCE, amplitudes=np.ones((2, 2)),
+                            speeds=np.ones(2), first_axle_times=np.zeros(2),
+                            residuals=np.zeros(2), reasons=("", ""), distance_offset=0.0,
+                            nit=1, gauges=tuple(gauges), gain_ratio=0.25,
+                            amplitude_spread=0.1)
+
+
+def _same_model(taus, v, amps, n=700, seed=0):
+    """Readings of the model itself: responses at ``taus`` (detector 1) and ``v``,
+    amplitudes (n, 2) in reading units, a bending of 12 random-walk gauges read with
+    weights −0.2, offsets; no noise."""
+    from bwim.detect.vehicle_fit import make_problem
+
+    t = np.arange(n) / FS
+    learned = _gaussian_responses([f"g{j}" for j in range(12)])
+    g = np.random.default_rng(seed).standard_normal((n, 12)).cumsum(axis=0)
+    pb = make_problem(t, np.zeros((n, 2)), g, learned, v)
+    y = np.column_stack([X @ amps[:, c] for c, X in enumerate(pb.atoms(taus, v))]) / pb.w
+    y = y + (g - g.mean(axis=0)) @ np.full((12, 1), -0.2) + np.array([3.0, -1.0])
+    return t, y, g, learned
+
+
+def test_group_misfit_from_correlations():
+    """The misfit a group hypothesis removes, from the readings' correlation with one
+    response and the response's autocorrelation, equals least squares on the explicit
+    shifted responses (np.linalg.lstsq), k = 1, 2, 3, both detectors."""
+    from bwim.detect.groups import explained
+
+    rng = np.random.default_rng(3)
+    h = [np.exp(-0.5 * ((np.arange(31) - 15) / 5.0) ** 2), np.hanning(25)]
+    z = [rng.standard_normal(200), rng.standard_normal(200)]
+    corr = [np.correlate(z[c], h[c], mode="valid") for c in range(2)]
+    auto = [np.concatenate([np.correlate(x, x, mode="full")[x.size - 1:], np.zeros(200)])
+            for x in h]
+    for hyp in (np.array([[40]]), np.array([[30, 52], [60, 70]]), np.array([[10, 33, 56]])):
+        total, amps = explained(hyp, corr, auto)
+        for j, row in enumerate(hyp):
+            expect = 0.0
+            for c in range(2):
+                X = np.zeros((200, row.size))
+                for i, m in enumerate(row):
+                    X[m:m + h[c].size, i] = h[c]
+                a, *_ = np.linalg.lstsq(X, z[c], rcond=None)
+                np.testing.assert_allclose(amps[j, :, c], a, rtol=1e-8, atol=1e-10)
+                expect += float(z[c] @ z[c] - np.sum((z[c] - X @ a) ** 2))
+            assert total[j] == pytest.approx(expect, rel=1e-9)
+
+
+def test_removal_costs_and_refinement():
+    """Same-model readings (algebra): each axle's removal cost equals the misfit of an
+    explicit refit without it, and the variable-projection Levenberg-Marquardt recovers
+    the axle times (< 0.05 ms) and speed (< 1e-4) from a start 4 ms and 2 % off, with the
+    rest (the bending of 12 gauges, offsets, drift) fitted."""
+    from bwim.detect.vehicle_fit import make_problem, refine, solve
+
+    v = 21.0
+    taus = 0.3 + np.array([0.0, 3.6, 9.6, 10.9]) / v
+    amps = np.array([[20.0, 5.5], [40.0, 9.0], [25.0, 7.0], [24.0, 5.0]])
+    t, y, g, learned = _same_model(taus, v, amps)
+    pb = make_problem(t, y, g, learned, v)
+    rows = np.arange(t.size)
+    res, _, a, costs = solve(pb, taus, v, rows, False)
+    assert float(res @ res) < 1e-16 * float(np.sum(pb.y**2))
+    np.testing.assert_allclose(a, amps, rtol=1e-6)
+    for i in range(taus.size):
+        r_i = solve(pb, np.delete(taus, i), v, rows, False)[0]
+        assert costs[i] == pytest.approx(float(r_i @ r_i - res @ res), rel=1e-6)
+    fit = refine(pb, taus + 0.004, 1.02 * v)
+    np.testing.assert_allclose(fit.taus, taus, atol=5e-5)
+    assert fit.v == pytest.approx(v, rel=1e-4)
+
+
+def test_pursuit_counts_same_model_axles():
+    """Same-model readings of a 2+3 artic with a tridem 1.3 m apart (algebra): the whole
+    chain (pursuit, groups, refinement) finds the five axles and the speed."""
+    from bwim.detect.pursuit import pursue_axles
+
+    v = 23.0
+    offs = np.array([0.0, 3.5, 9.5, 10.8, 12.1])
+    amps = np.array([[15.0, 4.0], [40.0, 10.0], [22.0, 5.5], [22.0, 5.5], [22.0, 5.5]])
+    t, y, g, learned = _same_model(0.3 + offs / v, v, amps, n=800)
+    out = pursue_axles(t, y, learned, speed_range=(5.0, 40.0), min_axle_spacing=0.8,
+                         max_axle_spacing=12.0, snr_threshold=6.0, min_height=0.1, gauges=g)
+    assert len(out) == 1 and out[0].times.size == 5
+    np.testing.assert_allclose((out[0].times - out[0].times[0]) * out[0].speed, offs,
+                               atol=1e-3)
+    assert out[0].speed == pytest.approx(v, rel=1e-4)
+
+
+def test_learned_gauges_must_be_in_the_record():
+    """Responses learned with gauges need them in the record: a one-line InputError."""
+    learned = _gaussian_responses(["s01", "s02"])
+    rec = wide_record([(20.0, (3.6,), (60e3, 90e3), 0.4, 0.0)], duration=1.0)
+    with pytest.raises(InputError, match=r"learned with gauges \['s01', 's02'\]"):
+        detect_axles(rec, ("ad1", "ad2"), DISTANCE, responses=learned)
+
+
+def test_gauge_names_checked():
+    """learn_responses' gauges: an unknown channel or an axle detector is refused."""
+    runs, _ = _runs(n=3)
+    with pytest.raises(InputError, match="no channel 'x1'"):
+        learn_responses(runs, ("ad1", "ad2"), DISTANCE, CAL_SPACINGS, gauges=["x1"])
+    with pytest.raises(InputError, match="is an axle detector"):
+        learn_responses(runs, ("ad1", "ad2"), DISTANCE, CAL_SPACINGS, gauges=["ad1"])

@@ -250,3 +250,95 @@ def test_strain_only_free_search(plate, lines):
     assert np.abs(errors).max() < 0.08
     assert np.median(np.abs(errors)) < 0.02
     assert all(4 <= n <= 6 for n in counts) and counts.count(5) >= 8
+
+
+# --- wide detector responses on the realistic site (issue 20) ------------------------------
+# tests/detect_data.py site_day: bwim.synthetic's "short-span-4-lane" installation (its own
+# finite-element slab, vehicle-bridge interaction on class A-B roads, detectors with wide
+# local peaks less a share of the slab's bending, gains 3-5x apart, tyre types, lateral
+# wander, gauge noise, offsets and drift, half the calibration runs with a vehicle in the
+# other direction), seed 3, 12 calibration runs, 24 traffic events, 0.6 m mesh.  The
+# responses are learned from the runs (known layout); nothing of the site's model is given
+# to bwim.detect.  References: the simulation's truth (truth.csv, site_truth.toml).
+
+@pytest.fixture(scope="module")
+def site(tmp_path_factory):
+    from bwim.detect import learn_responses
+
+    from tests.detect_data import site_day
+
+    day, calibration, traffic, truck = site_day(tmp_path_factory.mktemp("site") / "day",
+                                                seed=3, n_traffic=24)
+    learned = learn_responses(calibration, ("ad1", "ad2"), 3.0, truck["axle_spacings"],
+                              loads=truck["axle_loads"])
+    lane1 = [(rec, rows[0]) for rec, rows in traffic if len(rows) == 1
+             and rows[0]["lane"] == "1"]
+    return day, calibration, learned, lane1
+
+
+def test_site_responses_from_the_calibration_runs(site):
+    """Learned from the 12 runs with the gauges' bending: each run's speed within 1.5 %
+    of the truth (measured ≤ 0.92 %; the truck's own dynamic tyre forces), the detectors'
+    gain ratio within 4 % of the site's (measured 1.9 %), each response even about its
+    detector and 1.2 ± 0.12 m wide at half height (the site's local peak: 1.2 m; measured
+    1.26 and 1.22 m), the bending read with a negative share of the gauges (the site's
+    detectors subtract 0.7 × the slab's strain)."""
+    import csv
+    import tomllib
+
+    day, _, learned, _ = site
+    speeds = {}
+    with open(day.truth, newline="") as f:
+        for r in csv.DictReader(f):
+            if r["kind"] == "calibration" and r["lane"] == "1":
+                speeds[r["record"]] = float(r["speed_m_s"])
+    truth = np.array([speeds[p.name] for p in day.calibration])
+    assert not any(learned.reasons)
+    assert np.abs(learned.speeds / truth - 1).max() < 0.015
+    gains = tomllib.loads(day.site_truth.read_text())["axle_detectors"]
+    g = dict(zip(gains["name"], gains["gain"], strict=True))
+    assert learned.gain_ratio == pytest.approx(g["ad2"] / g["ad1"], rel=0.04)
+    for r in learned.responses:
+        np.testing.assert_allclose(r.k, r.k[::-1], atol=1e-12)
+        assert r.fwhm == pytest.approx(1.2, abs=0.12)
+        assert r.bending.sum() < 0
+    assert learned.gauges == tuple(f"s{k:02d}" for k in range(1, 13))
+
+
+def test_site_lane1_axles_counted(site):
+    """Every single lane-1 truck of the traffic date (13 here: 2-axle rigids, 2+3 and 3+3
+    artics with tandems and tridems 1.3-1.4 m apart, wide singles) counted right, as one
+    vehicle, without a count-mismatch flag (measured 13/13).  Spacings within 0.25 m and
+    speeds within 5 % (measured ≤ 0.17 m and ≤ 3.5 %; median 1.3 %): the tyres' dynamic
+    forces shift each peak by a few ms at each detector, which sets these errors (with the
+    simulation's own forces, exact responses and the true start, the same fit errs by
+    1.3 % at the median, 3 % at the 90th percentile: see the benchmark)."""
+    from tests.detect_data import site_axles
+
+    _, _, learned, lane1 = site
+    assert len(lane1) >= 10
+    errors, spacings = [], []
+    for rec, row in lane1:
+        _, v, sp = site_axles(row)
+        det = detect_axles(rec, ("ad1", "ad2"), 3.0, responses=learned)
+        assert FLAG_COUNT_MISMATCH not in det.flags and det.method == "learned responses"
+        veh = det.single
+        assert veh.n_axles == sp.size + 1, row["record"]
+        spacings.append(np.abs(veh.axle_spacings - sp).max())
+        errors.append(veh.speed / v - 1)
+        assert 0.5 <= veh.confidence <= 1.0
+    assert max(spacings) < 0.25
+    assert np.abs(errors).max() < 0.05 and np.median(np.abs(errors)) < 0.025
+
+
+def test_site_peaks_alone_miscount(site):
+    """The reference point of the issue on the same events: peak picking (no responses)
+    gets the count right with both detectors agreeing on at most 4 of them (measured 2),
+    the learned responses on all (previous test)."""
+    _, _, _, lane1 = site
+    right = 0
+    for rec, row in lane1:
+        det = detect_axles(rec, ("ad1", "ad2"), 3.0)
+        right += (det.n_vehicles == 1 and FLAG_COUNT_MISMATCH not in det.flags
+                  and det.vehicles[0].n_axles == int(row["n_axles"]))
+    assert right <= 4

@@ -196,7 +196,9 @@ def detect_axles(
         The detectors' responses learned from the calibration runs
         (:func:`bwim.detect.learn_responses`): axles are then found by sparse
         deconvolution (:mod:`bwim.detect.pursuit`), which resolves merged peaks and uses
-        both detectors together; ``baseline_window`` and ``polarity`` do not apply.
+        both detectors together (and, if the responses were learned with gauges, those
+        gauges of the record for the span's bending); ``baseline_window`` and
+        ``polarity`` do not apply.
     **options
         The keywords of :class:`~bwim.detect.options.DetectOptions`: ``speed_range``
         (bounds the lag between the detectors), ``min_axle_spacing`` (peaks closer than
@@ -373,10 +375,19 @@ def _detect_learned(record: Record, detectors: Sequence[str], distance: float,
                          f"apart, not {distance:g} m")
     method = "learned responses"
     y = record.channels(list(detectors)).data
+    g = None
+    if responses.gauges:
+        names = {s.name for s in record.sensors}
+        missing = [n for n in responses.gauges if n not in names]
+        if missing:
+            raise InputError(f"the responses were learned with gauges {missing} that this "
+                             "record does not have")
+        g = record.channels(list(responses.gauges)).data
     estimates = pursue_axles(record.time, y, responses, speed_range=opts.speed_range,
                              min_axle_spacing=opts.min_axle_spacing,
                              max_axle_spacing=opts.max_axle_spacing,
-                             snr_threshold=snr_threshold, min_height=max(min_height, 0.1))
+                             snr_threshold=snr_threshold, min_height=max(min_height, 0.1),
+                             gauges=g)
     if not estimates:
         return Detection(flags=(FLAG_NO_AXLES,), method=method,
                          message=f"no axle found: nothing on {detectors[0]} and "

@@ -1,308 +1,336 @@
-"""Axles from two wide-response detectors by sparse deconvolution (matching pursuit).
+"""Axles from two wide-response detectors by sparse deconvolution.
 
 Contract
 --------
-* Input: the two detector channels of a record and their learned responses
+* Input: the two detector channels of a record (and, when the responses were learned
+  with gauges, those gauges) and their learned responses
   (:class:`~bwim.detect.response.LearnedResponses`).  Model of each vehicle's axles,
   both detectors at once::
 
-      y_d(t) = c_d(t) + Σ_i A_id K_d(v (t − τ_i) − D_d) + e,   D_1 = 0, D_2 = D,
+      y_d(t) = Σ_i A_id K_d(v (t − τ_i) − D_d) + n_d(t) + e,   D_1 = 0, D_2 = D,
 
-  ``τ_i`` the time axle ``i`` passes detector 1, ``v`` the vehicle's speed,
-  ``A_id = g_d a_i`` its amplitude at each detector (``a_i ≥ 0`` one per axle, ``g_d`` the
-  detectors' gains as learned: a lane's two detectors lie on one line across the lane,
-  so they see every axle through the same tyres and lateral position, and what one
-  detector shows without the other, such as a tyre force's dynamics while it passes, is
-  not taken for an axle), ``c_d`` a
-  slowly varying baseline (offset, drift, the span's bending) and noise ``e``, each
-  channel weighted by its level (:attr:`~bwim.detect.response.DetectorResponse.level`:
-  its noise, or what the learned response missed of the calibration truck's axles if
-  that is more).  Readings and model are **high-passed in space**
-  (:func:`~bwim.detect.response.high_pass` over
-  :data:`~bwim.detect.response.HIGH_PASS` m of travel at the vehicle's speed), as the
-  responses were learned: what identifies an axle is its own local peak; the slab's
-  global bending, which depends on where the other axles and vehicles are, and any
-  offset or drift, are left out.
-* Steps: (1) the speed, from the band-passed detectors' lag; (2) **matching pursuit**: the
-  axle time that most reduces the weighted misfit of both detectors together is added and
-  every amplitude refitted (non-negative least squares, both detectors in one), while the
-  reduction exceeds ``snr_threshold²`` noise variances and ``min_height²`` of what the
-  record's strongest axle gave (an axle ``min_height`` as tall as the largest: what the
-  learned response misses of a big axle must not pass for a small one), and its amplitude
-  is at least ``min_height`` of the largest; (3) axles are grouped into vehicles (gaps
-  larger than ``max_axle_spacing``) and each vehicle's axle times, speed and amplitudes
-  refined jointly (Levenberg–Marquardt, analytic Jacobian); (4) **backward check**: an
-  axle whose removal costs less than the threshold, or closer than ``min_axle_spacing`` to
-  another, is dropped and the vehicle refitted; one more pursuit step may add an axle the
-  first pass missed. Merged peaks (a tridem 1.3 m apart under a 1 m wide response) come
-  apart because the fit knows the response; the detectors never "disagree" on the count,
-  since one fit counts for both: their agreement enters the confidence instead.
+  ``τ_i`` the time axle ``i`` passes detector 1, ``v`` the vehicle's speed, ``A_id`` its
+  amplitude at each detector (free: an axle's dynamic force differs at the two instants
+  it passes them), ``n_d`` the rest: with gauges ``β_d b_d(t) + c_d + s_d t`` (the span's
+  bending as the gauges read it, an offset and a drift, all fitted); without, readings
+  and model are high-passed in space (:func:`~bwim.detect.response.high_pass` over
+  :data:`~bwim.detect.response.HIGH_PASS` m of travel at the record's first speed
+  estimate).  Each channel is weighted by its level
+  (:attr:`~bwim.detect.response.DetectorResponse.level`: what the learned response
+  missed of the calibration truck's axles, or the noise if more): misfits below are in
+  these units ("level variances").
+* An axle is seen by **both** detectors: its amplitudes, in the detectors' learned gain
+  ratio ``ρ``, may differ by the dynamics only: ``|ln(A_2 / (ρ A_1))|`` at most
+  :data:`RATIO_SPREADS` times the spread the calibration runs showed (at least
+  :data:`MIN_RATIO_BOUND`); each reaches ``min_height`` of that detector's largest.
+  What one detector shows without the other (a tyre force's dynamics while it passes) is
+  not an axle.  The detectors never "disagree" on the count: one fit counts for both.
+* Steps.  (1) A first speed from the lag of the band-passed detectors (less their
+  bending).  (2) **Orthogonal matching pursuit** over the record: the axle whose
+  response, in the gain ratio at both detectors (the second's allowed
+  :data:`SPEED_SLACK` of the lag off), best matches the residual is added and all
+  amplitudes refitted, while the misfit falls by more than ``snr_threshold²`` and
+  :data:`PURSUIT_SHARE` of the strongest axle's fall.  (3) Axles more than
+  ``max_axle_spacing`` apart start new vehicles; a vehicle's speed is the median of its
+  axles' own lags.  (4) Per vehicle: axles lowering the misfit by less than the
+  **threshold** (``snr_threshold²`` and :data:`GAIN_SHARE` of the strongest axle's fall)
+  are pruned, times and speed refined (Levenberg–Marquardt on the variable projection:
+  amplitudes and rest by linear least squares inside, analytic Jacobian after Kaufman),
+  axles one detector does not see pruned.  (5) **Axle groups chosen again**: with the
+  rest fitted and taken off, both detectors' readings (the second's moved back by the
+  lag) are cut into groups where they dip below :data:`GROUP_DIP` of the lower
+  neighbouring peak, over the vehicle's whole span (an axle the pursuit missed is found
+  here); each group is chosen among 1 … :data:`GROUP_AXLES` evenly spaced axles
+  (spacings from the smallest to :data:`GROUP_SPACING`, all positions on the window's
+  sampling grid: a group's misfit needs only the readings' correlation with one axle's
+  response and that response's autocorrelation), the most axles such that each more
+  lowers the misfit by the threshold and by :data:`LEVEL_GAIN` times the vehicle's
+  residual per sample (dynamic tyre forces beyond the calibration truck's make spurious
+  splits cheaper), and both detectors see
+  every axle; a group whose count stands keeps its refined times.  (6) The vehicle is
+  refined again, then axles closer than the smallest spacing (the weaker goes), below
+  the threshold, lower than ``min_height`` or unseen by one detector are dropped one by
+  one, refining after each.  The smallest spacing is the larger of ``min_axle_spacing``
+  and :data:`MIN_SPACING_WIDTH` of the responses' width: closer peaks are one axle whose
+  force changed while it passed.
 * Confidence of a vehicle = ``c_snr × c_both``: ``c_snr = clip(√Δ / (2 snr_threshold),
   0.5, 1)`` with ``Δ`` the smallest misfit reduction (level variances) of its axles;
-  ``c_both`` the share of its axles that each detector fitted alone sees with at least
-  0.4 of the joint amplitude, at least 0.5.
+  ``c_both`` the mean over its axles of ``exp(−½ (ln(A_2 / (ρ A_1)) / (2 s))²)``, ``s``
+  the learned spread (at least ``MIN_RATIO_BOUND / RATIO_SPREADS``), at least 0.5.
 * Times in s, distances in m, speeds in m/s.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import itertools
 
 import numpy as np
-from scipy.optimize import least_squares, nnls
 
 from .assemble import VehicleEstimate
-from .response import (
-    HIGH_PASS,
-    LearnedResponses,
-    band_pass,
-    high_pass,
-    peak_polarity,
-    xcorr_lag,
+from .groups import choose_groups
+from .response import LearnedResponses, band_pass, xcorr_lag
+from .vehicle_fit import (
+    MIN_RATIO_BOUND,
+    RATIO_SPREADS,
+    Problem,
+    VehicleFit,
+    make_problem,
+    refine,
+    relative,
+    solve,
+    window,
 )
 
-__all__ = ["pursue_axles"]
+__all__ = ["EXCLUDE", "FIRST_LM", "GAIN_SHARE", "MAX_AXLES", "MIN_SPACING_WIDTH",
+           "PURSUIT_SHARE", "SPEED_SLACK", "pursue_axles"]
 
 #: An upper bound on the axles of one record.
 MAX_AXLES = 40
-#: Samples a vehicle's fit looks at beyond its first and last axle, m of travel.
-REACH = 4.0
+#: In the pursuit, the second detector's atom of an axle may be off the first speed
+#: estimate by this share of the lag between the detectors.
+SPEED_SLACK = 0.08
+#: The pursuit stops at an axle lowering the misfit by less than this share of what the
+#: record's strongest did (the axle groups are chosen again after).
+PURSUIT_SHARE = 0.1
+#: An axle must lower the misfit by this share of what the record's strongest axle did.
+GAIN_SHARE = 0.02
+#: Axles closer than this share of the responses' width (at half height) are one axle
+#: whose force changed while it passed.
+MIN_SPACING_WIDTH = 0.8
+#: A new axle is looked for no closer to one already found than this share of the
+#: smallest spacing (the refinement moves them apart).
+EXCLUDE = 0.5
+#: Levenberg–Marquardt iterations of a vehicle's first refinement (which sets the speed
+#: at which its axle groups are chosen).
+FIRST_LM = 4
 
 
-@dataclass(frozen=True, eq=False)
-class _Problem:
-    """One record's two channels, high-passed and weighted, and the high-passed
-    responses in space."""
-
-    t: np.ndarray
-    y: np.ndarray  # (n_t, 2) high-passed, weighted (level units)
-    w: np.ndarray  # (2,) 1 / level
-    ratio: np.ndarray  # (2,) the detectors' gains relative to the first
-    shift: tuple[float, float]  # D_d
-    grids: tuple  # per detector (u, K_hp, dK_hp/du)
-    fs: float
-
-    def atoms(self, taus: np.ndarray, v: float, rows: slice | np.ndarray = slice(None),
-              slopes: bool = False):
-        """Per detector the weighted columns K_hp(v (t − τ_i) − D_d), (n_rows, n); with
-        ``slopes`` also their slopes dK_hp/du at the same points."""
-        t = self.t[rows]
-        out, der = [], []
-        for c, (u, k, dk) in enumerate(self.grids):
-            x = v * (t[:, None] - taus[None, :]) - self.shift[c]
-            scale = self.w[c] * self.ratio[c]
-            out.append(np.interp(x, u, k, left=0.0, right=0.0) * scale)
-            if slopes:
-                der.append(np.interp(x, u, dk, left=0.0, right=0.0) * scale)
-        return (out, der) if slopes else out
-
-    def fit(self, taus: np.ndarray, v: float, rows: slice | np.ndarray = slice(None)
-            ) -> tuple[np.ndarray, float, np.ndarray]:
-        """One amplitude ≥ 0 per axle (both detectors, in their gains' ratio), the
-        misfit, the residual (rows)."""
-        y = self.y[rows]
-        if not taus.size:
-            return np.zeros(0), float(np.sum(y**2)), y.copy()
-        X = self.atoms(taus, v, rows)
-        a, _ = nnls(np.vstack(X), np.concatenate([y[:, 0], y[:, 1]]))
-        res = y - np.column_stack([X[0] @ a, X[1] @ a])
-        return a, float(np.sum(res**2)), res
-
-    def separate(self, taus: np.ndarray, v: float, rows) -> np.ndarray:
-        """Each detector's own amplitudes ≥ 0 (n, 2), in units of the first's gain."""
-        y = self.y[rows]
-        return np.column_stack([nnls(X, y[:, c])[0]
-                                for c, X in enumerate(self.atoms(taus, v, rows))])
-
-
-def _problem(t: np.ndarray, y: np.ndarray, learned: LearnedResponses, v: float) -> _Problem:
-    fs = 1.0 / float(np.median(np.diff(t)))
-    w = 1.0 / np.array([max(r.level, 1e-300) for r in learned.responses])
-    y_hp = high_pass(y, HIGH_PASS / v * fs) * w
-    amps = np.abs(learned.amplitudes)
-    ratio = float(np.median(amps[:, 1] / np.maximum(amps[:, 0], 1e-300)))
-    return _Problem(t=t, y=y_hp, w=w, ratio=np.array([1.0, ratio]),
-                    shift=(0.0, learned.distance),
-                    grids=tuple(r.high_passed() for r in learned.responses), fs=fs)
-
-
-def _speed(y: np.ndarray, fs: float, distance: float, speed_range: tuple[float, float]
-           ) -> float | None:
-    z = band_pass(y, fs)
-    z = z * peak_polarity(z)
+def _speed(y: np.ndarray, fs: float, distance: float, speed_range: tuple[float, float],
+           sign: np.ndarray) -> float | None:
+    """Speed from the lag of the band-passed detectors (made positive by the responses'
+    ``sign``), None if they do not correlate in the speed range."""
+    z = band_pass(y, fs) * sign
     lag = xcorr_lag(z[:, 0], z[:, 1], np.floor(distance / speed_range[1] * fs),
                     np.ceil(distance / speed_range[0] * fs))
     return None if lag is None else distance / (lag / fs)
 
 
-def _best_new(pb: _Problem, res: np.ndarray, v: float, taken: np.ndarray, min_gap: float
-              ) -> float:
-    """The axle time whose atoms (both detectors, each its own amplitude ≥ 0) most reduce
-    the residual ``res`` (all samples)."""
+def _best_new(pb: Problem, res: np.ndarray, v: float, taken: np.ndarray, min_gap: float,
+              slack: int = 0) -> tuple[float, float]:
+    """The axle time whose atoms (both detectors, one amplitude in their gain ratio) best
+    match the residual ``res`` (all samples); the second detector's atom may be up to
+    ``slack`` samples off the speed ``v``.  Returns the time at detector 1 and the time
+    the second detector's atom says (both at detector 1 for the speed ``v``)."""
     n = pb.t.size
-    corr = np.zeros(n)
+    corr = []
     energy = 0.0
     for c, (u, k, _) in enumerate(pb.grids):
         d = pb.shift[c]
         m_lo = int(np.floor((u[0] + d) / v * pb.fs)) - 1
         m_hi = int(np.ceil((u[-1] + d) / v * pb.fs)) + 1
+        scale = pb.w[c] * (pb.ratio if c else 1.0)
         atom = np.interp(v * np.arange(m_lo, m_hi + 1) / pb.fs - d, u, k, left=0.0,
-                         right=0.0) * pb.w[c] * pb.ratio[c]
+                         right=0.0) * scale
         energy += float(atom @ atom)
         lo, hi = max(0, -m_lo), max(0, m_hi)
         r = np.concatenate([np.zeros(lo), res[:, c], np.zeros(hi)])
-        corr += np.correlate(r, atom, mode="valid")[m_lo + lo:m_lo + lo + n]
-    score = np.maximum(corr, 0.0) ** 2 / max(energy, 1e-300)
+        corr.append(np.correlate(r, atom, mode="valid")[m_lo + lo:m_lo + lo + n])
+    if slack:
+        padded = np.concatenate([np.full(slack, -np.inf), corr[1], np.full(slack, -np.inf)])
+        stack = np.lib.stride_tricks.sliding_window_view(padded, 2 * slack + 1)
+        off = np.argmax(stack, axis=1) - slack
+        c2 = corr[1][np.arange(n) + off]
+    else:
+        off, c2 = np.zeros(n, dtype=int), corr[1]
+    score = np.maximum(corr[0] + c2, 0.0) ** 2 / max(energy, 1e-300)
     for tk in taken:  # not on an axle already found
         score[np.abs(pb.t - tk) < min_gap / v] = 0.0
-    return float(pb.t[int(np.argmax(score))])
+    m = int(np.argmax(score))
+    return float(pb.t[m]), float(pb.t[m + off[m]])
 
 
 def pursue_axles(record_time: np.ndarray, y: np.ndarray, learned: LearnedResponses, *,
                  speed_range: tuple[float, float], min_axle_spacing: float,
-                 max_axle_spacing: float, snr_threshold: float, min_height: float
-                 ) -> list[VehicleEstimate]:
+                 max_axle_spacing: float, snr_threshold: float, min_height: float,
+                 gauges: np.ndarray | None = None) -> list[VehicleEstimate]:
     """Vehicles of one record (see the module docstring).
 
-    ``y`` (n_t, 2) are the two detector channels (in the responses' order), ``record_time``
+    ``y`` (n_t, 2) are the two detector channels (in the responses' order), ``gauges``
+    (n_t, n_gauges) the channels of ``learned.gauges`` (None: high-pass), ``record_time``
     their times.  Returns the vehicles' estimates (empty when no axle stands out)."""
     t = np.asarray(record_time, dtype=float)
+    y = np.asarray(y, dtype=float)
     fs = 1.0 / float(np.median(np.diff(t)))
-    v0 = _speed(y, fs, learned.distance, speed_range)
+    if not (learned.gauges and gauges is not None):
+        gauges = None
+    if gauges is not None:
+        g = np.asarray(gauges, dtype=float)
+        g = g - g.mean(axis=0)
+        bend = np.column_stack([g @ r.bending for r in learned.responses])
+        y0 = y - bend
+    else:
+        y0 = y
+    v0 = _speed(y0, fs, learned.distance, speed_range,
+                np.array([r.sign for r in learned.responses]))
     if v0 is None:
         return []
-    pb = _problem(t, np.asarray(y, dtype=float), learned, v0)
+    pb = make_problem(t, y, gauges, learned, v0)
     thr2 = snr_threshold**2
-    taus = np.zeros(0)
-    _, chi, res = pb.fit(taus, v0)
+    min_sp = max(min_axle_spacing, MIN_SPACING_WIDTH * float(np.mean(
+        [r.fwhm for r in learned.responses])))
+    omp = _Pursuit(pb, v0)
     first = 0.0
-    for _ in range(MAX_AXLES):
-        tk = _best_new(pb, res, v0, taus, min_axle_spacing)
-        trial = np.sort(np.append(taus, tk))
-        amps, chi_new, res_new = pb.fit(trial, v0)
-        gain = chi - chi_new
+    refused = np.zeros(0)  # candidates one detector does not see: not tried again
+    lag = learned.distance / v0
+    slack = int(np.ceil(SPEED_SLACK * lag * fs))
+    for _ in range(2 * MAX_AXLES):
+        tk, tk2 = _best_new(pb, omp.res, v0, np.append(omp.taus, refused),
+                            EXCLUDE * min_sp, slack)
+        amps, chi_new, state = omp.trial(tk, tk2)
+        gain = omp.chi - chi_new
         first = max(first, gain)
-        if gain < max(thr2, min_height**2 * first) or not _tall(amps, trial, tk, min_height):
+        if gain < max(thr2, PURSUIT_SHARE * first) or omp.taus.size >= MAX_AXLES:
             break
-        taus, chi, res = trial, chi_new, res_new
+        if not _acceptable(pb, amps, min_height):
+            refused = np.append(refused, tk)
+            continue
+        omp.accept(tk, tk2, chi_new, state)
+    order = np.argsort(omp.taus)
+    taus = omp.taus[order]
+    lags = lag + omp.taus2[order] - taus  # each axle's own lag between the detectors
     if taus.size == 0:
         return []
-    limit = max(thr2, min_height**2 * first)
+    limit = max(thr2, GAIN_SHARE * first)
     out = []
-    for group in _groups(taus, v0, max_axle_spacing):
-        veh = _check(pb, *_refine(pb, group, v0), limit, min_axle_spacing, min_height,
-                     snr_threshold)
+    groups = np.split(np.arange(taus.size),
+                      np.flatnonzero(np.diff(taus) * v0 > max_axle_spacing) + 1)
+    # each vehicle's axles may lie between the midpoints to its neighbours' (the pursuit
+    # may have missed some: the axle groups are found again there)
+    edges = [t[0], *(0.5 * (taus[a[-1]] + taus[b[0]])
+                     for a, b in itertools.pairwise(groups)), t[-1]]
+    for k, group in enumerate(groups):
+        # the vehicle's speed from its axles' lags
+        v = learned.distance / float(np.median(lags[group]))
+        if not speed_range[0] <= v <= speed_range[1]:
+            v = v0
+        veh = _vehicle(pb, taus[group], v, limit, min_sp, min_height, snr_threshold,
+                       (edges[k], edges[k + 1]))
         if veh is not None:
             out.append(veh)
     return out
 
 
-def _tall(amps: np.ndarray, taus: np.ndarray, tk: float, min_height: float) -> bool:
-    """Whether the axle at ``tk`` reaches ``min_height`` of the largest amplitude at one
-    detector at least."""
-    i = int(np.flatnonzero(taus == tk)[0])
-    return bool(_relative(amps)[i] >= min_height)
+def _acceptable(pb: Problem, amps: np.ndarray, min_height: float) -> bool:
+    """Whether the last axle of ``amps`` reaches ``min_height`` of the largest amplitude
+    at both detectors (the gain ratio is checked on the refined vehicle: merged peaks
+    explained in part share their amplitudes unevenly between the detectors)."""
+    return bool(relative(amps)[-1].min() >= min_height)
 
 
-def _relative(amps: np.ndarray) -> np.ndarray:
-    top = float(amps.max()) if amps.size else 0.0
-    return amps / top if top > 0 else amps
+class _Pursuit:
+    """Orthogonal matching pursuit over the whole record: the axles' responses with each
+    detector's rest projected out, their Gram matrix and least-squares amplitudes kept up
+    to date as axles are added."""
 
-
-def _groups(taus: np.ndarray, v: float, max_spacing: float) -> list[np.ndarray]:
-    taus = np.sort(taus)
-    return np.split(taus, np.flatnonzero(np.diff(taus) * v > max_spacing) + 1)
-
-
-def _window(pb: _Problem, taus: np.ndarray, v: float) -> np.ndarray:
-    """Samples from REACH m of travel before the first axle reaches detector 1 to REACH m
-    after the last leaves detector 2."""
-    return np.flatnonzero((pb.t >= taus[0] - REACH / v)
-                          & (pb.t <= taus[-1] + (pb.shift[1] + REACH) / v))
-
-
-def _refine(pb: _Problem, taus: np.ndarray, v0: float) -> tuple[np.ndarray, float]:
-    """The vehicle's axle times and speed, jointly with its amplitudes (free in sign here:
-    the non-negative amplitudes are refitted after), analytic Jacobian."""
-    n = taus.size
-    rows = _window(pb, taus, v0)
-    y = pb.y[rows]
-    amps, _, _ = pb.fit(taus, v0, rows)
-
-    def unpack(p):
-        return p[:n], p[n], p[n + 1:]
-
-    def resid(p: np.ndarray) -> np.ndarray:
-        tt, v, a = unpack(p)
-        X = pb.atoms(tt, v, rows)
-        return np.concatenate([y[:, c] - X[c] @ a for c in range(2)])
-
-    def jac(p: np.ndarray) -> np.ndarray:
-        tt, v, a = unpack(p)
-        X, dX = pb.atoms(tt, v, rows, slopes=True)
-        dt = pb.t[rows][:, None] - tt[None, :]
-        blocks = []
+    def __init__(self, pb: Problem, v: float):
+        self.pb, self.v = pb, v
+        self.taus = np.zeros(0)  # at detector 1
+        self.taus2 = np.zeros(0)  # the second detector's, less D / v
+        self.y = []
         for c in range(2):
-            J = np.zeros((rows.size, 2 * n + 1))
-            J[:, :n] = dX[c] * a * v  # d/dτ_i of −a K(v (t − τ_i) − D)
-            J[:, n] = -(dX[c] * dt) @ a
-            J[:, n + 1:] = -X[c]
-            blocks.append(J)
-        return np.vstack(blocks)
+            Q = pb.q_rest[c]
+            self.y.append(pb.y[:, c] - Q @ (Q.T @ pb.y[:, c]))
+        self.cols = [np.zeros((pb.t.size, 0)), np.zeros((pb.t.size, 0))]
+        self.res = np.column_stack(self.y)
+        self.chi = float(np.sum(self.res**2))
 
-    p0 = np.concatenate([taus, [v0], amps])
-    sol = least_squares(resid, p0, jac=jac, method="lm",
-                        x_scale=np.concatenate([np.full(n, 2e-3), [0.02 * v0],
-                                                np.maximum(amps, 1e-3)]))
-    tt, v, _ = unpack(sol.x)
-    order = np.argsort(tt)
-    return tt[order], float(v)
+    def trial(self, tk: float, tk2: float):
+        """Amplitudes (n + 1, 2; the new axle last), misfit and state with an axle at
+        ``tk`` added (at ``tk2`` for the second detector)."""
+        new = [self.pb.atoms(np.array([tk]), self.v, only=0)[0],
+               self.pb.atoms(np.array([tk2]), self.v, only=1)[1]]
+        cols, amps, res = [], np.zeros((self.taus.size + 1, 2)), np.empty_like(self.res)
+        for c in range(2):
+            Q = self.pb.q_rest[c]
+            x = new[c][:, 0]
+            x = x - Q @ (Q.T @ x)
+            X = np.column_stack([self.cols[c], x])
+            G = X.T @ X
+            G.flat[::G.shape[0] + 1] += 1e-12 * (np.trace(G) / G.shape[0] + 1e-300)
+            a = np.linalg.solve(G, X.T @ self.y[c])
+            amps[:, c] = a
+            res[:, c] = self.y[c] - X @ a
+            cols.append(X)
+        return amps, float(np.sum(res**2)), (cols, res)
+
+    def accept(self, tk: float, tk2: float, chi: float, state) -> None:
+        self.cols, self.res = state
+        self.taus = np.append(self.taus, tk)
+        self.taus2 = np.append(self.taus2, tk2)
+        self.chi = chi
 
 
-def _gains(pb: _Problem, taus: np.ndarray, v: float, chi: float, rows) -> np.ndarray:
-    """How much the misfit rises when each axle is left out (noise variances)."""
-    return np.array([pb.fit(np.delete(taus, i), v, rows)[1] - chi for i in range(taus.size)])
-
-
-def _check(pb: _Problem, taus: np.ndarray, v: float, limit: float, min_spacing: float,
-           min_height: float, snr_threshold: float) -> VehicleEstimate | None:
-    """Backward elimination and one more pursuit step; the vehicle's estimate."""
-    for _ in range(4):
-        changed = False
-        while taus.size > 1 and np.min(np.diff(taus)) * v < min_spacing:
-            i = int(np.argmin(np.diff(taus)))
-            taus = np.delete(taus, i + 1)
-            changed = True
-        rows = _window(pb, taus, v)
-        amps, chi, _ = pb.fit(taus, v, rows)
-        weak = (_gains(pb, taus, v, chi, rows) < limit) | (_relative(amps) < min_height)
-        if weak.any() and taus.size > 1:
-            taus = np.delete(taus, int(np.flatnonzero(weak)[0]))
-            changed = True
-        else:
-            _, _, res = pb.fit(taus, v)
-            tk = _best_new(pb, res, v, taus, min_spacing)
-            if taus[0] - REACH / v <= tk <= taus[-1] + REACH / v:
-                trial = np.sort(np.append(taus, tk))
-                rows2 = _window(pb, trial, v)
-                amps2, chi2, _ = pb.fit(trial, v, rows2)
-                _, chi1, _ = pb.fit(taus, v, rows2)
-                if chi1 - chi2 >= limit and _tall(amps2, trial, tk, min_height):
-                    taus = trial
-                    changed = True
-        if not changed:
-            break
-        taus, v = _refine(pb, taus, v)
-    if taus.size == 0:
+def _drop_close(fit: VehicleFit, min_sp: float) -> np.ndarray | None:
+    """The times without the weaker of the closest pair closer than ``min_sp``; None if
+    none is that close."""
+    if fit.taus.size < 2:
         return None
-    rows = _window(pb, taus, v)
-    amps, chi, _ = pb.fit(taus, v, rows)
-    gains = _gains(pb, taus, v, chi, rows)
-    snr = float(np.sqrt(max(float(gains.min()), 0.0)))
+    d = np.diff(fit.taus) * fit.v
+    i = int(np.argmin(d))
+    if d[i] >= min_sp:
+        return None
+    weaker = i if fit.gains[i] < fit.gains[i + 1] else i + 1
+    return np.delete(fit.taus, weaker)
+
+
+def _vehicle(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp: float,
+             min_height: float, snr_threshold: float, span: tuple[float, float]
+             ) -> VehicleEstimate | None:
+    """A first refinement (the speed), the axle groups chosen again in ``span`` (record
+    times at detector 1), the final refinement and backward check; the vehicle's
+    estimate."""
+    fit = refine(pb, _prune(pb, taus, v, limit), v, FIRST_LM)
+    kept = _prune(pb, fit.taus, fit.v, limit, both=True)
+    grouped = choose_groups(pb, kept, fit.v, limit, min_sp, span)
+    if grouped is not None or kept.size < fit.taus.size:
+        fit = refine(pb, kept if grouped is None else grouped, fit.v)
+    for _ in range(MAX_AXLES):
+        close = _drop_close(fit, min_sp)
+        if close is not None:
+            fit = refine(pb, close, fit.v)
+            continue
+        weak = ((fit.gains < limit) | (relative(fit.amps).min(axis=1) < min_height)
+                | ~pb.seen_by_both(fit.amps))
+        if weak.any() and fit.taus.size > 1:
+            i = int(np.argmin(np.where(weak, fit.gains, np.inf)))
+            fit = refine(pb, np.delete(fit.taus, i), fit.v)
+            continue
+        break
+    if fit.taus.size == 0 or not pb.seen_by_both(fit.amps).any():
+        return None
+    snr = float(np.sqrt(max(float(fit.gains.min()), 0.0)))
     c_snr = float(np.clip(snr / (2.0 * snr_threshold), 0.5, 1.0))
-    own = pb.separate(taus, v, rows)  # each detector alone: does it see the axle?
-    seen = (own / np.maximum(amps[:, None], 1e-300) >= 0.4).all(axis=1)
-    c_both = max(0.5, float(np.mean(seen)))
-    det_times = np.column_stack([taus, taus + pb.shift[1] / v])
-    return VehicleEstimate(times=taus, speed=v, confidence=c_snr * c_both,
-                           amplitudes=_relative(amps), snr=snr, detector_times=det_times)
+    lr = np.minimum(np.abs(pb.log_ratio(fit.amps)), 1e3)
+    s = max(pb.spread, MIN_RATIO_BOUND / RATIO_SPREADS)
+    c_both = max(0.5, float(np.mean(np.exp(-0.5 * (lr / (2 * s)) ** 2))))
+    det_times = np.column_stack([fit.taus, fit.taus + pb.shift[1] / fit.v])
+    rel = np.maximum(fit.amps[:, 0], 0.0) + np.maximum(fit.amps[:, 1], 0.0) / pb.ratio
+    return VehicleEstimate(times=fit.taus, speed=fit.v, confidence=c_snr * c_both,
+                           amplitudes=rel / max(float(rel.max()), 1e-300), snr=snr,
+                           detector_times=det_times)
+
+
+def _prune(pb: Problem, taus: np.ndarray, v: float, limit: float, both: bool = False
+           ) -> np.ndarray:
+    """``taus`` less, one by one, the weakest axle while it lowers the misfit by less
+    than ``limit`` (or, with ``both``, one detector does not see it), at the given times
+    and speed: a cheap pass without refinement."""
+    while taus.size > 1:
+        _, _, amps, gains = solve(pb, taus, v, window(pb, taus, v), False)
+        weak = gains < limit
+        if both:
+            weak |= ~pb.seen_by_both(amps)
+        if not weak.any():
+            break
+        taus = np.delete(taus, int(np.argmin(np.where(weak, gains, np.inf))))
+    return taus

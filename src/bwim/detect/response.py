@@ -10,34 +10,51 @@ Contract
 --------
 * A :class:`DetectorResponse` is ``K(u)``: an axle's **local** response at one detector
   when the axle is ``u`` metres past it (``u < 0``: not yet there), piecewise linear on a
-  uniform grid over ``|u| ≤`` :data:`NEAR`, zero beyond, as seen through a spatial
-  **high-pass** (:func:`high_pass`: a signal less its Gaussian average over
-  :data:`HIGH_PASS` m of travel): the high-passed readings are modelled as the high-pass
-  of ``Σ_i A_i K(u_i)``.  The span's global bending, which pulls a detector's baseline
-  down between axle groups, depends on every axle on the span and no single response
-  holds it; the high-pass takes it out of readings and model alike, with any offset and
-  drift, and leaves what identifies an axle: its own local peak.  Normalised so that
-  its largest magnitude is 1, at ``u = 0``, with its sign kept (a detector whose pulses go
-  negative has a negative peak): the axle's own peak defines where the detector is.
+  uniform grid over ``|u| ≤`` :data:`NEAR`, zero beyond, normalised so that its largest
+  magnitude is 1, at ``u = 0``, with its sign kept (the axle's own peak defines where the
+  detector is).
+* The rest of a detector's reading is the span's global **bending** (it depends on every
+  axle on the span, in every lane), an offset and drift.  Two ways to keep it out:
+
+  - **gauges** (when the runs hold strain gauges): the bending a detector sees is a fixed
+    linear combination of what the gauges read, ``b_d(t) = Σ_j w_dj (g_j(t) − ḡ_j)``
+    (:attr:`DetectorResponse.bending`, learned with the response); readings are modelled
+    as ``Σ_i A_id K_d(u_i) + β_d b_d(t) + c_d + s_d t``.  The gauges share the detectors'
+    strain factor, so ``β_d`` stays near 1 from day to day; it is refitted per record.
+  - **high-pass** (no gauges): readings and model are high-passed in space
+    (:func:`high_pass`: a signal less its Gaussian average over :data:`HIGH_PASS` m of
+    travel), which takes out bending, offset and drift with part of the peak.
+
 * :func:`learn_responses` fits both detectors' responses to the runs of a calibration
-  truck whose axle spacings ``a_i`` are known.  High-passed reading of detector ``d`` in
-  run ``r``::
+  truck whose axle spacings ``a_i`` are known.  Reading of detector ``d`` in run ``r``::
 
-      y_rd(t) = Σ_i A_id K_d(v_r (t − τ_r) − a_i − D_d) + e,    D_1 = 0, D_2 = D,
+      y_rd(t) = Σ_i A_rid K_d(v_r (t − τ_r) − a_i − D_d) + b_d(t) + c_rd + s_rd t + e,
 
-  with ``v_r`` the run's speed, ``τ_r`` when its first axle passes detector 1 and
-  ``A_id = g_d f_i`` each axle's amplitude (shared by the runs: the same truck; a
-  visibility ``f_i ≥ 0`` per axle that both detectors share, since a steering axle's
-  single tyres are seen weaker by both, and a gain ``g_d`` per detector).  For fixed
-  amplitudes ``K_d`` is linear least squares on the matrix method's hat functions with
-  a light second-difference smoothing; for fixed responses the visibilities are
-  non-negative least squares and the gains a ratio (alternated); each response is
-  re-centred on its peak; then each run's ``(τ_r, v_r)`` is refitted to both detectors
-  at once by nonlinear least squares (the declared distance ``D`` sets the speeds), and
-  the cycle repeated.  The known spacing of two separate axles checks ``D``
-  independently of the responses' shapes (the time between their peaks at detector 1):
-  the difference is :attr:`LearnedResponses.distance_offset`; beyond
-  :data:`DISTANCE_TOLERANCE` of ``D`` the calibration is refused.
+  ``D_1 = 0``, ``D_2 = D``, ``v_r`` the run's speed, ``τ_r`` when its first axle passes
+  detector 1, ``A_rid`` each axle's amplitude in each run at each detector (free: the
+  tyres' dynamic forces differ from run to run and from one detector to the next).  For
+  fixed amplitudes ``K_d`` (with the gauge weights and offsets) is linear least squares on
+  the matrix method's hat functions with a light second-difference smoothing; for fixed
+  responses the amplitudes are linear least squares (alternated); then each run's
+  ``(τ_r, v_r)`` is refitted to both detectors at once by nonlinear least squares (the
+  known spacings set the speeds), and the cycle repeated.  With ``symmetric`` (the
+  default with gauges) each response is even about its detector: ``K_d(−u) = K_d(u)``
+  (a tyre's local effect on a detector in a uniform slab is; and then the calibration
+  truck's own dynamic forces at the detectors, much the same in every run, cannot skew
+  the responses nor the traffic speeds measured with them).  Otherwise detector 1's
+  response is re-centred on its peak (it defines where the axles are; the runs' times
+  follow it) and, without gauges, detector 2's too (its peak is the declared distance; a
+  high-passed response also holds what the high-pass leaves of the truck's bending);
+  with gauges and ``symmetric=False`` detector 2's response stays where the runs put it.
+  The known spacing of two separate axles checks ``D`` independently of the responses'
+  shapes (the time between their peaks at detector 1): the difference is
+  :attr:`LearnedResponses.distance_offset`; beyond :data:`DISTANCE_TOLERANCE` of ``D``
+  the calibration is refused.
+* From the amplitudes: the detectors' **gain ratio** ``ρ`` (median of ``A_ri2 / A_ri1``)
+  and the **spread** of ``ln(A_ri2 / (ρ A_ri1))`` (robust σ): how differently the two
+  detectors see one axle (its dynamic force at two instants).  From the residual: each
+  detector's **misfit** (RMS while the truck crosses) and **relative misfit** (misfit over
+  the RMS axle amplitude): what one response cannot explain of a real axle.
 * Start: each run's speed from the cross-correlation of the band-passed detectors over
   the declared distance, its first axle by aligning the known layout with a bump of one
   metre; runs whose fit stays poor (relative residual beyond the median by
@@ -49,12 +66,12 @@ Contract
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg
 from scipy.ndimage import gaussian_filter1d
-from scipy.optimize import least_squares, nnls
+from scipy.optimize import least_squares
 
 from bwim.errors import InputError, NumericalError, require_positive
 from bwim.records import Record, axle_offsets, record_list
@@ -77,6 +94,9 @@ NEAR = 1.5
 #: Length of the spatial high-pass, m (σ of the Gaussian average taken off): an axle's
 #: local peak (about a metre wide) passes, the span's bending (several metres) does not.
 HIGH_PASS = 0.6
+#: Ridge on the gauge weights of the bending, relative to the mean diagonal of their
+#: normal equations (the gauges of one section read much alike).
+GAUGE_RIDGE = 1e-3
 
 
 def high_pass(y: np.ndarray, sigma: float) -> np.ndarray:
@@ -96,7 +116,7 @@ def band_pass(y: np.ndarray, fs: float, *, short: float = 0.01, long: float = 0.
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class DetectorResponse:
-    """One detector's local, high-passed response to one axle (see the module docstring).
+    """One detector's local response to one axle (see the module docstring).
 
     Attributes
     ----------
@@ -105,14 +125,18 @@ class DetectorResponse:
     u : ndarray, shape (n,)
         Grid of axle distances past the detector, m, ascending and uniform.
     k : ndarray, shape (n,)
-        ``K(u)`` on the grid: reading per unit amplitude (before the high-pass);
-        ``K(0)`` is ±1.
+        ``K(u)`` on the grid: reading per unit amplitude; ``K(0)`` is ±1.
     noise : float
         The channel's noise standard deviation in the runs, reading units.
     misfit : float
         Root-mean-square of the runs' residual while the truck crosses, reading units:
         what one response cannot explain of a real axle (its dynamic force while it
         passes, its tyres and lateral position), the level an axle must stand out of.
+    bending : ndarray, shape (n_gauges,)
+        Weights of :attr:`LearnedResponses.gauges` whose combination is the bending this
+        detector reads (reading units per gauge unit); empty without gauges.
+    relative_misfit : float
+        ``misfit`` over the root-mean-square amplitude of the truck's axles.
     """
 
     channel: str
@@ -120,6 +144,8 @@ class DetectorResponse:
     k: np.ndarray
     noise: float
     misfit: float = 0.0
+    bending: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    relative_misfit: float = 0.0
 
     @property
     def level(self) -> float:
@@ -129,6 +155,13 @@ class DetectorResponse:
     def __call__(self, u: np.ndarray) -> np.ndarray:
         """``K`` at distances ``u`` (m), zero outside the grid."""
         return np.interp(u, self.u, self.k, left=0.0, right=0.0)
+
+    def padded(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(u, K, dK/du)`` on the grid widened by one spacing each side (zeros)."""
+        du = float(self.u[1] - self.u[0])
+        u = self.u[0] + du * np.arange(-1, self.u.size + 1)
+        k = self(u)
+        return u, k, np.gradient(k, du)
 
     def high_passed(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The response high-passed in space (:data:`HIGH_PASS` m), on a grid widened by
@@ -178,7 +211,8 @@ class LearnedResponses:
     distance : float
         The declared distance between them, m.
     amplitudes : ndarray, shape (n_axles, 2)
-        The calibration truck's axle amplitudes at each detector (reading units).
+        The calibration truck's axle amplitudes at each detector (reading units, mean
+        over the runs used).
     speeds, first_axle_times, residuals : ndarray, shape (n_runs,)
         Each run's fitted speed (m/s), the time its first axle passes detector 1 (s) and
         its relative residual (NaN for a run left out).
@@ -190,6 +224,14 @@ class LearnedResponses:
         measurement's noise, a large one refuses the calibration).
     nit : int
         Outer iterations made.
+    gauges : tuple of str
+        The gauge channels whose combination models each detector's bending (empty: the
+        readings are high-passed instead).
+    gain_ratio : float
+        The second detector's amplitude of an axle over the first's (median over the
+        runs' axles).
+    amplitude_spread : float
+        Robust standard deviation of ``ln(A_2 / (gain_ratio A_1))`` over the runs' axles.
     """
 
     responses: tuple[DetectorResponse, DetectorResponse]
@@ -201,6 +243,9 @@ class LearnedResponses:
     reasons: tuple[str, ...]
     distance_offset: float
     nit: int
+    gauges: tuple[str, ...] = ()
+    gain_ratio: float = 1.0
+    amplitude_spread: float = 0.0
 
     @property
     def channels(self) -> tuple[str, str]:
@@ -235,17 +280,44 @@ def _bump(u: np.ndarray) -> np.ndarray:
     return np.exp(-4.0 * np.log(2.0) * u**2)
 
 
+def resolve_gauges(record: Record, detectors: Sequence[str], gauges) -> tuple[str, ...]:
+    """The gauge channels named by ``gauges``: "auto" every structural channel of
+    ``record`` other than the detectors, None or () none, else the names given."""
+    if gauges is None:
+        return ()
+    if isinstance(gauges, str):
+        if gauges != "auto":
+            raise InputError(f"gauges must be 'auto', None or channel names, got {gauges!r}")
+        return tuple(s.name for s in record.sensors
+                     if s.kind.is_structural and s.name not in detectors)
+    names = tuple(str(g) for g in gauges)
+    have = {s.name for s in record.sensors}
+    for g in names:
+        if g not in have:
+            raise InputError(f"gauges: no channel {g!r} in this record")
+        if g in detectors:
+            raise InputError(f"gauges: {g!r} is an axle detector")
+    return names
+
+
 @dataclass
 class _Run:
     t: np.ndarray
-    y: np.ndarray  # (n_t, 2), high-passed
+    y: np.ndarray  # (n_t, 2): high-passed readings, or readings (gauge mode)
+    g: np.ndarray  # (n_t, n_gauges): gauge readings less their mean (gauge mode)
     sigma: float  # samples of the high-pass
     tau: float
     v: float
 
+    @property
+    def nuisance(self) -> np.ndarray:
+        """Offset and slope columns (gauge mode)."""
+        tc = self.t - self.t.mean()
+        return np.column_stack([np.ones_like(tc), tc / max(float(np.ptp(tc)), 1e-300)])
 
-def _start(rec: Record, chans: tuple[str, str], distance: float, offsets: np.ndarray,
-           loads: np.ndarray, v_range: tuple[float, float]) -> _Run:
+
+def _start(rec: Record, chans: tuple[str, str], gauges: tuple[str, ...], distance: float,
+           offsets: np.ndarray, loads: np.ndarray, v_range: tuple[float, float]) -> _Run:
     """Speed from the detectors' lag, first axle by aligning the layout with a bump."""
     raw = rec.channels(list(chans)).data.astype(float)
     t = rec.time
@@ -264,7 +336,12 @@ def _start(rec: Record, chans: tuple[str, str], distance: float, offsets: np.nda
         if score > best:
             best, tau = score, float(t[0] + shift)
     sigma = HIGH_PASS / v * fs
-    return _Run(t=t, y=high_pass(raw, sigma), sigma=sigma, tau=tau, v=v)
+    if gauges:
+        g = rec.channels(list(gauges)).data.astype(float)
+        return _Run(t=t, y=raw - raw.mean(axis=0), g=g - g.mean(axis=0), sigma=sigma,
+                    tau=tau, v=v)
+    return _Run(t=t, y=high_pass(raw, sigma), g=np.zeros((t.size, 0)), sigma=sigma,
+                tau=tau, v=v)
 
 
 def _peak(grid: np.ndarray, k: np.ndarray) -> tuple[float, float]:
@@ -337,96 +414,165 @@ def _smoothing(m: int, ell: float, h: float) -> np.ndarray:
     return (ell / h) ** 4 * (D.T @ D)
 
 
+def _transform(run: _Run, cols: np.ndarray, gauge_mode: bool) -> np.ndarray:
+    return cols if gauge_mode else high_pass(cols, run.sigma)
+
+
+class _Design:
+    """Stacked least squares over the runs for one detector: per-run blocks (amplitudes
+    or offsets), shared blocks (response ordinates, gauge weights), a ridge on some."""
+
+    def __init__(self, runs: Sequence[_Run], col: int, gauge_mode: bool):
+        self.runs, self.col, self.gauge_mode = runs, col, gauge_mode
+        self.rows = np.cumsum([0] + [r.t.size for r in runs])
+
+    def solve(self, shared: list[np.ndarray], per_run: list[np.ndarray],
+              penalty: np.ndarray, noise: float) -> tuple[np.ndarray, list[np.ndarray]]:
+        """``shared``: per run (n_t, p) columns with one coefficient set for all runs;
+        ``per_run``: per run (n_t, q) columns with their own coefficients; ``penalty``
+        (p, p) added to the shared block's normal equations.  Returns the shared
+        coefficients and each run's own."""
+        p = shared[0].shape[1]
+        qs = [c.shape[1] for c in per_run]
+        n_col = p + sum(qs)
+        M = np.zeros((self.rows[-1], n_col))
+        z = np.zeros(self.rows[-1])
+        off = p
+        for k, r in enumerate(self.runs):
+            a, b = self.rows[k], self.rows[k + 1]
+            M[a:b, :p] = shared[k]
+            M[a:b, off:off + qs[k]] = per_run[k]
+            z[a:b] = r.y[:, self.col]
+            off += qs[k]
+        M /= noise
+        z = z / noise
+        A = M.T @ M
+        if p:
+            A[:p, :p] += penalty * float(np.mean(np.diag(A)[:p]))
+        A[np.diag_indices_from(A)] += 1e-12 * float(np.mean(np.diag(A)))
+        try:
+            x = scipy.linalg.solve(A, M.T @ z, assume_a="pos")
+        except (np.linalg.LinAlgError, scipy.linalg.LinAlgError):
+            raise NumericalError("the detector response is not determined by the runs") from None
+        own, off = [], p
+        for q in qs:
+            own.append(x[off:off + q])
+            off += q
+        return x[:p], own
+
+
+def _mirror(m: int) -> np.ndarray:
+    """(m, ⌈m/2⌉) matrix spreading the ordinates of one half (centre last) of a symmetric
+    response over its m interior ordinates (m odd: the centre is a node)."""
+    half = (m + 1) // 2
+    S = np.zeros((m, half))
+    for j in range(m):
+        S[j, min(j, m - 1 - j)] = 1.0
+    return S
+
+
 def _learn_kernel(runs: Sequence[_Run], offsets: np.ndarray, amps: np.ndarray,
-                  d_shift: float, col: int, grid: np.ndarray, ell: float) -> np.ndarray:
-    """K on ``grid`` (zero at its ends) for fixed amplitudes: least squares on the
-    high-passed hat functions, smoothed."""
+                  d_shift: float, col: int, grid: np.ndarray, ell: float, noise: float,
+                  gauge_mode: bool, symmetric: bool) -> tuple[np.ndarray, np.ndarray]:
+    """K on ``grid`` (zero at its ends; even about u = 0 if ``symmetric``) and the gauge
+    weights for fixed amplitudes ``amps`` (n_runs, n_axles): least squares on the hat
+    functions, smoothed."""
     h = grid[1] - grid[0]
     n = grid.size - 1
-    A = np.zeros((n - 1, n - 1))
-    b = np.zeros(n - 1)
-    for r in runs:
-        G = high_pass(hat_design(_positions(r, offsets, d_shift), amps, grid[0], h, n)
-                      .toarray(), r.sigma)
-        A += G.T @ G
-        b += G.T @ r.y[:, col]
+    n_g = runs[0].g.shape[1]
+    S = _mirror(n - 1) if symmetric else np.eye(n - 1)
+    m = S.shape[1]
+    shared, own = [], []
+    for r, a in zip(runs, amps, strict=True):
+        G = hat_design(_positions(r, offsets, d_shift), a, grid[0], h, n) @ S
+        shared.append(np.hstack([_transform(r, G, gauge_mode), r.g]))
+        own.append(r.nuisance if gauge_mode else np.zeros((r.t.size, 0)))
+    pen = np.zeros((m + n_g, m + n_g))
     if ell > 0:
-        A += float(np.mean(np.diag(A))) * _smoothing(n - 1, ell, h)
-    try:
-        inner = scipy.linalg.solve(A, b, assume_a="pos")
-    except (np.linalg.LinAlgError, scipy.linalg.LinAlgError):
-        raise NumericalError("the detector response is not determined by the runs") from None
-    return np.concatenate([[0.0], inner, [0.0]])
+        pen[:m, :m] = S.T @ _smoothing(n - 1, ell, h) @ S
+    pen[m:, m:] = GAUGE_RIDGE * np.eye(n_g)
+    x, _ = _Design(runs, col, gauge_mode).solve(shared, own, pen, noise)
+    return np.concatenate([[0.0], S @ x[:m], [0.0]]), x[m:]
 
 
-def _columns(run: _Run, offsets: np.ndarray, d_shift: float, grid: np.ndarray,
-             k: np.ndarray) -> np.ndarray:
-    """High-passed responses of each axle in one run, (n_t, n_axles)."""
-    return high_pass(np.interp(_positions(run, offsets, d_shift), grid, k, left=0.0,
-                               right=0.0), run.sigma)
+def _atoms(run: _Run, offsets: np.ndarray, d_shift: float, grid: np.ndarray,
+           k: np.ndarray, gauge_mode: bool) -> np.ndarray:
+    """Each axle's response in one run, (n_t, n_axles) (high-passed without gauges)."""
+    return _transform(run, np.interp(_positions(run, offsets, d_shift), grid, k, left=0.0,
+                                     right=0.0), gauge_mode)
 
 
-def _learn_amplitudes(runs: Sequence[_Run], offsets: np.ndarray, kernels, amps: np.ndarray,
-                      distance: float, noise: np.ndarray) -> np.ndarray:
-    """Amplitudes ``A_id = g_d f_i`` for fixed responses (see the module docstring),
-    alternated from ``amps``, (n_axles, 2)."""
-    X, z = [], []
+def _learn_amplitudes(runs: Sequence[_Run], offsets: np.ndarray, grid: np.ndarray,
+                      k: np.ndarray, d_shift: float, col: int, noise: float,
+                      gauge_mode: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Each run's axle amplitudes (n_runs, n_axles) and the gauge weights for a fixed
+    response."""
+    n_g = runs[0].g.shape[1]
+    shared = [r.g for r in runs]
+    own = [np.hstack([_atoms(r, offsets, d_shift, grid, k, gauge_mode),
+                      r.nuisance if gauge_mode else np.zeros((r.t.size, 0))]) for r in runs]
+    w, x = _Design(runs, col, gauge_mode).solve(shared, own, GAUGE_RIDGE * np.eye(n_g),
+                                                noise)
+    return np.array([xi[:offsets.size] for xi in x]), w
+
+
+def _run_fit(run: _Run, offsets: np.ndarray, kernels, weights, distance: float,
+             noise: np.ndarray, gauge_mode: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Residual (both detectors, in noise units) and amplitudes (n_axles, 2) of one run
+    for its (τ, v), each detector's amplitudes, bending scale and offsets free."""
+    res, amps = [], []
     for c, (grid, k) in enumerate(kernels):
-        X.append(np.vstack([_columns(r, offsets, distance if c else 0.0, grid, k)
-                            for r in runs]) / noise[c])
-        z.append(np.concatenate([r.y[:, c] for r in runs]) / noise[c])
-    g = np.maximum(amps.max(axis=0), 1e-300)
-    f = amps[:, 0] / g[0]
-    for _ in range(5):
-        f, _ = nnls(np.vstack([g[c] * X[c] for c in range(2)]), np.concatenate(z))
-        if not np.any(f > 0):
-            break
-        f = f / f.max()
-        g = np.array([max(float((X[c] @ f) @ z[c]) / max(float((X[c] @ f) @ (X[c] @ f)),
-                                                            1e-300), 1e-300)
-                      for c in range(2)])
-    return np.outer(f, g)
+        X = _atoms(run, offsets, distance if c else 0.0, grid, k, gauge_mode)
+        if gauge_mode:
+            X = np.hstack([X, (run.g @ weights[c])[:, None], run.nuisance])
+        coef, *_ = np.linalg.lstsq(X, run.y[:, c], rcond=None)
+        res.append((run.y[:, c] - X @ coef) / noise[c])
+        amps.append(coef[:offsets.size])
+    return np.concatenate(res), np.column_stack(amps)
 
 
-def _refit_run(run: _Run, offsets: np.ndarray, kernels, amps: np.ndarray, distance: float,
-               noise: np.ndarray) -> tuple[_Run, float]:
+def _refit_run(run: _Run, offsets: np.ndarray, kernels, weights, distance: float,
+               noise: np.ndarray, gauge_mode: bool) -> tuple[_Run, float]:
     """(τ, v) of one run against fixed responses, both detectors; the relative residual."""
 
     def resid(p: np.ndarray) -> np.ndarray:
-        trial = _Run(t=run.t, y=run.y, sigma=run.sigma, tau=p[0], v=p[1])
-        return np.concatenate([
-            (run.y[:, c] - _columns(trial, offsets, distance if c else 0.0, grid, k)
-             @ amps[:, c]) / noise[c] for c, (grid, k) in enumerate(kernels)])
+        trial = _Run(t=run.t, y=run.y, g=run.g, sigma=run.sigma, tau=p[0], v=p[1])
+        return _run_fit(trial, offsets, kernels, weights, distance, noise, gauge_mode)[0]
 
     sol = least_squares(resid, np.array([run.tau, run.v]), x_scale=np.array([1e-3, 0.1]),
                         method="lm")
-    new = _Run(t=run.t, y=run.y, sigma=run.sigma, tau=float(sol.x[0]), v=float(sol.x[1]))
-    yw = np.concatenate([run.y[:, c] / noise[c] for c in range(2)])
+    new = _Run(t=run.t, y=run.y, g=run.g, sigma=run.sigma, tau=float(sol.x[0]),
+               v=float(sol.x[1]))
+    yw = np.concatenate([(run.y[:, c] - run.y[:, c].mean()) / noise[c] for c in range(2)])
     return new, float(np.linalg.norm(sol.fun) / max(np.linalg.norm(yw), 1e-300))
 
 
-def _misfits(runs: Sequence[_Run], offsets: np.ndarray, kernels, amps: np.ndarray,
-             distance: float) -> np.ndarray:
+def _misfits(runs: Sequence[_Run], offsets: np.ndarray, kernels, weights, distance: float,
+             noise: np.ndarray, gauge_mode: bool) -> tuple[np.ndarray, np.ndarray]:
     """Per detector, the RMS residual of the runs while the truck crosses (from NEAR m
-    before its first axle reaches detector 1 to NEAR m after its last leaves detector 2)."""
+    before its first axle reaches detector 1 to NEAR m after its last leaves detector 2),
+    and every run's amplitudes (n_runs, n_axles, 2)."""
     sq = np.zeros(2)
     count = 0
+    amps = []
     for r in runs:
         on = ((r.t >= r.tau - NEAR / r.v)
               & (r.t <= r.tau + (offsets[-1] + distance + NEAR) / r.v))
-        for c, (grid, k) in enumerate(kernels):
-            e = r.y[on, c] - _columns(r, offsets, distance if c else 0.0, grid, k)[on] \
-                @ amps[:, c]
-            sq[c] += float(e @ e)
+        res, a = _run_fit(r, offsets, kernels, weights, distance, noise, gauge_mode)
+        e = res.reshape(2, -1) * noise[:, None]
+        sq += (e[:, on] ** 2).sum(axis=1)
         count += int(on.sum())
-    return np.sqrt(sq / max(count, 1))
+        amps.append(a)
+    return np.sqrt(sq / max(count, 1)), np.array(amps)
 
 
 def learn_responses(records: Sequence[Record], detectors: Sequence[str], distance: float,
                     spacings: Sequence[float], *, loads: Sequence[float] | None = None,
+                    gauges: Sequence[str] | str | None = "auto",
                     speed_range: tuple[float, float] = (5.0, 40.0),
                     smoothing: float = 0.05, spacing: float | None = None,
-                    iterations: int = 4) -> LearnedResponses:
+                    iterations: int = 4, symmetric: bool | None = None
+                    ) -> LearnedResponses:
     """Each detector's response to one axle, from runs of a truck with known ``spacings``.
 
     Parameters
@@ -440,7 +586,10 @@ def learn_responses(records: Sequence[Record], detectors: Sequence[str], distanc
     spacings : sequence of float
         The truck's axle spacings, m.
     loads : sequence of float, optional
-        Its static axle loads (N): the amplitudes' first guess (default equal).
+        Its static axle loads (N): only to align the layout at the start (default equal).
+    gauges : "auto", None or sequence of str
+        Strain gauges whose combination models each detector's bending: "auto" every
+        structural channel of the first run (none: high-pass instead); None: high-pass.
     speed_range : (float, float)
         Speeds the runs may have, m/s.
     smoothing : float
@@ -450,6 +599,13 @@ def learn_responses(records: Sequence[Record], detectors: Sequence[str], distanc
         sample.
     iterations : int
         Outer cycles of (responses and amplitudes, then each run's timing and speed).
+    symmetric : bool, optional
+        Learn responses even about the detector (``K(−u) = K(u)``): a tyre's local effect
+        on a detector in a uniform slab is, and the calibration truck's own dynamic
+        forces at the detectors, the same in every run, then cannot skew the responses
+        (nor the speeds measured with them).  Default: with gauges; not without (the
+        high-passed response also holds what the high-pass leaves of the truck's bending,
+        which is not even).
 
     Returns
     -------
@@ -474,12 +630,15 @@ def learn_responses(records: Sequence[Record], detectors: Sequence[str], distanc
     v_range = check_speed_range(speed_range)
     if int(iterations) < 1:
         raise InputError(f"iterations must be >= 1, got {iterations!r}")
+    gnames = resolve_gauges(recs[0], chans, gauges)
+    gauge_mode = bool(gnames)
+    symmetric = gauge_mode if symmetric is None else bool(symmetric)
 
     runs: list[_Run | None] = []
     reasons = [""] * len(recs)
     for k, rec in enumerate(recs):
         try:
-            runs.append(_start(rec, chans, dist, offs, w / w.max(), v_range))
+            runs.append(_start(rec, chans, gnames, dist, offs, w / w.max(), v_range))
         except InputError as exc:
             runs.append(None)
             reasons[k] = str(exc)
@@ -487,34 +646,48 @@ def learn_responses(records: Sequence[Record], detectors: Sequence[str], distanc
     if len(used) < 2:
         raise InputError(f"detector responses need at least two usable runs; "
                          f"{'; '.join(f'run {k + 1}: {r}' for k, r in enumerate(reasons) if r)}")
-    noise = np.array([robust_sigma(np.diff(np.concatenate([runs[k].y[:, c] for k in used])))
-                      / np.sqrt(2.0) for c in range(2)])
+    noise = np.array([robust_sigma(np.diff(np.concatenate([
+        recs[k].channels([chans[c]]).data[:, 0] for k in used]))) / np.sqrt(2.0)
+        for c in range(2)])
     noise = np.where(noise > 0, noise, 1.0)
     h = spacing if spacing is not None else max(runs[k].v / recs[k].sampling_rate for k in used)
     n = max(int(np.ceil(2 * NEAR / require_positive("spacing", h))), 4)
+    n += n % 2  # even: u = 0 is a node
     grid = -NEAR + 2 * NEAR / n * np.arange(n + 1)
 
-    amps = np.column_stack([w / w.max(), w / w.max()])
     kernels = [(grid, _bump(grid)), (grid, _bump(grid))]
+    weights = [np.zeros(len(gnames)), np.zeros(len(gnames))]
     resid = np.full(len(recs), np.nan)
     nit = 0
     for _ in range(int(iterations)):
         nit += 1
         active = [runs[k] for k in used]
-        for _ in range(3):  # responses and amplitudes, alternated
-            kernels = [(grid, _learn_kernel(active, offs, amps[:, c], dist if c else 0.0, c,
-                                            grid, smoothing)) for c in range(2)]
-            amps = _learn_amplitudes(active, offs, kernels, amps, dist, noise)
-        # anchor: each response's peak at u = 0 (detector 1's defines where the axles are,
-        # so the runs' times follow it; detector 2's is the declared distance)
+        for _ in range(3):  # amplitudes and responses, alternated
+            for c in range(2):
+                shift = dist if c else 0.0
+                amps, weights[c] = _learn_amplitudes(active, offs, grid, kernels[c][1], shift,
+                                                     c, noise[c], gauge_mode)
+                kk, weights[c] = _learn_kernel(active, offs, amps, shift, c, grid, smoothing,
+                                               noise[c], gauge_mode, symmetric)
+                kernels[c] = (grid, kk)
+        # anchor: detector 1's response peaks at u = 0 (it defines where the axles are,
+        # so the runs' times follow it).  Detector 2's stays where the runs put it with
+        # gauges (the runs' known spacings set their speeds, so its place relative to
+        # the declared distance is measured); without gauges its shape holds what the
+        # high-pass left of the truck's bending, and its peak is the declared distance.
         for c, (g, kk) in enumerate(kernels):
-            at, _ = _peak(g, kk)
-            kernels[c] = (g, np.interp(g + at, g, kk, left=0.0, right=0.0))
+            at, top = _peak(g, kk)
+            if symmetric:
+                at = 0.0
+            elif c == 0 or not gauge_mode:
+                kk = np.interp(g + at, g, kk, left=0.0, right=0.0)
             if c == 0:
                 for k in used:
                     runs[k].tau += at / runs[k].v
+            kernels[c] = (g, kk / abs(top))
         for k in used:
-            runs[k], resid[k] = _refit_run(runs[k], offs, kernels, amps, dist, noise)
+            runs[k], resid[k] = _refit_run(runs[k], offs, kernels, weights, dist, noise,
+                                           gauge_mode)
         med = float(np.median(resid[used]))
         rsd = 1.4826 * float(np.median(np.abs(resid[used] - med)))
         worst = max(used, key=lambda k: resid[k])
@@ -524,15 +697,23 @@ def learn_responses(records: Sequence[Record], detectors: Sequence[str], distanc
                               f"median {med:.3g}: another vehicle on the detectors?")
             used.remove(worst)
 
-    misfit = _misfits([runs[k] for k in used], offs, kernels, amps, dist)
+    active = [runs[k] for k in used]
+    misfit, run_amps = _misfits(active, offs, kernels, weights, dist, noise, gauge_mode)
+    a1, a2 = run_amps[..., 0].ravel(), run_amps[..., 1].ravel()
+    ok = (a1 > 0) & (a2 > 0)
+    if not ok.any():
+        raise NumericalError("the calibration runs give no positive axle amplitudes")
+    log_ratio = np.log(a2[ok] / a1[ok])
+    gain_ratio = float(np.exp(np.median(log_ratio)))
+    spread = robust_sigma(log_ratio)
     responses = []
     for c, (g, kk) in enumerate(kernels):
-        _, top = _peak(g, kk)
-        scale = abs(top)
-        responses.append(DetectorResponse(channel=chans[c], u=g.copy(), k=kk / scale,
-                                          noise=float(noise[c]), misfit=float(misfit[c])))
-        amps[:, c] *= scale
-    offset = _distance_offset([runs[k] for k in used], offs, dist)
+        rms_amp = float(np.sqrt(np.mean(run_amps[..., c] ** 2)))
+        responses.append(DetectorResponse(
+            channel=chans[c], u=g.copy(), k=kk, noise=float(noise[c]),
+            misfit=float(misfit[c]), bending=np.asarray(weights[c], dtype=float),
+            relative_misfit=float(misfit[c] / max(rms_amp, 1e-300))))
+    offset = _distance_offset(active, offs, dist)
     if abs(offset) > DISTANCE_TOLERANCE * dist:
         raise InputError(
             f"the axle detectors' distance of {dist:g} m contradicts the calibration runs' "
@@ -544,6 +725,7 @@ def learn_responses(records: Sequence[Record], detectors: Sequence[str], distanc
         if k not in used:
             resid[k] = np.nan
     return LearnedResponses(responses=(responses[0], responses[1]), distance=dist,
-                            amplitudes=amps, speeds=speeds, first_axle_times=taus,
-                            residuals=resid, reasons=tuple(reasons),
-                            distance_offset=float(offset), nit=nit)
+                            amplitudes=run_amps.mean(axis=0), speeds=speeds,
+                            first_axle_times=taus, residuals=resid, reasons=tuple(reasons),
+                            distance_offset=float(offset), nit=nit, gauges=gnames,
+                            gain_ratio=gain_ratio, amplitude_spread=float(spread))

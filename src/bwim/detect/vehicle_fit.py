@@ -1,0 +1,242 @@
+"""A vehicle's axles at two detectors as one least-squares model, and its refinement.
+
+Contract
+--------
+* :class:`Problem` holds one record's two detector channels for the fit: weighted by each
+  detector's level (:attr:`~bwim.detect.response.DetectorResponse.level`: what the
+  learned response missed of the calibration truck's axles, or the noise if more; all
+  misfits of :mod:`bwim.detect.pursuit` and :mod:`bwim.detect.groups` are in these
+  "level variances"), the columns of their **rest** (with gauges: the bending as the
+  learned gauge combination reads it, an offset and a drift; without: none, readings and
+  responses high-passed in space over :data:`~bwim.detect.response.HIGH_PASS` m of
+  travel at the record's first speed estimate), and the responses ``K_d`` on their grids.
+* Model of a vehicle's axles on its window (:func:`window`: :data:`REACH` m of travel
+  before its first axle reaches detector 1 to REACH m after its last leaves detector 2,
+  every ``step``-th sample: at least :data:`WINDOW_SAMPLES` per response width at half
+  height)::
+
+      y_d(t) = Σ_i A_id K_d(v (t − τ_i) − D_d) + rest_d(t) + e,   D_1 = 0, D_2 = D,
+
+  ``τ_i`` the time axle ``i`` passes detector 1, ``v`` the speed, ``A_id`` its amplitude
+  at each detector (free: an axle's dynamic force differs at the two instants it passes
+  them).  :func:`solve` gives the amplitudes and rest by linear least squares, the
+  residual, each axle's **removal cost** (the misfit's rise without it:
+  ``A_i² / [(MᵀM)⁻¹]_ii`` summed over the detectors) and, on request, the
+  variable-projection Jacobian of the residual in (τ, v) (Kaufman's approximation);
+  residuals and costs are scaled to the misfit of all samples.  :func:`refine` is
+  Levenberg–Marquardt on (τ, v) over that projection (at most :data:`MAX_LM`
+  iterations, until the misfit falls by less than :data:`CONVERGED` of itself).
+* An axle is **seen by both** detectors when ``|ln(A_2 / (ρ A_1))|`` (``ρ`` the learned
+  gain ratio) is at most :data:`RATIO_SPREADS` times the spread the calibration runs
+  showed, and at least :data:`MIN_RATIO_BOUND`.
+* Times in s, distances in m, speeds in m/s; amplitudes in each detector's reading units.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .response import HIGH_PASS, LearnedResponses, high_pass
+
+__all__ = ["CONVERGED", "MAX_LM", "MIN_RATIO_BOUND", "RATIO_SPREADS", "REACH",
+           "WINDOW_SAMPLES", "Problem", "VehicleFit", "make_problem", "refine", "relative",
+           "solve", "window"]
+
+#: A vehicle's fit looks this far beyond its first and last axle, m of travel.
+REACH = 2.0
+#: An axle's two amplitudes may differ from the gain ratio by this many learned spreads.
+RATIO_SPREADS = 4.0
+#: ... and at least by this factor (natural log: a factor 3).
+MIN_RATIO_BOUND = float(np.log(3.0))
+#: Samples per response width (at half height) a vehicle's fit keeps at least.
+WINDOW_SAMPLES = 8
+#: Levenberg–Marquardt iterations of a refinement, at most ...
+MAX_LM = 15
+#: ... which stops when the misfit falls by less than this share (or the times move by
+#: less than 5 mm of travel).
+CONVERGED = 3e-3
+
+
+@dataclass(frozen=True, eq=False)
+class Problem:
+    """One record's two channels, weighted, their rest's columns and the responses (see
+    the module contract); made by :func:`make_problem`."""
+
+    t: np.ndarray
+    y: np.ndarray  # (n_t, 2) weighted (level units); high-passed without gauges
+    rest: tuple[np.ndarray, np.ndarray]  # per detector (n_t, k) weighted columns
+    q_rest: tuple[np.ndarray, np.ndarray]  # their orthonormal bases (all samples)
+    w: np.ndarray  # (2,) 1 / level
+    ratio: float  # the second detector's gain over the first's
+    bound: float  # largest |ln(A_2 / (ratio A_1))| of an axle
+    spread: float  # learned spread of that log ratio
+    shift: tuple[float, float]  # D_d
+    grids: tuple  # per detector (u, K, dK/du), high-passed without gauges
+    steps: tuple  # per detector K's differences between ordinates (0 after the last)
+    fs: float
+    step: int  # every step-th sample in a vehicle's window
+
+    def atoms(self, taus: np.ndarray, v: float, rows: slice | np.ndarray = slice(None),
+              slopes: bool = False, only: int | None = None):
+        """Per detector the weighted columns K(v (t − τ_i) − D_d), (n_rows, n), K linear
+        between its ordinates; with ``slopes`` also their slopes dK/du (of the linear
+        pieces) at the same points; with ``only`` that detector's (None for the other)."""
+        t = self.t[rows]
+        out, der = [], []
+        for c, (u, k, _) in enumerate(self.grids):
+            if only is not None and c != only:
+                out.append(None)
+                der.append(None)
+                continue
+            du = u[1] - u[0]
+            x = (v * (t[:, None] - taus[None, :]) - (self.shift[c] + u[0])) * (1.0 / du)
+            np.clip(x, 0.0, u.size - 1.000001, out=x)  # the grids end in zeros
+            j = x.astype(np.intp)
+            x -= j
+            step = self.steps[c][j]
+            out.append((k[j] + x * step) * self.w[c])
+            if slopes:
+                der.append(step * (self.w[c] / du))
+        return (out, der) if slopes else out
+
+    def log_ratio(self, amps: np.ndarray) -> np.ndarray:
+        """``ln(A_2 / (ratio A_1))`` per axle (±inf where one detector sees nothing)."""
+        a1 = np.maximum(amps[:, 0], 0.0)
+        a2 = np.maximum(amps[:, 1], 0.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            r = np.log(a2 / (self.ratio * a1))
+        return np.where(np.isnan(r), np.inf, r)
+
+    def seen_by_both(self, amps: np.ndarray) -> np.ndarray:
+        return np.abs(self.log_ratio(amps)) <= self.bound
+
+
+@dataclass(frozen=True, eq=False)
+class VehicleFit:
+    """A vehicle's fit on its window: times, speed, amplitudes (n, 2), misfit, each axle's
+    removal cost (level variances)."""
+
+    taus: np.ndarray
+    v: float
+    amps: np.ndarray
+    chi: float
+    gains: np.ndarray
+
+
+def make_problem(t: np.ndarray, y: np.ndarray, gauges: np.ndarray | None,
+             learned: LearnedResponses, v: float) -> Problem:
+    fs = 1.0 / float(np.median(np.diff(t)))
+    w = 1.0 / np.array([max(r.level, 1e-300) for r in learned.responses])
+    spread = float(learned.amplitude_spread)
+    bound = max(RATIO_SPREADS * spread, MIN_RATIO_BOUND)
+    # a vehicle's fit samples every step-th reading: at least WINDOW_SAMPLES per response
+    # width at half height (the response is smooth on that scale)
+    width = min(r.fwhm for r in learned.responses) / v * fs
+    step = max(1, int(width // WINDOW_SAMPLES))
+    common = dict(t=t, w=w, ratio=float(learned.gain_ratio), bound=bound, spread=spread,
+                  shift=(0.0, learned.distance), fs=fs, step=step)
+    if learned.gauges and gauges is not None:
+        g = gauges - gauges.mean(axis=0)
+        tc = t - t.mean()
+        tc = tc / max(float(np.ptp(tc)), 1e-300)
+        rest = tuple(np.column_stack([g @ r.bending, np.ones_like(tc), tc]) * w[c]
+                     for c, r in enumerate(learned.responses))
+        grids = tuple(r.padded() for r in learned.responses)
+        return Problem(y=(y - y.mean(axis=0)) * w, rest=rest,
+                        q_rest=tuple(np.linalg.qr(r)[0] for r in rest), grids=grids,
+                        steps=tuple(np.append(np.diff(g[1]), 0.0) for g in grids), **common)
+    y_hp = high_pass(y, HIGH_PASS / v * fs) * w
+    empty = np.zeros((t.size, 0))
+    grids = tuple(r.high_passed() for r in learned.responses)
+    return Problem(y=y_hp, rest=(empty, empty), q_rest=(empty, empty), grids=grids,
+                    steps=tuple(np.append(np.diff(g[1]), 0.0) for g in grids), **common)
+
+
+def relative(amps: np.ndarray) -> np.ndarray:
+    """Amplitudes over each detector's largest, (n, 2)."""
+    top = amps.max(axis=0) if amps.size else np.zeros(2)
+    return amps / np.where(top > 0, top, 1.0)
+
+
+def window(pb: Problem, taus: np.ndarray, v: float) -> np.ndarray:
+    """Samples from REACH m of travel before the first axle reaches detector 1 to REACH m
+    after the last leaves detector 2."""
+    lo = np.searchsorted(pb.t, taus.min() - REACH / v)
+    hi = np.searchsorted(pb.t, taus.max() + (pb.shift[1] + REACH) / v, side="right")
+    return np.arange(lo, hi, pb.step)
+
+
+def solve(pb: Problem, taus: np.ndarray, v: float, rows: np.ndarray, slopes: bool):
+    """Per detector the least-squares amplitudes and rest on ``rows`` (free in sign), the
+    residual; with ``slopes`` the variable-projection Jacobian (Kaufman) of the residual
+    with respect to (τ_1 … τ_n, v); each axle's removal cost.  Residual and costs are
+    scaled by the window's sampling step (misfits of all samples)."""
+    n = taus.size
+    if slopes:
+        X, dX = pb.atoms(taus, v, rows, slopes=True)
+    else:
+        X = pb.atoms(taus, v, rows)
+    res, jac, amps, gains = [], [], np.zeros((n, 2)), np.zeros(n)
+    for c in range(2):
+        M = np.hstack([X[c], pb.rest[c][rows]])
+        yc = pb.y[rows, c]
+        G = M.T @ M
+        G.flat[::G.shape[0] + 1] += 1e-12 * (np.trace(G) / G.shape[0] + 1e-300)
+        try:
+            Ginv = np.linalg.inv(G)
+        except np.linalg.LinAlgError:
+            Ginv = np.linalg.pinv(G)
+        coef = Ginv @ (M.T @ yc)
+        r = yc - M @ coef
+        res.append(r)
+        a = coef[:n]
+        amps[:, c] = a
+        # removing regressor i raises the misfit by coef_i² / [(MᵀM)⁻¹]_ii
+        gains += a**2 / np.maximum(np.diag(Ginv)[:n], 1e-300)
+        if slopes:
+            D = np.empty((rows.size, n + 1))
+            D[:, :n] = -v * dX[c] * a  # ∂(X a)/∂τ_i
+            D[:, n] = (dX[c] * (pb.t[rows][:, None] - taus[None, :])) @ a  # ∂(X a)/∂v
+            jac.append(M @ (Ginv @ (M.T @ D)) - D)
+    # every step-th sample: scaled to the misfit of all samples
+    k = np.sqrt(pb.step)
+    return (np.concatenate(res) * k, (np.vstack(jac) * k if slopes else None), amps,
+            gains * pb.step)
+
+
+def refine(pb: Problem, taus: np.ndarray, v: float, iterations: int = MAX_LM) -> VehicleFit:
+    """The vehicle's axle times and speed by Levenberg–Marquardt on the variable
+    projection (amplitudes and rest by least squares inside), on a fixed window."""
+    taus = np.sort(np.asarray(taus, dtype=float))
+    rows = window(pb, taus, v)
+    p = np.append(taus, v)
+    r, J, amps, gains = solve(pb, taus, v, rows, True)
+    cost = float(r @ r)
+    lam = 1e-3
+    scale = np.append(np.full(taus.size, 1.0 / v), 1.0 / v)  # τ in s, v in m/s: metres
+    for _ in range(iterations):
+        Js = J * scale
+        A = Js.T @ Js
+        g = Js.T @ r
+        improved = False
+        for _ in range(8):
+            step = -np.linalg.solve(A + lam * np.diag(np.diag(A) + 1e-12), g) * scale
+            trial = p + step
+            tt, vv = np.sort(trial[:-1]), trial[-1]
+            if vv <= 0:
+                lam *= 10.0
+                continue
+            r2, J2, amps2, gains2 = solve(pb, tt, vv, rows, True)
+            c2 = float(r2 @ r2)
+            if c2 < cost:
+                rel = (cost - c2) / max(cost, 1e-300)
+                p, r, J, amps, gains, cost = np.append(tt, vv), r2, J2, amps2, gains2, c2
+                lam = max(lam / 3.0, 1e-7)
+                improved = True
+                break
+            lam *= 10.0
+        if not improved or rel < CONVERGED or np.max(np.abs(step[:-1])) * p[-1] < 5e-3:
+            break
+    return VehicleFit(taus=p[:-1], v=float(p[-1]), amps=amps, chi=cost, gains=gains)
