@@ -239,13 +239,16 @@ def test_weighing_by_mfi_with_an_fe_model(day, site):
     doc["sensors"][0]["y"] = list(layout.GAUGE_Y)
     doc["logger"]["scale"] = 1e-6  # the logger writes microstrain × an unknown gain
     placed = scenario_from_dict(doc, source="site.toml")
+    # runs and traffic read with one scenario: the learned detector responses and their
+    # noise are in the readings' units
+    placed_cal = calibrate_site([load_record(p, placed) for p in day.calibration], cal.setup)
     bridge = layout.site_bridge(0.75)
     truth = {r["record"]: r for r in _rows(day.truth)}
     n = 0
     for path in day.traffic:
         if truth[path.name]["n_vehicles"] != "1":
             continue
-        ev = weigh_event(load_record(path, placed), cal, bridge=bridge,
+        ev = weigh_event(load_record(path, placed), placed_cal, bridge=bridge,
                          identify_options={"n_modes": 12})
         assert ev.method == "mfi" and ev.weighed, (path.name, ev.reason)
         assert abs(ev.gvw / 1e3 / float(truth[path.name]["gvw_kN"]) - 1) < 0.12

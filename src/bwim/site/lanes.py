@@ -22,7 +22,12 @@ Contract
   saw it with the higher confidence).  A vehicle whose lateral position (m) lies nearer
   another lane of its direction (``SiteSetup.lane_of``) is given that lane's number.
 * **Multiple presence**: vehicles whose windows on the span overlap are each flagged
-  ``multiple_presence``; :attr:`LaneVehicle.others` names the lanes of the others.
+  ``multiple_presence``; :attr:`LaneVehicle.others` names the lanes of the others.  A
+  vehicle no detector saw (a lane without detectors) shows as gauge activity outside
+  every detected vehicle's window (:func:`bwim.detect.presence.unexplained_activity` on
+  the gauges' sum); such activity that begins or ends within a quarter of a vehicle's
+  window length of that window continues into it, so that vehicle is flagged
+  ``multiple_presence`` too, with no lane in ``others``.
 * Never raises for a record it can read: a lane whose detection fails contributes its
   reason to ``message`` and no vehicle.
 """
@@ -36,6 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from bwim.detect import Detection, LearnedResponses, VehicleDetection, detect_axles
+from bwim.detect.presence import unexplained_activity
 from bwim.detect.result import FLAG_MULTIPLE_PRESENCE
 from bwim.errors import BwimError
 from bwim.records import Record
@@ -149,6 +155,7 @@ def detect_lanes(record: Record, setup: SiteSetup, *,
                                      pair=pair.lane, window=v.window))
     vehicles = _deduplicated(found, setup)
     vehicles = _presence(vehicles)
+    vehicles = _unseen_neighbours(record, vehicles, gauges, notes)
     return EventDetection(vehicles=tuple(vehicles), by_lane=by_lane, message="; ".join(notes))
 
 
@@ -195,6 +202,39 @@ def _own_pair_score(v: LaneVehicle, pairs: Mapping[int, DetectorLane]) -> float:
     if y is not None and v.vehicle.lateral_unit == "m" and np.isfinite(v.vehicle.lateral):
         return -abs(v.vehicle.lateral - y)
     return v.vehicle.confidence - 10.0
+
+
+#: Unexplained activity this close to a window (in window lengths) continues into it.
+_ABUTS = 0.25
+
+
+def _unseen_neighbours(record: Record, vehicles: list[LaneVehicle], gauges: Sequence[str],
+                       notes: list[str]) -> list[LaneVehicle]:
+    """Vehicles next to gauge activity no detected vehicle explains, flagged
+    ``multiple_presence`` (see the module docstring)."""
+    windows = [v.window for v in vehicles if v.window is not None]
+    if not gauges or not windows:
+        return vehicles
+    total = record.channels(list(gauges)).data.sum(axis=1)
+    extra = unexplained_activity(record.time, total, np.asarray(windows, dtype=float))
+    if not extra.size:
+        return vehicles
+    out = []
+    for v in vehicles:
+        if v.window is None:
+            out.append(v)
+            continue
+        a, b = v.window
+        reach = _ABUTS * (b - a)
+        if any(s - b < reach and a - e < reach for s, e in extra):
+            veh = v.vehicle
+            if FLAG_MULTIPLE_PRESENCE not in veh.flags:
+                veh = dataclasses.replace(veh, flags=(*veh.flags, FLAG_MULTIPLE_PRESENCE))
+            notes.append(f"lane {v.lane}: gauge activity no detector saw continues into the "
+                         f"vehicle's time on the span ({a:.3f}–{b:.3f} s): another vehicle")
+            v = dataclasses.replace(v, vehicle=veh)
+        out.append(v)
+    return out
 
 
 def _presence(vehicles: list[LaneVehicle]) -> list[LaneVehicle]:
