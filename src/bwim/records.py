@@ -35,7 +35,7 @@ from datetime import datetime
 import numpy as np
 
 from bwim.errors import InputError, require_axis, require_columns, require_finite, require_positive
-from bwim.sensors import Sensor
+from bwim.sensors import Sensor, SensorKind
 
 __all__ = ["AxleLayout", "Passage", "Record", "SimulationSettings", "Truth", "VBIConvergence",
            "axle_offsets", "noise_sigma", "record_list"]
@@ -208,7 +208,8 @@ class Record:
     time : ndarray, shape (n_t,)
         Sample times, s, uniformly spaced.
     data : ndarray, shape (n_t, n_sensors)
-        Readings: strain (m/m) or deflection (m).
+        Readings: strain (m/m) or deflection (m); finite, except that a ``temperature``
+        channel (°C) may have gaps (NaN).
     sensors : tuple of Sensor
     passages : tuple of Passage
     truths : tuple of Truth
@@ -236,8 +237,12 @@ class Record:
     def __post_init__(self) -> None:
         t = require_axis("time", self.time)
         d = require_columns("data", self.data, (t.size, len(self.sensors)), "(n_t, n_sensors)")
-        if not np.all(np.isfinite(d)):
-            bad = np.argwhere(~np.isfinite(d))[0]
+        # a temperature channel may have gaps (NaN); every other sample is finite
+        gappy = np.array([s.kind is SensorKind.TEMPERATURE for s in self.sensors], dtype=bool)
+        bad = ~np.isfinite(d)
+        bad[:, gappy] = np.isinf(d[:, gappy])
+        if bad.any():
+            bad = np.argwhere(bad)[0]
             raise InputError(
                 f"data has a non-finite sample at t = {t[bad[0]]:g} s in channel "
                 f"{self.sensors[bad[1]].name!r}"

@@ -45,8 +45,10 @@ Contract
   ``max_field`` characters; a row with a missing or extra field; an empty field, text that
   is not a number (a number written with a decimal comma while ``decimal`` is ``"."``:
   the message hints ``decimal = ","``), NaN or an infinite sample in a channel or the time
-  column; fewer than ``min_samples`` or more than ``max_samples`` rows; time that goes
-  back or repeats, a dropped sample (a step over 1.5 x the median step) or jitter (a step
+  column (except that an empty or NaN field of a ``temperature`` channel is a gap, read
+  as NaN: a temperature probe that drops out does not lose the record); fewer than
+  ``min_samples`` or more than ``max_samples`` rows; time that goes back or repeats, a
+  dropped sample (a step over 1.5 x the median step) or jitter (a step
   off the median by more than ``time_tolerance`` of it, plus one unit of the file's last
   written time decimal); a time column that disagrees with ``sampling_rate``; a clipped
   channel (see :func:`read_logger`); a clock that cannot be read (see
@@ -332,6 +334,11 @@ def _is_number(s: str, decimal: str) -> bool:
     return _NUMBER.fullmatch(s.replace(",", ".") if decimal == "," else s) is not None
 
 
+def _is_gap(s: str) -> bool:
+    """An empty or NaN field: a gap, in a column that may have gaps."""
+    return not s or s.lower().lstrip("+-") == "nan"
+
+
 def _bad_field(s: str, decimal: str) -> str:
     if not s:
         return "empty field"
@@ -458,7 +465,9 @@ def read_logger(
             with io.TextIOWrapper(raw, encoding="utf-8-sig", newline=None) as f:
                 parser = _Parser(f, p, fmt, size=size, max_bytes=max_bytes,
                                  max_samples=max_samples, max_field=max_field,
-                                 vectorised=vectorised)
+                                 vectorised=vectorised,
+                                 gaps={s.name for s in channel_sensors
+                                       if s.kind is SensorKind.TEMPERATURE})
                 parser.run()
         except UnicodeDecodeError:
             raise InputError(f"{p}: not UTF-8 text") from None
@@ -488,7 +497,7 @@ def read_logger(
     scales = fmt.scales
     if np.any(scales != 1.0):
         values *= scales
-        bad = np.argwhere(~np.isfinite(values))
+        bad = np.argwhere(np.isinf(values))
         if bad.size:
             k, j = bad[0]
             raise InputError(f"{p}: line {lines[k]}, column {fmt.channels[j]!r}: the scaled "
@@ -649,7 +658,8 @@ class _Parser:
     """Reads a logger file's rows into :class:`_Rows` (see the module docstring)."""
 
     def __init__(self, f: TextIO, p: Path, fmt: LoggerFormat, *, size: int, max_bytes: int,
-                 max_samples: int, max_field: int, vectorised: bool = True) -> None:
+                 max_samples: int, max_field: int, vectorised: bool = True,
+                 gaps: set[str] | frozenset[str] = frozenset()) -> None:
         self.f, self.p, self.fmt = f, p, fmt
         self.vectorised, self.size = vectorised, size
         self.max_bytes, self.max_samples, self.max_field = max_bytes, max_samples, max_field
@@ -664,6 +674,8 @@ class _Parser:
                            else np.array(self.keep))
         self.t_col = cols.index(TIME) if fmt.has_time else None
         self.numeric = self.keep if self.t_col is None else [self.t_col, *self.keep]
+        # columns whose empty or NaN fields read as NaN (a temperature sensor's gaps)
+        self.gaps = {j for j, c in enumerate(cols) if c in gaps}
         self.clock_cols = {c: cols.index(c) for c in fmt.clock_columns}
         self.comma = fmt.decimal == ","
         self.delim = fmt.delimiter
@@ -744,7 +756,8 @@ class _Parser:
         if fmt.header is not None:
             return fmt.header
         fields = [_clean(s) for s in raw]
-        numbers = [_is_number(fields[j], fmt.decimal) for j in self.numeric]
+        numbers = [_is_number(fields[j], fmt.decimal) or (j in self.gaps and _is_gap(fields[j]))
+                   for j in self.numeric]
         if not any(numbers):
             return True
         if not all(numbers):
@@ -897,6 +910,9 @@ class _Parser:
                 s = fields[j]
                 if comma:
                     s = s.replace(",", ".")
+                if j in self.gaps and _is_gap(s):
+                    buf.append(math.nan)
+                    continue
                 if _NUMBER.fullmatch(s) is None:
                     raise InputError(f"{p}: line {k}, column {fmt.columns[j]!r}: "
                                      f"{_bad_field(fields[j], fmt.decimal)}")

@@ -64,7 +64,7 @@ from bwim.wim.multirun import RunFit
 from bwim.wim.scale_trend import ScaleTrend
 
 __all__ = ["SPACING_TOLERANCE", "STRAIN_ONLY_PASSES", "SiteCalibration", "calibrate_site",
-           "gauge_names", "temperature_channel"]
+           "gauge_names", "record_temperature", "temperature_channel"]
 
 #: A calibration run whose detected axle spacings differ from the truck's by more than
 #: this (m) is rejected: the detection, not the truck, is wrong.
@@ -344,6 +344,14 @@ def temperature_channel(record: Record, setup: SiteSetup) -> str | None:
     return next((s.name for s in record.sensors if s.kind.value == "temperature"), None)
 
 
+def record_temperature(record: Record, channel: str) -> float | None:
+    """The record's temperature, °C: the median of the channel's finite samples (a probe's
+    gaps are NaN); None when it has none."""
+    values = record.channels([channel]).data[:, 0]
+    values = values[np.isfinite(values)]
+    return float(np.median(values)) if values.size else None
+
+
 def _temperature(records: Sequence[Record], cal: _Lines, setup: SiteSetup
                  ) -> TemperatureDrift | None:
     used = _used(records, cal)
@@ -351,9 +359,10 @@ def _temperature(records: Sequence[Record], cal: _Lines, setup: SiteSetup
     if len(channels) != 1 or None in channels:
         return None
     channel = channels.pop()
-    temps = [float(np.mean(rec.channels([channel]).data)) for rec, _ in used]
+    temps = [record_temperature(rec, channel) for rec, _ in used]
+    known = [(t, fit.scale) for t, (_, fit) in zip(temps, used, strict=True) if t is not None]
     try:
-        return TemperatureDrift.fit(temps, [fit.scale for _, fit in used])
+        return TemperatureDrift.fit([t for t, _ in known], [f for _, f in known])
     except InputError:
         return None
 

@@ -8,11 +8,15 @@ reported per vehicle (``drift_method``):
 Contract
 --------
 * ``"temperature"``: the logger has a temperature channel (``DriftSetup.temperature``).
-  The calibration runs' scale factors are regressed on their mean temperature
+  The calibration runs' scale factors are regressed on their temperature
   (:class:`TemperatureDrift`, least squares, a straight line); an event's factor is the
-  line at its own mean temperature.  It holds on any day the factor follows the
-  temperature.  Temperatures beyond the runs' range by more than a quarter of it are
-  flagged ``temperature_extrapolated``.
+  line at its own temperature.  A record's temperature is the median of its channel's
+  readings; a probe's gaps (empty or NaN fields, read as NaN) are left out, and a record
+  with no reading at all is left out of the fit, or, for an event, falls back to the
+  time of day flagged ``temperature_missing`` (``"auto"``) or is refused
+  (``"temperature"``).  It holds on any day the factor follows the temperature.
+  Temperatures beyond the runs' range by more than a quarter of it are flagged
+  ``temperature_extrapolated``.
 * ``"traffic"``: **self-calibration from the traffic itself** (:func:`traffic_drift`):
   the steering axle of the commonest articulated class (``reference_class``: an
   axle-group code, :mod:`bwim.classify`; default, among the classes of five or more

@@ -53,7 +53,12 @@ from bwim.fe.bridge import Bridge
 from bwim.mfi import ForceIdentification, identify_forces
 from bwim.plausibility import HARD_FLAGS
 from bwim.records import Passage, Record
-from bwim.site.calibrate import SiteCalibration, gauge_names, temperature_channel
+from bwim.site.calibrate import (
+    SiteCalibration,
+    gauge_names,
+    record_temperature,
+    temperature_channel,
+)
 from bwim.site.lanes import EventDetection, LaneVehicle, detect_lanes
 from bwim.summary import SummaryRow
 from bwim.wim import Weighing, weigh
@@ -366,22 +371,28 @@ def _drift_factor(record: Record, passage: Passage, calibration: SiteCalibration
         return 1.0, "none" if method == "none" else "", ()
     if method == "trend":
         return 1.0, "trend", ()
+    gap: tuple[str, ...] = ()
     if method in ("temperature", "auto"):
         channel = temperature_channel(record, setup)
         if calibration.temperature is not None and channel is not None:
-            f, beyond = calibration.temperature.factor(
-                float(np.mean(record.channels([channel]).data)))
-            return f, "temperature", ("temperature_extrapolated",) if beyond else ()
+            temperature = record_temperature(record, channel)
+            if temperature is not None:
+                f, beyond = calibration.temperature.factor(temperature)
+                return f, "temperature", ("temperature_extrapolated",) if beyond else ()
+            if method == "temperature":
+                raise InputError(f"the temperature channel {channel!r} has no reading in "
+                                 "this record")
+            gap = ("temperature_missing",)
         if method == "temperature":
             raise InputError("the temperature method needs a temperature channel in the "
                              "runs and in the event ([drift] temperature)")
     tod = calibration.time_of_day
     if tod is None:
-        return 1.0, "", ()
+        return 1.0, "", gap
     when = record.clock_at(passage.delay)
     f, outside = tod.factor(when if when is not None
                             else record.clock_seconds(passage.delay))
-    return f, "time_of_day", ("outside_calibration_time",) if outside else ()
+    return f, "time_of_day", (*gap, *(("outside_calibration_time",) if outside else ()))
 
 
 def _weigh_mfi(record: Record, lv: LaneVehicle, flags: tuple[str, ...], bridge: Bridge,
