@@ -53,7 +53,7 @@ def _rows(path: Path) -> list[dict]:
         return list(csv.DictReader(f))
 
 
-def _zeroed(record, passage, support):
+def zeroed(record, passage, support):
     """The record less each channel's mean before the first axle reaches the line (the
     classic pre-trigger zeroing of a B-WIM system)."""
     before = passage.axle_x(record.time)[:, 0] < support[0]
@@ -62,15 +62,16 @@ def _zeroed(record, passage, support):
     return dataclasses.replace(record, data=record.data - record.data[before].mean(axis=0))
 
 
-def _baseline(day, scenario, site, traffic) -> list[SummaryRow]:
+def moses_baseline(calibration, scenario, site, traffic) -> list[SummaryRow]:
     """Moses with one summed-gauge line, on bwim's detected passages, over the support
-    bwim estimated, with pre-trigger zeroing."""
+    bwim estimated, with pre-trigger zeroing.  ``calibration``: the runs' paths (in the
+    order ``site`` was calibrated from); ``traffic``: (name, record, EventWeighing)."""
     support = site.lines.support
     used = [k for k, r in enumerate(site.reasons) if not r]
     # the summed gauges are the classic lane-insensitive channel: one line for all runs
     passages = [dataclasses.replace(site.detections[k].vehicles[0].passage, lane=0.0)
                 for k in used]
-    cal_records = [dataclasses.replace(_zeroed(load_record(day.calibration[k], scenario),
+    cal_records = [dataclasses.replace(zeroed(load_record(calibration[k], scenario),
                                                p, support), passages=(p,))
                    for k, p in zip(used, passages, strict=True)]
     il = calibrate_influence_line(cal_records, build_vehicle(scenario), channels="sum",
@@ -81,7 +82,7 @@ def _baseline(day, scenario, site, traffic) -> list[SummaryRow]:
             rows.append(SummaryRow(record=name))
             continue
         p = dataclasses.replace(ev.passage, lane=il.lane)
-        w = weigh_static(_zeroed(rec, p, support), il, passage=p, groups=group_axles(p))
+        w = weigh_static(zeroed(rec, p, support), il, passage=p, groups=group_axles(p))
         ok = w.quality != "reject"
         rows.append(SummaryRow(record=name, gvw=w.gvw if ok else None,
                                axle_weights=tuple(w.axle_weights) if ok else (),
@@ -108,7 +109,7 @@ def run_day(label: str, roughness, folder: Path) -> dict:
     t0 = time.process_time()
     traffic = [(name, rec, weigh_event(rec, setup_site)) for name, rec in records]
     t_weigh = time.process_time() - t0
-    base = assess(_baseline(day, scenario, setup_site, traffic), reference)
+    base = assess(moses_baseline(day.calibration, scenario, setup_site, traffic), reference)
 
     truth = {}
     for r in _rows(day.truth):

@@ -53,6 +53,7 @@ from bwim.detect import (
     learn_responses,
 )
 from bwim.detect.response import band_pass, peak_polarity
+from bwim.detect.result import FLAG_MULTIPLE_PRESENCE
 from bwim.detect.signals import robust_sigma
 from bwim.errors import InputError
 from bwim.records import Passage, Record
@@ -69,6 +70,8 @@ __all__ = ["SPACING_TOLERANCE", "STRAIN_ONLY_PASSES", "SiteCalibration", "calibr
 #: A calibration run whose detected axle spacings differ from the truck's by more than
 #: this (m) is rejected: the detection, not the truck, is wrong.
 SPACING_TOLERANCE = 0.3
+#: Least spread (natural log) of a transferred pair's amplitude ratio about its gain ratio.
+TRANSFERRED_SPREAD = float(np.log(2.0))
 #: Without axle detectors: passes of (lines from the runs, runs re-detected against them).
 STRAIN_ONLY_PASSES = 2
 
@@ -233,9 +236,14 @@ def _transferred(learned: LearnedResponses, channels: tuple[str, str], distance:
         for ch, r, pol, n in zip(channels, learned.responses, polarity, noise, strict=True))
     gain = np.array(size) / max(size[0], 1e-300)
     amps = np.column_stack([np.ones(1), np.full(1, gain[1])])
+    # the pair's gain ratio from the readings' sizes (every vehicle of the runs: cruder
+    # than the calibration lane's axle by axle, so its spread is at least a factor 2)
     return LearnedResponses(responses=resp, distance=distance,
                             amplitudes=amps, speeds=np.zeros(0), first_axle_times=np.zeros(0),
-                            residuals=np.zeros(0), reasons=(), distance_offset=0.0, nit=0)
+                            residuals=np.zeros(0), reasons=(), distance_offset=0.0, nit=0,
+                            gain_ratio=float(gain[1]),
+                            amplitude_spread=max(learned.amplitude_spread,
+                                                 TRANSFERRED_SPREAD))
 
 
 # --- 3. runs -------------------------------------------------------------------------------
@@ -259,6 +267,8 @@ def _run_reason(ev: EventDetection, setup: SiteSetup, strict: bool = False) -> s
         shown = ", ".join(f"lane {w.lane}, {w.direction}, {w.vehicle.n_axles} axles"
                           for w in busy)
         return f"another vehicle on the bridge: {shown}"
+    if FLAG_MULTIPLE_PRESENCE in truck.vehicle.flags and not truck.others:
+        return "another vehicle on the bridge: gauge activity no axle detector saw"
     n = setup.calibration_loads.size
     p = truck.vehicle.passage
     if p.n_axles != n:

@@ -15,8 +15,11 @@ Contract
 * A lane pair's detectors also feel vehicles of other lanes, weakly: a single axle found
   by a pair other than the calibration lane's, or a vehicle whose lateral position (m)
   lies clearly in a lane of the other direction (beyond three quarters of the way from
-  the pair's ``y`` to that lane's centre), is a trace of a vehicle the other way and is
-  left to that lane's detectors; a vehicle that two pairs of one direction both report
+  the pair's ``y`` to that lane's centre) while a pair of that direction saw a vehicle
+  at the same time (and the trace has its speed, or fits the pair's learned response
+  poorly), is a trace of that vehicle and is left to its lane's
+  detectors (without such a vehicle it is a vehicle of its own, whose lateral position
+  another vehicle on the span pulled aside); a vehicle that two pairs of one direction both report
   (its windows on the span overlap) is kept once, from the pair of its own lane (the
   one whose ``y`` is nearer the vehicle's lateral position in metres, else the one that
   saw it with the higher confidence).  A vehicle whose lateral position (m) lies nearer
@@ -125,6 +128,7 @@ def detect_lanes(record: Record, setup: SiteSetup, *,
     the lateral position; ``lanes`` limits the detection to these detector lanes."""
     responses = responses or {}
     by_lane: dict[int, Detection] = {}
+    seen: list[tuple[DetectorLane, VehicleDetection]] = []
     found: list[LaneVehicle] = []
     notes: list[str] = []
     for pair in setup.lanes:
@@ -143,27 +147,41 @@ def detect_lanes(record: Record, setup: SiteSetup, *,
         by_lane[pair.lane] = det
         if not det.vehicles and det.message and pair.lane == setup.calibration_lane:
             notes.append(f"lane {pair.lane}: {det.message}")
-        for v in det.vehicles:
-            lane = pair.lane
-            if _echo(v, pair, setup):
-                notes.append(f"lane {pair.lane}: a {v.n_axles}-axle trace of a vehicle in a "
-                             "lane the other way, left to that lane's detectors")
-                continue
-            if v.lateral_unit == "m" and np.isfinite(v.lateral):
-                lane = setup.lane_of(v.lateral, pair.direction) or lane
-            found.append(LaneVehicle(vehicle=v, lane=lane, direction=pair.direction,
-                                     pair=pair.lane, window=v.window))
+        seen.extend((pair, v) for v in det.vehicles)
+    for pair, v in seen:
+        lane = pair.lane
+        if _echo(v, pair, setup, seen):
+            notes.append(f"lane {pair.lane}: a {v.n_axles}-axle trace of a vehicle in a "
+                         "lane the other way, left to that lane's detectors")
+            continue
+        if v.lateral_unit == "m" and np.isfinite(v.lateral):
+            lane = setup.lane_of(v.lateral, pair.direction) or lane
+        found.append(LaneVehicle(vehicle=v, lane=lane, direction=pair.direction,
+                                 pair=pair.lane, window=v.window))
     vehicles = _deduplicated(found, setup)
     vehicles = _presence(vehicles)
     vehicles = _unseen_neighbours(record, vehicles, gauges, notes)
     return EventDetection(vehicles=tuple(vehicles), by_lane=by_lane, message="; ".join(notes))
 
 
-def _echo(v: VehicleDetection, pair: DetectorLane, setup: SiteSetup) -> bool:
+#: Relative speed difference within which two pairs' vehicles may be one vehicle.
+_SAME_SPEED = 0.03
+#: Below this detection confidence a trace fits the pair's learned response too poorly
+#: to be a vehicle of its own (an echo's axles reach the pair's detectors in the wrong
+#: order, and fit only in part).
+_ECHO_CONFIDENCE = 0.9
+
+
+def _echo(v: VehicleDetection, pair: DetectorLane, setup: SiteSetup,
+          seen: Sequence[tuple[DetectorLane, VehicleDetection]]) -> bool:
     """Whether a vehicle a pair reports is a trace of a vehicle the other way: a single
     axle found by a pair other than the calibration lane's, or a vehicle whose lateral
     position (m) lies clearly in a lane of the other direction (beyond three quarters of
-    the way from the pair's y to that lane's centre)."""
+    the way from the pair's y to that lane's centre) while a pair of that direction saw
+    a vehicle there at the same time, and the trace either has that vehicle's speed
+    (within :data:`_SAME_SPEED`) or fits the pair's response poorly (confidence below
+    :data:`_ECHO_CONFIDENCE`).  Otherwise the trace is a vehicle of its own whose lateral
+    position another vehicle on the span pulled aside."""
     if v.n_axles < 2 and pair.lane != setup.calibration_lane:
         return True
     if pair.y is None or v.lateral_unit != "m" or not np.isfinite(v.lateral):
@@ -172,7 +190,13 @@ def _echo(v: VehicleDetection, pair: DetectorLane, setup: SiteSetup) -> bool:
     if nearest is None or setup.direction_of(nearest) == pair.direction:
         return False
     centre = setup.centres()[nearest][0]
-    return abs(v.lateral - pair.y) > 0.75 * abs(centre - pair.y)
+    if abs(v.lateral - pair.y) <= 0.75 * abs(centre - pair.y):
+        return False
+    return any(other.direction != pair.direction and _overlap(v.window, w.window)
+               and (v.confidence < _ECHO_CONFIDENCE
+                    or abs(abs(w.passage.speed) - abs(v.passage.speed))
+                    <= _SAME_SPEED * abs(v.passage.speed))
+               for other, w in seen)
 
 
 def _overlap(a: tuple[float, float] | None, b: tuple[float, float] | None) -> bool:

@@ -61,7 +61,8 @@ vehicle's first axle at the gauge line.
 
 **Simulation.**  Vehicle–bridge interaction (:mod:`bwim.dynamics`, modal, static
 correction) at 1024 Hz, anti-alias FIR and decimation to 512 Hz, a 60 m run-up on the
-vehicles' own ISO 8608 road (G_d(n₀) log-uniform between the class A and B means; one
+vehicles' own ISO 8608 road (G_d(n₀) log-uniform in ``roughness``, default
+:data:`ROUGHNESS`, a WIM-grade approach: docs/realistic_site.md; one
 road per direction and event, smoothed over a 0.24 m tyre patch; an event whose tyre
 loses contact is simulated again on a new road, at most 10 times).  Vehicles of one
 direction are simulated together (their coupling through the bridge included); a -x
@@ -114,11 +115,10 @@ OFFSET = 50.0 * MICROSTRAIN  #: half-range of a gauge's per-event offset (strain
 BASELINE = 2.0  #: σ of a gauge's baseline change over an event, in noise σ
 TEMPERATURE_NOISE = 0.1  #: °C
 TYRE_PATCH = 0.24  #: m, road smoothing length
-#: G_d(n₀) range, m³/cycle: a WIM-grade approach, ISO 8608 class A down to an eighth of it.
-#: The measured fact this reproduces: on the real short-span site the commercial system
-#: weighed its 15 reference trucks' GVW at ±3.4 % (sd); with class A-B roads even the true
-#: passages, lateral positions and drift leave ±6 % on this layout, with this range ±3.8 %
-#: (docs/realistic_site.md).
+#: G_d(n₀) range, m³/cycle: a WIM-grade approach, ISO 8608 class A down to an eighth of it:
+#: the roads on which a weighing that knows the true passages, lateral positions and drift
+#: scatters about as much as the commercial system did on the real site (class A-B roads
+#: leave it clearly worse; docs/realistic_site.md, benchmarks/bench_realsite.py).
 ROUGHNESS = (ISO_CLASSES["A"] / 8.0, ISO_CLASSES["A"])
 WANDER = (0.25, 0.6)  #: m: σ of the lateral wander (normal), truncated at ± the second
 CAL_SPEED = (20.0, 25.0)  #: m/s, uniform
