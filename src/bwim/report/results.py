@@ -85,7 +85,7 @@ def _influence(name: str, il, bridge=None) -> Section:
     from bwim.wim import model_influence_line
 
     lo, hi = il.support
-    table = Table("Influence line", ("source", "channels", "lane (m)", "support (m)",
+    table = Table("Influence line", ("source", "channels", "lateral", "support (m)",
                                      "spacing (m)", "residual"),
                   ((il.source or "–", ", ".join(il.channel_names), f"{il.lane:g}",
                     f"{lo:g} … {hi:g}", f"{il.spacing:.3g}",
