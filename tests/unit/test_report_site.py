@@ -103,6 +103,20 @@ def test_site_report_has_every_figure_and_the_tables():
     assert escape(flag_meanings()["ill_conditioned"].meaning) in page
 
 
+def test_counts_by_class_and_lane_count_vehicles_not_failed_records():
+    """30 vehicles in classes 11, 12, 113 in turn (10 each) and lanes 1, 2 (15 each); the
+    failed record is no vehicle."""
+    from bwim.plots.traffic import plot_counts
+
+    rows = _day()[0]
+    for by, keys, each in (("class", ["11", "12", "113"], 10), ("lane", ["1", "2"], 15)):
+        ax = plot_counts(rows, by=by).axes[0]
+        assert [t.get_text() for t in ax.get_xticklabels()] == keys
+        weighed, other = ax.containers
+        totals = [a.get_height() + b.get_height() for a, b in zip(weighed, other, strict=True)]
+        assert totals == [each] * len(keys)
+
+
 def test_missing_columns_leave_figures_out_with_a_note():
     """A summary with no time, lane, class or speed (the contract's columns only), no
     reference and no runs: the weight figures only, and a note for each one left out."""
@@ -178,6 +192,16 @@ def test_reference_pairs_give_the_injected_errors_and_agree_with_assess():
     # a reference naming a refused vehicle makes no pair
     refused = next(r for r in rows if r.status == "refused")
     assert reference_pairs(rows, [ReferenceRow(record=refused.record, gvw=1e5)]) == ()
+    # two vehicles in one record: the reference's vehicle number, else its lane, decides
+    two = [SummaryRow(record="e.csv", vehicle=1, lane=1, axle_weights=(50e3, 50e3),
+                      gvw=100e3),
+           SummaryRow(record="e.csv", vehicle=2, lane=2, axle_weights=(60e3, 60e3),
+                      gvw=120e3)]
+    for ref, gvw in ((ReferenceRow(record="e.csv", gvw=1e5, lane=2), 120e3),
+                     (ReferenceRow(record="e.csv", gvw=1e5, vehicle=1, lane=2), 100e3)):
+        (pair,) = reference_pairs(two, [ref])
+        assert pair[0].gvw == gvw
+        assert assess(two, [ref, ReferenceRow(record="x.csv", gvw=1e5)]).n_vehicles == 1
 
 
 def _doc_rows() -> list[tuple[tuple[str, ...], str, str]]:
