@@ -273,7 +273,7 @@ def test_report_command_writes_the_site_report_and_refuses_to_overwrite(tmp_path
     assert main(argv) == 0
     page = out.read_text(encoding="utf-8")
     assert sorted(_images(page)) == sorted(TRAFFIC_FIGURES + ACCURACY_FIGURES + RUN_FIGURES)
-    assert "COST 323 accuracy against ref.csv" in page
+    assert "COST 323 accuracy of summary.csv against ref.csv" in page
     capsys.readouterr()
     assert main(argv) == 2
     err = capsys.readouterr().err

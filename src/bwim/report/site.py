@@ -234,8 +234,8 @@ def reference_pairs(rows: Sequence[SummaryRow], reference: Sequence
     return tuple(out)
 
 
-def _accuracy(rows: Sequence[SummaryRow], reference: Sequence, name: str, *,
-              repeatability: str, environment: str) -> Section:
+def _accuracy(rows: Sequence[SummaryRow], reference: Sequence, summary_name: str, name: str,
+              *, repeatability: str, environment: str) -> Section:
     from bwim.accuracy import assess, relative_errors
     from bwim.plots.accuracy import plot_error_histogram, plot_weighed_vs_reference
 
@@ -259,7 +259,8 @@ def _accuracy(rows: Sequence[SummaryRow], reference: Sequence, name: str, *,
     else:
         notes.append("No reference vehicle was weighed: the scatter and the error "
                      "histogram are left out.")
-    return Section(f"COST 323 accuracy against {name}", (result.table(),), tuple(figures),
+    return Section(f"COST 323 accuracy of {summary_name} against {name}", (result.table(),),
+                   tuple(figures),
                    note=" ".join(notes))
 
 
@@ -317,8 +318,8 @@ def site_sections(summary: TrafficSummary, *, reference: Sequence | None = None,
     over, n_over = _overloads(rows, lim)
     extra = []
     if reference is not None:
-        extra.append(_accuracy(rows, reference, reference_name, repeatability=repeatability,
-                               environment=environment))
+        extra.append(_accuracy(rows, reference, summary.name, reference_name,
+                               repeatability=repeatability, environment=environment))
     else:
         notes.append("No static reference given (--reference): no accuracy section.")
     if runs is not None:
