@@ -6,8 +6,9 @@ Contract
   order: ``(group, flags, meaning, what to look at)`` with ``group`` ``"hard"`` (the
   weights are not used, quality ``reject``), ``"soft"`` (kept, quality ``warning``) or
   ``"detection"`` (:mod:`bwim.detect`).  The text is the document's, without its
-  Markdown back-quotes; a test checks the two agree word for word, so the document and
-  the report cannot drift apart.
+  Markdown back-quotes; a test checks that every row of the document is here word for
+  word, so the document and the report cannot drift apart (a flag added to the document
+  must be added here).
 * :func:`explain` gives one flag's :class:`FlagMeaning`; a flag not in the vocabulary
   gets group ``"unknown"`` and a meaning that says so (a report never fails on one).
 """
@@ -56,6 +57,16 @@ FLAG_TABLE: tuple[tuple[str, tuple[str, ...], str, str], ...] = (
     ("soft", ("outside_calibration_time",),
      "the event's clock time lies outside the span of the calibration runs: the drift "
      "correction there is the nearest run's, not a measured one", ""),
+    ("soft", ("temperature_extrapolated",),
+     "the event's deck temperature lies outside the range of the calibration runs' "
+     "temperatures: the temperature drift there is extrapolated", ""),
+    ("soft", ("temperature_missing",),
+     "the temperature drift was asked for but the event's temperature channel has no "
+     "reading (every sample a gap): the time-of-day drift was used instead", ""),
+    ("soft", ("drift_traffic_thin",),
+     'the day-by-day drift from the traffic ([drift] method = "traffic") had too few '
+     "weighed vehicles on this date to measure the day's factor: the calibration's factor "
+     "was kept", ""),
     ("soft", ("lateral_extrapolated",),
      "the vehicle's lateral position lies outside the range the calibration runs "
      "covered: its lines are extrapolated", ""),
