@@ -3,7 +3,8 @@ figure loaded.
 
 Uses a Chromium found on the PATH (``chromium``, ``chromium-browser``, ``google-chrome``,
 ``chromium-headless-shell``, ``chrome-headless-shell``) through ``--dump-dom`` with a probe
-script added to a copy of the page; skipped when none is installed.
+script added to a copy of the page, else Playwright's own Chromium when the ``playwright``
+package and its browser are installed; skipped when neither is.
 """
 
 from __future__ import annotations
@@ -43,19 +44,41 @@ window.addEventListener("load", function () {
 </script>"""
 
 
-def _browser() -> str:
+def _browser() -> str | None:
     for name in BROWSERS:
         path = shutil.which(name)
         if path:
             return path
-    pytest.skip("no headless Chromium installed (" + ", ".join(BROWSERS) + ")")
+    return None
+
+
+def _measure_playwright(url: str) -> dict:
+    """The probe's numbers from Playwright's Chromium (skip when it is not installed)."""
+    try:
+        from playwright.sync_api import Error, sync_playwright
+    except ImportError:
+        pytest.skip("no headless Chromium installed (" + ", ".join(BROWSERS)
+                    + ") and no playwright")
+    with sync_playwright() as pw:
+        try:
+            browser = pw.chromium.launch()
+        except Error as exc:
+            pytest.skip(f"playwright has no browser: {str(exc).splitlines()[0]}")
+        try:
+            view = browser.new_page(viewport={"width": WIDTH, "height": 1000})
+            view.goto(url, wait_until="load")
+            return json.loads(view.locator("#probe").text_content(timeout=30_000))
+        finally:
+            browser.close()
 
 
 def _measure(page: str, tmp_path) -> dict:
     """Render ``page`` in headless Chromium at WIDTH px and return the probe's numbers."""
-    exe = _browser()
     html_file = tmp_path / "page.html"
     html_file.write_text(page.replace("</body>", PROBE + "</body>"), encoding="utf-8")
+    exe = _browser()
+    if exe is None:
+        return _measure_playwright(html_file.as_uri())
     cmd = [exe, "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
            f"--window-size={WIDTH},1000", "--virtual-time-budget=10000",
            f"--user-data-dir={tmp_path / 'profile'}", "--dump-dom", html_file.as_uri()]
