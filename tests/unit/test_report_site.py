@@ -132,6 +132,9 @@ def test_missing_columns_leave_figures_out_with_a_note():
     nothing = [SummaryRow(record="e.csv", reason="no axles", flags=("no_axles",))]
     page = render_html("none", site_sections(TrafficSummary(name="s.csv", rows=nothing)))
     assert _images(page) == [] and "No vehicle was weighed" in page
+    empty = render_html("empty", site_sections(TrafficSummary(name="s.csv", rows=()),
+                                               reference=[ReferenceRow(record="a", gvw=1e5)]))
+    assert _images(empty) == [] and "No reference vehicle was weighed" in empty
 
 
 def test_hourly_counts_follow_the_clock():
