@@ -8,7 +8,8 @@ Contract
   (Moses' fit), an :class:`~bwim.InfluenceLine`, a :class:`~bwim.Record` (its channels),
   a :class:`~bwim.calibration.Calibration` (parameters, CE convergence), a
   :class:`~bwim.Bridge` (its parameters), a COST 323
-  :class:`~bwim.accuracy.AccuracyResult` or a :class:`~bwim.tables.Table`.  A simulated
+  :class:`~bwim.accuracy.AccuracyResult`, a calibration runs table
+  (:func:`bwim.report.site.runs_section`) or a :class:`~bwim.tables.Table`.  A simulated
   record's truth, when given, is drawn and tabulated beside identified forces and weights.
 * :func:`read_results` reads result files: any bwim HDF5 (identification, static weights,
   influence line, record), a bridge model TOML (:func:`bwim.scenario.save_bridge`), a weigh
@@ -159,7 +160,7 @@ def section(obj: Any, name: str = "", *, truth=None, length: float | None = None
     ----------
     obj
         A result: ForceIdentification, StaticWeights, InfluenceLine, Record, Calibration,
-        Bridge, AccuracyResult (COST 323 classes), a :class:`Table` or a ready
+        Bridge, AccuracyResult (COST 323 classes), CalibrationRuns, a :class:`Table` or a ready
         :class:`Section`.
     name : str
         What the result is (a file name, a vehicle), shown in the title.
@@ -198,6 +199,14 @@ def section(obj: Any, name: str = "", *, truth=None, length: float | None = None
     if isinstance(obj, AccuracyResult):
         return Section(f"COST 323 accuracy{f' of {name}' if name else ''}", (obj.table(),),
                        note=" ".join(f"{n}." for n in obj.notes()))
+    from bwim.report.runs import CalibrationRuns
+    from bwim.report.site import TrafficSummary, runs_section
+
+    if isinstance(obj, CalibrationRuns):
+        return runs_section(obj)
+    if isinstance(obj, TrafficSummary):
+        raise InputError("a summary makes a site report of several sections: use "
+                         "bwim.report.site_sections")
     raise InputError(f"cannot report a {type(obj).__name__}")
 
 
