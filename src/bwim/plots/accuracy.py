@@ -17,9 +17,9 @@ import numpy as np
 from bwim.conventions import KILONEWTON
 from bwim.plots import axes
 
-_SIZE = (6.0, 3.8)  # inches: two figures side by side on a report page
-
 __all__ = ["plot_error_histogram", "plot_weighed_vs_reference"]
+
+_SIZE = (6.0, 3.8)  # inches: two figures side by side on a report page
 
 
 def _legend(ax) -> None:

@@ -19,9 +19,9 @@ import numpy as np
 
 from bwim.plots import axes
 
-_SIZE = (6.0, 3.8)  # inches: two figures side by side on a report page
-
 __all__ = ["plot_run_residuals", "plot_run_scales", "run_hours"]
+
+_SIZE = (6.0, 3.8)  # inches: two figures side by side on a report page
 
 
 def run_hours(runs) -> np.ndarray | None:

@@ -22,10 +22,10 @@ import numpy as np
 from bwim.conventions import KILONEWTON
 from bwim.plots import axes
 
-_SIZE = (6.0, 3.8)  # inches: two figures side by side on a report page
-
 __all__ = ["hourly_counts", "plot_axle_load_spectrum", "plot_counts", "plot_gvw_histogram",
            "plot_hourly_flow", "plot_speed_distribution", "seen"]
+
+_SIZE = (6.0, 3.8)  # inches: two figures side by side on a report page
 
 _KMH = 3.6
 _WEIGHED, _NOT = "C0", "0.65"
