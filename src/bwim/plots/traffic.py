@@ -62,7 +62,7 @@ def plot_gvw_histogram(rows: Sequence, *, limit: float | None = None, width: flo
     if limit is not None:
         ax.axvline(limit / KILONEWTON, color="C3", lw=1.5,
                    label=f"limit {limit / KILONEWTON:.0f} kN")
-        ax.legend(loc="upper right", fontsize="small")
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small")
     ax.grid(alpha=0.3)
     return ax.figure
 
@@ -84,7 +84,7 @@ def plot_axle_load_spectrum(rows: Sequence, *, limit: float | None = None,
     if limit is not None:
         ax.axvline(limit / KILONEWTON, color="C3", lw=1.5,
                    label=f"limit {limit / KILONEWTON:.0f} kN")
-        ax.legend(loc="upper right", fontsize="small")
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small")
     ax.grid(alpha=0.3)
     return ax.figure
 
