@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 from bwim.cli.common import (
     out_file,
@@ -33,27 +34,55 @@ def accuracy_command(args: argparse.Namespace) -> int:
 
 
 # --- report ----------------------------------------------------------------------------------
+def _limits(args: argparse.Namespace):
+    """Overload limits from ``--gvw-limit`` / ``--axle-limit`` (kN; 0 switches one off)
+    when the parser has them, else the defaults (:class:`bwim.report.OverloadLimits`)."""
+    from bwim.report import OverloadLimits
+
+    given = {}
+    for key, attr in (("gvw", "gvw_limit"), ("axle", "axle_limit")):
+        value = getattr(args, attr, None)
+        if value is not None:
+            given[key] = None if float(value) == 0.0 else float(value) * 1000.0
+    return OverloadLimits(**given)
+
+
 def report_command(args: argparse.Namespace) -> int:
+    """``bwim report RESULTS... [--reference REF.csv] [--runs RUNS.csv] -o REPORT.html``:
+    result files as sections; a weigh ``summary.csv`` as the operator's site report
+    (:func:`bwim.report.site_sections`) with the COST 323 accuracy against
+    ``--reference`` and the calibration runs (``--runs``, or a ``calibration_runs.csv``
+    among the results)."""
     from bwim import report
 
-    out = out_file(args.output, (".html", ".htm"), force=args.force,
-                    inputs=[*args.results, *([args.reference] if args.reference else [])])
+    runs_arg = getattr(args, "runs", None)
+    inputs = [*args.results, *([args.reference] if args.reference else []),
+              *([runs_arg] if runs_arg else [])]
+    out = out_file(args.output, (".html", ".htm"), force=args.force, inputs=inputs)
+    limits = _limits(args)
     items = report.read_results(args.results)
-    sections = [report.section(obj, name) for name, obj in items]
-    if args.reference:  # COST 323 classes of every weigh summary among the results
-        from bwim.accuracy import assess
-        from bwim.io import read_reference, read_summary
-        from bwim.io.summary import is_summary
+    summaries = [obj for _, obj in items if isinstance(obj, report.TrafficSummary)]
+    runs = [obj for _, obj in items if isinstance(obj, report.CalibrationRuns)]
+    if runs_arg:
+        runs.insert(0, report.read_calibration_runs(runs_arg))
+    reference = None
+    if args.reference:
+        from bwim.io import read_reference
 
-        reference = read_reference(args.reference)
-        summaries = [p for p in report.result_paths(args.results)
-                     if p.suffix.lower() == ".csv" and is_summary(p)]
         if not summaries:
             raise InputError("--reference needs a weigh summary.csv among the results")
-        for p in summaries:
-            sections.append(report.section(assess(read_summary(p), reference), p.name))
+        reference = read_reference(args.reference)
+    sections = []
+    for k, summary in enumerate(summaries):
+        sections += report.site_sections(
+            summary, reference=reference, limits=limits,
+            reference_name=Path(args.reference).name if args.reference else "",
+            runs=runs[0] if runs and k == 0 else None)
+    for extra in runs[1:] if summaries else runs:
+        sections.append(report.site.runs_section(extra))
+    for name, obj in items:
+        if not isinstance(obj, (report.TrafficSummary, report.CalibrationRuns)):
+            sections.append(report.section(obj, name))
     report.write_report(out, sections, title=args.title)
-    print(f"report of {len(items)} result(s): {out}")
+    print(f"report of {len(items) + bool(runs_arg)} result(s): {out}")
     return 0
-
-

@@ -4,7 +4,13 @@ Contract
 --------
 * Every plotting function has the form ``plot_something(result, ..., ax=None) -> Figure``:
   it draws on ``ax`` if given, otherwise on a new figure, and never calls ``show()``.
-* Plots show strain in µε and forces in kN (:mod:`bwim.conventions`).
+* Plots show strain in µε and forces in kN (:mod:`bwim.conventions`); readings in a
+  logger's uncalibrated units are labelled "reading units", never µε
+  (:func:`bwim.plots.wim.reading_units`).  Legends stand beside the axes, or a colour bar
+  tells many channels apart, so that no legend covers the curves.
+* The site report's figures: :mod:`bwim.plots.traffic` (weights, speeds, counts, flow),
+  :mod:`bwim.plots.accuracy` (against a static reference), :mod:`bwim.plots.runs`
+  (calibration runs).
 * Nothing in the core imports this package at import time; it imports matplotlib lazily
   through :func:`axes`, so ``import bwim`` stays free of matplotlib.  Each result with a
   figure has a thin ``.plot(ax=None, **kw)`` method that imports its function here when

@@ -57,7 +57,7 @@ def plot_mfi_comparison(exact, calibrated, truth, *, ax=None):
                 label=f"MFI, calibrated, axle {a + 1}")
     ax.set_xlabel("first axle distance (m)")
     ax.set_ylabel("force (kN)")
-    ax.legend(fontsize="x-small", ncols=2)
+    ax.legend(fontsize="x-small", loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.grid(alpha=0.3)
     return ax.figure
 

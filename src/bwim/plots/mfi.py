@@ -33,7 +33,7 @@ def plot_forces(ident, truth=None, *, by="axle", ax=None, label="MFI"):
                       alpha=0.6)
     ax.set_xlabel("time (s)")
     ax.set_ylabel("force (kN)")
-    ax.legend(fontsize="small", ncols=2)
+    ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.grid(alpha=0.3)
     return ax.figure
 

@@ -1,36 +1,31 @@
-"""A single-file HTML report of bwim results: tables and embedded figures.
+"""Sections of bwim result objects and the reading of result files.
 
 Contract
 --------
-* :func:`section` turns one result object into a :class:`Section` (a title, tables and
-  matplotlib figures from :mod:`bwim.plots`): a :class:`~bwim.ForceIdentification`
-  (forces, L-curve), :class:`~bwim.StaticWeights` (Moses' fit), an
-  :class:`~bwim.InfluenceLine`, a :class:`~bwim.Record` (its channels), a
-  :class:`~bwim.calibration.Calibration` (parameters, CE convergence) or a
-  :class:`~bwim.Bridge` (its parameters).  A simulated record's truth, when given, is
-  drawn and tabulated beside identified forces and weights.
+* :func:`section` turns one result object into a :class:`~bwim.report.page.Section` (a
+  title, tables and matplotlib figures from :mod:`bwim.plots`): a
+  :class:`~bwim.ForceIdentification` (forces, L-curve), :class:`~bwim.StaticWeights`
+  (Moses' fit), an :class:`~bwim.InfluenceLine`, a :class:`~bwim.Record` (its channels),
+  a :class:`~bwim.calibration.Calibration` (parameters, CE convergence), a
+  :class:`~bwim.Bridge` (its parameters), a COST 323
+  :class:`~bwim.accuracy.AccuracyResult`, a calibration runs table
+  (:func:`bwim.report.site.runs_section`) or a :class:`~bwim.tables.Table`.  A simulated
+  record's truth, when given, is drawn and tabulated beside identified forces and weights.
 * :func:`read_results` reads result files: any bwim HDF5 (identification, static weights,
-  influence line, record), a bridge model TOML (:func:`bwim.scenario.save_bridge`) and CSV
-  summaries (shown as tables); folders are expanded to the files they hold.
-* Tables are :class:`bwim.tables.Table` (re-exported here as :class:`Table`), rendered
-  with :meth:`~bwim.tables.Table.to_html`.
-* :func:`figure_files` names the sections' figures for writing them as image files.
-* :func:`render_html` makes the page (figures as base64 PNG, nothing linked);
-  :func:`write_report` writes it atomically.
-* Bad input is an :class:`~bwim.errors.InputError` naming the file.  This module is above
+  influence line, record), a bridge model TOML (:func:`bwim.scenario.save_bridge`), a weigh
+  ``summary.csv`` (as a :class:`~bwim.report.site.TrafficSummary`, for the site report
+  :func:`bwim.report.site.site_sections`), a ``calibration_runs.csv``
+  (:class:`~bwim.report.runs.CalibrationRuns`) and any other CSV (shown as a table);
+  folders are expanded to the files they hold.
+* Bad input is an :class:`~bwim.errors.InputError` naming the file.  This package is above
   the core and may import matplotlib; the core never imports it.
 """
 
 from __future__ import annotations
 
-import base64
 import csv
-import html
-import io
 import os
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
-from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
@@ -38,23 +33,13 @@ import numpy as np
 
 from bwim.errors import InputError
 from bwim.io.paths import expand_paths
+from bwim.report.page import Section
 from bwim.tables import Table, format_kn, format_kn_each, format_pct, param_values
 
-__all__ = ["Section", "Table", "figure_files", "read_results", "render_html", "section",
-           "write_report"]
+__all__ = ["RESULT_SUFFIXES", "read_results", "result_paths", "section"]
 
 #: File suffixes :func:`read_results` picks up in a folder.
 RESULT_SUFFIXES = (".h5", ".hdf5", ".hdf", ".toml", ".csv")
-
-
-@dataclass(frozen=True, eq=False)
-class Section:
-    """One part of the report: a title, a note, tables and (caption, Figure) pairs."""
-
-    title: str
-    tables: tuple[Table, ...] = ()
-    figures: tuple[tuple[str, Any], ...] = ()
-    note: str = ""
 
 
 def _weight_table(title: str, weights: np.ndarray, truth) -> Table:
@@ -101,7 +86,7 @@ def _influence(name: str, il, bridge=None) -> Section:
     from bwim.wim import model_influence_line
 
     lo, hi = il.support
-    table = Table("Influence line", ("source", "channels", "lane (m)", "support (m)",
+    table = Table("Influence line", ("source", "channels", "lateral", "support (m)",
                                      "spacing (m)", "residual"),
                   ((il.source or "–", ", ".join(il.channel_names), f"{il.lane:g}",
                     f"{lo:g} … {hi:g}", f"{il.spacing:.3g}",
@@ -175,7 +160,7 @@ def section(obj: Any, name: str = "", *, truth=None, length: float | None = None
     ----------
     obj
         A result: ForceIdentification, StaticWeights, InfluenceLine, Record, Calibration,
-        Bridge, AccuracyResult (COST 323 classes), a :class:`Table` or a ready
+        Bridge, AccuracyResult (COST 323 classes), CalibrationRuns, a :class:`Table` or a ready
         :class:`Section`.
     name : str
         What the result is (a file name, a vehicle), shown in the title.
@@ -214,6 +199,14 @@ def section(obj: Any, name: str = "", *, truth=None, length: float | None = None
     if isinstance(obj, AccuracyResult):
         return Section(f"COST 323 accuracy{f' of {name}' if name else ''}", (obj.table(),),
                        note=" ".join(f"{n}." for n in obj.notes()))
+    from bwim.report.runs import CalibrationRuns
+    from bwim.report.site import TrafficSummary, runs_section
+
+    if isinstance(obj, CalibrationRuns):
+        return runs_section(obj)
+    if isinstance(obj, TrafficSummary):
+        raise InputError("a summary makes a site report of several sections: use "
+                         "bwim.report.site_sections")
     raise InputError(f"cannot report a {type(obj).__name__}")
 
 
@@ -226,6 +219,19 @@ def _read_csv_table(path: Path) -> Table:
     if not rows:
         raise InputError(f"{path}: empty CSV file")
     return Table(path.name, tuple(rows[0]), tuple(tuple(r) for r in rows[1:]))
+
+
+def _read_csv(path: Path):
+    """A summary, a calibration runs table or any other CSV file (a table)."""
+    from bwim.io.summary import is_summary, read_summary
+    from bwim.report.runs import is_runs_table, read_calibration_runs
+    from bwim.report.site import TrafficSummary
+
+    if is_summary(path):
+        return TrafficSummary(name=path.name, rows=read_summary(path))
+    if is_runs_table(path):
+        return read_calibration_runs(path)
+    return _read_csv_table(path)
 
 
 def _read_h5(path: Path):
@@ -260,72 +266,7 @@ def read_results(paths: Sequence[str | os.PathLike]) -> list[tuple[str, Any]]:
         elif suffix == ".toml":
             out.append((p.name, load_bridge(p)))
         elif suffix == ".csv":
-            out.append((p.name, _read_csv_table(p)))
+            out.append((p.name, _read_csv(p)))
         else:
             raise InputError(f"{p}: unknown result format {p.suffix!r}; use .h5, .toml or .csv")
     return out
-
-
-def figure_files(sections: Sequence[Section]) -> dict[str, Any]:
-    """The sections' figures by file-name stem: the section title in lower case with every
-    character but letters and digits as ``_``, cut at 48 characters and stripped of
-    ``_`` at both ends, then the figure's number in its section (``record__x_1``)."""
-    out = {}
-    for s in sections:
-        name = "".join(c if c.isalnum() else "_" for c in s.title.lower())[:48].strip("_")
-        for k, (_, fig) in enumerate(s.figures):
-            out[f"{name}_{k + 1}"] = fig
-    return out
-
-
-def _png(fig) -> str:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=100)
-    return base64.b64encode(buf.getvalue()).decode("ascii")
-
-
-_STYLE = """
-body{font-family:system-ui,sans-serif;max-width:1000px;margin:2em auto;padding:0 1em;
-color:#222}
-h1{font-size:1.6em}h2{font-size:1.25em;border-bottom:1px solid #ccc;padding-bottom:.2em;
-margin-top:2em}
-table{border-collapse:collapse;margin:1em 0;font-size:.9em}
-caption{text-align:left;font-weight:600;padding-bottom:.3em}
-th,td{border:1px solid #ccc;padding:.25em .6em;text-align:right}
-th{background:#f2f2f2}figure{margin:1em 0}img{max-width:100%}
-figcaption{font-size:.85em;color:#555}.note{color:#444}
-"""
-
-
-def render_html(title: str, sections: Sequence[Section], *, intro: str = "") -> str:
-    """The report as one self-contained HTML page."""
-    e = html.escape
-    stamp = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
-    parts = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
-             f"<title>{e(title)}</title><style>{_STYLE}</style></head><body>",
-             f"<h1>{e(title)}</h1>", f'<p class="note">bwim report, {stamp}.</p>']
-    if intro:
-        parts.append(f"<p>{e(intro)}</p>")
-    for s in sections:
-        parts.append(f"<section><h2>{e(s.title)}</h2>")
-        if s.note:
-            parts.append(f'<p class="note">{e(s.note)}</p>')
-        parts += [t.to_html() for t in s.tables]
-        for caption, fig in s.figures:
-            parts.append(f'<figure><img alt="{e(caption)}" src="data:image/png;base64,'
-                         f'{_png(fig)}"><figcaption>{e(caption)}</figcaption></figure>')
-        parts.append("</section>")
-    parts.append("</body></html>")
-    return "\n".join(parts) + "\n"
-
-
-def write_report(path: str | os.PathLike, sections: Sequence[Section], *,
-                 title: str = "bwim report", intro: str = "") -> Path:
-    """Render ``sections`` and write the page atomically to ``path``; returns the path."""
-    from bwim.io import atomic_open, check_writable
-
-    target = check_writable(path)
-    page = render_html(title, sections, intro=intro)
-    with atomic_open(target) as f:
-        f.write(page)
-    return target

@@ -1,0 +1,126 @@
+"""The flag vocabulary in words: what each flag of a summary row means.
+
+Contract
+--------
+* :data:`FLAG_TABLE` holds the rows of the flag tables of ``docs/flags.md``, in its
+  order: ``(group, flags, meaning, what to look at)`` with ``group`` ``"hard"`` (the
+  weights are not used, quality ``reject``), ``"soft"`` (kept, quality ``warning``) or
+  ``"detection"`` (:mod:`bwim.detect`).  The text is the document's, without its
+  Markdown back-quotes; a test checks that every row of the document is here word for
+  word, so the document and the report cannot drift apart (a flag added to the document
+  must be added here).
+* :func:`explain` gives one flag's :class:`FlagMeaning`; a flag not in the vocabulary
+  gets group ``"unknown"`` and a meaning that says so (a report never fails on one).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["FLAG_GROUPS", "FLAG_TABLE", "FlagMeaning", "explain", "flag_meanings"]
+
+#: What each group means for the weights.
+FLAG_GROUPS = {
+    "hard": "the weights are not used (quality reject; the row is refused)",
+    "soft": "the weights are kept (quality warning)",
+    "detection": "raised by the vehicle detection",
+    "unknown": "not in bwim's vocabulary (docs/flags.md)",
+}
+
+#: The rows of docs/flags.md's tables: (group, flags, meaning, what to look at).
+FLAG_TABLE: tuple[tuple[str, tuple[str, ...], str, str], ...] = (
+    ("hard", ("undetermined",),
+     "the weights are not determined by the data (a rank-deficient fit: e.g. two axles "
+     "the record cannot tell apart)", "the axle detection; the record's length"),
+    ("hard", ("negative_axle_weight", "negative_group_weight"),
+     "an axle or axle group came out below zero",
+     "a wrong axle position or speed; a second vehicle"),
+    ("hard", ("axle_weight_high", "axle_weight_low"),
+     "an axle above 250 kN or below 1 kN (bwim.plausibility.Limits)",
+     "units of the calibration truck's loads; a faulty gauge"),
+    ("hard", ("gvw_high", "gvw_low"),
+     "a gross weight above 1000 kN or below 5 kN", "as above"),
+    ("hard", ("residual_high",),
+     "the fit of the measured strains is much worse than the calibration runs' fits (the "
+     "misfit limit of the calibration)",
+     "another vehicle on the bridge, a wrong passage, a faulty gauge"),
+    ("hard", ("truncated_start", "truncated_end"),
+     "an axle is already (still) on the lines' support at the record's first (last) "
+     "sample: the record does not hold the whole crossing",
+     "the logger's pre- and post-trigger"),
+    ("hard", ("no_baseline",),
+     "too few samples without an axle on the bridge to find the gauges' offsets",
+     "the logger's pre-trigger"),
+    ("hard", ("negative_force",),
+     "moving force identification: an identified axle force is tensile where it is "
+     "weighed", "the model, the regularisation"),
+    ("soft", ("outside_calibration_time",),
+     "the event's clock time lies outside the span of the calibration runs: the drift "
+     "correction there is the nearest run's, not a measured one", ""),
+    ("soft", ("temperature_extrapolated",),
+     "the event's deck temperature lies outside the range of the calibration runs' "
+     "temperatures: the temperature drift there is extrapolated", ""),
+    ("soft", ("temperature_missing",),
+     "the temperature drift was asked for but the event's temperature channel has no "
+     "reading (every sample a gap): the time-of-day drift was used instead", ""),
+    ("soft", ("drift_traffic_thin",),
+     'the day-by-day drift from the traffic ([drift] method = "traffic") had too few '
+     "weighed vehicles on this date to measure the day's factor: the calibration's factor "
+     "was kept", ""),
+    ("soft", ("lateral_extrapolated",),
+     "the vehicle's lateral position lies outside the range the calibration runs "
+     "covered: its lines are extrapolated", ""),
+    ("soft", ("ill_conditioned",),
+     "the fit's condition number is large (closely spaced axles): the individual axle "
+     "weights are less certain than their sum", ""),
+    ("detection", ("multiple_presence",),
+     "two vehicles were on the instrumented span at once: the event is not weighed as "
+     "one vehicle (each detected vehicle gets its own refused row)", ""),
+    ("detection", ("axle_count_mismatch",),
+     "the two axle detectors saw different numbers of axles", ""),
+    ("detection", ("no_axles",), "no axle was found in the record", ""),
+    ("detection", ("single_axle",),
+     'a "vehicle" of one axle (an isolated peak, or a vehicle split by a long gap)', ""),
+    ("detection", ("speed_varies",),
+     "the per-axle speeds of one vehicle differ by more than the tolerance", ""),
+    ("detection", ("strain_only",),
+     "found from the strain gauges alone (no axle detectors): lower confidence", ""),
+    ("detection", ("truncated",),
+     "the vehicle's time on the span starts before or ends after the record", ""),
+    ("detection", ("unexplained_strain",),
+     "strain activity outside the time on the span of every detected vehicle: e.g. a "
+     "vehicle in a lane the axle detectors do not cover", ""),
+)
+
+
+@dataclass(frozen=True, kw_only=True)
+class FlagMeaning:
+    """One flag in words: its group (see :data:`FLAG_GROUPS`), meaning and what to check
+    (``""`` when the document gives nothing)."""
+
+    flag: str
+    group: str
+    meaning: str
+    look_at: str = ""
+
+
+def flag_meanings() -> dict[str, FlagMeaning]:
+    """Every flag of :data:`FLAG_TABLE` by name (``"as above"`` resolved to the text of
+    the row above)."""
+    out: dict[str, FlagMeaning] = {}
+    previous = ""
+    for group, flags, meaning, look_at in FLAG_TABLE:
+        look = previous if look_at == "as above" else look_at
+        previous = look
+        for f in flags:
+            out[f] = FlagMeaning(flag=f, group=group, meaning=meaning, look_at=look)
+    return out
+
+
+def explain(flag: str) -> FlagMeaning:
+    """The meaning of ``flag`` (group ``"unknown"`` for a flag outside the vocabulary)."""
+    known = flag_meanings().get(flag)
+    if known is not None:
+        return known
+    return FlagMeaning(flag=flag, group="unknown",
+                       meaning="not a flag of bwim's vocabulary (docs/flags.md)")
