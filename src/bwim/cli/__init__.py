@@ -116,7 +116,7 @@ class Command:
 # Arguments several commands share, declared once; a command adds its own default and help.
 _SCENARIO = arg("scenario", metavar="SCENARIO.toml")
 _RECORDS = arg("records", nargs="+", metavar="RECORD")
-_OUTPUT = arg("-o", "--output")
+_OUTPUT = arg("-o", "--output", "--out")
 _BRIDGE = arg("--bridge", metavar="MODEL.toml")
 _REFERENCE = arg("--reference", metavar="REF.csv")
 _FORCE = arg("--force", action="store_true",
@@ -272,11 +272,13 @@ COMMANDS: tuple[Command, ...] = (
         "with the calibrated model and weigh it by Moses; print the results against the truth "
         "and write figures and report.html to --out.",
         (arg("--modes", type=int, default=6, help="natural frequencies to print (default 6)"),
-         arg("--out", default="bwim-out", help="output folder (default bwim-out)"),
+         arg("-o", "--out", "--output", dest="out", default="bwim-out",
+             help="output folder (default bwim-out)"),
          arg("--seed", type=int, default=0, help="seed of the calibration"),
          arg("--jobs", type=int, default=1, help="worker processes for calibration"),
          arg("--quick", action="store_true",
-             help="a smaller, faster calibration (for tests)"))),
+             help="a smaller, faster calibration (for tests)"),
+         _FORCE)),
     Command(
         "reproduce", reproduce_command,
         "the paper's experiments with its numbers side by side",
@@ -285,9 +287,11 @@ COMMANDS: tuple[Command, ...] = (
         "('compare').  Full runs take minutes (5.3 the longest); --quick runs small versions.",
         (arg("case", choices=["5.1", "5.2", "5.3", "5.4", "compare", "all"]),
          arg("--quick", action="store_true", help="small, fast versions"),
-         arg("--out", default="bwim-out/reproduce", help="folder for the figures"),
+         arg("-o", "--out", "--output", dest="out", default="bwim-out/reproduce",
+             help="folder for the figures"),
          arg("--jobs", type=int, default=1, help="worker processes for populations"),
-         arg("--no-figures", action="store_true", help="tables only")),
+         arg("--no-figures", action="store_true", help="tables only"),
+         _FORCE),
         raw=False),
 )
 
@@ -311,6 +315,7 @@ def _parser() -> argparse.ArgumentParser:
         epilog="Scenario files (TOML) describe the bridge, the sensors, the vehicle, the "
         "road and the run; see examples/paper_slab.toml.  Units are SI.",
     )
+    p.add_argument("--version", action="version", version=f"bwim {_version()}")
     p.add_argument("--memory-limit", metavar="SIZE",
                    help="most memory a command may use, e.g. 4G, 800M or 0.25 (a fraction "
                    "of the machine's); default: the BWIM_MEMORY_LIMIT environment variable, "
@@ -325,6 +330,50 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
+def _version() -> str:
+    from bwim import __version__
+
+    return __version__
+
+
+class _PipeSafe:
+    """A text stream whose reader may go away (``bwim weigh ... | head``): once the pipe
+    is broken, what is printed is dropped and the command goes on (its output files are
+    still written whole); the exit code stays the command's."""
+
+    def __init__(self, stream) -> None:
+        self.stream = stream
+        self.broken = False
+
+    def _drop(self) -> None:
+        self.broken = True
+        with contextlib.suppress(AttributeError, ValueError, OSError):
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, self.stream.fileno())  # the interpreter's last flush is quiet
+            os.close(devnull)
+
+    def write(self, text: str) -> int:
+        if not self.broken:
+            try:
+                return self.stream.write(text)
+            except BrokenPipeError:
+                self._drop()
+        return len(text)
+
+    def flush(self) -> None:
+        if not self.broken:
+            try:
+                self.stream.flush()
+            except BrokenPipeError:
+                self._drop()
+
+    def isatty(self) -> bool:
+        return False if self.broken else self.stream.isatty()
+
+    def __getattr__(self, name: str):
+        return getattr(self.stream, name)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``bwim`` command; returns the exit code."""
     from bwim.io.outputs import signals_as_interrupt
@@ -336,24 +385,31 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = _parser()
     args = parser.parse_args(argv)
     saved = os.environ.get(ENV_VAR)
+    stdout = sys.stdout
+    sys.stdout = _PipeSafe(stdout)
     try:
         if args.memory_limit is not None:
             parse_size(args.memory_limit)  # a one-line error if it is not a size
             os.environ[ENV_VAR] = args.memory_limit
+        elif (saved or "").strip():
+            parse_size(saved)  # a garbage BWIM_MEMORY_LIMIT: refused before any work
         with signals_as_interrupt():
             return int(args.run(args))
     except BwimError as exc:
         message = " ".join(str(exc).split()) or type(exc).__name__
         print(f"bwim: error: {message}", file=sys.stderr)
         return 2
+    except RecursionError:  # e.g. a TOML file of thousands of nested arrays
+        print("bwim: error: an input file is nested too deeply to be read (e.g. thousands of "
+              "nested arrays or tables in a TOML file)", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         print("bwim: interrupted (the records finished so far are kept; rerun to go on)",
               file=sys.stderr)
         return 130
     finally:
+        sys.stdout = stdout
         if saved is None:
             os.environ.pop(ENV_VAR, None)
         else:
             os.environ[ENV_VAR] = saved
-
-

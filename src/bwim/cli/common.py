@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import csv
 import os
+import stat
 import sys
 import time
 from collections.abc import Sequence
@@ -15,7 +16,7 @@ from bwim.errors import InputError
 
 __all__ = ["RECORD_SUFFIXES", "CalibrationProgress", "Progress", "bar", "bridge_of", "check_jobs",
            "display_name", "load_records", "locked", "out_file", "out_folder", "quiet",
-           "record_paths", "unique_stems", "write_csv"]
+           "record_paths", "refuse_existing_outputs", "regular_file", "unique_stems", "write_csv"]
 
 RECORD_SUFFIXES = (".h5", ".hdf5", ".hdf", ".csv", ".txt")
 
@@ -81,6 +82,18 @@ def out_file(path: str | Path, suffixes: Sequence[str] | None = None, *,
     return refuse_existing(p, force=force)
 
 
+def refuse_existing_outputs(paths: Sequence[Path], *, force: bool) -> None:
+    """:class:`InputError` naming the first of ``paths`` that exists (unless ``force``),
+    and how many do: checked before any of them is written."""
+    if force:
+        return
+    there = [p for p in paths if p.exists() or p.is_symlink()]
+    if there:
+        more = f" (and {len(there) - 1} more of its outputs)" if len(there) > 1 else ""
+        raise InputError(f"{there[0]} exists{more}; use --force to overwrite, or another "
+                         "output folder")
+
+
 def out_folder(path: str | Path) -> Path:
     """An output folder, created if needed, that can be written."""
     from bwim.io import check_writable
@@ -108,7 +121,32 @@ def record_paths(items: Sequence[str], *, any_suffix: bool = False) -> list[Path
     ``any_suffix`` (a logger's exports) every file of a folder."""
     from bwim.io.paths import expand_paths
 
-    return expand_paths(items, None if any_suffix else RECORD_SUFFIXES, what="records")
+    paths = expand_paths(items, None if any_suffix else RECORD_SUFFIXES, what="records")
+    for p in paths:
+        regular_file(p)
+    return paths
+
+
+_KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
+          (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+          (stat.S_ISSOCK, "a socket"))
+
+
+def regular_file(path: Path) -> Path:
+    """``path`` if it names a regular file (symbolic links followed); a folder, FIFO,
+    device or socket is refused from its ``stat`` alone (a FIFO is never opened: opening
+    one for reading waits for a writer)."""
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such file") from None
+    except (OSError, ValueError) as exc:  # ValueError: a NUL byte in the name
+        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        raise InputError(f"{path}: cannot read: {reason.lower()}") from None
+    if not stat.S_ISREG(mode):
+        kind = next((name for test, name in _KINDS if test(mode)), "not a file")
+        raise InputError(f"{path}: is {kind}, not a regular file")
+    return path
 
 
 def load_records(paths: Sequence[Path], scenario) -> list:
