@@ -69,7 +69,7 @@ from bwim.cli.models import (
 from bwim.cli.results import accuracy_command, report_command
 from bwim.errors import BwimError
 
-__all__ = ["main"]
+__all__ = ["COMMANDS", "build_parser", "main"]
 
 
 # --- the parser: one declarative entry per command -------------------------------------------
@@ -306,7 +306,8 @@ def _add(parser, item: Arg | OneOf) -> None:
         parser.add_argument(*item.names, **item.options)
 
 
-def _parser() -> argparse.ArgumentParser:
+def build_parser() -> argparse.ArgumentParser:
+    """The ``bwim`` argument parser (built from :data:`COMMANDS`)."""
     p = argparse.ArgumentParser(
         prog="bwim",
         description="Calibrated, dynamic Bridge Weigh-in-Motion: simulate crossings, "
@@ -382,7 +383,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     for stream in (sys.stdout, sys.stderr):  # file names that are not UTF-8 print too
         with contextlib.suppress(AttributeError, ValueError, OSError):
             stream.reconfigure(errors="backslashreplace")
-    parser = _parser()
+    parser = build_parser()
     args = parser.parse_args(argv)
     saved = os.environ.get(ENV_VAR)
     stdout = sys.stdout

@@ -95,13 +95,13 @@ def identify_command(args: argparse.Namespace) -> int:
 
     check_jobs(args.jobs)
     out = Path(args.output)
+    paths = record_paths(args.records)
     if out.suffix.lower() == ".csv":
         summary = out_file(out)
         folder = summary.parent
     else:
         folder = out_folder(out)
         summary = folder / "summary.csv"
-    paths = record_paths(args.records)
     inputs = [args.scenario, *([args.bridge] if args.bridge else []), *paths]
     items = [Item(name=display_name(p), source=p, target=folder / f"{stem}_forces.h5")
              for p, stem in zip(paths, unique_stems(paths), strict=True)]
@@ -268,13 +268,13 @@ def weigh_command(args: argparse.Namespace) -> int:
     from bwim.scenario import load_scenario
 
     check_jobs(args.jobs)
-    folder = out_folder(args.output)
     scenario = load_scenario(args.scenario)
     site = scenario.logger is not None
     paths = record_paths(args.records, any_suffix=site)
     _unique_names(paths)
     cal = (record_paths(args.calibration_records, any_suffix=site)
            if args.calibration_records else [])
+    folder = out_folder(args.output)  # created once the inputs are known to exist
     outputs = ([folder / "calibration_runs.csv", folder / "influence_lines.h5"] if site
                else [folder / "influence_line.h5"])
     refuse_input_overwrite([folder / "summary.csv", *outputs],

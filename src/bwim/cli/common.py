@@ -99,6 +99,9 @@ def out_folder(path: str | Path) -> Path:
     from bwim.io import check_writable
 
     p = Path(path)
+    if "\x00" in str(p):
+        shown = str(p).replace("\x00", "\\x00")
+        raise InputError(f"cannot write in {shown}: the path holds a NUL byte")
     if p.exists() and not p.is_dir():
         raise InputError(f"cannot write in {p}: it is a file, not a folder")
     try:
