@@ -141,3 +141,34 @@ def test_every_output_file_needs_force(beam, tmp_path, capsys, argv, existing):
     _one_line_error(code, capsys.readouterr().err, f"{existing} exists", "--force")
     assert sorted(p.name for p in out.iterdir()) == [existing]
     assert (out / existing).read_text() == "keep me"
+
+
+# --- progress on stderr when it is not a terminal (issue 21 item 5) -------------------------
+def test_weigh_progress_lines_when_stderr_is_not_a_terminal(day, tmp_path, capsys,
+                                                            monkeypatch):
+    """stderr captured (not a terminal): plain lines with count, total and ETA (every
+    item here: the period set to zero)."""
+    from bwim.cli.common import Progress
+
+    monkeypatch.setattr(Progress, "every", 0.0)
+    code = main(_weigh_argv(day, [day.traffic[0].parent], tmp_path / "out"))
+    err = capsys.readouterr().err
+    assert code == 0, err
+    n = len(day.traffic)
+    lines = [ln for ln in err.splitlines() if ln.startswith("bwim: weighing: ")]
+    assert [ln.split()[2] for ln in lines] == [f"{k}/{n}" for k in range(1, n + 1)], err
+    assert all("ETA " in ln for ln in lines)
+    assert lines[-1].endswith("ETA 0 s")
+
+
+def test_calibration_progress_lines_when_stderr_is_not_a_terminal(capsys, monkeypatch):
+    from bwim.cli.common import CalibrationProgress
+
+    progress = CalibrationProgress()
+    monkeypatch.setattr(progress, "every", 1e9)
+    for stage, it in (("stiffness", 1), ("stiffness", 2), ("mass", 1)):
+        progress(stage, it, 0.5 / it)
+    progress.close()
+    lines = capsys.readouterr().err.splitlines()
+    assert [ln.split(": ")[2] for ln in lines] == ["stiffness", "mass"]
+    assert "iteration 1, best 0.5" in lines[0]

@@ -8,8 +8,12 @@ help, description, arguments), from which the parser is built; tables are printe
 :class:`bwim.tables.Table`.  Bad input (a scenario, record or model file, an option, an
 output path) ends with a one-line message ``bwim: error: ...`` on stderr and exit code 2,
 never a traceback, and leaves no partial output file (every writer is atomic, outputs are
-checked before the work starts).  Progress bars (tqdm, on stderr) show only when stdout is
-a terminal.
+checked before the work starts).  Progress goes to stderr: a bar (tqdm) on a terminal,
+else plain lines every ten seconds or so (batches: count, total, rate and ETA; the
+calibration: stage, iteration and best objective).  ``bwim --version`` prints the
+version; every command takes its output as ``-o`` (also ``--out``, ``--output``).  When
+stdout's reader goes away (``bwim weigh ... | head``), what is printed is dropped and the
+command finishes its work and its files.
 
 Subcommands:
 

@@ -22,7 +22,11 @@ RECORD_SUFFIXES = (".h5", ".hdf5", ".hdf", ".csv", ".txt")
 
 
 def quiet() -> bool:
-    return not sys.stdout.isatty()
+    """No progress bar: stderr (where progress goes) is not a terminal."""
+    try:
+        return not sys.stderr.isatty()
+    except (AttributeError, ValueError):
+        return True
 
 
 def bar(total: int | None, desc: str):
@@ -31,32 +35,44 @@ def bar(total: int | None, desc: str):
     return tqdm(total=total, desc=desc, disable=quiet(), file=sys.stderr, leave=False)
 
 
+def _duration(seconds: float) -> str:
+    """``"45 s"``, ``"12.5 min"``, ``"3.2 h"``."""
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    if seconds < 5400:
+        return f"{seconds / 60:.1f} min"
+    return f"{seconds / 3600:.1f} h"
+
+
 class Progress:
     """A batch's progress on stderr: a bar (count, total, rate, ETA) on a terminal, else a
-    plain line every :attr:`every` seconds.  ``progress(n)``: n items finished so far."""
+    plain line every :attr:`every` seconds.  ``progress(n)``: n items finished so far;
+    the first call gives those done before this run (0 if none: not part of the rate)."""
 
     every = 10.0
 
     def __init__(self, total: int, desc: str) -> None:
         self.total, self.desc = total, desc
-        self.tty = sys.stderr.isatty()
+        self.tty = not quiet()
         self.bar = bar(total, desc) if self.tty and total > 1 else None
         self.t0 = self.last = time.perf_counter()
-        self.start = self.n = 0
+        self.start: int | None = None
+        self.n = 0
 
     def __call__(self, n: int) -> None:
-        if self.n == 0 and self.start == 0 and n > 0 and self.last == self.t0:
+        if self.start is None:
             self.start = n  # done before: not part of the rate
         if self.bar is not None:
             self.bar.update(n - self.n)
         self.n = n
         now = time.perf_counter()
-        if not self.tty and self.total > 1 and now - self.last >= self.every:
+        if not self.tty and self.total > 1 and n > self.start and \
+                now - self.last >= self.every:
             self.last = now
             rate = (n - self.start) / max(now - self.t0, 1e-9)
-            eta = (self.total - n) / rate if rate > 0 else float("nan")
+            eta = (self.total - n) / rate
             print(f"bwim: {self.desc}: {n}/{self.total} ({100 * n / self.total:.0f} %), "
-                  f"{rate:.3g}/s, ETA {eta / 60:.1f} min", file=sys.stderr, flush=True)
+                  f"{rate:.3g}/s, ETA {_duration(eta)}", file=sys.stderr, flush=True)
 
     def __enter__(self) -> Progress:
         return self
@@ -156,10 +172,11 @@ def load_records(paths: Sequence[Path], scenario) -> list:
     from bwim.scenario import load_record
 
     records = []
-    with bar(len(paths) if len(paths) > 1 else None, "reading records") as progress:
+    with Progress(len(paths), "reading records") as progress:
+        progress(0)
         for p in paths:
             records.append(load_record(p, scenario))
-            progress.update()
+            progress(len(records))
     return records
 
 
@@ -200,20 +217,32 @@ def write_csv(path: Path, header: Sequence[str], rows: Sequence[Sequence]) -> No
 
 
 class CalibrationProgress:
-    """A tqdm bar fed by ``calibrate``'s callback: one tick per optimiser iteration."""
+    """``calibrate``'s callback on stderr: a tqdm bar (one tick per optimiser iteration)
+    on a terminal, else a plain line at each new stage and every :attr:`every` seconds
+    (stage, iteration, best objective, time so far; the optimisers announce no total)."""
+
+    every = 10.0
 
     def __init__(self) -> None:
-        self.bar = bar(None, "calibrating")
+        self.tty = not quiet()
+        self.bar = bar(None, "calibrating") if self.tty else None
         self.stage = None
+        self.t0 = self.last = time.perf_counter()
 
     def __call__(self, stage: str, iteration: int, best: float) -> None:
-        if stage != self.stage:
-            self.stage = stage
-            self.bar.set_description(f"calibrating: {stage}")
-        self.bar.set_postfix(best=f"{best:.3g}", refresh=False)
-        self.bar.update()
+        now = time.perf_counter()
+        new = stage != self.stage
+        self.stage = stage
+        if self.bar is not None:
+            if new:
+                self.bar.set_description(f"calibrating: {stage}")
+            self.bar.set_postfix(best=f"{best:.3g}", refresh=False)
+            self.bar.update()
+        elif new or now - self.last >= self.every:
+            self.last = now
+            print(f"bwim: calibrating: {stage}: iteration {iteration}, best {best:.4g}, "
+                  f"{now - self.t0:.0f} s so far", file=sys.stderr, flush=True)
 
     def close(self) -> None:
-        self.bar.close()
-
-
+        if self.bar is not None:
+            self.bar.close()
