@@ -172,3 +172,16 @@ def test_calibration_progress_lines_when_stderr_is_not_a_terminal(capsys, monkey
     lines = capsys.readouterr().err.splitlines()
     assert [ln.split(": ")[2] for ln in lines] == ["stiffness", "mass"]
     assert "iteration 1, best 0.5" in lines[0]
+
+
+def test_site_calibration_prints_short(day):
+    """``print(site_calibration)`` was 25 kB (issue 21): one line naming what was
+    learned."""
+    from bwim.scenario import build_site_setup, load_record, load_scenario
+    from bwim.site import calibrate_site
+
+    sc = load_scenario(day.scenario)
+    site = calibrate_site([load_record(p, sc) for p in day.calibration], build_site_setup(sc))
+    text = str(site)
+    assert text == repr(site) and "\n" not in text and len(text) < 200, text
+    assert f"{site.n_used} of {len(day.calibration)} runs used" in text
