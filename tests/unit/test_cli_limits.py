@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import errno
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -153,20 +154,30 @@ def test_every_command_takes_o(command):
 
 
 # --- limits --------------------------------------------------------------------------------
-@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs FIFOs")
+@pytest.mark.skipif(not hasattr(os, "mkfifo") or not hasattr(signal, "alarm"),
+                    reason="needs FIFOs and SIGALRM")
 @pytest.mark.parametrize("where", ["records", "calibration"])
-def test_fifo_and_device_refused_at_once(day, tmp_path, where):
+def test_fifo_and_device_refused_at_once(day, tmp_path, capsys, where):
     """A FIFO (or /dev/null) given as a record: refused from its stat, exit 2, never
-    opened (opening a FIFO for reading would wait for a writer: the timeout)."""
+    opened (opening a FIFO for reading would wait for a writer: the alarm ends a hang)."""
     fifo = tmp_path / "event.txt"
     os.mkfifo(fifo)
-    for path in (fifo, Path(os.devnull)):
-        kw = {where: [path]} if where == "records" else {"calibration": path}
-        proc = subprocess.run([sys.executable, "-m", "bwim.cli",
-                               *_weigh_argv(day, tmp_path / "out", **kw)],
-                              env=ENV, capture_output=True, text=True, timeout=60)
-        _one_line_error(proc.returncode, proc.stderr, str(path), "not a regular file")
-        assert not (tmp_path / "out" / "summary.csv").exists()
+
+    def hang(signum, frame):
+        raise TimeoutError("the FIFO was opened for reading")
+
+    old = signal.signal(signal.SIGALRM, hang)
+    try:
+        for path in (fifo, Path(os.devnull)):
+            kw = {where: [path]} if where == "records" else {"calibration": path}
+            signal.alarm(20)
+            code = main(_weigh_argv(day, tmp_path / "out", **kw))
+            signal.alarm(0)
+            _one_line_error(code, capsys.readouterr().err, str(path), "not a regular file")
+            assert not (tmp_path / "out" / "summary.csv").exists()
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, old)
 
 
 def test_garbage_memory_limit_refused_first(day, tmp_path, capsys, monkeypatch):
