@@ -185,3 +185,17 @@ def test_site_calibration_prints_short(day):
     text = str(site)
     assert text == repr(site) and "\n" not in text and len(text) < 200, text
     assert f"{site.n_used} of {len(day.calibration)} runs used" in text
+
+
+def test_a_record_result_file_never_replaces_an_input(beam, tmp_path, capsys):
+    """``weigh a.h5 a_static.h5 -o <their folder>``: a.h5's weights would be written over
+    the record a_static.h5: refused, even with --force."""
+    import shutil
+
+    a = shutil.copy(beam["a"], tmp_path / "a.h5")
+    other = shutil.copy(beam["a"], tmp_path / "a_static.h5")
+    before = Path(other).read_bytes()
+    code = main(["weigh", str(beam["scen"]), str(a), str(other), "--calibration-records",
+                 str(a), "-o", str(tmp_path), "--force"])
+    _one_line_error(code, capsys.readouterr().err, "is the input", "a_static.h5")
+    assert Path(other).read_bytes() == before

@@ -275,15 +275,15 @@ def weigh_command(args: argparse.Namespace) -> int:
     cal = (record_paths(args.calibration_records, any_suffix=site)
            if args.calibration_records else [])
     folder = out_folder(args.output)  # created once the inputs are known to exist
-    outputs = ([folder / "calibration_runs.csv", folder / "influence_lines.h5"] if site
-               else [folder / "influence_line.h5"])
+    if site:
+        outputs = [folder / "calibration_runs.csv", folder / "influence_lines.h5"]
+    else:  # each record's weights, and the line unless it is given
+        outputs = [*(folder / f"{stem}_static.h5" for stem in unique_stems(paths)),
+                   *([] if args.influence else [folder / "influence_line.h5"])]
     refuse_input_overwrite([folder / "summary.csv", *outputs],
                            [args.scenario, *paths, *cal,
                             *([args.influence] if args.influence else []),
                             *([args.bridge] if args.bridge else [])])
-    if not site:
-        targets = [folder / f"{stem}_static.h5" for stem in unique_stems(paths)]
-        outputs = targets + ([] if args.influence else outputs)
     with locked(folder):
         if _fresh(args, folder):  # no output of a command replaced without --force
             refuse_existing_outputs(outputs, force=args.force)
