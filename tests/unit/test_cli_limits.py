@@ -51,16 +51,27 @@ def _tmp_files(folder: Path) -> list[Path]:
 
 
 # --- one-line errors -----------------------------------------------------------------------
-def test_weigh_into_a_closed_pipe(day, tmp_path):
-    """``bwim weigh ... | head -1``: the reader is gone before the first line; no
-    traceback, the exit code is the command's own and the summary is written whole."""
+_PROGRESS_EVERY_ITEM = ("import sys; from bwim.cli import common, main; "
+                        "common.Progress.every = 0.0; sys.exit(main(sys.argv[1:]))")
+
+
+@pytest.mark.parametrize("merged", [False, True])
+def test_weigh_into_a_closed_pipe(day, tmp_path, merged):
+    """``bwim weigh ... | head -1`` (and ``2>&1 | head -1``): the reader is gone before
+    the first line; no traceback, the exit code is the command's own (0) and the summary
+    is written whole.  Progress is printed for every record (its period set to zero) so
+    that stderr is written to as well."""
     out = tmp_path / "out"
-    proc = subprocess.Popen([sys.executable, "-m", "bwim.cli", *_weigh_argv(day, out)],
-                            env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc = subprocess.Popen([sys.executable, "-c", _PROGRESS_EVERY_ITEM,
+                             *_weigh_argv(day, out)], env=ENV, stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT if merged else subprocess.PIPE)
     proc.stdout.close()  # the reader goes away at once
     _, err = proc.communicate(timeout=120)
-    assert proc.returncode == 0, err.decode()
-    assert b"Traceback" not in err and b"BrokenPipe" not in err, err.decode()
+    err = (err or b"").decode()
+    assert proc.returncode == 0, err
+    assert "Traceback" not in err and "BrokenPipe" not in err, err
+    if not merged:
+        assert f"bwim: weighing: {len(day.traffic)}/{len(day.traffic)}" in err
     lines = (out / "summary.csv").read_text().splitlines()
     assert len(lines) >= 1 + len(day.traffic)
 

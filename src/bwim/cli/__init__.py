@@ -342,9 +342,9 @@ def _version() -> str:
 
 
 class _PipeSafe:
-    """A text stream whose reader may go away (``bwim weigh ... | head``): once the pipe
-    is broken, what is printed is dropped and the command goes on (its output files are
-    still written whole); the exit code stays the command's."""
+    """A text stream whose reader may go away (``bwim weigh ... | head``, also with
+    ``2>&1``): once the pipe is broken, what is printed is dropped and the command goes on
+    (its output files are still written whole); the exit code stays the command's."""
 
     def __init__(self, stream) -> None:
         self.stream = stream
@@ -390,8 +390,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     saved = os.environ.get(ENV_VAR)
-    stdout = sys.stdout
-    sys.stdout = _PipeSafe(stdout)
+    stdout, stderr = sys.stdout, sys.stderr
+    sys.stdout, sys.stderr = _PipeSafe(stdout), _PipeSafe(stderr)
     try:
         if args.memory_limit is not None:
             parse_size(args.memory_limit)  # a one-line error if it is not a size
@@ -413,7 +413,7 @@ def main(argv: Sequence[str] | None = None) -> int:
               file=sys.stderr)
         return 130
     finally:
-        sys.stdout = stdout
+        sys.stdout, sys.stderr = stdout, stderr
         if saved is None:
             os.environ.pop(ENV_VAR, None)
         else:
