@@ -31,11 +31,14 @@ Subcommands:
     second or so).  A rerun skips the records done (``manifest.json``); ``--force``
     starts afresh.  Exit code 0: all records done; 1: some failed; 2: bad input.
 
-Safety of outputs (:mod:`bwim.io.outputs`): an output that is one of the inputs is refused;
-an existing output file is refused unless ``--force``; an output folder is locked
-(``.bwim.lock``) for the run; SIGTERM ends a run like Ctrl-C (temporary files removed,
-worker processes stopped, exit code 130).  ``bwim --memory-limit SIZE COMMAND`` bounds the
-memory of the run (:mod:`bwim.limits`).
+Safety of outputs (:mod:`bwim.io.outputs`, ``docs/cli.md``): an output that is one of the
+inputs is refused; every existing output file of a command (summary, manifest, each
+record's result, lines, runs, report, figures) is refused unless ``--force``, before any
+work; an output folder is locked (``.bwim.lock``) for the run; SIGTERM ends a run like
+Ctrl-C (temporary files removed, worker processes stopped, exit code 130); worker
+processes end with their parent, also on ``kill -9``.  ``bwim --memory-limit SIZE
+COMMAND`` bounds the memory of each process of the run (:mod:`bwim.limits`); a
+``BWIM_MEMORY_LIMIT`` that is not a size is refused before any work.
 ``weigh SCENARIO RECORD... (--calibration-records REC... | --influence IL.h5) [-o FOLDER]``
     Static weights by Moses' algorithm, the influence line calibrated from crossings of
     the scenario's vehicle (and written) or read from a file.
@@ -43,13 +46,13 @@ memory of the run (:mod:`bwim.limits`).
     The COST 323 accuracy class per criterion and overall.
 ``report RESULTS... -o REPORT.html``
     A single-file HTML report (tables, embedded figures) of result files and folders.
-``demo [--out FOLDER] [--quick]``
+``demo [-o FOLDER] [--quick] [--force]``
     The whole chain on the paper's slab bridge: simulate a calibration crossing,
     calibrate, identify a second vehicle's forces with the calibrated model, weigh it by
     Moses; a table against the truth, figures and ``report.html``.
-``reproduce {5.1,5.2,5.3,5.4,compare,all}``
+``reproduce {5.1,5.2,5.3,5.4,compare,all} [-o FOLDER] [--force]``
     The paper's experiments: tables with the paper's numbers beside ours, figures in
-    ``--out`` (default ``bwim-out/reproduce``).
+    ``-o`` (default ``bwim-out/reproduce``).
 """
 
 
@@ -322,9 +325,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--version", action="version", version=f"bwim {_version()}")
     p.add_argument("--memory-limit", metavar="SIZE",
-                   help="most memory a command may use, e.g. 4G, 800M or 0.25 (a fraction "
-                   "of the machine's); default: the BWIM_MEMORY_LIMIT environment variable, "
-                   "else half the machine's memory")
+                   help="most memory a command may use (per process), e.g. 4G, 800M or "
+                   "0.25 (a fraction of the machine's); default: the BWIM_MEMORY_LIMIT "
+                   "environment variable, else half the machine's memory")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for c in COMMANDS:
         fmt = {"formatter_class": argparse.RawDescriptionHelpFormatter} if c.raw else {}
