@@ -12,9 +12,9 @@ Contract
   the temporary file is removed and the target is left as it was.  A reader therefore sees
   the old file or the complete new one, never a half-written output.
 * An output path that cannot be written (its folder does not exist, a folder is in the
-  way, no permission) raises :class:`~bwim.errors.InputError` naming the path before any
-  work is done; an operating-system error while writing (a full disk) raises
-  :class:`~bwim.errors.InputError` naming the path too.
+  way, no permission, a NUL byte in the path) raises :class:`~bwim.errors.InputError`
+  naming the path before any work is done; an operating-system error while writing (a
+  full disk) raises :class:`~bwim.errors.InputError` naming the path too.
 * :func:`atomic_open` is the same for a text file, yielding the open file (the io
   layer's text writers use it).
 * The temporary file is created with the usual permissions (``0o666`` less the umask), so
@@ -53,6 +53,9 @@ def check_writable(path: str | os.PathLike) -> Path:
         ``path`` as a :class:`~pathlib.Path`.
     """
     target = Path(path)
+    if "\x00" in str(target):
+        shown = str(target).replace("\x00", "\\x00")
+        raise InputError(f"cannot write {shown}: the path holds a NUL byte")
     folder = target.parent
     if not folder.is_dir():
         raise InputError(f"cannot write {target}: the folder {folder} does not exist")

@@ -14,7 +14,9 @@ Contract
   (cloudpickle, as loky and dask do),
   and again after this process's first item (so that the workers receive its warm
   caches: modes, matrices).  Each process gets its share of the cores for BLAS (two
-  processes with a BLAS thread per core would oversubscribe them).
+  processes with a BLAS thread per core would oversubscribe them).  A worker ends
+  within a second of its parent process, also when the parent is killed (``kill -9``:
+  :func:`die_with_parent`).
 * :class:`Dask` runs items on a ``dask.distributed`` scheduler.  Items are read here
   (``task.load``; the workers need not see this file system) and sent, at most two per
   worker thread ahead, so a day of records is never all in memory.
@@ -28,6 +30,7 @@ import os
 import pickle
 import queue
 import threading
+import time
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -107,9 +110,10 @@ class Processes(Executor):
         from threadpoolctl import threadpool_limits
 
         threads = max(1, _cores() // (workers + 1))
-        executor = ProcessPoolExecutor(max_workers=workers, env={
-            name: str(threads) for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
-                                            "MKL_NUM_THREADS")})
+        executor = ProcessPoolExecutor(max_workers=workers, initializer=die_with_parent,
+                                       env={name: str(threads) for name in (
+                                           "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
+                                           "MKL_NUM_THREADS")})
         limits = threadpool_limits(limits=threads)
         stop = threading.Event()
         finished: queue.Queue = queue.Queue()
@@ -162,6 +166,31 @@ class Processes(Executor):
             limits.restore_original_limits()
             with contextlib.suppress(Exception):
                 executor.shutdown(wait=False)
+
+
+#: Seconds between a worker's checks that the process that started it is alive.
+WATCH_PARENT_EVERY = 0.5
+
+
+def die_with_parent(every: float = WATCH_PARENT_EVERY) -> None:
+    """Make this (worker) process end when the process that started it ends, however it
+    ends (``kill -9`` included): a daemon thread checks every ``every`` seconds that its
+    parent is still the same process (once the parent is gone the worker is handed to
+    another, so ``os.getppid()`` changes) and ends the worker at once (``os._exit``).
+
+    Linux's ``prctl(PR_SET_PDEATHSIG)`` is not used: it fires when the *thread* that
+    started the worker ends, and the pool starts workers from whichever feeding thread
+    submits, so a worker busy with another thread's item would be killed.
+    """
+    parent = os.getppid()
+
+    def watch() -> None:
+        while True:
+            time.sleep(every)
+            if os.getppid() != parent:
+                os._exit(1)
+
+    threading.Thread(target=watch, name="bwim-watch-parent", daemon=True).start()
 
 
 def _run_pickled(task: Task, blob: bytes, item: Any) -> Any:

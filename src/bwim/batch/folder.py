@@ -14,8 +14,9 @@ Contract
   once it is repaired.  The rows of inputs that a rerun does not name again are kept
   (the summary lists the inputs given, in order, then the others by file name): a resume
   never loses a row.  A folder that holds another batch (another scenario, calibration or
-  model: the manifest's ``meta``) is refused.  Without ``resume``, an existing summary or
-  manifest is refused unless ``force`` (then the batch starts afresh).
+  model: the manifest's ``meta``) is refused.  Without ``resume`` (or with it but no
+  manifest in the folder: nothing to resume), an existing summary or manifest is refused
+  unless ``force`` (then the batch starts afresh).
 * :func:`run_into` drains an iterator of :class:`~bwim.batch.events.Outcome` into a
   folder with a progress callback and returns a :class:`BatchReport`.
 """
@@ -66,7 +67,8 @@ class BatchFolder:
                  ) -> None:
         self.folder = Path(folder)
         self.summary = Path(summary) if summary is not None else self.folder / "summary.csv"
-        if not resume:
+        if not resume or not (self.folder / MANIFEST_NAME).exists():
+            # nothing to resume: an existing summary is another run's (no manifest of it)
             refuse_existing(self.summary, force=force)
             refuse_existing(self.folder / MANIFEST_NAME, force=force)
         self.manifest = Manifest(self.folder, fresh=not resume)

@@ -8,8 +8,12 @@ help, description, arguments), from which the parser is built; tables are printe
 :class:`bwim.tables.Table`.  Bad input (a scenario, record or model file, an option, an
 output path) ends with a one-line message ``bwim: error: ...`` on stderr and exit code 2,
 never a traceback, and leaves no partial output file (every writer is atomic, outputs are
-checked before the work starts).  Progress bars (tqdm, on stderr) show only when stdout is
-a terminal.
+checked before the work starts).  Progress goes to stderr: a bar (tqdm) on a terminal,
+else plain lines every ten seconds or so (batches: count, total, rate and ETA; the
+calibration: stage, iteration and best objective).  ``bwim --version`` prints the
+version; every command takes its output as ``-o`` (also ``--out``, ``--output``).  When
+stdout's reader goes away (``bwim weigh ... | head``), what is printed is dropped and the
+command finishes its work and its files.
 
 Subcommands:
 
@@ -27,11 +31,14 @@ Subcommands:
     second or so).  A rerun skips the records done (``manifest.json``); ``--force``
     starts afresh.  Exit code 0: all records done; 1: some failed; 2: bad input.
 
-Safety of outputs (:mod:`bwim.io.outputs`): an output that is one of the inputs is refused;
-an existing output file is refused unless ``--force``; an output folder is locked
-(``.bwim.lock``) for the run; SIGTERM ends a run like Ctrl-C (temporary files removed,
-worker processes stopped, exit code 130).  ``bwim --memory-limit SIZE COMMAND`` bounds the
-memory of the run (:mod:`bwim.limits`).
+Safety of outputs (:mod:`bwim.io.outputs`, ``docs/cli.md``): an output that is one of the
+inputs is refused; every existing output file of a command (summary, manifest, each
+record's result, lines, runs, report, figures) is refused unless ``--force``, before any
+work; an output folder is locked (``.bwim.lock``) for the run; SIGTERM ends a run like
+Ctrl-C (temporary files removed, worker processes stopped, exit code 130); worker
+processes end with their parent, also on ``kill -9``.  ``bwim --memory-limit SIZE
+COMMAND`` bounds the memory of each process of the run (:mod:`bwim.limits`); a
+``BWIM_MEMORY_LIMIT`` that is not a size is refused before any work.
 ``weigh SCENARIO RECORD... (--calibration-records REC... | --influence IL.h5) [-o FOLDER]``
     Static weights by Moses' algorithm, the influence line calibrated from crossings of
     the scenario's vehicle (and written) or read from a file.
@@ -39,13 +46,13 @@ memory of the run (:mod:`bwim.limits`).
     The COST 323 accuracy class per criterion and overall.
 ``report RESULTS... -o REPORT.html``
     A single-file HTML report (tables, embedded figures) of result files and folders.
-``demo [--out FOLDER] [--quick]``
+``demo [-o FOLDER] [--quick] [--force]``
     The whole chain on the paper's slab bridge: simulate a calibration crossing,
     calibrate, identify a second vehicle's forces with the calibrated model, weigh it by
     Moses; a table against the truth, figures and ``report.html``.
-``reproduce {5.1,5.2,5.3,5.4,compare,all}``
+``reproduce {5.1,5.2,5.3,5.4,compare,all} [-o FOLDER] [--force]``
     The paper's experiments: tables with the paper's numbers beside ours, figures in
-    ``--out`` (default ``bwim-out/reproduce``).
+    ``-o`` (default ``bwim-out/reproduce``).
 """
 
 
@@ -69,7 +76,7 @@ from bwim.cli.models import (
 from bwim.cli.results import accuracy_command, report_command
 from bwim.errors import BwimError
 
-__all__ = ["main"]
+__all__ = ["COMMANDS", "build_parser", "main"]
 
 
 # --- the parser: one declarative entry per command -------------------------------------------
@@ -116,7 +123,7 @@ class Command:
 # Arguments several commands share, declared once; a command adds its own default and help.
 _SCENARIO = arg("scenario", metavar="SCENARIO.toml")
 _RECORDS = arg("records", nargs="+", metavar="RECORD")
-_OUTPUT = arg("-o", "--output")
+_OUTPUT = arg("-o", "--output", "--out")
 _BRIDGE = arg("--bridge", metavar="MODEL.toml")
 _REFERENCE = arg("--reference", metavar="REF.csv")
 _FORCE = arg("--force", action="store_true",
@@ -272,11 +279,13 @@ COMMANDS: tuple[Command, ...] = (
         "with the calibrated model and weigh it by Moses; print the results against the truth "
         "and write figures and report.html to --out.",
         (arg("--modes", type=int, default=6, help="natural frequencies to print (default 6)"),
-         arg("--out", default="bwim-out", help="output folder (default bwim-out)"),
+         arg("-o", "--out", "--output", dest="out", default="bwim-out",
+             help="output folder (default bwim-out)"),
          arg("--seed", type=int, default=0, help="seed of the calibration"),
          arg("--jobs", type=int, default=1, help="worker processes for calibration"),
          arg("--quick", action="store_true",
-             help="a smaller, faster calibration (for tests)"))),
+             help="a smaller, faster calibration (for tests)"),
+         _FORCE)),
     Command(
         "reproduce", reproduce_command,
         "the paper's experiments with its numbers side by side",
@@ -285,9 +294,11 @@ COMMANDS: tuple[Command, ...] = (
         "('compare').  Full runs take minutes (5.3 the longest); --quick runs small versions.",
         (arg("case", choices=["5.1", "5.2", "5.3", "5.4", "compare", "all"]),
          arg("--quick", action="store_true", help="small, fast versions"),
-         arg("--out", default="bwim-out/reproduce", help="folder for the figures"),
+         arg("-o", "--out", "--output", dest="out", default="bwim-out/reproduce",
+             help="folder for the figures"),
          arg("--jobs", type=int, default=1, help="worker processes for populations"),
-         arg("--no-figures", action="store_true", help="tables only")),
+         arg("--no-figures", action="store_true", help="tables only"),
+         _FORCE),
         raw=False),
 )
 
@@ -302,7 +313,8 @@ def _add(parser, item: Arg | OneOf) -> None:
         parser.add_argument(*item.names, **item.options)
 
 
-def _parser() -> argparse.ArgumentParser:
+def build_parser() -> argparse.ArgumentParser:
+    """The ``bwim`` argument parser (built from :data:`COMMANDS`)."""
     p = argparse.ArgumentParser(
         prog="bwim",
         description="Calibrated, dynamic Bridge Weigh-in-Motion: simulate crossings, "
@@ -311,10 +323,11 @@ def _parser() -> argparse.ArgumentParser:
         epilog="Scenario files (TOML) describe the bridge, the sensors, the vehicle, the "
         "road and the run; see examples/paper_slab.toml.  Units are SI.",
     )
+    p.add_argument("--version", action="version", version=f"bwim {_version()}")
     p.add_argument("--memory-limit", metavar="SIZE",
-                   help="most memory a command may use, e.g. 4G, 800M or 0.25 (a fraction "
-                   "of the machine's); default: the BWIM_MEMORY_LIMIT environment variable, "
-                   "else half the machine's memory")
+                   help="most memory a command may use (per process), e.g. 4G, 800M or "
+                   "0.25 (a fraction of the machine's); default: the BWIM_MEMORY_LIMIT "
+                   "environment variable, else half the machine's memory")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for c in COMMANDS:
         fmt = {"formatter_class": argparse.RawDescriptionHelpFormatter} if c.raw else {}
@@ -325,6 +338,50 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
+def _version() -> str:
+    from bwim import __version__
+
+    return __version__
+
+
+class _PipeSafe:
+    """A text stream whose reader may go away (``bwim weigh ... | head``, also with
+    ``2>&1``): once the pipe is broken, what is printed is dropped and the command goes on
+    (its output files are still written whole); the exit code stays the command's."""
+
+    def __init__(self, stream) -> None:
+        self.stream = stream
+        self.broken = False
+
+    def _drop(self) -> None:
+        self.broken = True
+        with contextlib.suppress(AttributeError, ValueError, OSError):
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, self.stream.fileno())  # the interpreter's last flush is quiet
+            os.close(devnull)
+
+    def write(self, text: str) -> int:
+        if not self.broken:
+            try:
+                return self.stream.write(text)
+            except BrokenPipeError:
+                self._drop()
+        return len(text)
+
+    def flush(self) -> None:
+        if not self.broken:
+            try:
+                self.stream.flush()
+            except BrokenPipeError:
+                self._drop()
+
+    def isatty(self) -> bool:
+        return False if self.broken else self.stream.isatty()
+
+    def __getattr__(self, name: str):
+        return getattr(self.stream, name)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``bwim`` command; returns the exit code."""
     from bwim.io.outputs import signals_as_interrupt
@@ -333,27 +390,34 @@ def main(argv: Sequence[str] | None = None) -> int:
     for stream in (sys.stdout, sys.stderr):  # file names that are not UTF-8 print too
         with contextlib.suppress(AttributeError, ValueError, OSError):
             stream.reconfigure(errors="backslashreplace")
-    parser = _parser()
+    parser = build_parser()
     args = parser.parse_args(argv)
     saved = os.environ.get(ENV_VAR)
+    stdout, stderr = sys.stdout, sys.stderr
+    sys.stdout, sys.stderr = _PipeSafe(stdout), _PipeSafe(stderr)
     try:
         if args.memory_limit is not None:
             parse_size(args.memory_limit)  # a one-line error if it is not a size
             os.environ[ENV_VAR] = args.memory_limit
+        elif (saved or "").strip():
+            parse_size(saved)  # a garbage BWIM_MEMORY_LIMIT: refused before any work
         with signals_as_interrupt():
             return int(args.run(args))
     except BwimError as exc:
         message = " ".join(str(exc).split()) or type(exc).__name__
         print(f"bwim: error: {message}", file=sys.stderr)
         return 2
+    except RecursionError:  # e.g. a TOML file of thousands of nested arrays
+        print("bwim: error: an input file is nested too deeply to be read (e.g. thousands of "
+              "nested arrays or tables in a TOML file)", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         print("bwim: interrupted (the records finished so far are kept; rerun to go on)",
               file=sys.stderr)
         return 130
     finally:
+        sys.stdout, sys.stderr = stdout, stderr
         if saved is None:
             os.environ.pop(ENV_VAR, None)
         else:
             os.environ[ENV_VAR] = saved
-
-

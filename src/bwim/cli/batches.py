@@ -19,6 +19,7 @@ from bwim.cli.common import (
     out_file,
     out_folder,
     record_paths,
+    refuse_existing_outputs,
     unique_stems,
     write_csv,
 )
@@ -75,6 +76,14 @@ def _report_failures(report) -> int:
     return EXIT_OK
 
 
+def _fresh(args: argparse.Namespace, folder: Path) -> bool:
+    """Whether the run starts afresh: not ``--resume``, or nothing to resume (no manifest:
+    the folder's files are then not this batch's, and are refused like any others)."""
+    from bwim.io.outputs import MANIFEST_NAME
+
+    return not args.resume or not (folder / MANIFEST_NAME).exists()
+
+
 def _done_before(report) -> str:
     return f" ({report.n_done_before} done before)" if report.n_done_before else ""
 
@@ -86,18 +95,20 @@ def identify_command(args: argparse.Namespace) -> int:
 
     check_jobs(args.jobs)
     out = Path(args.output)
+    paths = record_paths(args.records)
     if out.suffix.lower() == ".csv":
         summary = out_file(out)
         folder = summary.parent
     else:
         folder = out_folder(out)
         summary = folder / "summary.csv"
-    paths = record_paths(args.records)
     inputs = [args.scenario, *([args.bridge] if args.bridge else []), *paths]
     items = [Item(name=display_name(p), source=p, target=folder / f"{stem}_forces.h5")
              for p, stem in zip(paths, unique_stems(paths), strict=True)]
     refuse_input_overwrite([summary, *(it.target for it in items)], inputs)
     with locked(folder):
+        if _fresh(args, folder):  # no result file of a record replaced without --force
+            refuse_existing_outputs([it.target for it in items], force=args.force)
         scenario = load_scenario(args.scenario)
         bridge = bridge_of(args, scenario)
         batch = BatchFolder(folder, resume=args.resume, force=args.force, summary=summary,
@@ -128,6 +139,14 @@ def _unique_names(paths: Sequence[Path]) -> None:
         seen[p.name] = p
 
 
+def _first_reason(unread: Sequence[tuple[str, str]]) -> str:
+    """The first file's reason (its message names the file) and how many failed."""
+    name, reason = unread[0]
+    where = reason if name in reason else f"{name}: {reason}"
+    return (f"{len(unread)} file(s) unreadable; the first: {where}" if len(unread) > 1
+            else where)
+
+
 def _calibrate_site(paths: Sequence[Path], scenario, folder: Path):
     """Lines from the calibration truck's logger events; a table of the runs."""
     from bwim.io import write_influence_line
@@ -143,8 +162,13 @@ def _calibrate_site(paths: Sequence[Path], scenario, folder: Path):
         except InputError as exc:
             unread.append((p.name, str(exc)))
     if not records and unread:
-        raise InputError(f"no calibration run could be read; {unread[0][0]}: {unread[0][1]}")
-    site = calibrate_site(records, setup)
+        raise InputError(f"no calibration run could be read ({_first_reason(unread)})")
+    try:
+        site = calibrate_site(records, setup)
+    except InputError as exc:
+        if not unread:
+            raise
+        raise InputError(f"{exc}; also {_first_reason(unread)}") from None
     rows = []
     for p, det, reason, fit in zip(used, site.detections, site.reasons, site.fits,
                                    strict=True):
@@ -240,27 +264,29 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path, batch) -> int:
 
 def weigh_command(args: argparse.Namespace) -> int:
     from bwim.batch import BatchFolder
-    from bwim.io.outputs import refuse_existing, refuse_input_overwrite
+    from bwim.io.outputs import refuse_input_overwrite
     from bwim.scenario import load_scenario
 
     check_jobs(args.jobs)
-    folder = out_folder(args.output)
     scenario = load_scenario(args.scenario)
     site = scenario.logger is not None
     paths = record_paths(args.records, any_suffix=site)
     _unique_names(paths)
     cal = (record_paths(args.calibration_records, any_suffix=site)
            if args.calibration_records else [])
-    outputs = ([folder / "calibration_runs.csv", folder / "influence_lines.h5"] if site
-               else [folder / "influence_line.h5"])
+    folder = out_folder(args.output)  # created once the inputs are known to exist
+    if site:
+        outputs = [folder / "calibration_runs.csv", folder / "influence_lines.h5"]
+    else:  # each record's weights, and the line unless it is given
+        outputs = [*(folder / f"{stem}_static.h5" for stem in unique_stems(paths)),
+                   *([] if args.influence else [folder / "influence_line.h5"])]
     refuse_input_overwrite([folder / "summary.csv", *outputs],
                            [args.scenario, *paths, *cal,
                             *([args.influence] if args.influence else []),
                             *([args.bridge] if args.bridge else [])])
     with locked(folder):
-        if not args.resume and not (site is False and args.influence):
-            for p in outputs:  # no output of a command replaced without --force
-                refuse_existing(p, force=args.force)
+        if _fresh(args, folder):  # no output of a command replaced without --force
+            refuse_existing_outputs(outputs, force=args.force)
         batch = BatchFolder(folder, resume=args.resume, force=args.force, meta=_meta(
             "weigh", scenario=args.scenario, calibration=sorted(cal, key=str),
             influence=args.influence, bridge=args.bridge))

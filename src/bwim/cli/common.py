@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import csv
 import os
+import stat
 import sys
 import time
 from collections.abc import Sequence
@@ -15,13 +16,17 @@ from bwim.errors import InputError
 
 __all__ = ["RECORD_SUFFIXES", "CalibrationProgress", "Progress", "bar", "bridge_of", "check_jobs",
            "display_name", "load_records", "locked", "out_file", "out_folder", "quiet",
-           "record_paths", "unique_stems", "write_csv"]
+           "record_paths", "refuse_existing_outputs", "regular_file", "unique_stems", "write_csv"]
 
 RECORD_SUFFIXES = (".h5", ".hdf5", ".hdf", ".csv", ".txt")
 
 
 def quiet() -> bool:
-    return not sys.stdout.isatty()
+    """No progress bar: stderr (where progress goes) is not a terminal."""
+    try:
+        return not sys.stderr.isatty()
+    except (AttributeError, ValueError):
+        return True
 
 
 def bar(total: int | None, desc: str):
@@ -30,32 +35,44 @@ def bar(total: int | None, desc: str):
     return tqdm(total=total, desc=desc, disable=quiet(), file=sys.stderr, leave=False)
 
 
+def _duration(seconds: float) -> str:
+    """``"45 s"``, ``"12.5 min"``, ``"3.2 h"``."""
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    if seconds < 5400:
+        return f"{seconds / 60:.1f} min"
+    return f"{seconds / 3600:.1f} h"
+
+
 class Progress:
     """A batch's progress on stderr: a bar (count, total, rate, ETA) on a terminal, else a
-    plain line every :attr:`every` seconds.  ``progress(n)``: n items finished so far."""
+    plain line every :attr:`every` seconds.  ``progress(n)``: n items finished so far;
+    the first call gives those done before this run (0 if none: not part of the rate)."""
 
     every = 10.0
 
     def __init__(self, total: int, desc: str) -> None:
         self.total, self.desc = total, desc
-        self.tty = sys.stderr.isatty()
+        self.tty = not quiet()
         self.bar = bar(total, desc) if self.tty and total > 1 else None
         self.t0 = self.last = time.perf_counter()
-        self.start = self.n = 0
+        self.start: int | None = None
+        self.n = 0
 
     def __call__(self, n: int) -> None:
-        if self.n == 0 and self.start == 0 and n > 0 and self.last == self.t0:
+        if self.start is None:
             self.start = n  # done before: not part of the rate
         if self.bar is not None:
             self.bar.update(n - self.n)
         self.n = n
         now = time.perf_counter()
-        if not self.tty and self.total > 1 and now - self.last >= self.every:
+        if not self.tty and self.total > 1 and n > self.start and \
+                now - self.last >= self.every:
             self.last = now
             rate = (n - self.start) / max(now - self.t0, 1e-9)
-            eta = (self.total - n) / rate if rate > 0 else float("nan")
+            eta = (self.total - n) / rate
             print(f"bwim: {self.desc}: {n}/{self.total} ({100 * n / self.total:.0f} %), "
-                  f"{rate:.3g}/s, ETA {eta / 60:.1f} min", file=sys.stderr, flush=True)
+                  f"{rate:.3g}/s, ETA {_duration(eta)}", file=sys.stderr, flush=True)
 
     def __enter__(self) -> Progress:
         return self
@@ -81,11 +98,26 @@ def out_file(path: str | Path, suffixes: Sequence[str] | None = None, *,
     return refuse_existing(p, force=force)
 
 
+def refuse_existing_outputs(paths: Sequence[Path], *, force: bool) -> None:
+    """:class:`InputError` naming the first of ``paths`` that exists (unless ``force``),
+    and how many do: checked before any of them is written."""
+    if force:
+        return
+    there = [p for p in paths if p.exists() or p.is_symlink()]
+    if there:
+        more = f" (and {len(there) - 1} more of its outputs)" if len(there) > 1 else ""
+        raise InputError(f"{there[0]} exists{more}; use --force to overwrite, or another "
+                         "output folder")
+
+
 def out_folder(path: str | Path) -> Path:
     """An output folder, created if needed, that can be written."""
     from bwim.io import check_writable
 
     p = Path(path)
+    if "\x00" in str(p):
+        shown = str(p).replace("\x00", "\\x00")
+        raise InputError(f"cannot write in {shown}: the path holds a NUL byte")
     if p.exists() and not p.is_dir():
         raise InputError(f"cannot write in {p}: it is a file, not a folder")
     try:
@@ -108,17 +140,43 @@ def record_paths(items: Sequence[str], *, any_suffix: bool = False) -> list[Path
     ``any_suffix`` (a logger's exports) every file of a folder."""
     from bwim.io.paths import expand_paths
 
-    return expand_paths(items, None if any_suffix else RECORD_SUFFIXES, what="records")
+    paths = expand_paths(items, None if any_suffix else RECORD_SUFFIXES, what="records")
+    for p in paths:
+        regular_file(p)
+    return paths
+
+
+_KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
+          (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+          (stat.S_ISSOCK, "a socket"))
+
+
+def regular_file(path: Path) -> Path:
+    """``path`` if it names a regular file (symbolic links followed); a folder, FIFO,
+    device or socket is refused from its ``stat`` alone (a FIFO is never opened: opening
+    one for reading waits for a writer)."""
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such file") from None
+    except (OSError, ValueError) as exc:  # ValueError: a NUL byte in the name
+        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        raise InputError(f"{path}: cannot read: {reason.lower()}") from None
+    if not stat.S_ISREG(mode):
+        kind = next((name for test, name in _KINDS if test(mode)), "not a file")
+        raise InputError(f"{path}: is {kind}, not a regular file")
+    return path
 
 
 def load_records(paths: Sequence[Path], scenario) -> list:
     from bwim.scenario import load_record
 
     records = []
-    with bar(len(paths) if len(paths) > 1 else None, "reading records") as progress:
+    with Progress(len(paths), "reading records") as progress:
+        progress(0)
         for p in paths:
             records.append(load_record(p, scenario))
-            progress.update()
+            progress(len(records))
     return records
 
 
@@ -159,20 +217,32 @@ def write_csv(path: Path, header: Sequence[str], rows: Sequence[Sequence]) -> No
 
 
 class CalibrationProgress:
-    """A tqdm bar fed by ``calibrate``'s callback: one tick per optimiser iteration."""
+    """``calibrate``'s callback on stderr: a tqdm bar (one tick per optimiser iteration)
+    on a terminal, else a plain line at each new stage and every :attr:`every` seconds
+    (stage, iteration, best objective, time so far; the optimisers announce no total)."""
+
+    every = 10.0
 
     def __init__(self) -> None:
-        self.bar = bar(None, "calibrating")
+        self.tty = not quiet()
+        self.bar = bar(None, "calibrating") if self.tty else None
         self.stage = None
+        self.t0 = self.last = time.perf_counter()
 
     def __call__(self, stage: str, iteration: int, best: float) -> None:
-        if stage != self.stage:
-            self.stage = stage
-            self.bar.set_description(f"calibrating: {stage}")
-        self.bar.set_postfix(best=f"{best:.3g}", refresh=False)
-        self.bar.update()
+        now = time.perf_counter()
+        new = stage != self.stage
+        self.stage = stage
+        if self.bar is not None:
+            if new:
+                self.bar.set_description(f"calibrating: {stage}")
+            self.bar.set_postfix(best=f"{best:.3g}", refresh=False)
+            self.bar.update()
+        elif new or now - self.last >= self.every:
+            self.last = now
+            print(f"bwim: calibrating: {stage}: iteration {iteration}, best {best:.4g}, "
+                  f"{now - self.t0:.0f} s so far", file=sys.stderr, flush=True)
 
     def close(self) -> None:
-        self.bar.close()
-
-
+        if self.bar is not None:
+            self.bar.close()

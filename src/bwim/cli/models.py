@@ -16,6 +16,7 @@ from bwim.cli.common import (
     out_file,
     out_folder,
     record_paths,
+    refuse_existing_outputs,
 )
 from bwim.errors import InputError
 from bwim.tables import Table, format_kn, format_kn_each, format_pct, param_values
@@ -119,6 +120,12 @@ def write_figures(figures: dict, folder: Path, *, prefix: str = "", dpi: int) ->
     return paths
 
 
+#: The files ``bwim demo`` writes whatever the run (its figures are named after them).
+DEMO_FILES = ("calibrated_bridge.toml", "calibration_crossing.h5", "second_vehicle.h5",
+              "second_vehicle_forces.h5", "second_vehicle_static.h5", "influence_line.h5",
+              "report.html")
+
+
 def demo_command(args: argparse.Namespace) -> int:
     from bwim.paper.demo import MAX_MODES
 
@@ -127,6 +134,7 @@ def demo_command(args: argparse.Namespace) -> int:
     check_jobs(args.jobs)
     out = out_folder(args.out)
     with locked(out):
+        refuse_existing_outputs([out / name for name in DEMO_FILES], force=args.force)
         return _demo_run(args, out)
 
 
@@ -148,6 +156,9 @@ def _demo_run(args: argparse.Namespace, out: Path) -> int:
                         callback=progress, echo=lambda text: print(text, flush=True))
     finally:
         progress.close()
+    sections = demo.sections()
+    figures = figure_files(sections)
+    refuse_existing_outputs([out / f"{name}.png" for name in figures], force=args.force)
     save_bridge(demo.calibration.bridge, out / "calibrated_bridge.toml",
                 title="bwim demo: calibrated")
     write_record(demo.calibration_record, out / "calibration_crossing.h5")
@@ -155,8 +166,7 @@ def _demo_run(args: argparse.Namespace, out: Path) -> int:
     write_identification(demo.identified, out / "second_vehicle_forces.h5")
     write_static_weights(demo.moses, out / "second_vehicle_static.h5")
     write_influence_line(demo.influence_line, out / "influence_line.h5")
-    sections = demo.sections()
-    write_figures(figure_files(sections), out, dpi=100)
+    write_figures(figures, out, dpi=100)
     page = write_report(out / "report.html", sections, title=REPORT_TITLE, intro=REPORT_INTRO)
     print(f"\nfiles in {out}: calibrated_bridge.toml, records, results (.h5), figures (.png)")
     print(f"report: {page}")
@@ -174,8 +184,15 @@ def reproduce_command(args: argparse.Namespace) -> int:
     out = out_folder(args.out)
     check_writable(out / ".probe")
     with locked(out):
+        if not args.no_figures:  # a case's figures share its prefix (5_1_..., compare_...)
+            refuse_existing_outputs(sorted(p for name in names for p in out.glob(
+                f"{_prefix(name)}*.png")), force=args.force)
         _reproduce_cases(args, names, out)
     return 0
+
+
+def _prefix(case: str) -> str:
+    return f"{case.replace('.', '_')}_"
 
 
 def _reproduce_cases(args: argparse.Namespace, names: Sequence[str], out: Path) -> None:
@@ -190,8 +207,10 @@ def _reproduce_cases(args: argparse.Namespace, names: Sequence[str], out: Path) 
         report = reproduce.CASES[name](**kwargs)
         print(report.render(), flush=True)
         if not args.no_figures:
-            for target in write_figures(report.figures(), out,
-                                         prefix=f"{name.replace('.', '_')}_", dpi=110):
+            figures = report.figures()
+            refuse_existing_outputs([out / f"{_prefix(name)}{k}.png" for k in figures],
+                                    force=args.force)
+            for target in write_figures(figures, out, prefix=_prefix(name), dpi=110):
                 print(f"  figure: {target}")
         print()
     print(f"total {time.perf_counter() - t0:.1f} s")

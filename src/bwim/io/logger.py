@@ -86,7 +86,7 @@ from bwim.limits import check_memory
 from bwim.records import Record
 from bwim.sensors import Sensor, SensorKind
 
-__all__ = ["CHUNK", "DELIMITERS", "LoggerFormat", "read_logger"]
+__all__ = ["CHUNK", "DELIMITERS", "MAX_LOGGER_BYTES", "LoggerFormat", "read_logger"]
 
 DELIMITERS = (";", "\t", ",", " ")
 """Delimiters in the order auto-detection tries them (``" "``: any run of whitespace)."""
@@ -94,6 +94,8 @@ DELIMITERS = (";", "\t", ",", " ")
 SKIP = "-"
 TIME = "time"
 MiB = 2**20
+#: Logger files larger than this (bytes) are refused from their size, before reading.
+MAX_LOGGER_BYTES = 256 * MiB
 
 CHUNK = 2**16
 """Characters of text parsed at once (whole lines are added to finish the last one)."""
@@ -386,7 +388,7 @@ def read_logger(
     fmt: LoggerFormat,
     *,
     sensors: Sequence[Sensor] | None = None,
-    max_bytes: int = 256 * MiB,
+    max_bytes: int = MAX_LOGGER_BYTES,
     max_samples: int = 1_000_000,
     max_field: int = 64,
     min_samples: int = 2,
@@ -407,7 +409,9 @@ def read_logger(
         kinds.  Each must name a channel; a kind that contradicts ``fmt.kinds`` is refused.
         Channels without one get ``Sensor(name=channel, kind=fmt.kind_of(channel))``.
     max_bytes : int
-        Larger files are refused before reading (default 256 MiB).
+        Larger files are refused before reading, from their size (default
+        :data:`MAX_LOGGER_BYTES`, 256 MiB; a longer recording is split into files
+        first).
     max_samples : int
         More data rows are refused (default 1 000 000: 33 min at 512 Hz).
     max_field : int
@@ -460,7 +464,8 @@ def read_logger(
     with open_regular(p) as raw:
         size = os.fstat(raw.fileno()).st_size
         if size > max_bytes:
-            raise InputError(f"{p}: {size} bytes is more than max_bytes = {max_bytes}")
+            raise InputError(f"{p}: {size} bytes is more than max_bytes = {max_bytes}, the "
+                             "logger file limit (split the recording into shorter files)")
         try:
             with io.TextIOWrapper(raw, encoding="utf-8-sig", newline=None) as f:
                 parser = _Parser(f, p, fmt, size=size, max_bytes=max_bytes,
