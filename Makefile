@@ -20,7 +20,7 @@ $(STAMP): pyproject.toml
 install: $(STAMP)
 
 demo: $(STAMP)
-	$(BIN)/bwim demo
+	$(BIN)/bwim demo --force
 
 test: $(STAMP)
 	$(BIN)/ruff check src tests benchmarks examples
@@ -33,7 +33,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py
 
 reproduce: $(STAMP)
-	$(BIN)/bwim reproduce all --jobs 2
+	$(BIN)/bwim reproduce all --jobs 2 --force
 
 clean:
 	rm -rf $(VENV) build dist src/*.egg-info .pytest_cache .ruff_cache

@@ -11,6 +11,7 @@ Targets from issue 11: axle count right, speed within 0.5 %, spacings within 0.1
 import csv
 import dataclasses
 import shutil
+from datetime import time
 from functools import partial
 
 import numpy as np
@@ -126,7 +127,15 @@ def test_weigh_command_writes_the_contract_summary(day, tmp_path, capsys):
         w = _floats(r["axle_weights_kN"])
         assert w.size == int(r["n_axles"]) == int(ref[r["record"]]["n_axles"])
         assert float(r["gvw_kN"]) == pytest.approx(w.sum(), abs=0.02)
-    assert (out / "calibration_runs.csv").exists() and (out / "influence_lines.h5").exists()
+    assert (out / "influence_lines.h5").exists()
+    runs = _rows(out / "calibration_runs.csv")
+    # each run's start: this day's time column is the clock of day (truth: event start)
+    starts = {r["record"]: r["event_start_s"] for r in _rows(day.truth)}
+    assert [r["run"] for r in runs] == [p.name for p in day.calibration]
+    for r in runs:
+        clock = time.fromisoformat(r["time"])
+        seconds = clock.hour * 3600 + clock.minute * 60 + clock.second + clock.microsecond / 1e6
+        assert seconds == pytest.approx(float(starts[r["run"]]), abs=1e-3)
     capsys.readouterr()
     assert main(["accuracy", str(out / "summary.csv"), "--reference", str(day.reference)]) == 0
     assert "gross weight" in capsys.readouterr().out

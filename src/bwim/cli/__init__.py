@@ -261,12 +261,20 @@ COMMANDS: tuple[Command, ...] = (
         "a single-file HTML report of result files",
         "A self-contained HTML page (figures embedded) of result files: force "
         "identifications, static weights, influence lines, records (.h5), bridge models "
-        "(.toml) and summaries (.csv); folders are expanded.\n\n"
+        "(.toml) and summaries (.csv); folders are expanded.  A weigh summary.csv gives "
+        "the site report: traffic figures, overloads, flags in words, the COST 323 "
+        "accuracy against --reference and the calibration runs (docs/report.md).\n\n"
         "  bwim report out/ -o report.html",
         (arg("results", nargs="+", metavar="RESULTS"),
          _OUTPUT.updated(default="report.html", metavar="REPORT.html",
              help="default report.html"),
          arg("--title", default="bwim report", help="the page title"),
+         arg("--runs", metavar="RUNS.csv",
+             help="calibration_runs.csv of bwim weigh: each run's scale factor and residual"),
+         arg("--gvw-limit", type=float, metavar="KN",
+             help="overload limit of the gross weight, kN (default 392.4 = 40 t; 0: none)"),
+         arg("--axle-limit", type=float, metavar="KN",
+             help="overload limit of an axle, kN (default 112.8 = 11.5 t; 0: none)"),
          _REFERENCE.updated(
              help="static weights of the weighed vehicles: adds the COST 323 accuracy "
              "classes of each weigh summary.csv among the results"),

@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+from datetime import datetime, timedelta
 from pathlib import Path
 
 from bwim.cli.common import (
@@ -147,6 +148,19 @@ def _first_reason(unread: Sequence[tuple[str, str]]) -> str:
             else where)
 
 
+def _run_time(rec) -> str:
+    """A run's start in ISO 8601 (to the ms): its date and time when the record has a
+    clock, the time of day when its time axis is one (as the summary's ``time``), else
+    empty."""
+    clock = rec.clock_at()
+    if clock is not None:
+        return clock.isoformat(timespec="milliseconds")
+    t0 = float(rec.time[0])
+    if 0.0 < t0 < 86400.0:
+        return (datetime.min + timedelta(seconds=t0)).time().isoformat(timespec="milliseconds")
+    return ""
+
+
 def _calibrate_site(paths: Sequence[Path], scenario, folder: Path):
     """Lines from the calibration truck's logger events; a table of the runs."""
     from bwim.io import write_influence_line
@@ -170,16 +184,17 @@ def _calibrate_site(paths: Sequence[Path], scenario, folder: Path):
             raise
         raise InputError(f"{exc}; also {_first_reason(unread)}") from None
     rows = []
-    for p, det, reason, fit in zip(used, site.detections, site.reasons, site.fits,
-                                   strict=True):
+    for p, rec, det, reason, fit in zip(used, records, site.detections, site.reasons,
+                                        site.fits, strict=True):
         v = det.vehicles[0].passage if len(det.vehicles) == 1 else None
-        rows.append((p.name, "" if v is None else f"{v.speed:.2f}",
+        rows.append((p.name, _run_time(rec),
+                     "" if v is None else f"{v.speed:.2f}",
                      "" if v is None else f"{v.lane:.2f}",
                      "" if fit is None else f"{fit.scale:.4f}",
                      "" if fit is None else f"{fit.residual:.3g}",
                      reason or "used"))
-    rows += [(name, "", "", "", "", f"unreadable: {msg}") for name, msg in unread]
-    header = ("run", "speed (m/s)", "lateral", "scale", "residual", "status")
+    rows += [(name, "", "", "", "", "", f"unreadable: {msg}") for name, msg in unread]
+    header = ("run", "time", "speed (m/s)", "lateral", "scale", "residual", "status")
     write_csv(folder / "calibration_runs.csv", header, rows)
     print(Table(f"Calibration runs ({site.n_used} of {len(paths)} used):", header,
                 rows).render())
