@@ -35,7 +35,7 @@ def _one_line_error(code, err, *needles):
 @pytest.fixture(scope="module")
 def day(tmp_path_factory):
     return make_test_day(tmp_path_factory.mktemp("limits") / "day", site="short-span-4-lane",
-                         seed=4, n_calibration=3, n_traffic=2, n_calibration_day_traffic=0,
+                         seed=4, n_calibration=6, n_traffic=2, n_calibration_day_traffic=0,
                          mesh=0.6)
 
 
