@@ -24,6 +24,12 @@ Contract
   one whose ``y`` is nearer the vehicle's lateral position in metres, else the one that
   saw it with the higher confidence).  A vehicle whose lateral position (m) lies nearer
   another lane of its direction (``SiteSetup.lane_of``) is given that lane's number.
+* **Following vehicles**: a detected vehicle whose axles spread over more than
+  :data:`MAX_WHEELBASE` (the longest vehicle allowed on European roads) is vehicles
+  following each other: it is cut between axle groups where two plausible vehicles
+  part (:func:`split_long`; again while a part is too long); the parts keep the whole's
+  window,
+  so they are each other's multiple presence (and are refused, never weighed as one).
 * **Multiple presence**: vehicles whose windows on the span overlap are each flagged
   ``multiple_presence``; :attr:`LaneVehicle.others` names the lanes of the others.  A
   vehicle no detector saw (a lane without detectors) shows as gauge activity outside
@@ -43,14 +49,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bwim.classify import DEFAULT_GROUP_SPACING
 from bwim.detect import Detection, LearnedResponses, VehicleDetection, detect_axles
 from bwim.detect.presence import unexplained_activity
 from bwim.detect.result import FLAG_MULTIPLE_PRESENCE
 from bwim.errors import BwimError
-from bwim.records import Record
+from bwim.records import Passage, Record
 from bwim.site.setup import DetectorLane, SiteSetup
 
-__all__ = ["EventDetection", "LaneVehicle", "detect_lanes"]
+__all__ = ["MAX_WHEELBASE", "EventDetection", "LaneVehicle", "detect_lanes", "split_long"]
 
 #: What one lane's detection may raise without ending the event's detection.
 _ERRORS = (BwimError, ArithmeticError, ValueError, np.linalg.LinAlgError)
@@ -147,7 +154,14 @@ def detect_lanes(record: Record, setup: SiteSetup, *,
         by_lane[pair.lane] = det
         if not det.vehicles and det.message and pair.lane == setup.calibration_lane:
             notes.append(f"lane {pair.lane}: {det.message}")
-        seen.extend((pair, v) for v in det.vehicles)
+        for v in det.vehicles:
+            parts = split_long(v)
+            if len(parts) > 1:
+                notes.append(f"lane {pair.lane}: {v.n_axles} axles over "
+                             f"{float(np.sum(v.passage.axle_spacings)):.1f} m, longer than "
+                             f"any vehicle ({MAX_WHEELBASE:g} m): {len(parts)} vehicles "
+                             "following each other")
+            seen.extend((pair, w) for w in parts)
     for pair, v in seen:
         lane = pair.lane
         if _echo(v, pair, setup, seen):
@@ -162,6 +176,57 @@ def detect_lanes(record: Record, setup: SiteSetup, *,
     vehicles = _presence(vehicles)
     vehicles = _unseen_neighbours(record, vehicles, gauges, notes)
     return EventDetection(vehicles=tuple(vehicles), by_lane=by_lane, message="; ".join(notes))
+
+
+#: m: no vehicle's first and last axles are further apart than the longest vehicle allowed
+#: on European roads (18.75 m, a road train: Council Directive 96/53/EC, Annex I); axles
+#: spread over more are vehicles following each other.
+MAX_WHEELBASE = 18.75
+
+
+def _axles_of(values: np.ndarray, axles: slice) -> np.ndarray:
+    """The rows of per-axle ``values`` (first axis) of ``axles``; empty stays empty."""
+    return values[axles] if len(values) else values
+
+
+def split_long(v: VehicleDetection) -> list[VehicleDetection]:
+    """``v`` as the vehicles it holds: one when its axles span at most
+    :data:`MAX_WHEELBASE`, else cut, each part cut again, all flagged
+    ``multiple_presence``.  The cut is the longest axle spacing that leaves two vehicles
+    of two axles or more, lies between axle groups (spacings of
+    :data:`bwim.classify.DEFAULT_GROUP_SPACING` or more) with a single axle leading the
+    rear vehicle, and leaves both within the limit; failing that, without the limit;
+    failing that, the longest spacing."""
+    spacings = np.asarray(v.passage.axle_spacings, dtype=float)
+    if spacings.size < 2 or float(spacings.sum()) <= MAX_WHEELBASE:
+        return [v]
+    offsets = np.concatenate([[0.0], np.cumsum(spacings)])
+    n = spacings.size
+
+    def cuts(within: bool) -> list[int]:
+        # both sides vehicles of two axles or more, the cut between axle groups, the
+        # rear side led by a single (steering) axle; ``within``: both sides not too long
+        return [k for k in range(1, n - 1)
+                if spacings[k] >= DEFAULT_GROUP_SPACING
+                and spacings[k + 1] >= DEFAULT_GROUP_SPACING
+                and (not within or (offsets[k] <= MAX_WHEELBASE
+                                    and offsets[-1] - offsets[k + 1] <= MAX_WHEELBASE))]
+
+    cut = max(cuts(True) or cuts(False) or range(n), key=lambda k: spacings[k])
+    parts = []
+    for axles in (slice(0, cut + 1), slice(cut + 1, None)):
+        first = axles.start
+        p = v.passage
+        passage = Passage(speed=p.speed, lane=p.lane, axle_spacings=spacings[axles][:-1]
+                          if axles.stop is not None else spacings[first:],
+                          delay=p.delay + offsets[first] / p.speed, track_width=p.track_width)
+        flags = v.flags if FLAG_MULTIPLE_PRESENCE in v.flags else (*v.flags,
+                                                                  FLAG_MULTIPLE_PRESENCE)
+        parts.append(dataclasses.replace(
+            v, passage=passage, flags=flags, axle_times=_axles_of(v.axle_times, axles),
+            axle_amplitudes=_axles_of(v.axle_amplitudes, axles),
+            detector_times=_axles_of(v.detector_times, axles)))
+    return [w for part in parts for w in split_long(part)]
 
 
 #: Relative speed difference within which two pairs' vehicles may be one vehicle.

@@ -1,0 +1,57 @@
+"""Vehicles following each other that the axle detectors saw as one (issue 21: two trucks
+came out as one 10-axle vehicle of 627 kN): axles spread over more than the longest
+vehicle allowed on European roads are cut into vehicles, each flagged multiple presence.
+Reference: the axle layouts the test builds (closed form: positions and times)."""
+
+import numpy as np
+import pytest
+
+from bwim.detect import VehicleDetection
+from bwim.records import Passage
+from bwim.site.lanes import MAX_WHEELBASE, split_long
+
+ARTIC = [3.6, 6.0, 1.31, 1.31]  # a 5-axle articulated truck, 12.22 m
+RIGID = [5.4]                   # a 2-axle rigid truck
+
+
+def _vehicle(spacings, speed=22.0, delay=1.0):
+    s = np.asarray(spacings, dtype=float)
+    offsets = np.concatenate([[0.0], np.cumsum(s)])
+    times = delay + offsets / speed
+    return VehicleDetection(
+        passage=Passage(speed=speed, lane=5.9, axle_spacings=s, delay=delay),
+        confidence=0.9, axle_times=times, axle_amplitudes=np.linspace(0.5, 1.0, s.size + 1),
+        lateral=5.9, window=(0.5, 3.0), detector_times=np.column_stack([times, times + 0.1]))
+
+
+@pytest.mark.parametrize(("front", "gap", "rear"), [
+    (ARTIC, 8.0, ARTIC),   # the issue's 10 axles
+    (ARTIC, 5.5, RIGID),   # 7 axles: 12.22 + 5.5 + 5.4 = 23.1 m
+    (RIGID, 7.0, ARTIC),
+])
+def test_following_trucks_are_cut_where_they_part(front, gap, rear):
+    whole = _vehicle([*front, gap, *rear])
+    parts = split_long(whole)
+    assert [p.n_axles for p in parts] == [len(front) + 1, len(rear) + 1]
+    assert np.allclose(parts[0].passage.axle_spacings, front)
+    assert np.allclose(parts[1].passage.axle_spacings, rear)
+    # the rear truck's first axle passes x = 0 when the whole's axle len(front) + 1 did
+    k = len(front) + 1
+    assert parts[1].passage.delay == pytest.approx(whole.axle_times[k])
+    assert np.allclose(parts[1].axle_times, whole.axle_times[k:])
+    assert np.allclose(parts[1].detector_times, whole.detector_times[k:])
+    for p in parts:
+        assert "multiple_presence" in p.flags and p.window == whole.window
+        assert p.passage.speed == whole.passage.speed
+
+
+def test_a_long_vehicle_within_the_limit_stays_one():
+    """A road train of 18.5 m between its first and last axles is one vehicle."""
+    v = _vehicle([3.2, 1.35, 6.4, 1.31, 6.24])
+    assert float(np.sum(v.passage.axle_spacings)) < MAX_WHEELBASE
+    assert split_long(v) == [v]
+
+
+def test_three_following_vehicles_give_three():
+    parts = split_long(_vehicle([*ARTIC, 7.0, *ARTIC, 6.0, *RIGID]))
+    assert [p.n_axles for p in parts] == [5, 5, 2]
