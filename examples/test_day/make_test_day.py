@@ -15,7 +15,7 @@ from bwim.synthetic.testday import WIM_GRADE_ROUGHNESS
 
 SMALL = {
     "basic-2-lane": {"n_calibration": 4, "n_traffic": 8, "mesh": 0.5},
-    "short-span-4-lane": {"n_calibration": 4, "n_traffic": 12,
+    "short-span-4-lane": {"n_calibration": 6, "n_traffic": 12,
                           "n_calibration_day_traffic": 4, "mesh": 0.5},
 }
 
