@@ -4,7 +4,8 @@
   commands and the Python block, in order) runs in a fresh folder with the environment's
   ``bin`` first on the PATH, as `. .venv/bin/activate` leaves it: each command exits 0
   and the files the next one reads exist.
-* The command-line tour (section "On the command line") runs the same way, but for
+* The Python example (section "In Python") and the command-line tour (section "On the
+  command line") runs the same way, but for
   ``bwim reproduce`` (minutes: ``make reproduce`` runs it).
 * Every ``bwim`` command line in the README parses with the command's own parser.
 """
@@ -70,6 +71,13 @@ def _run(steps: list[tuple[str, str]], folder: Path) -> None:
             done = subprocess.run([sys.executable, "-c", code], cwd=folder, env=env,
                                   capture_output=True, text=True, timeout=300)
         assert done.returncode == 0, (code, done.stderr[-2000:])
+
+
+def test_the_python_example_runs(tmp_path):
+    """Section "In Python": simulate, calibrate from a poor guess, identify."""
+    steps = _steps(_section("In Python"))
+    assert [kind for kind, _ in steps] == ["python"]
+    _run(steps, tmp_path)
 
 
 def test_the_command_line_tour_runs(tmp_path):
