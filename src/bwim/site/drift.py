@@ -23,9 +23,11 @@ Contract
   axles weighed, the commonest) is a stable reference: its load hardly depends on the
   payload.  Its weighed value, divided by a nominal value, tracks the factor: a robust
   local-linear trend over the day's clock time (:class:`bwim.wim.ScaleTrend`, bandwidth
-  by cross-validation, after dropping ratios beyond 4 robust standard deviations of the
-  day's median), one trend per date.  The nominal value is learned while the calibration
-  holds: the median reference steering axle of vehicles weighed on a calibration date
+  by cross-validation among :data:`TRAFFIC_BANDWIDTHS`, after dropping ratios beyond
+  :data:`OUTLIER` robust standard deviations of the day's median), one trend per date.
+  The nominal value is learned while the calibration holds: the mean reference steering
+  axle (within the same outlier limit; a mean, as the trends are local means: a median
+  would shift every factor by the loads' skew) of vehicles weighed on a calibration date
   inside the runs' span, with the runs' own trend; without such traffic,
   ``reference_load`` (N) from the scenario.  A date with fewer than ``min_reference``
   reference vehicles is too thin: its vehicles fall back to the next source, flagged
@@ -68,6 +70,10 @@ DRIFT_METHODS = ("auto", "traffic", "temperature", "time_of_day", "trend", "none
 #: Reference ratios beyond this many robust standard deviations of a day's median are
 #: left out of its trend (a misdetected axle, a wrong class).
 OUTLIER = 4.0
+#: s: the bandwidths the traffic method's trend is chosen among (cross-validated), half an
+#: hour to four hours: a deck's temperature, and the factor with it, changes over hours,
+#: while the reference vehicles are many and each scatters by its own dynamics.
+TRAFFIC_BANDWIDTHS = tuple(h * 3600.0 for h in (0.5, 1.0, 1.5, 2.0, 3.0, 4.0))
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -211,6 +217,13 @@ class TrafficDrift:
     counts: dict
 
 
+def _keep(values: np.ndarray) -> np.ndarray:
+    """Which values lie within :data:`OUTLIER` robust standard deviations of their median."""
+    med = float(np.median(values))
+    rsd = 1.4826 * float(np.median(np.abs(values - med))) or 1e-9
+    return np.abs(values - med) <= OUTLIER * rsd
+
+
 def _steer(row: SummaryRow) -> float | None:
     """The row's steering axle load as weighed before any drift correction, N."""
     if not row.weighed or not row.axle_weights:
@@ -245,7 +258,11 @@ def traffic_drift(rows: Sequence[SummaryRow], setup: DriftSetup, *,
                 if r.time.date() in calibration.dates
                 and lo <= seconds_of_day(r.time) <= hi]
         if len(base) >= setup.min_reference:
-            nominal, source = float(np.median(base)), "calibration day traffic"
+            # the mean, as the trends are local means (a median would bias every factor
+            # by the steering loads' skew), of the ratios within the outlier limit
+            ratios = np.asarray(base)
+            nominal = float(np.mean(ratios[_keep(ratios)]))
+            source = "calibration day traffic"
     if nominal is None and setup.reference_load is not None:
         nominal, source = float(setup.reference_load), "scenario"
     if nominal is None:
@@ -257,11 +274,10 @@ def traffic_drift(rows: Sequence[SummaryRow], setup: DriftSetup, *,
     for day, pts in by_date.items():
         t = np.array([p[0] for p in pts])
         q = np.array([p[1] for p in pts])
-        med = float(np.median(q))
-        rsd = 1.4826 * float(np.median(np.abs(q - med))) or 1e-9
-        keep = np.abs(q - med) <= OUTLIER * rsd
+        keep = _keep(q)
         counts[day] = int(keep.sum())
-        trends[day] = (ScaleTrend.fit(t[keep], q[keep]) if counts[day] >= setup.min_reference
+        trends[day] = (ScaleTrend.fit(t[keep], q[keep], candidates=TRAFFIC_BANDWIDTHS)
+                       if counts[day] >= setup.min_reference
                        else None)
     return TrafficDrift(reference_class=cls, nominal=nominal, nominal_source=source,
                         trends=trends, counts=counts)

@@ -62,7 +62,8 @@ class ScaleTrend:
     bandwidth: float
 
     @classmethod
-    def fit(cls, time: Any, factor: Any, *, bandwidth: float | None = None) -> ScaleTrend:
+    def fit(cls, time: Any, factor: Any, *, bandwidth: float | None = None,
+            candidates: Any = None) -> ScaleTrend:
         """The trend of ``factor`` (n_runs,) over clock ``time`` (n_runs,), s.
 
         At each knot ``t_j`` the smoothed factor is the intercept of the straight line
@@ -74,6 +75,9 @@ class ScaleTrend:
         smoothing when the factors scatter little about a smooth drift, more when the
         truck's own dynamics scatter them (the bandwidth rules are compared by
         ``benchmarks/bench_multirun.py``, the trend's error against the true drift).
+        ``candidates`` (s) replaces those candidates by absolute bandwidths (for many
+        noisy points, e.g. the traffic's own reference vehicles, whose spacing in time
+        says nothing of how fast the factor may change).
         """
         t = np.array(time, dtype=float, ndmin=1)
         f = np.array(factor, dtype=float, ndmin=1)
@@ -84,7 +88,7 @@ class ScaleTrend:
         knots, inverse, counts = np.unique(t, return_inverse=True, return_counts=True)
         raw = np.bincount(inverse, weights=f) / counts
         if bandwidth is None:
-            bw = cv_bandwidth(t, f)
+            bw = cv_bandwidth(t, f, candidates=candidates)
         else:
             bw = require_finite("bandwidth", bandwidth)
             if bw < 0:
@@ -111,18 +115,20 @@ class ScaleTrend:
         return bool(lo <= float(t) <= hi)
 
 
-def cv_bandwidth(t: np.ndarray, f: np.ndarray) -> float:
+def cv_bandwidth(t: np.ndarray, f: np.ndarray, *, candidates: Any = None) -> float:
     """Leave-one-out cross-validated bandwidth of :func:`local_linear` for factors ``f`` at
     times ``t`` (1-D, same length), s: the candidate of :data:`CV_BANDWIDTHS` × the median
-    spacing of the distinct times with the least squared prediction error (the smallest
-    on a tie); 0 if there are fewer than 4 distinct times."""
+    spacing of the distinct times (or of ``candidates``, s, when given) with the least
+    squared prediction error (the smallest on a tie); 0 if there are fewer than 4
+    distinct times."""
     knots = np.unique(t)
     if knots.size < 4:
         return 0.0
     spacing = float(np.median(np.diff(knots)))
+    grid = ([m * spacing for m in CV_BANDWIDTHS] if candidates is None
+            else [require_finite("bandwidth candidate", c) for c in candidates])
     best, best_err = 0.0, np.inf
-    for mult in CV_BANDWIDTHS:
-        bw = mult * spacing
+    for bw in grid:
         err = 0.0
         for i in range(f.size):
             w = np.ones(f.size)
