@@ -30,12 +30,12 @@ import os
 import pickle
 import queue
 import threading
-import time
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 from bwim.errors import InputError
+from bwim.orphans import die_with_parent
 
 __all__ = ["Dask", "Executor", "Processes", "Serial", "Task", "executor_for"]
 
@@ -166,31 +166,6 @@ class Processes(Executor):
             limits.restore_original_limits()
             with contextlib.suppress(Exception):
                 executor.shutdown(wait=False)
-
-
-#: Seconds between a worker's checks that the process that started it is alive.
-WATCH_PARENT_EVERY = 0.5
-
-
-def die_with_parent(every: float = WATCH_PARENT_EVERY) -> None:
-    """Make this (worker) process end when the process that started it ends, however it
-    ends (``kill -9`` included): a daemon thread checks every ``every`` seconds that its
-    parent is still the same process (once the parent is gone the worker is handed to
-    another, so ``os.getppid()`` changes) and ends the worker at once (``os._exit``).
-
-    Linux's ``prctl(PR_SET_PDEATHSIG)`` is not used: it fires when the *thread* that
-    started the worker ends, and the pool starts workers from whichever feeding thread
-    submits, so a worker busy with another thread's item would be killed.
-    """
-    parent = os.getppid()
-
-    def watch() -> None:
-        while True:
-            time.sleep(every)
-            if os.getppid() != parent:
-                os._exit(1)
-
-    threading.Thread(target=watch, name="bwim-watch-parent", daemon=True).start()
 
 
 def _run_pickled(task: Task, blob: bytes, item: Any) -> Any:

@@ -128,7 +128,11 @@ def evaluate(
     else:
         from joblib import Parallel, delayed, effective_n_jobs, parallel_config
 
-        with parallel_config(backend="loky", inner_max_num_threads=1):
+        from bwim.orphans import die_with_parent
+
+        # the workers end with this process, also when it is killed (issue 22)
+        with parallel_config(backend="loky", inner_max_num_threads=1,
+                             initializer=die_with_parent):
             workers = effective_n_jobs(n_jobs)
             if chunk_size is None:
                 chunk_size = math.ceil(k / workers)
