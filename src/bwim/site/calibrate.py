@@ -178,6 +178,14 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
         events = [detect_lanes(rec, setup, responses=responses, span=span,
                                gauges=gauge_names(rec)) for rec in records]
         reasons, passages, kept = _truck_runs(events, setup)
+        # pass 3: the responses learned again from the runs of the truck alone (a run
+        # with another vehicle on the detectors smears the learned shapes and every
+        # speed found with them), and the runs detected again with them
+        if 2 <= len(kept) < len(records) and responses:
+            responses = _responses(records, setup, [], learn_from=kept) or responses
+            events = [detect_lanes(rec, setup, responses=responses, span=span,
+                                   gauges=gauge_names(rec)) for rec in records]
+            reasons, passages, kept = _truck_runs(events, setup)
     cal = _site_calibration(records, setup,
                             [e.by_lane.get(setup.calibration_lane, Detection()) for e in events],
                             reasons, passages, kept)
@@ -190,13 +198,16 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
 
 
 # --- 1. responses --------------------------------------------------------------------------
-def _responses(records: Sequence[Record], setup: SiteSetup, notes: list[str]
-               ) -> dict[int, LearnedResponses]:
+def _responses(records: Sequence[Record], setup: SiteSetup, notes: list[str],
+               learn_from: Sequence[int] | None = None) -> dict[int, LearnedResponses]:
+    """The detectors' responses: the calibration lane's learned from the runs
+    ``learn_from`` (default all), the other lanes' transferred with every run's readings."""
     if setup.detection == "peaks":
         return {}
     pair = setup.calibration_pair
+    teach = records if learn_from is None else [records[k] for k in learn_from]
     try:
-        learned = learn_responses(records, pair.channels, pair.distance,
+        learned = learn_responses(teach, pair.channels, pair.distance,
                                   setup.calibration_spacings,
                                   loads=setup.calibration_loads)
     except InputError as exc:
