@@ -33,6 +33,9 @@ def _plate(**kw):
         ("supports", {"left": "free"}, r"unknown support edge\(s\) \['left'\]"),
         ("zones", (5, 0), r"zones = \(5, 0\)"),
         ("damping_ratio", -0.01, r"damping_ratio must lie in \[0, 1\], got -0.01"),
+        # issue 22: these reached the eigen-solver and ended in its traceback
+        ("E", 1e300, r"E_x / mu = 6.41e\+296 is outside 1e-30 … 1e\+30"),
+        ("mu", 1e-300, r"E_x / mu = inf is outside"),
     ],
 )
 def test_plate_rejects(arg, value, pattern):

@@ -122,6 +122,12 @@ def _structure(grid: Grid, supports: Any, zone_map: tuple[np.ndarray, int], **se
                    n_zones=n_zones, **section)
 
 
+#: Bounds on a zone's modulus over its mass (Pa per kg/m², or per kg/m for a beam): a
+#: concrete slab has about 1e7, a steel beam 1e8; beyond these bounds the eigenvalues
+#: (∝ the ratio) over- or underflow double precision in the modal solver.
+STIFFNESS_MASS_RANGE = (1e-30, 1e30)
+
+
 def _param_array(name: str, value: Any, n: int) -> np.ndarray:
     arr = np.array(value, dtype=float, ndmin=1)
     if arr.size == 1 and n != 1:
@@ -175,6 +181,22 @@ class Bridge:
         set_(self, "mu_girder",
              _param_array("mu_girder", self.mu_girder, ng) if ng else np.zeros(0))
         require_range("damping_ratio", self.damping_ratio, 0.0, 1.0, closed=True)
+        pairs = [("E_x", self.E_x, "mu", self.mu)]
+        if m.is_plate:
+            pairs.append(("E_y", self.E_y, "mu", self.mu))
+        if ng:
+            pairs.append(("E_girder", self.E_girder, "mu_girder", self.mu_girder))
+        for e_name, e, m_name, mass in pairs:
+            with np.errstate(over="ignore"):
+                ratio = e / mass
+            bad = ~((ratio > STIFFNESS_MASS_RANGE[0]) & (ratio < STIFFNESS_MASS_RANGE[1]))
+            if bad.any():
+                k = int(np.flatnonzero(bad)[0])
+                raise InputError(
+                    f"{e_name} / {m_name} = {ratio[k]:.3g} is outside "
+                    f"{STIFFNESS_MASS_RANGE[0]:g} … {STIFFNESS_MASS_RANGE[1]:g}: the natural "
+                    f"frequencies would leave floating point (units? E in Pa, mass in kg/m² "
+                    "or kg/m)")
         set_(self, "_cache", {})
 
     # --- constructors ----------------------------------------------------------------
