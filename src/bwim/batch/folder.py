@@ -33,6 +33,7 @@ from bwim.batch.events import Item, Outcome
 from bwim.errors import InputError
 from bwim.io.outputs import MANIFEST_NAME, Manifest, refuse_existing
 from bwim.io.summary import from_cells, to_cells, write_summary
+from bwim.io.summary_parquet import require_pyarrow, write_summary_parquet
 from bwim.summary import SummaryRow
 
 __all__ = ["BatchFolder", "BatchReport", "run_into"]
@@ -57,20 +58,28 @@ class BatchFolder:
         ``finalize(rows) -> rows``: a day-level step applied to every row before the
         summary is written (e.g. the traffic's own drift correction,
         :func:`bwim.site.correct_drift`); the manifest keeps the rows as they came.
+    parquet : bool
+        Also write the final summary as ``summary.parquet`` beside it
+        (:mod:`bwim.io.summary_parquet`; refused like the summary when it exists).
     """
 
     save_every = 1.0
 
     def __init__(self, folder: str | Path, *, meta: dict[str, Any], resume: bool,
                  force: bool, summary: str | Path | None = None,
-                 finalize: Callable[[list[SummaryRow]], list[SummaryRow]] | None = None
-                 ) -> None:
+                 finalize: Callable[[list[SummaryRow]], list[SummaryRow]] | None = None,
+                 parquet: bool = False) -> None:
         self.folder = Path(folder)
         self.summary = Path(summary) if summary is not None else self.folder / "summary.csv"
+        self.parquet = self.summary.with_suffix(".parquet") if parquet else None
+        if self.parquet is not None:
+            require_pyarrow()
         if not resume or not (self.folder / MANIFEST_NAME).exists():
             # nothing to resume: an existing summary is another run's (no manifest of it)
             refuse_existing(self.summary, force=force)
             refuse_existing(self.folder / MANIFEST_NAME, force=force)
+            if self.parquet is not None:
+                refuse_existing(self.parquet, force=force)
         self.manifest = Manifest(self.folder, fresh=not resume)
         if resume and self.manifest.entries and self.manifest.meta != meta:
             raise InputError(f"{self.folder} holds the results of another batch (another "
@@ -126,7 +135,10 @@ class BatchFolder:
         runs on the final save only (it needs every row)."""
         t = time.perf_counter()
         self.manifest.save()
-        write_summary(self.summary, self.rows() if final else self.raw_rows())
+        rows = self.rows() if final else self.raw_rows()
+        write_summary(self.summary, rows)
+        if final and self.parquet is not None:
+            write_summary_parquet(self.parquet, rows)
         self._last = time.perf_counter()
         self._cost = self._last - t
 

@@ -137,6 +137,9 @@ _RESUME = arg("--resume", action="store_true",
               help="go on with the batch in OUT (its manifest.json): records done and "
               "unchanged are kept, failed ones are tried again, rows of records not given "
               "again are kept")
+_PARQUET = arg("--parquet", action="store_true",
+               help="also write the summary as summary.parquet (typed columns; needs "
+               "pyarrow: pip install 'bwim[parquet]')")
 
 COMMANDS: tuple[Command, ...] = (
     Command(
@@ -200,6 +203,7 @@ COMMANDS: tuple[Command, ...] = (
              "bwim-out/identify"),
          _PARALLEL,
          _RESUME,
+         _PARQUET,
          _FORCE)),
     Command(
         "weigh", weigh_command,
@@ -233,6 +237,7 @@ COMMANDS: tuple[Command, ...] = (
              help="logger files only: weigh each detected vehicle by moving force "
              "identification with this (calibrated) bridge model instead of Moses; the "
              "gauges need x and y, and the first detector's position its x on the bridge"),
+         _PARQUET,
          _FORCE)),
     Command(
         "accuracy", accuracy_command,

@@ -113,7 +113,8 @@ def identify_command(args: argparse.Namespace) -> int:
         scenario = load_scenario(args.scenario)
         bridge = bridge_of(args, scenario)
         batch = BatchFolder(folder, resume=args.resume, force=args.force, summary=summary,
-                            meta=_meta("identify", scenario=args.scenario, bridge=args.bridge))
+                            meta=_meta("identify", scenario=args.scenario, bridge=args.bridge),
+                            parquet=args.parquet)
         kwargs = scenario.identify.kwargs() if scenario.identify is not None else {}
         executor = executor_for(args.jobs, args.scheduler)
         report = _run_batch(batch, items, lambda todo: identify_records(
@@ -304,7 +305,7 @@ def weigh_command(args: argparse.Namespace) -> int:
             refuse_existing_outputs(outputs, force=args.force)
         batch = BatchFolder(folder, resume=args.resume, force=args.force, meta=_meta(
             "weigh", scenario=args.scenario, calibration=sorted(cal, key=str),
-            influence=args.influence, bridge=args.bridge))
+            influence=args.influence, bridge=args.bridge), parquet=args.parquet)
         if site:
             return _weigh_site(args, scenario, folder, batch)
         return _weigh_moses(args, scenario, folder, batch, paths, cal)

@@ -1,0 +1,48 @@
+"""``bwim weigh --parquet`` (issue 21 item 1): summary.parquet beside summary.csv with the
+same rows; refused like every output when it exists.  Data: a small realistic day."""
+
+import pytest
+
+from bwim.cli import main
+from bwim.io.summary import read_summary
+from bwim.synthetic import make_test_day
+
+pytest.importorskip("pyarrow")
+from bwim.io.summary_parquet import read_summary_parquet
+
+
+@pytest.fixture(scope="module")
+def day(tmp_path_factory):
+    return make_test_day(tmp_path_factory.mktemp("parquet") / "day", site="short-span-4-lane",
+                         seed=4, n_calibration=6, n_traffic=4, n_calibration_day_traffic=0,
+                         mesh=0.6)
+
+
+def _argv(day, out, *extra):
+    return ["weigh", str(day.scenario), str(day.traffic[0].parent), "--calibration-records",
+            str(day.calibration[0].parent), "-o", str(out), *extra]
+
+
+def test_parquet_holds_the_summarys_rows(day, tmp_path):
+    out = tmp_path / "out"
+    assert main(_argv(day, out, "--parquet")) == 0
+    csv_rows = read_summary(out / "summary.csv")
+    pq_rows = read_summary_parquet(out / "summary.parquet")
+    assert [(r.record, r.vehicle, r.status, r.lane, r.flags) for r in pq_rows] == \
+        [(r.record, r.vehicle, r.status, r.lane, r.flags) for r in csv_rows]
+    assert any(r.weighed for r in pq_rows)
+    for a, b in zip(pq_rows, csv_rows, strict=True):
+        assert (a.gvw is None) == (b.gvw is None)
+        if a.gvw is not None:  # the CSV holds kN to 2 decimals
+            assert a.gvw == pytest.approx(b.gvw, abs=5.0)
+
+
+def test_an_existing_parquet_is_not_replaced_without_force(day, tmp_path, capsys):
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "summary.parquet").write_text("precious")
+    assert main(_argv(day, out, "--parquet")) == 2
+    err = capsys.readouterr().err.strip()
+    assert "summary.parquet" in err and "--force" in err and "\n" not in err
+    assert (out / "summary.parquet").read_text() == "precious"
+    assert not (out / "summary.csv").exists()
