@@ -9,7 +9,10 @@ Contract
   spacings = time differences × speed), their time on the span and the flags that depend
   on it (``multiple_presence``, ``truncated``, ``unexplained_strain``), and each vehicle's
   lateral position (:func:`~bwim.detect.lateral.lateral_position`; ``Passage.lane`` is
-  the lateral position, 0.0 when no gauge responded).
+  the lateral position, 0.0 when no gauge responded).  A vehicle is ``truncated`` when
+  its time on the span reaches beyond the record, and the last one also when the gauges
+  end the record away from where they started (:func:`ends_loaded`: the record was cut
+  while a vehicle was on the bridge, whose axles beyond the cut no detector saw).
 * The quiet level of the gauges is taken outside every vehicle's time on the span (more
   than 50 ms from it) when the span is known and that leaves ≥ 10 % of the record, else
   from the first and last 10 % of the record.  Without a span, the lateral window of each
@@ -36,10 +39,30 @@ from .result import (
     VehicleDetection,
 )
 
-__all__ = ["VehicleEstimate", "assemble_detection"]
+__all__ = ["END_SHARE", "END_SPAN", "VehicleEstimate", "assemble_detection", "ends_loaded"]
 
 #: Margin around a vehicle's time on the span, s, before samples count as quiet.
 QUIET_MARGIN = 0.05
+#: s of readings averaged at each end of a record (a free vibration's cycles average out).
+END_SPAN = 0.05
+#: A record whose gauges end further from where they started than this share of their
+#: largest excursion ends (or starts) with a vehicle on the bridge.
+END_SHARE = 0.15
+
+
+def ends_loaded(time: np.ndarray, total: np.ndarray) -> bool:
+    """Whether the gauges' sum ``total`` ends the record (mean over its last
+    :data:`END_SPAN` s) further than :data:`END_SHARE` of its largest excursion from where
+    it started (mean over its first :data:`END_SPAN` s): a record cut while a vehicle is
+    on the bridge, at its end or its start."""
+    t = np.asarray(time, dtype=float)
+    y = np.asarray(total, dtype=float)
+    n = max(2, round(END_SPAN / float(np.median(np.diff(t)))))
+    if y.size < 4 * n:
+        return False
+    start, end = float(y[:n].mean()), float(y[-n:].mean())
+    swing = float(np.max(np.abs(y - start)))
+    return swing > 0 and abs(end - start) > END_SHARE * swing
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -124,6 +147,12 @@ def assemble_detection(
         total = record.channels(names).data.sum(axis=1)
         extra = unexplained_activity(t, total, windows, margin=QUIET_MARGIN,
                                      fraction=unexplained_fraction)
+        if ends_loaded(t, total):
+            last = int(np.argmax(windows[:, 1]))
+            if FLAG_TRUNCATED not in veh_flags[last]:
+                veh_flags[last].append(FLAG_TRUNCATED)
+            notes.append(f"the gauges end the record (at {t[-1]:.3f} s) away from where "
+                         "they started: it ends (or starts) while a vehicle is on the bridge")
         if extra.size:
             rec_flags.add(FLAG_UNEXPLAINED_STRAIN)
             spans = ", ".join(f"{a:.3f}–{b:.3f} s" for a, b in extra)

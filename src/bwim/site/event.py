@@ -47,7 +47,7 @@ import numpy as np
 
 from bwim.classify import axle_configuration
 from bwim.detect import Detection, VehicleDetection, detect_from_strain
-from bwim.detect.result import FLAG_MULTIPLE_PRESENCE
+from bwim.detect.result import FLAG_MULTIPLE_PRESENCE, FLAG_TRUNCATED
 from bwim.errors import BwimError, InputError
 from bwim.fe.bridge import Bridge
 from bwim.mfi import ForceIdentification, identify_forces
@@ -336,6 +336,9 @@ def _vehicle(record: Record, ev: EventDetection, k: int, calibration: SiteCalibr
                        "weighed as one")
     if "axle_count_mismatch" in flags:
         return refused("the axle detectors disagree on the number of axles")
+    if FLAG_TRUNCATED in flags:
+        return refused("the record starts or ends while the vehicle is on the bridge "
+                       "(truncated): its weights cannot be whole")
     try:
         factor, method, drift_flags = _drift_factor(record, v.passage, calibration)
     except InputError as exc:
