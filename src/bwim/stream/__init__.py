@@ -15,8 +15,10 @@ Contract
 Documented in docs/streams.md.
 """
 
+from bwim.stream.chunks import ROWS, cut_file, read_chunks
 from bwim.stream.events import FLAGS, EventCut, StreamEvent
 from bwim.stream.settings import TriggerSettings
 from bwim.stream.trigger import cut_events, cut_stream
 
-__all__ = ["FLAGS", "EventCut", "StreamEvent", "TriggerSettings", "cut_events", "cut_stream"]
+__all__ = ["FLAGS", "ROWS", "EventCut", "StreamEvent", "TriggerSettings", "cut_events",
+           "cut_file", "cut_stream", "read_chunks"]
