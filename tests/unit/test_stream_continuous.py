@@ -127,3 +127,29 @@ def test_the_cut_events_count_the_same_vehicles(day):
         ref = _vehicles(weigh_event(load_record(p.source, sc), cal))
         got = _vehicles(weigh_event(ev.record, cal))
         assert len(ref) == len(got) and all(map(_same, ref, got)), p.source.name
+
+
+def test_bwim_weigh_continuous(day, tmp_path, capsys):
+    """``bwim weigh --continuous`` on the long file: one summary row per vehicle of each
+    event, named FILE#k, at the event's clock; the lane-1 truck (6 axles) weighed."""
+    import csv
+
+    from bwim.cli import main
+
+    site, cont = day["site"], day["cont"]
+    out = tmp_path / "out"
+    code = main(["weigh", str(site.scenario), str(cont.path), "--calibration-records",
+                 str(site.calibration[0].parent), "-o", str(out), "--continuous"])
+    assert code == 0, capsys.readouterr().err
+    rows = list(csv.DictReader(open(out / "summary.csv")))
+    names = sorted({r["record"] for r in rows})
+    assert names == [f"{cont.path.name}#{k}" for k in range(1, 5)]
+    assert sorted((out / "events").iterdir())[0].name == f"{cont.path.name}#1.h5"
+    weighed = [r for r in rows if r["gvw_kN"]]
+    assert [r["n_axles"] for r in weighed] == ["6"]
+    ev = day["events"][2]
+    assert weighed[0]["record"] == f"{cont.path.name}#3"
+    assert weighed[0]["time"].startswith(ev.clock.isoformat()[:16])
+    assert main(["weigh", str(site.scenario), str(cont.path), "--calibration-records",
+                 str(site.calibration[0].parent), "-o", str(out), "--continuous"]) == 2
+    assert "exists (and 2 more of its outputs)" in capsys.readouterr().err  # events/ too

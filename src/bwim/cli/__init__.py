@@ -233,6 +233,10 @@ COMMANDS: tuple[Command, ...] = (
              help="logger files only: weigh each detected vehicle by moving force "
              "identification with this (calibrated) bridge model instead of Moses; the "
              "gauges need x and y, and the first detector's position its x on the bridge"),
+         arg("--continuous", action="store_true",
+             help="logger files only: each file is a continuous recording, cut into events "
+             "by the trigger first (docs/streams.md); each event is written to "
+             "FOLDER/events/FILE#k.h5 and named FILE#k in the summary"),
          _FORCE)),
     Command(
         "accuracy", accuracy_command,
