@@ -1,0 +1,143 @@
+"""Cutting a continuous recording into events (issue 21 item 2): bwim.stream.
+
+A long logger file at 512 Hz with 20 columns (time, four axle detectors, twelve gauges, two
+statuses: the real site's layout plus one) and a crossing every 10 s (half-sine pulses on
+the gauges, noise on every channel) is cut:
+
+* **streamed**: :func:`bwim.stream.cut_file` (blocks of :data:`bwim.stream.ROWS` rows read
+  by ``read_logger``, the trigger across the blocks);
+* **whole**: ``read_logger`` on the whole file, then :func:`bwim.stream.cut_events` (the
+  baseline of this benchmark: the same parser, all in memory);
+* **trigger alone**: :func:`bwim.stream.cut_events` on the record already in memory.
+
+Throughput is the recording's duration over the wall time (× real time, one core, one
+BLAS thread), every ratio measured in the same run.  The peak of allocated memory
+(tracemalloc, numpy's arrays included) is measured in a child process for the streamed
+and the whole cut, beside the size of the whole record's arrays.  Both cuts must find the
+same events (checked).
+
+    python -m benchmarks.bench_stream [--minutes 60]
+"""
+
+from __future__ import annotations
+
+import argparse
+import subprocess
+import sys
+import tempfile
+import textwrap
+import time
+from pathlib import Path
+
+import numpy as np
+
+from benchmarks._timing import print_table
+from bwim.io.logger import LoggerFormat, read_logger
+from bwim.stream import cut_events, cut_file
+
+FS = 512.0
+GAUGES = tuple(f"s{k:02d}" for k in range(1, 13))
+DETECTORS = ("ad1", "ad2", "ad3", "ad4")
+COLUMNS = ("time", "ad1", "ad2", *GAUGES, "ad3", "ad4", "-", "-", "-")
+KINDS = {d: "axle_detector" for d in DETECTORS}
+FORMAT = LoggerFormat(columns=COLUMNS, kinds=KINDS, sampling_rate=FS)
+EVERY = 10.0  #: s between crossings
+WHOLE = {"max_bytes": 2**34, "max_samples": 10**9}
+
+
+def write_long(path: Path, minutes: float, seed: int = 0) -> int:
+    """The recording of the module docstring, written in blocks; its number of rows."""
+    rng = np.random.default_rng(seed)
+    n = round(minutes * 60 * FS)
+    weights = rng.uniform(0.2, 1.0, 12)
+    offsets = rng.uniform(-50, 50, 12)
+    with open(path, "w") as f:
+        for k0 in range(0, n, 100_000):
+            k = np.arange(k0, min(n, k0 + 100_000))
+            t = k / FS
+            phase = (t % EVERY) - EVERY / 2           # a 1.2 s pulse in every 10 s
+            pulse = np.where(np.abs(phase) < 0.6, np.cos(np.pi * phase / 1.2), 0.0)
+            gauges = 300.0 * pulse[:, None] * weights + offsets \
+                + rng.normal(0, 0.5, (k.size, 12))
+            det = rng.normal(0, 0.3, (k.size, 4))
+            status = np.ones((k.size, 3))
+            table = np.column_stack([t, det[:, :2], gauges, det[:, 2:], status])
+            np.savetxt(f, table, delimiter="\t",
+                       fmt=["%.9f"] + ["%.3f"] * 16 + ["%d"] * 3)
+    return n
+
+
+_CHILD = textwrap.dedent("""
+    import sys, tracemalloc
+    from benchmarks.bench_stream import FORMAT, WHOLE
+    from bwim.io.logger import read_logger
+    from bwim.stream import cut_events, cut_file
+    path, mode = sys.argv[1], sys.argv[2]
+    tracemalloc.start()
+    if mode == "streamed":
+        n = sum(1 for _ in cut_file(path, FORMAT))
+    else:
+        r = read_logger(path, FORMAT, **WHOLE)
+        n = len(cut_events(r).events)
+    print(tracemalloc.get_traced_memory()[1], n)
+""")
+
+
+def _peak(path: Path, mode: str) -> tuple[float, int]:
+    root = Path(__file__).resolve().parent.parent
+    out = subprocess.run([sys.executable, "-c", _CHILD, str(path), mode], cwd=root,
+                         capture_output=True, text=True, check=True).stdout.split()
+    return float(out[0]), int(out[1])
+
+
+def rows(minutes: float):
+    with tempfile.TemporaryDirectory() as tmp:
+        p = Path(tmp) / "long_2026-04-17-12-00-00-000.txt"
+        n = write_long(p, minutes)
+        seconds = n / FS
+
+        t0 = time.perf_counter()
+        streamed = list(cut_file(p, FORMAT))
+        t_stream = time.perf_counter() - t0
+
+        t0 = time.perf_counter()
+        record = read_logger(p, FORMAT, **WHOLE)
+        t_read = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        whole = cut_events(record).events
+        t_trigger = time.perf_counter() - t0
+        if [(e.start_index, e.stop_index) for e in whole] != \
+                [(e.start_index, e.stop_index) for e in streamed]:
+            raise RuntimeError("the streamed and the whole cut differ")
+        arrays = record.data.nbytes + record.time.nbytes
+        del record
+        peak_stream, _ = _peak(p, "streamed")
+        peak_whole, _ = _peak(p, "whole")
+        size = p.stat().st_size / 2**20
+        label = f"{minutes:g} min, {n} rows, {size:.0f} MiB"
+        t_whole = t_read + t_trigger
+        return [
+            [label, "streamed (cut_file)", f"{t_stream:.2f}", f"{seconds / t_stream:.0f}",
+             f"{peak_stream / 2**20:.0f}", f"{len(streamed)}"],
+            [label, "whole (read_logger + cut_events)", f"{t_whole:.2f}",
+             f"{seconds / t_whole:.0f}", f"{peak_whole / 2**20:.0f}", f"{len(whole)}"],
+            [label, "trigger alone (in memory)", f"{t_trigger:.2f}",
+             f"{seconds / t_trigger:.0f}", "-", f"{len(whole)}"],
+            [label, "streamed / whole", f"{t_stream / t_whole:.2f}", "-",
+             f"{peak_stream / peak_whole:.3f} (arrays {arrays / 2**20:.0f} MiB)", "-"],
+        ]
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--minutes", type=float, default=5.0,
+                    help="length of the recording (default 5; 60: the hour of issue 21)")
+    args = ap.parse_args(argv)
+    print_table("A continuous recording (20 columns, 512 Hz, a crossing every 10 s) cut into "
+                "events, one core",
+                ["file", "how", "wall s", "x real time", "peak MiB", "events"],
+                rows(args.minutes))
+
+
+if __name__ == "__main__":
+    main()
