@@ -140,6 +140,16 @@ def test_a_lasting_step_is_closed_at_max_duration_and_the_baseline_follows():
     assert evs[0].off == pytest.approx(15.0 + 12.0, abs=0.3)
 
 
+def test_a_stream_that_begins_and_ends_inside_crossings():
+    """The first pulse is under way at the first sample, the last one at the last: both
+    events are kept, flagged, their windows clipped to the stream."""
+    rec = _record(20.0, [(-0.3, 1.0, 100.0), (19.6, 1.0, 100.0)])
+    evs = cut_events(rec, TriggerSettings(baseline=5.0)).events
+    assert [e.flags for e in evs] == [("open_at_start",), ("open_at_end",)]
+    assert evs[0].start_index == 0 and evs[0].on == 0.0
+    assert evs[1].stop_index == rec.time.size and evs[1].off == pytest.approx(20.0)
+
+
 def test_the_clock_of_each_event():
     clock = datetime(2026, 4, 17, 12, 0, 0)
     rec = _record(20.0, [(9.0, 1.0, 100.0)], clock=clock)

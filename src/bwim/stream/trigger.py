@@ -152,9 +152,13 @@ class _Trigger:
         else:
             self._check_next(record)
         self.last_time = float(record.time[-1])
-        self.time = np.concatenate([self.time, record.time])
-        self.data = np.concatenate([self.data, record.data])
-        self.signal = np.concatenate([self.signal, record.data[:, self.idx].sum(axis=1)])
+        signal = record.data[:, self.idx].sum(axis=1)
+        if self.time.size:
+            self.time = np.concatenate([self.time, record.time])
+            self.data = np.concatenate([self.data, record.data])
+            self.signal = np.concatenate([self.signal, signal])
+        else:                       # nothing held: the record's own arrays (never written)
+            self.time, self.data, self.signal = record.time, record.data, signal
         self.n += record.time.size
         if not self.ready:
             if self.n < self.n_frames * self.frame:
