@@ -209,3 +209,7 @@ def test_unknown_channel_and_no_gauge():
         cut_events(rec, TriggerSettings(channels=["x"]))
     with pytest.raises(InputError, match="no strain or deflection channel"):
         cut_events(rec.channels(["ad"]))
+    warm = Record(time=rec.time, data=rec.data, sensors=[
+        *rec.sensors[:3], Sensor(name="ad", kind="temperature")])
+    with pytest.raises(InputError, match="'ad' is a temperature channel"):
+        cut_events(warm, TriggerSettings(channels=["g0", "ad"]))

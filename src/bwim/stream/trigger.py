@@ -45,6 +45,7 @@ import numpy as np
 
 from bwim.errors import InputError
 from bwim.records import Record
+from bwim.sensors import SensorKind
 from bwim.stream.events import EventCut, StreamEvent
 from bwim.stream.settings import TriggerSettings
 
@@ -111,6 +112,11 @@ class _Trigger:
                 raise InputError(f"TriggerSettings.channels: no channel {missing[0]!r} in the "
                                  f"record; channels: {names}")
             idx = [names.index(c) for c in s.channels]
+            gappy = [c for c, j in zip(s.channels, idx, strict=True)
+                     if record.sensors[j].kind is SensorKind.TEMPERATURE]
+            if gappy:
+                raise InputError(f"TriggerSettings.channels: {gappy[0]!r} is a temperature "
+                                 "channel (it may have gaps); sum readings of the bridge")
         self.idx = np.array(idx)
         self.template = record
         self.fs = record.sampling_rate
