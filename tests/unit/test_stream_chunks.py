@@ -111,6 +111,13 @@ def test_a_dropped_sample_at_a_block_edge_is_refused(tmp_path):
         list(read_chunks(path, FMT, rows=1000))
 
 
+def test_a_file_that_is_not_utf8(tmp_path):
+    path = tmp_path / NAME
+    path.write_bytes(b"0.0\t1\t2\t1\t0\n0.001953125\t\xff\t2\t1\t0\n")
+    with pytest.raises(InputError, match="not UTF-8 text"):
+        list(read_chunks(path, FMT))
+
+
 def test_bad_arguments(tmp_path):
     with pytest.raises(InputError, match="no such file"):
         list(read_chunks(tmp_path / "none.txt", FMT))

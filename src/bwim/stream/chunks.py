@@ -78,6 +78,9 @@ class _Blocks:
                 yield from self._blocks(f)
         except UnicodeDecodeError:
             raise InputError(f"{self.path}: not UTF-8 text") from None
+        except OSError as exc:
+            why = (exc.strerror or str(exc)).lower()
+            raise InputError(f"{self.path}: cannot read: {why}") from None
 
     def _blocks(self, f) -> Iterator[tuple[int, int]]:
         line_no = 0                 # raw lines read so far
