@@ -119,8 +119,8 @@ def test_the_cut_events_weigh_the_same_trucks(day):
 
 @pytest.mark.xfail(strict=True, reason="detection finds a phantom 1-axle lane-1 vehicle in "
                    "the first event's longer quiet margin (bwim.detect / bwim.site.lanes, "
-                   "outside bwim.stream): issue 21 item 2 is not met until detection is "
-                   "independent of the quiet time around an event")
+                   "outside bwim.stream): issue 21 item 2 is not met until detection does "
+                   "not depend on the quiet time around an event (docs/streams.md, Limits)")
 def test_the_cut_events_count_the_same_vehicles(day):
     sc, cal = day["sc"], day["cal"]
     for ev, p in zip(day["events"], day["cont"].placements, strict=True):
