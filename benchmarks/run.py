@@ -21,6 +21,7 @@ from benchmarks import (  # noqa: E402
     bench_multirun,
     bench_optimize,
     bench_site,
+    bench_stream,
     bench_testday,
     bench_vbi,
     bench_wim,
@@ -42,6 +43,7 @@ def main() -> None:
     bench_site.main()
     bench_mismatch.main()
     bench_detect_site.main([])
+    bench_stream.main([])
 
 
 if __name__ == "__main__":

@@ -238,6 +238,10 @@ COMMANDS: tuple[Command, ...] = (
              "identification with this (calibrated) bridge model instead of Moses; the "
              "gauges need x and y, and the first detector's position its x on the bridge"),
          _PARQUET,
+         arg("--continuous", action="store_true",
+             help="logger files only: each file is a continuous recording, cut into events "
+             "by the trigger first (docs/streams.md); each event is written to "
+             "FOLDER/events/FILE#k.h5 and named FILE#k in the summary"),
          _FORCE)),
     Command(
         "accuracy", accuracy_command,

@@ -244,6 +244,8 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path, batch) -> int:
         raise InputError("weighing logger files needs --calibration-records (runs of the "
                          "calibration truck)")
     paths = record_paths(args.records, any_suffix=True)
+    items = ([Item(name=display_name(p), source=p) for p in paths] if not args.continuous
+             else _continuous_items(paths, scenario, folder / EVENTS, resume=args.resume))
     bridge = options = None
     if args.bridge:
         from bwim.scenario import load_bridge
@@ -263,11 +265,11 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path, batch) -> int:
 
     batch.finalize = finalize
     executor = executor_for(args.jobs, args.scheduler)
-    report = _run_batch(batch, [Item(name=display_name(p), source=p) for p in paths],
+    report = _run_batch(batch, items,
                         lambda todo: weigh_events(todo, site, read=_read(scenario),
                                                   bridge=bridge, identify_options=options,
                                                   executor=executor, keep=False), "weighing")
-    print(f"{len(paths)} event(s){_done_before(report)} in {report.elapsed:.1f} s: "
+    print(f"{len(items)} event(s){_done_before(report)} in {report.elapsed:.1f} s: "
           f"{report.count('weighed')} vehicle(s) weighed, {report.count('refused')} not "
           f"weighed (flagged), {report.count('failed')} record(s) failed")
     _print_drift(site, drift_fits[0] if drift_fits else None)
@@ -276,6 +278,36 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path, batch) -> int:
                    "gauges combined):")
     print(f"summary: {batch.summary}")
     return _report_failures(report)
+
+
+#: Subfolder of a ``weigh --continuous`` output with the events cut from the long files.
+EVENTS = "events"
+
+
+def _continuous_items(paths: Sequence[Path], scenario, events: Path, *, resume: bool) -> list:
+    """Each long logger file cut into events (:func:`bwim.stream.cut_file`, default
+    trigger), each event written to ``events/FILE#k.h5`` (k from 1) and named ``FILE#k``;
+    with ``resume`` an event file already written is kept as it is."""
+    from bwim.batch import Item
+    from bwim.io import write_record
+    from bwim.scenario import build_logger_format, build_sensors
+    from bwim.stream import cut_file
+
+    fmt, sensors = build_logger_format(scenario), build_sensors(scenario) or None
+    events.mkdir(parents=True, exist_ok=True)
+    items = []
+    for p in paths:
+        n = 0
+        for n, ev in enumerate(cut_file(p, fmt, sensors=sensors), start=1):
+            name = f"{display_name(p)}#{n}"
+            target = events / f"{name}.h5"
+            if not (resume and target.exists()):
+                write_record(ev.record, target)
+            items.append(Item(name=name, source=target))
+        print(f"{display_name(p)}: {n} event(s) cut")
+    if not items:
+        raise InputError("no event found in the continuous recording(s)")
+    return items
 
 
 def weigh_command(args: argparse.Namespace) -> int:
@@ -290,9 +322,13 @@ def weigh_command(args: argparse.Namespace) -> int:
     _unique_names(paths)
     cal = (record_paths(args.calibration_records, any_suffix=site)
            if args.calibration_records else [])
+    if args.continuous and not site:
+        raise InputError("--continuous cuts logger files: the scenario needs a [logger] "
+                         "section")
     folder = out_folder(args.output)  # created once the inputs are known to exist
     if site:
-        outputs = [folder / "calibration_runs.csv", folder / "influence_lines.h5"]
+        outputs = [folder / "calibration_runs.csv", folder / "influence_lines.h5",
+                   *([folder / EVENTS] if args.continuous and not args.resume else [])]
     else:  # each record's weights, and the line unless it is given
         outputs = [*(folder / f"{stem}_static.h5" for stem in unique_stems(paths)),
                    *([] if args.influence else [folder / "influence_line.h5"])]

@@ -13,6 +13,7 @@ detectors: :mod:`bwim.synthetic.detector`; drift: :mod:`bwim.synthetic.thermal`;
 :mod:`bwim.synthetic.fleet`).
 """
 
+from bwim.synthetic.continuous import ContinuousRecording, Placement, make_continuous
 from bwim.synthetic.detector import DetectorResponse
 from bwim.synthetic.fleet import FLEET_KINDS, TrafficVehicle, traffic_vehicle
 from bwim.synthetic.layout import SHORT_SPAN_4_LANE, AxleDetector, Gauge, Lane, SiteLayout
@@ -37,12 +38,14 @@ __all__ = [
     "SITE_NAMES",
     "TRUCK_KINDS",
     "AxleDetector",
+    "ContinuousRecording",
     "DeckTemperature",
     "DetectorResponse",
     "Drift",
     "Event",
     "Gauge",
     "Lane",
+    "Placement",
     "SiteDays",
     "SiteEvent",
     "SiteLayout",
@@ -53,6 +56,7 @@ __all__ = [
     "VehicleTruth",
     "basic_test_day",
     "calibration_truck",
+    "make_continuous",
     "make_site_days",
     "make_test_day",
     "random_truck",
