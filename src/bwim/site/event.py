@@ -59,6 +59,7 @@ from bwim.site.calibrate import (
     record_temperature,
     temperature_channel,
 )
+from bwim.site.health import check_gauges
 from bwim.site.lanes import EventDetection, LaneVehicle, detect_lanes
 from bwim.summary import SummaryRow
 from bwim.wim import Weighing, weigh
@@ -342,10 +343,14 @@ def _vehicle(record: Record, ev: EventDetection, k: int, calibration: SiteCalibr
         return refused(f"drift correction failed: {_why(exc)}")
     if bridge is not None and lv.lane == setup.calibration_lane:
         return _weigh_mfi(record, lv, flags, bridge, options, factor, method, drift_flags)
+    health = check_gauges(record, v.passage, calibration.lines, combine=setup.combine,
+                          compare=FLAG_MULTIPLE_PRESENCE not in flags)
+    if not health.usable:
+        return refused(health.reason, flags=(*flags, *health.flags))
     try:
-        w = weigh(record, v.passage, calibration.lines, combine=setup.combine,
-                  scale_correction=method == "trend", scale=None if method == "trend"
-                  else factor)
+        w = health.mark(weigh(record, v.passage, health.lines, combine=setup.combine,
+                              scale_correction=method == "trend",
+                              scale=None if method == "trend" else factor))
     except _EVENT_ERRORS as exc:
         return refused(f"weighing failed: {_why(exc)}")
     flags = tuple(dict.fromkeys([*flags, *w.flags, *drift_flags]))
