@@ -54,8 +54,9 @@ Contract
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from types import MappingProxyType
 
 import numpy as np
 
@@ -130,12 +131,17 @@ class GaugeHealth:
         none is faulty); None when refused.
     reason : str
         Why the vehicle cannot be weighed ("" when it can).
+    ratios : mapping of str to float
+        Each healthy channel's gain ratio over what the others predict, ``a_g / â_g``,
+        in the last comparison (empty when none was made: another vehicle on the span,
+        too few channels, a failed weighing).
     """
 
     faults: tuple[GaugeFault, ...]
     healthy: tuple[str, ...]
     lines: MultiRunCalibration | None
     reason: str = ""
+    ratios: Mapping[str, float] = field(default_factory=dict)
 
     @property
     def usable(self) -> bool:
@@ -184,13 +190,15 @@ def check_gauges(record: Record, passage: Passage, lines: MultiRunCalibration, *
     readings = read_channels(record, lines.channels)
     faults = list(_flat(readings, lines))
     bad = {f.gauge for f in faults}
+    ratios: dict[str, float] = {}
     while compare and len(names) - len(bad) >= MIN_COMPARED and 2 * len(bad) < len(names):
-        fault = _worst_gain(record, passage, lines, [n for n in names if n not in bad],
-                            combine)
+        fault, ratios = _worst_gain(record, passage, lines,
+                                    [n for n in names if n not in bad], combine)
         if fault is None:
             break
         faults.append(fault)
         bad.add(fault.gauge)
+        ratios = {}
     healthy = tuple(n for n in names if n not in bad)
     if 2 * len(healthy) <= len(names) or len(healthy) < 2:
         shown = ", ".join(f"{f.gauge} ({f.kind})" for f in faults)
@@ -198,7 +206,8 @@ def check_gauges(record: Record, passage: Passage, lines: MultiRunCalibration, *
             faults=tuple(faults), healthy=healthy, lines=None,
             reason=f"too few healthy gauges: {len(healthy)} of {len(names)}, faulty: {shown}")
     return GaugeHealth(faults=tuple(faults), healthy=healthy,
-                       lines=restrict_lines(lines, healthy))
+                       lines=restrict_lines(lines, healthy),
+                       ratios=MappingProxyType(ratios))
 
 
 def _flat(readings: np.ndarray, lines: MultiRunCalibration) -> list[GaugeFault]:
@@ -228,31 +237,32 @@ def _positions(lines: MultiRunCalibration) -> np.ndarray:
 
 
 def _worst_gain(record: Record, passage: Passage, lines: MultiRunCalibration,
-                names: list[str], combine: str) -> GaugeFault | None:
+                names: list[str], combine: str) -> tuple[GaugeFault | None, dict[str, float]]:
     """Step 2: the most significant gain fault among ``names`` (None when every one
-    passes or the weighing fails)."""
+    passes or the weighing fails) and every channel's ratio (empty when it fails)."""
     sub = restrict_lines(lines, names)
     try:
         w = weigh(record, passage, sub, combine=combine, scale_correction=False)
     except _WEIGH_ERRORS:
-        return None
+        return None, {}
     if not np.isfinite(w.gvw) or w.gvw <= 0:
-        return None
+        return None, {}
     m, f = w.measured, w.fitted
     power = (f * f).sum(axis=0)
     if m.shape[0] == 0 or np.any(power <= 0):
-        return None
+        return None, {}
     a = (m * f).sum(axis=0) / power
     sd = np.sqrt(np.clip(np.diag(sub.error_covariance(w.gvw)), np.finfo(float).tiny, None))
     snr = np.sqrt(power / m.shape[0]) / sd
     y = _positions(sub)
-    worst, score = None, SIGNIFICANCE
+    worst, score, ratios = None, SIGNIFICANCE, {}
     for g in range(len(names)):
         others = np.arange(len(names)) != g
         expected = _line_at(y[others], a[others], snr[others] ** 2, y[g])
         if not expected > 0:
             continue
         ratio = float(a[g] / expected)
+        ratios[names[g]] = ratio
         off = ratio <= 0 or abs(np.log(ratio)) > np.log(GAIN_TOLERANCE)
         significance = abs(a[g] - expected) * snr[g]
         if off and significance > score:
@@ -261,7 +271,7 @@ def _worst_gain(record: Record, passage: Passage, lines: MultiRunCalibration,
                 gauge=names[g], kind=kind, ratio=ratio,
                 detail=f"gain {ratio:.2f} × what the other gauges predict "
                        f"({significance:.1f} residual deviations)"), significance
-    return worst
+    return worst, ratios
 
 
 def _line_at(x: np.ndarray, y: np.ndarray, weight: np.ndarray, at: float) -> float:
