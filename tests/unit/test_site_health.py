@@ -13,12 +13,14 @@ expected outcome is the issue's: the fault named, and the weight the clean event
 
 from __future__ import annotations
 
+import csv
 import dataclasses
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from bwim.cli import main
 from bwim.errors import InputError
 from bwim.report.flags import explain
 from bwim.scenario import build_site_setup, load_record, load_scenario
@@ -222,3 +224,22 @@ def test_the_flag_is_explained_with_its_gauge():
     meaning = explain("gauge_fault:s02")
     assert meaning.group == "soft" and meaning.flag == "gauge_fault:s02"
     assert "left out" in meaning.meaning
+
+
+def test_bwim_weigh_writes_the_flag(site, truck, tmp_path):
+    """``bwim weigh`` on a folder of the one event with s02 reversed: its row is weighed
+    with quality ``warning`` and the flag ``gauge_fault:s02`` in summary.csv."""
+    day, scenario, _ = site
+    path, clean = truck
+    folder = tmp_path / "traffic"
+    folder.mkdir()
+    _corrupted(path, folder / path.name, scenario, ["s02"], "reversed")
+    out = tmp_path / "out"
+    assert main(["weigh", str(day.scenario), str(folder), "--calibration-records",
+                 str(day.calibration[0].parent), "-o", str(out)]) == 0
+    with (out / "summary.csv").open(newline="", encoding="utf-8") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == 1 and rows[0]["status"] == "weighed", rows
+    assert "gauge_fault:s02" in rows[0]["flags"].split(";")
+    assert rows[0]["quality"] == "warning"
+    assert float(rows[0]["gvw_kN"]) * 1e3 == pytest.approx(clean.gvw, rel=0.04)
