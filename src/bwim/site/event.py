@@ -10,7 +10,11 @@ Contract
   - a vehicle that shares the span with another vehicle travelling its way (side by side
     or following) is refused (``multiple_presence``): one record cannot tell their weights
     apart with lines of one vehicle;
-  - any other vehicle is weighed (:func:`bwim.wim.weigh`: gauges combined by generalised
+  - any other vehicle's gauges are judged first (:func:`bwim.site.health.check_gauges`;
+    not for a vehicle weighed by MFI, below): a dead, stuck, reversed or gain-changed
+    gauge is left out and named (``gauge_fault:NAME``, quality ``warning``); too few
+    healthy gauges refuse it;
+  - it is then weighed (:func:`bwim.wim.weigh`: gauges combined by generalised
     least squares, axle groups as groups); one with a vehicle of the other direction on
     the span at the same time is weighed and flagged ``multiple_presence`` (the fit's
     residual check still refuses a weighing the other vehicle spoils);
