@@ -77,9 +77,12 @@ FLAG_GAUGE_FAULT = "gauge_fault"
 #: at rest is flat (dead or stuck).
 FLAT_NOISE = 0.1
 #: A channel's gain ratio against what the others predict may differ from 1 by up to
-#: this factor (either way) before it is a gain fault.
+#: this factor (either way) before it is a gain fault (the clean vehicles' ratios against
+#: it: tests/unit/test_site_health.py).
 GAIN_TOLERANCE = 1.3
-#: ... and the difference must add this many expected residual deviations.
+#: ... and the difference must add this many expected residual deviations (a clean
+#: gauge's ratio is far more precise than one sample's deviation: the ratio averages
+#: the whole crossing; this only keeps a gauge with no signal out of the test).
 SIGNIFICANCE = 1.0
 #: Channels needed to compare one channel's ratio with the others' (a line and a check).
 MIN_COMPARED = 4
