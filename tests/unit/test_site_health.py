@@ -204,6 +204,27 @@ def test_every_flat_gauge_is_found(site, truck, tmp_path, fault):
         assert [(f.gauge, f.kind) for f in health.faults] == [(gauge, "flat")]
 
 
+def test_a_logger_coarser_than_its_noise_is_not_flat(site, truck):
+    """Every gauge of the clean event rounded to steps of 3 × its calibration noise (a
+    logger whose resolution is coarser than the gauges' noise repeats most samples: more
+    than half of the steps are 0, so a median-based noise would be 0) is no fault."""
+    _, scenario, calibration = site
+    path, clean = truck
+    record = load_record(path, scenario)
+    columns = [s.name for s in record.sensors]
+    data = record.data.copy()
+    zero_steps = []
+    for c, noise in zip(calibration.lines.channels, calibration.lines.channel_noise,
+                        strict=True):
+        k = columns.index(c.name)
+        data[:, k] = np.round(data[:, k] / (3.0 * noise)) * (3.0 * noise)
+        zero_steps.append(np.mean(np.diff(data[:, k]) == 0.0))
+    assert min(zero_steps) > 0.5
+    health = check_gauges(dataclasses.replace(record, data=data), clean.vehicle.passage,
+                          calibration.lines, combine=calibration.setup.combine)
+    assert health.faults == ()
+
+
 def test_too_few_healthy_gauges_refuse_the_vehicle(site, truck, tmp_path):
     """Half the gauges dead (6 of 12): refused with the reason, the faults named; five
     dead: weighed with the other seven."""

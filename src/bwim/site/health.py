@@ -7,11 +7,13 @@ Contract
   (:class:`~bwim.wim.multirun.MultiRunCalibration`) in one vehicle's record, before it
   is weighed, in two steps:
 
-  1. **Flat** (a dead gauge, or one stuck at a value): the channel's noise in the record,
-     ``robust_sigma(diff(reading)) / √2`` (:func:`bwim.detect.signals.robust_sigma`), is
-     below :data:`FLAT_NOISE` × its noise at rest in the calibration runs
-     (``channel_noise``).  A working gauge and its logger always show their noise; a
-     constant channel has none.  No weighing is needed for this step.
+  1. **Flat** (a dead gauge, or one stuck at a value): the channel's sample-to-sample
+     variation in the record, ``std(diff(reading)) / √2``, is below :data:`FLAT_NOISE` ×
+     its noise at rest in the calibration runs (``channel_noise``).  A working gauge and
+     its logger always show their noise; a constant channel has none.  (The plain
+     deviation, not a robust one: a logger whose noise is below its resolution repeats
+     most samples, and a median of the steps would call it flat.)  No weighing is
+     needed for this step.
   2. **Gain** (reversed polarity, a changed gain): the vehicle is weighed with the
      remaining channels (:func:`bwim.wim.weigh`, the readings undivided by any drift
      factor: a factor common to all gauges does not change their ratios), and each
@@ -60,7 +62,6 @@ from types import MappingProxyType
 
 import numpy as np
 
-from bwim.detect.signals import robust_sigma
 from bwim.errors import BwimError, InputError
 from bwim.plausibility import ordered_flags, quality_of
 from bwim.records import Passage, Record
@@ -221,7 +222,7 @@ def _flat(readings: np.ndarray, lines: MultiRunCalibration) -> list[GaugeFault]:
         ref = float(lines.channel_noise[k])
         if ref <= 0 or y.size < 3:
             continue
-        noise = robust_sigma(np.diff(y)) / np.sqrt(2.0)
+        noise = float(np.std(np.diff(y))) / np.sqrt(2.0)
         if noise < FLAT_NOISE * ref:
             out.append(GaugeFault(
                 gauge=c.name, kind="flat", ratio=float("nan"),
