@@ -204,6 +204,28 @@ def test_every_flat_gauge_is_found(site, truck, tmp_path, fault):
         assert [(f.gauge, f.kind) for f in health.faults] == [(gauge, "flat")]
 
 
+@pytest.mark.parametrize("gauge", ["s02", "s05"])
+def test_a_gauge_that_reads_only_noise_is_silent(site, truck, gauge):
+    """A broken gauge whose logger channel still shows its noise (its offset plus white
+    noise of its calibration noise, seed 1): not flat, but no response to the load:
+    found as ``silent`` and left out, within 4 % of the clean weight."""
+    _, scenario, calibration = site
+    path, clean = truck
+    record = load_record(path, scenario)
+    k = [s.name for s in record.sensors].index(gauge)
+    noise = calibration.lines.channel_noise[[c.name for c in calibration.lines.channels]
+                                            .index(gauge)]
+    data = record.data.copy()
+    data[:, k] = data[0, k] + np.random.default_rng(1).normal(0.0, noise, data.shape[0])
+    record = dataclasses.replace(record, data=data)
+    health = check_gauges(record, clean.vehicle.passage, calibration.lines,
+                          combine=calibration.setup.combine)
+    assert [(f.gauge, f.kind) for f in health.faults] == [(gauge, "silent")]
+    v = weigh_event(record, calibration).vehicles[0]
+    assert v.weighed and _gauge_faults(v.flags) == [f"gauge_fault:{gauge}"]
+    assert v.gvw == pytest.approx(clean.gvw, rel=0.04)
+
+
 def test_a_logger_coarser_than_its_noise_is_not_flat(site, truck):
     """Every gauge of the clean event rounded to steps of 3 × its calibration noise (a
     logger whose resolution is coarser than the gauges' noise repeats most samples: more

@@ -30,7 +30,7 @@ Contract
      this weight, :meth:`~bwim.wim.multirun.MultiRunCalibration.error_covariance`), a
      channel is faulty when
 
-     - its ratio is off: ``a_g / â_g < 0`` (reversed, or no response) or
+     - its ratio is off: ``a_g / â_g ≤ 0`` (reversed, or no response) or
        ``|ln(a_g / â_g)| > ln(`` :data:`GAIN_TOLERANCE` ``)``, **and**
      - the difference is significant: ``|a_g − â_g| snr_g >`` :data:`SIGNIFICANCE`
        (the residual the gain error adds, in units of the residual deviation expected).
@@ -70,7 +70,7 @@ from bwim.wim.influence_line import read_channels
 from bwim.wim.multirun import MultiRunCalibration
 
 __all__ = ["FLAG_GAUGE_FAULT", "FLAT_NOISE", "GAIN_TOLERANCE", "MIN_COMPARED", "SIGNIFICANCE",
-           "GaugeFault", "GaugeHealth", "check_gauges", "restrict_lines"]
+           "SILENT_CORRELATION", "GaugeFault", "GaugeHealth", "check_gauges", "restrict_lines"]
 
 #: The flag of a faulty gauge, written ``gauge_fault:NAME``.
 FLAG_GAUGE_FAULT = "gauge_fault"
@@ -85,6 +85,10 @@ GAIN_TOLERANCE = 1.3
 #: gauge's ratio is far more precise than one sample's deviation: the ratio averages
 #: the whole crossing; this only keeps a gauge with no signal out of the test).
 SIGNIFICANCE = 1.0
+#: A faulty channel whose reading's correlation with its fitted static reading (over the
+#: samples with an axle on the support) is below this, either sign, does not respond
+#: to the load at all (a broken gauge whose logger channel still shows its noise).
+SILENT_CORRELATION = 0.5
 #: Channels needed to compare one channel's ratio with the others' (a line and a check).
 MIN_COMPARED = 4
 
@@ -101,8 +105,10 @@ class GaugeFault:
     gauge : str
         The channel's name.
     kind : str
-        ``"flat"`` (dead or stuck), ``"reversed"`` (its ratio against the others' is
-        negative) or ``"gain"`` (its ratio is off by more than :data:`GAIN_TOLERANCE`).
+        ``"flat"`` (dead or stuck: no noise), ``"silent"`` (noise but no response to the
+        load: uncorrelated with its fit, :data:`SILENT_CORRELATION`),
+        ``"reversed"`` (a negative ratio) or ``"gain"`` (a ratio off by more than
+        :data:`GAIN_TOLERANCE`).
     ratio : float
         Its gain ratio over what the other channels predict, ``a_g / â_g`` (nan for a
         flat channel).
@@ -256,6 +262,10 @@ def _worst_gain(record: Record, passage: Passage, lines: MultiRunCalibration,
     if m.shape[0] == 0 or np.any(power <= 0):
         return None, {}
     a = (m * f).sum(axis=0) / power
+    # the shape alone: a channel that does not respond is uncorrelated with its fit
+    mc, fc = m - m.mean(axis=0), f - f.mean(axis=0)
+    corr = (mc * fc).sum(axis=0) / np.sqrt(np.maximum((mc * mc).sum(axis=0)
+                                                      * (fc * fc).sum(axis=0), 1e-300))
     sd = np.sqrt(np.clip(np.diag(sub.error_covariance(w.gvw)), np.finfo(float).tiny, None))
     snr = np.sqrt(power / m.shape[0]) / sd
     y = _positions(sub)
@@ -270,7 +280,8 @@ def _worst_gain(record: Record, passage: Passage, lines: MultiRunCalibration,
         off = ratio <= 0 or abs(np.log(ratio)) > np.log(GAIN_TOLERANCE)
         significance = abs(a[g] - expected) * snr[g]
         if off and significance > score:
-            kind = "reversed" if ratio < 0 else "gain"
+            kind = ("silent" if abs(corr[g]) < SILENT_CORRELATION
+                    else "reversed" if ratio < 0 else "gain")
             worst, score = GaugeFault(
                 gauge=names[g], kind=kind, ratio=ratio,
                 detail=f"gain {ratio:.2f} × what the other gauges predict "
