@@ -248,6 +248,20 @@ def test_a_logger_coarser_than_its_noise_is_not_flat(site, truck):
     assert health.faults == ()
 
 
+def test_a_record_without_a_gauge_is_refused_not_raised(site, truck):
+    """An event without the column of s05 (a logger that lost a channel): weigh_event
+    still returns (its contract: it never raises on a record it can read), not weighed,
+    the missing channel named; check_gauges alone names it in an InputError."""
+    _, scenario, calibration = site
+    path, clean = truck
+    record = load_record(path, scenario)
+    record = record.channels([s.name for s in record.sensors if s.name != "s05"])
+    ev = weigh_event(record, calibration)
+    assert not ev.weighed and "s05" in ev.reason, ev.reason
+    with pytest.raises(InputError, match="s05"):
+        check_gauges(record, clean.vehicle.passage, calibration.lines)
+
+
 def test_too_few_healthy_gauges_refuse_the_vehicle(site, truck, tmp_path):
     """Half the gauges dead (6 of 12): refused with the reason, the faults named; five
     dead: weighed with the other seven."""

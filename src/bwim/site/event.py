@@ -347,11 +347,11 @@ def _vehicle(record: Record, ev: EventDetection, k: int, calibration: SiteCalibr
         return refused(f"drift correction failed: {_why(exc)}")
     if bridge is not None and lv.lane == setup.calibration_lane:
         return _weigh_mfi(record, lv, flags, bridge, options, factor, method, drift_flags)
-    health = check_gauges(record, v.passage, calibration.lines, combine=setup.combine,
-                          compare=FLAG_MULTIPLE_PRESENCE not in flags)
-    if not health.usable:
-        return refused(health.reason, flags=(*flags, *health.flags))
     try:
+        health = check_gauges(record, v.passage, calibration.lines, combine=setup.combine,
+                              compare=FLAG_MULTIPLE_PRESENCE not in flags)
+        if not health.usable:
+            return refused(health.reason, flags=(*flags, *health.flags))
         w = health.mark(weigh(record, v.passage, health.lines, combine=setup.combine,
                               scale_correction=method == "trend",
                               scale=None if method == "trend" else factor))
