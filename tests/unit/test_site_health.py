@@ -83,18 +83,41 @@ def _gauge_faults(flags) -> list[str]:
 
 def test_no_false_alarm_on_the_clean_events(site, truck):
     """Every clean event of the fixture (4 traffic events, 6 calibration runs; 14
-    vehicles, 4 weighed; the runs are in-sample; 3 runs and 1 event have a vehicle in
-    the other direction on the span: only the flat check applies to those) has no
-    gauge_fault flag and no vehicle refused for its gauges."""
+    vehicles, 4 weighed; the runs are in-sample) has no gauge_fault flag and no vehicle
+    refused for its gauges.  Three runs and one event have a vehicle of the other
+    direction on the span: two of them are refused because a gauge disagrees (it feels
+    the other vehicle), and the weighing with every gauge refuses both as well
+    (residual_high): no weight is lost to the check."""
     day, scenario, calibration = site
-    n_weighed = 0
+    n_weighed, n_other = 0, 0
     for path in (*day.traffic, *day.calibration):
-        ev = weigh_event(load_record(path, scenario), calibration)
-        for v in ev.vehicles:
+        record = load_record(path, scenario)
+        for v in weigh_event(record, calibration).vehicles:
             assert _gauge_faults(v.flags) == [], (path.name, v.flags)
             assert "healthy gauges" not in v.reason, (path.name, v.reason)
             n_weighed += v.weighed
-    assert n_weighed >= 4
+            if v.reason.startswith("another vehicle on the span and gauge"):
+                n_other += 1
+                w = weigh(record, v.vehicle.passage, calibration.lines,
+                          combine=calibration.setup.combine)
+                assert w.quality == "reject", w.flags
+    assert n_weighed >= 4 and n_other == 2
+
+
+def test_with_another_vehicle_a_disagreeing_gauge_refuses(site, truck, tmp_path):
+    """``alone=False`` (another vehicle on the span): the clean truck passes; with s02
+    reversed it is refused, the gauge named in the reason but not flagged as faulty
+    (its strain cannot be told from the other vehicle's)."""
+    _, scenario, calibration = site
+    path, clean = truck
+    record = load_record(path, scenario)
+    assert check_gauges(record, clean.vehicle.passage, calibration.lines,
+                        alone=False).usable
+    bad = load_record(_corrupted(path, tmp_path / path.name, scenario, ["s02"],
+                                 "reversed"), scenario)
+    health = check_gauges(bad, clean.vehicle.passage, calibration.lines, alone=False)
+    assert not health.usable and health.flags == ()
+    assert health.reason.startswith("another vehicle on the span and gauge s02 disagrees")
 
 
 def test_clean_ratios_leave_room_below_the_tolerance(site):

@@ -349,7 +349,7 @@ def _vehicle(record: Record, ev: EventDetection, k: int, calibration: SiteCalibr
         return _weigh_mfi(record, lv, flags, bridge, options, factor, method, drift_flags)
     try:
         health = check_gauges(record, v.passage, calibration.lines, combine=setup.combine,
-                              compare=FLAG_MULTIPLE_PRESENCE not in flags)
+                              alone=FLAG_MULTIPLE_PRESENCE not in flags)
         if not health.usable:
             return refused(health.reason, flags=(*flags, *health.flags))
         w = health.mark(weigh(record, v.passage, health.lines, combine=setup.combine,

@@ -43,10 +43,11 @@ Contract
 * **Too few healthy channels**: when the healthy channels are not more than half of the
   calibration's (the comparison with "the others" needs a healthy majority), or fewer
   than two, the vehicle is refused with that reason (:attr:`GaugeHealth.reason`).
-* **Another vehicle on the span** (``compare=False``; :func:`bwim.site.weigh_event` for a
+* **Another vehicle on the span** (``alone=False``; :func:`bwim.site.weigh_event` for a
   vehicle flagged ``multiple_presence``): the other vehicle's strain is no part of this
-  vehicle's fit, so the ratios say nothing about the gauges: only the flat check is
-  made (the weighing's residual check still refuses a spoiled fit).
+  vehicle's fit, so a gauge whose ratio is off may be faulty or may feel the other
+  vehicle: the vehicle is refused with that reason, and no gauge is named for it
+  (a flat gauge still is: it has no noise whatever is on the deck).
 * With fewer than :data:`MIN_COMPARED` channels only the flat check is made; a weighing
   that fails here (a singular fit) leaves the gain check out, and the caller's own
   weighing decides.
@@ -192,20 +193,28 @@ def restrict_lines(lines: MultiRunCalibration, names: Sequence[str]) -> MultiRun
 
 
 def check_gauges(record: Record, passage: Passage, lines: MultiRunCalibration, *,
-                 combine: str = "auto", compare: bool = True) -> GaugeHealth:
+                 combine: str = "auto", alone: bool = True) -> GaugeHealth:
     """The health of every channel of ``lines`` for the vehicle of ``passage`` in
     ``record`` (see the module docstring); ``combine`` as :func:`bwim.wim.weigh`'s;
-    ``compare=False`` makes the flat check only (another vehicle on the span)."""
+    ``alone=False``: another vehicle is on the span (a gauge that disagrees refuses the
+    vehicle instead of being left out)."""
     names = [c.name for c in lines.channels]
     readings = read_channels(record, lines.channels)
     faults = list(_flat(readings, lines))
     bad = {f.gauge for f in faults}
     ratios: dict[str, float] = {}
-    while compare and len(names) - len(bad) >= MIN_COMPARED and 2 * len(bad) < len(names):
+    while len(names) - len(bad) >= MIN_COMPARED and 2 * len(bad) < len(names):
         fault, ratios = _worst_gain(record, passage, lines,
                                     [n for n in names if n not in bad], combine)
         if fault is None:
             break
+        if not alone:
+            return GaugeHealth(
+                faults=tuple(faults), healthy=tuple(n for n in names if n not in bad),
+                lines=None,
+                reason=f"another vehicle on the span and gauge {fault.gauge} disagrees "
+                       f"with the others ({fault.detail}): its strain cannot be told from "
+                       "a faulty gauge")
         faults.append(fault)
         bad.add(fault.gauge)
         ratios = {}
