@@ -81,7 +81,9 @@ FLAG_TABLE: tuple[tuple[str, tuple[str, ...], str, str], ...] = (
      "(dead, or stuck at a value: less than a tenth of its noise in the calibration runs) "
      "or its response against what the other gauges predict reversed or off by more than "
      "a factor 1.3 (bwim.site.health). When the healthy gauges are not more than half of "
-     'them, the vehicle is refused ("too few healthy gauges")', ""),
+     'them, the vehicle is refused ("too few healthy gauges"); with another vehicle on '
+     "the span, a gauge that disagrees refuses the vehicle instead (its strain cannot be "
+     "told from a faulty gauge)", ""),
     ("detection", ("multiple_presence",),
      "two vehicles were on the instrumented span at once: the event is not weighed as "
      "one vehicle (each detected vehicle gets its own refused row)", ""),
