@@ -13,7 +13,8 @@ Contract
   - any other vehicle's gauges are judged first (:func:`bwim.site.health.check_gauges`;
     not for a vehicle weighed by MFI, below): a dead, stuck, reversed or gain-changed
     gauge is left out and named (``gauge_fault:NAME``, quality ``warning``); too few
-    healthy gauges refuse it;
+    healthy gauges refuse it, and so does a gauge that disagrees while a vehicle of the
+    other direction is on the span;
   - it is then weighed (:func:`bwim.wim.weigh`: gauges combined by generalised
     least squares, axle groups as groups); one with a vehicle of the other direction on
     the span at the same time is weighed and flagged ``multiple_presence`` (the fit's
