@@ -9,12 +9,14 @@ Contract
   Markdown back-quotes; a test checks that every row of the document is here word for
   word, so the document and the report cannot drift apart (a flag added to the document
   must be added here).
-* :func:`explain` gives one flag's :class:`FlagMeaning`; a flag not in the vocabulary
-  gets group ``"unknown"`` and a meaning that says so (a report never fails on one).
+* :func:`explain` gives one flag's :class:`FlagMeaning` (a flag with a subject,
+  ``gauge_fault:NAME``, the meaning of its stem ``gauge_fault``); a flag not in the
+  vocabulary gets group ``"unknown"`` and a meaning that says so (a report never fails on one).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 __all__ = ["FLAG_GROUPS", "FLAG_TABLE", "FlagMeaning", "explain", "flag_meanings"]
@@ -73,6 +75,15 @@ FLAG_TABLE: tuple[tuple[str, tuple[str, ...], str, str], ...] = (
     ("soft", ("ill_conditioned",),
      "the fit's condition number is large (closely spaced axles): the individual axle "
      "weights are less certain than their sum", ""),
+    ("soft", ("gauge_fault",),
+     "a gauge was found faulty in this event and left out: the vehicle was weighed with "
+     "the healthy gauges. Written gauge_fault:NAME, one per faulty gauge. Faulty: flat "
+     "(dead, or stuck at a value: less than a tenth of its noise in the calibration runs) "
+     "or its response against what the other gauges predict reversed or off by more than "
+     "a factor 1.3 (bwim.site.health). When the healthy gauges are not more than half of "
+     'them, the vehicle is refused ("too few healthy gauges"); with another vehicle on '
+     "the span, a gauge that disagrees refuses the vehicle instead (its strain cannot be "
+     "told from a faulty gauge)", ""),
     ("detection", ("multiple_presence",),
      "two vehicles were on the instrumented span at once: the event is not weighed as "
      "one vehicle (each detected vehicle gets its own refused row)", ""),
@@ -119,8 +130,12 @@ def flag_meanings() -> dict[str, FlagMeaning]:
 
 def explain(flag: str) -> FlagMeaning:
     """The meaning of ``flag`` (group ``"unknown"`` for a flag outside the vocabulary)."""
-    known = flag_meanings().get(flag)
+    meanings = flag_meanings()
+    known = meanings.get(flag)
     if known is not None:
         return known
+    stem, _, name = flag.partition(":")  # a flag with a subject: gauge_fault:NAME
+    if name and stem in meanings:
+        return dataclasses.replace(meanings[stem], flag=flag)
     return FlagMeaning(flag=flag, group="unknown",
                        meaning="not a flag of bwim's vocabulary (docs/flags.md)")

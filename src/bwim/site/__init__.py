@@ -15,6 +15,8 @@ Contract
 * :mod:`bwim.site.lanes`: the vehicles of an event in every lane, multiple presence.
 * :mod:`bwim.site.event`: :func:`weigh_event` (:class:`EventWeighing`, one
   :class:`VehicleWeighing` per vehicle, each a summary row).
+* :mod:`bwim.site.health`: :func:`check_gauges` (:class:`GaugeHealth`), the gauges of a
+  vehicle judged before it is weighed: a faulty one left out (``gauge_fault:NAME``).
 * :mod:`bwim.site.drift`: the drift of the strain-to-load ratio from one day to the next
   (temperature, the traffic itself, the time of day); :func:`correct_drift` applies the
   traffic method to a batch's summary rows.
@@ -36,6 +38,7 @@ from bwim.site.drift import (
     traffic_drift,
 )
 from bwim.site.event import EventWeighing, VehicleWeighing, weigh_event
+from bwim.site.health import GaugeFault, GaugeHealth, check_gauges
 from bwim.site.setup import DETECTION_METHODS, DetectorLane, Lane, SiteSetup
 from bwim.summary import SummaryRow
 
@@ -47,12 +50,15 @@ __all__ = [
     "DetectorLane",
     "DriftSetup",
     "EventWeighing",
+    "GaugeFault",
+    "GaugeHealth",
     "Lane",
     "SiteCalibration",
     "SiteSetup",
     "TrafficDrift",
     "VehicleWeighing",
     "calibrate_site",
+    "check_gauges",
     "correct_drift",
     "weigh_event",
 ]

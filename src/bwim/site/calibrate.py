@@ -35,8 +35,22 @@ Contract
   Without axle detectors the truck is found from the strain alone
   (:func:`bwim.detect.detect_known_truck`, then ``strain_passes`` of lines and
   re-detection): see :func:`calibrate_site`.
+* **The declaration is checked against the data** (``SiteSetup.calibration_loads`` and
+  ``calibration_spacings``, the ``[vehicle]`` of a scenario):
+
+  - the loads before anything else: an axle under :data:`MIN_AXLE_LOAD` (5 kN), or a
+    truck of :data:`MIN_TRUCK_AXLES` axles or more under :data:`MIN_TRUCK_WEIGHT`
+    (10 t), is no calibration truck: the loads were given in kg (or kN), not N, and the
+    message says so (a 40 t truck in kg reads 4.1 t);
+  - the spacings after the runs are chosen (with axle detectors): a declared spacing
+    that every used run's detected spacing differs from by more than
+    :data:`SPACING_BIAS` on the same side is refused, with the detected mean (the
+    runs' tolerance :data:`SPACING_TOLERANCE` accepts each run, but all of them
+    disagreeing the same way is the declaration's error, not the detection's).
+    Without axle detectors the truck is found with its declared spacings, which the
+    strain then cannot contradict.
 * Raises :class:`~bwim.errors.InputError` when fewer than two runs are usable, naming
-  each run's reason.
+  each run's reason, or when the declaration contradicts the data (above).
 """
 
 from __future__ import annotations
@@ -68,12 +82,25 @@ from bwim.wim import MultiRunCalibration, calibrate_lines
 from bwim.wim.multirun import RunFit
 from bwim.wim.scale_trend import ScaleTrend
 
-__all__ = ["SPACING_TOLERANCE", "STRAIN_ONLY_PASSES", "SiteCalibration", "calibrate_site",
+__all__ = ["MIN_AXLE_LOAD", "MIN_TRUCK_AXLES", "MIN_TRUCK_WEIGHT", "SPACING_BIAS",
+           "SPACING_TOLERANCE", "STRAIN_ONLY_PASSES", "SiteCalibration", "calibrate_site",
            "gauge_names", "record_temperature", "temperature_channel"]
 
 #: A calibration run whose detected axle spacings differ from the truck's by more than
 #: this (m) is rejected: the detection, not the truck, is wrong.
 SPACING_TOLERANCE = 0.3
+#: A declared spacing that every used run's detected spacing differs from by more than
+#: this (m), all on the same side, is refused: the detectors measure the truck's
+#: spacings to a few centimetres (tests/unit/test_site_declaration.py states the spread).
+SPACING_BIAS = 0.05
+#: Gravity, m/s², for the loads' message in tonnes.
+_G = 9.81
+#: A calibration truck's axle is heavier than this, N (an empty car's axle is ≈ 5 kN).
+MIN_AXLE_LOAD = 5e3
+#: A calibration truck of MIN_TRUCK_AXLES axles or more weighs more than this, N (10 t:
+#: an empty 5-axle articulated truck weighs about 14 t).
+MIN_TRUCK_WEIGHT = 10e3 * _G
+MIN_TRUCK_AXLES = 5
 #: Least spread (natural log) of a transferred pair's amplitude ratio about its gain ratio.
 TRANSFERRED_SPREAD = float(np.log(2.0))
 #: Without axle detectors: passes of (lines from the runs, runs re-detected against them).
@@ -164,6 +191,7 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
     """
     if records is None or len(records) == 0:
         raise InputError("records: give at least one calibration run")
+    _check_loads(setup)
     if not setup.lanes:
         if int(strain_passes) < 0:
             raise InputError(f"strain_passes must be >= 0, got {strain_passes!r}")
@@ -193,12 +221,51 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
     cal = _site_calibration(records, setup,
                             [e.by_lane.get(setup.calibration_lane, Detection()) for e in events],
                             reasons, passages, kept)
+    _check_spacings(events, cal.reasons, setup)
     return SiteCalibration(
         lines=cal.lines, detections=cal.detections, reasons=cal.reasons, fits=cal.fits,
         setup=setup, responses=MappingProxyType(dict(responses)),
         time_of_day=_time_of_day(records, cal),
         temperature=_temperature(records, cal, setup),
         notes=tuple(notes))
+
+
+# --- 0. the declaration -------------------------------------------------------------------
+def _check_loads(setup: SiteSetup) -> None:
+    """The declared loads are a truck's in N (see the module docstring)."""
+    loads = setup.calibration_loads
+    total, lightest = float(loads.sum()), float(loads.min())
+    if lightest >= MIN_AXLE_LOAD and (loads.size < MIN_TRUCK_AXLES
+                                      or total >= MIN_TRUCK_WEIGHT):
+        return
+    why = (f"an axle of {lightest / 1e3:.2f} kN (under {MIN_AXLE_LOAD / 1e3:g} kN)"
+           if lightest < MIN_AXLE_LOAD else
+           f"{loads.size} axles weighing {total / 1e3:.1f} kN ({total / _G / 1e3:.1f} t) in "
+           f"all (under {MIN_TRUCK_WEIGHT / _G / 1e3:g} t)")
+    raise InputError(f"the calibration truck's declared axle loads are implausible: {why}; "
+                     "give the static axle loads in N, not kg or kN (1 kg weighs 9.81 N; "
+                     "[vehicle] axle_loads)")
+
+
+def _check_spacings(events: Sequence[EventDetection], reasons: Sequence[str],
+                    setup: SiteSetup) -> None:
+    """The declared spacings against the used runs' detected ones (module docstring)."""
+    lane = setup.calibration_lane or 1
+    detected = np.array([
+        next(w for w in ev.vehicles if w.pair == lane).vehicle.passage.axle_spacings
+        for ev, why in zip(events, reasons, strict=True) if not why])
+    if detected.shape[0] < 2:
+        return
+    dev = detected - setup.calibration_spacings
+    wrong = [i for i in range(dev.shape[1])
+             if np.all(dev[:, i] > SPACING_BIAS) or np.all(dev[:, i] < -SPACING_BIAS)]
+    if wrong:
+        shown = "; ".join(f"spacing {i + 1} declared {setup.calibration_spacings[i]:.2f} m, "
+                          f"detected {setup.calibration_spacings[i] + dev[:, i].mean():.2f} m"
+                          for i in wrong)
+        raise InputError(f"the calibration truck's declared axle spacings contradict all "
+                         f"{dev.shape[0]} used runs: {shown} (every run more than "
+                         f"{SPACING_BIAS:g} m the same way); check [vehicle] axle_spacings")
 
 
 # --- 1. responses --------------------------------------------------------------------------

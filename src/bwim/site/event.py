@@ -10,7 +10,12 @@ Contract
   - a vehicle that shares the span with another vehicle travelling its way (side by side
     or following) is refused (``multiple_presence``): one record cannot tell their weights
     apart with lines of one vehicle;
-  - any other vehicle is weighed (:func:`bwim.wim.weigh`: gauges combined by generalised
+  - any other vehicle's gauges are judged first (:func:`bwim.site.health.check_gauges`;
+    not for a vehicle weighed by MFI, below): a dead, stuck, reversed or gain-changed
+    gauge is left out and named (``gauge_fault:NAME``, quality ``warning``); too few
+    healthy gauges refuse it, and so does a gauge that disagrees while a vehicle of the
+    other direction is on the span;
+  - it is then weighed (:func:`bwim.wim.weigh`: gauges combined by generalised
     least squares, axle groups as groups); one with a vehicle of the other direction on
     the span at the same time is weighed and flagged ``multiple_presence`` (the fit's
     residual check still refuses a weighing the other vehicle spoils);
@@ -59,6 +64,7 @@ from bwim.site.calibrate import (
     record_temperature,
     temperature_channel,
 )
+from bwim.site.health import check_gauges
 from bwim.site.lanes import EventDetection, LaneVehicle, detect_lanes
 from bwim.summary import SummaryRow
 from bwim.wim import Weighing, weigh
@@ -346,9 +352,13 @@ def _vehicle(record: Record, ev: EventDetection, k: int, calibration: SiteCalibr
     if bridge is not None and lv.lane == setup.calibration_lane:
         return _weigh_mfi(record, lv, flags, bridge, options, factor, method, drift_flags)
     try:
-        w = weigh(record, v.passage, calibration.lines, combine=setup.combine,
-                  scale_correction=method == "trend", scale=None if method == "trend"
-                  else factor)
+        health = check_gauges(record, v.passage, calibration.lines, combine=setup.combine,
+                              alone=FLAG_MULTIPLE_PRESENCE not in flags)
+        if not health.usable:
+            return refused(health.reason, flags=(*flags, *health.flags))
+        w = health.mark(weigh(record, v.passage, health.lines, combine=setup.combine,
+                              scale_correction=method == "trend",
+                              scale=None if method == "trend" else factor))
     except _EVENT_ERRORS as exc:
         return refused(f"weighing failed: {_why(exc)}")
     flags = tuple(dict.fromkeys([*flags, *w.flags, *drift_flags]))

@@ -1,0 +1,310 @@
+"""Gauge health of one vehicle: a dead, stuck, reversed or gain-changed gauge is found
+against the calibration and the other gauges, left out, and named.
+
+Contract
+--------
+* :func:`check_gauges` judges every channel of the calibration's lines
+  (:class:`~bwim.wim.multirun.MultiRunCalibration`) in one vehicle's record, before it
+  is weighed, in two steps:
+
+  1. **Flat** (a dead gauge, or one stuck at a value): the channel's sample-to-sample
+     variation in the record, ``std(diff(reading)) / √2``, is below :data:`FLAT_NOISE` ×
+     its noise at rest in the calibration runs (``channel_noise``).  A working gauge and
+     its logger always show their noise; a constant channel has none.  (The plain
+     deviation, not a robust one: a logger whose noise is below its resolution repeats
+     most samples, and a median of the steps would call it flat.)  No weighing is
+     needed for this step.
+  2. **Gain** (reversed polarity, a changed gain): the vehicle is weighed with the
+     remaining channels (:func:`bwim.wim.weigh`, the readings undivided by any drift
+     factor: a factor common to all gauges does not change their ratios), and each
+     channel's gain ratio ``a_g = ⟨m_g, f_g⟩ / ⟨f_g, f_g⟩`` is taken between its
+     offset-free reading ``m_g`` and its fitted static reading ``f_g`` over the samples
+     with an axle on the lines' support.  A healthy deck spreads a vehicle's load
+     smoothly across the gauges, so the ratios of healthy gauges lie on a smooth curve
+     of the gauges' lateral position ``y`` (m; the channel order when a gauge has no
+     ``y``): 1 everywhere when the vehicle drives where the calibration truck drove,
+     tilted when it drives beside that path.  Each channel's ratio is compared with
+     ``â_g``, the straight line through the other channels' ratios against ``y``
+     (weighted least squares, weights ``snr_j²``).  With
+     ``snr_g = rms(f_g) / σ_g`` (``σ_g`` the expected residual deviation of a vehicle of
+     this weight, :meth:`~bwim.wim.multirun.MultiRunCalibration.error_covariance`), a
+     channel is faulty when
+
+     - its ratio is off: ``a_g / â_g ≤ 0`` (reversed, or no response) or
+       ``|ln(a_g / â_g)| > ln(`` :data:`GAIN_TOLERANCE` ``)``, **and**
+     - the difference is significant: ``|a_g − â_g| snr_g >`` :data:`SIGNIFICANCE`
+       (the residual the gain error adds, in units of the residual deviation expected).
+
+     The most significant faulty channel is left out and the vehicle weighed again with
+     the others, until every remaining channel passes.
+* A faulty channel is **left out** and named in the flag ``gauge_fault:NAME``
+  (:data:`FLAG_GAUGE_FAULT` + ``:`` + the channel's name): a soft flag, the weights of
+  the healthy channels are kept with quality ``warning`` (:meth:`GaugeHealth.mark`).
+* **Too few healthy channels**: when the healthy channels are not more than half of the
+  calibration's (the comparison with "the others" needs a healthy majority), or fewer
+  than two, the vehicle is refused with that reason (:attr:`GaugeHealth.reason`).
+* **Another vehicle on the span** (``alone=False``; :func:`bwim.site.weigh_event` for a
+  vehicle flagged ``multiple_presence``): the other vehicle's strain is no part of this
+  vehicle's fit, so a gauge whose ratio is off may be faulty or may feel the other
+  vehicle: the vehicle is refused with that reason, and no gauge is named for it
+  (a flat gauge still is: it has no noise whatever is on the deck).
+* With fewer than :data:`MIN_COMPARED` channels only the flat check is made; a weighing
+  that fails here (a singular fit) leaves the gain check out, and the caller's own
+  weighing decides.
+* Units: readings in the logger's units; ratios dimensionless; ``y`` in m.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from types import MappingProxyType
+
+import numpy as np
+
+from bwim.errors import BwimError, InputError
+from bwim.plausibility import ordered_flags, quality_of
+from bwim.records import Passage, Record
+from bwim.wim import Weighing, weigh
+from bwim.wim.influence_line import read_channels
+from bwim.wim.multirun import MultiRunCalibration
+
+__all__ = ["FLAG_GAUGE_FAULT", "FLAT_NOISE", "GAIN_TOLERANCE", "MIN_COMPARED", "SIGNIFICANCE",
+           "SILENT_CORRELATION", "GaugeFault", "GaugeHealth", "check_gauges", "restrict_lines"]
+
+#: The flag of a faulty gauge, written ``gauge_fault:NAME``.
+FLAG_GAUGE_FAULT = "gauge_fault"
+#: A channel whose noise in the record is below this fraction of its calibration noise
+#: at rest is flat (dead or stuck).
+FLAT_NOISE = 0.1
+#: A channel's gain ratio against what the others predict may differ from 1 by up to
+#: this factor (either way) before it is a gain fault (the clean vehicles' ratios against
+#: it: tests/unit/test_site_health.py).
+GAIN_TOLERANCE = 1.3
+#: ... and the difference must add this many expected residual deviations (a clean
+#: gauge's ratio is far more precise than one sample's deviation: the ratio averages
+#: the whole crossing; this only keeps a gauge with no signal out of the test).
+SIGNIFICANCE = 1.0
+#: A faulty channel whose reading's correlation with its fitted static reading (over the
+#: samples with an axle on the support) is below this, either sign, does not respond
+#: to the load at all (a broken gauge whose logger channel still shows its noise).
+SILENT_CORRELATION = 0.5
+#: Channels needed to compare one channel's ratio with the others' (a line and a check).
+MIN_COMPARED = 4
+
+#: What a weighing may raise on a degenerate subset of channels.
+_WEIGH_ERRORS = (BwimError, ArithmeticError, ValueError, np.linalg.LinAlgError)
+
+
+@dataclass(frozen=True, kw_only=True)
+class GaugeFault:
+    """One faulty channel.
+
+    Attributes
+    ----------
+    gauge : str
+        The channel's name.
+    kind : str
+        ``"flat"`` (dead or stuck: no noise), ``"silent"`` (noise but no response to the
+        load: uncorrelated with its fit, :data:`SILENT_CORRELATION`),
+        ``"reversed"`` (a negative ratio) or ``"gain"`` (a ratio off by more than
+        :data:`GAIN_TOLERANCE`).
+    ratio : float
+        Its gain ratio over what the other channels predict, ``a_g / â_g`` (nan for a
+        flat channel).
+    detail : str
+        One line: what was measured.
+    """
+
+    gauge: str
+    kind: str
+    ratio: float
+    detail: str
+
+    @property
+    def flag(self) -> str:
+        return f"{FLAG_GAUGE_FAULT}:{self.gauge}"
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class GaugeHealth:
+    """The outcome of :func:`check_gauges`.
+
+    Attributes
+    ----------
+    faults : tuple of GaugeFault
+        The faulty channels, in the order found.
+    healthy : tuple of str
+        The channels to weigh with, in the calibration's order.
+    lines : MultiRunCalibration or None
+        The calibration restricted to the healthy channels (the calibration itself when
+        none is faulty); None when refused.
+    reason : str
+        Why the vehicle cannot be weighed ("" when it can).
+    ratios : mapping of str to float
+        Each healthy channel's gain ratio over what the others predict, ``a_g / â_g``,
+        in the last comparison (empty when none was made: another vehicle on the span,
+        too few channels, a failed weighing).
+    """
+
+    faults: tuple[GaugeFault, ...]
+    healthy: tuple[str, ...]
+    lines: MultiRunCalibration | None
+    reason: str = ""
+    ratios: Mapping[str, float] = field(default_factory=dict)
+
+    @property
+    def usable(self) -> bool:
+        return not self.reason
+
+    @property
+    def flags(self) -> tuple[str, ...]:
+        """``gauge_fault:NAME`` for each faulty channel."""
+        return tuple(f.flag for f in self.faults)
+
+    def mark(self, weighing: Weighing) -> Weighing:
+        """``weighing`` with this check's flags added and its quality recomputed (a flag
+        outside the hard flags makes it a ``warning``)."""
+        if not self.faults:
+            return weighing
+        flags = ordered_flags((*weighing.flags, *self.flags))
+        return dataclasses.replace(weighing, flags=flags, quality=quality_of(flags))
+
+
+def restrict_lines(lines: MultiRunCalibration, names: Sequence[str]) -> MultiRunCalibration:
+    """The calibration with only the channels ``names`` (in the calibration's order):
+    their lines, lateral slopes, residual deviations, covariance and noise.  The runs'
+    misfit medians are kept (each channel's misfit is in units of its own deviation)."""
+    keep = [k for k, c in enumerate(lines.channels) if c.name in set(names)]
+    if len(keep) != len(set(names)):
+        unknown = sorted(set(names) - {c.name for c in lines.channels})
+        raise InputError(f"not channels of the calibration: {', '.join(unknown)}")
+    if len(keep) == len(lines.channels):
+        return lines
+    idx = np.array(keep)
+    line = dataclasses.replace(lines.line, ordinates=lines.line.ordinates[:, idx],
+                               channels=tuple(lines.channels[k] for k in keep))
+    slope = None if lines.lateral_slope is None else lines.lateral_slope[:, idx]
+    return dataclasses.replace(
+        lines, line=line, lateral_slope=slope, channel_std=lines.channel_std[idx],
+        channel_covariance=lines.channel_covariance[np.ix_(idx, idx)],
+        channel_noise=lines.channel_noise[idx])
+
+
+def check_gauges(record: Record, passage: Passage, lines: MultiRunCalibration, *,
+                 combine: str = "auto", alone: bool = True) -> GaugeHealth:
+    """The health of every channel of ``lines`` for the vehicle of ``passage`` in
+    ``record`` (see the module docstring); ``combine`` as :func:`bwim.wim.weigh`'s;
+    ``alone=False``: another vehicle is on the span (a gauge that disagrees refuses the
+    vehicle instead of being left out)."""
+    names = [c.name for c in lines.channels]
+    readings = read_channels(record, lines.channels)
+    faults = list(_flat(readings, lines))
+    bad = {f.gauge for f in faults}
+    ratios: dict[str, float] = {}
+    while len(names) - len(bad) >= MIN_COMPARED and 2 * len(bad) < len(names):
+        fault, ratios = _worst_gain(record, passage, lines,
+                                    [n for n in names if n not in bad], combine)
+        if fault is None:
+            break
+        if not alone:
+            return GaugeHealth(
+                faults=tuple(faults), healthy=tuple(n for n in names if n not in bad),
+                lines=None,
+                reason=f"another vehicle on the span and gauge {fault.gauge} disagrees "
+                       f"with the others ({fault.detail}): its strain cannot be told from "
+                       "a faulty gauge")
+        faults.append(fault)
+        bad.add(fault.gauge)
+        ratios = {}
+    healthy = tuple(n for n in names if n not in bad)
+    if 2 * len(healthy) <= len(names) or len(healthy) < 2:
+        shown = ", ".join(f"{f.gauge} ({f.kind})" for f in faults)
+        return GaugeHealth(
+            faults=tuple(faults), healthy=healthy, lines=None,
+            reason=f"too few healthy gauges: {len(healthy)} of {len(names)}, faulty: {shown}")
+    return GaugeHealth(faults=tuple(faults), healthy=healthy,
+                       lines=restrict_lines(lines, healthy),
+                       ratios=MappingProxyType(ratios))
+
+
+def _flat(readings: np.ndarray, lines: MultiRunCalibration) -> list[GaugeFault]:
+    """Step 1: channels without their noise."""
+    out = []
+    for k, c in enumerate(lines.channels):
+        y = readings[:, k]
+        ref = float(lines.channel_noise[k])
+        if ref <= 0 or y.size < 3:
+            continue
+        noise = float(np.std(np.diff(y))) / np.sqrt(2.0)
+        if noise < FLAT_NOISE * ref:
+            out.append(GaugeFault(
+                gauge=c.name, kind="flat", ratio=float("nan"),
+                detail=f"noise {noise:.3g} against {ref:.3g} in the calibration runs "
+                       "(dead or stuck)"))
+    return out
+
+
+def _positions(lines: MultiRunCalibration) -> np.ndarray:
+    """Each channel's lateral position, m (its first sensor's ``y``); the channel order
+    when any is unknown."""
+    ys = [c.sensors[0].y for c in lines.channels]
+    if any(y is None for y in ys):
+        return np.arange(len(ys), dtype=float)
+    return np.array(ys, dtype=float)
+
+
+def _worst_gain(record: Record, passage: Passage, lines: MultiRunCalibration,
+                names: list[str], combine: str) -> tuple[GaugeFault | None, dict[str, float]]:
+    """Step 2: the most significant gain fault among ``names`` (None when every one
+    passes or the weighing fails) and every channel's ratio (empty when it fails)."""
+    sub = restrict_lines(lines, names)
+    try:
+        w = weigh(record, passage, sub, combine=combine, scale_correction=False)
+    except _WEIGH_ERRORS:
+        return None, {}
+    if not np.isfinite(w.gvw) or w.gvw <= 0:
+        return None, {}
+    m, f = w.measured, w.fitted
+    power = (f * f).sum(axis=0)
+    if m.shape[0] == 0 or np.any(power <= 0):
+        return None, {}
+    a = (m * f).sum(axis=0) / power
+    # the shape alone: a channel that does not respond is uncorrelated with its fit
+    mc, fc = m - m.mean(axis=0), f - f.mean(axis=0)
+    corr = (mc * fc).sum(axis=0) / np.sqrt(np.maximum((mc * mc).sum(axis=0)
+                                                      * (fc * fc).sum(axis=0), 1e-300))
+    sd = np.sqrt(np.clip(np.diag(sub.error_covariance(w.gvw)), np.finfo(float).tiny, None))
+    snr = np.sqrt(power / m.shape[0]) / sd
+    y = _positions(sub)
+    worst, score, ratios = None, SIGNIFICANCE, {}
+    for g in range(len(names)):
+        others = np.arange(len(names)) != g
+        expected = _line_at(y[others], a[others], snr[others] ** 2, y[g])
+        if not expected > 0:
+            continue
+        ratio = float(a[g] / expected)
+        ratios[names[g]] = ratio
+        off = ratio <= 0 or abs(np.log(ratio)) > np.log(GAIN_TOLERANCE)
+        significance = abs(a[g] - expected) * snr[g]
+        if off and significance > score:
+            kind = ("silent" if abs(corr[g]) < SILENT_CORRELATION
+                    else "reversed" if ratio < 0 else "gain")
+            worst, score = GaugeFault(
+                gauge=names[g], kind=kind, ratio=ratio,
+                detail=f"gain {ratio:.2f} × what the other gauges predict "
+                       f"({significance:.1f} residual deviations)"), significance
+    return worst, ratios
+
+
+def _line_at(x: np.ndarray, y: np.ndarray, weight: np.ndarray, at: float) -> float:
+    """The weighted least-squares straight line through (x, y), at ``at``."""
+    wsum = weight.sum()
+    if wsum <= 0:
+        return float("nan")
+    xm = (weight * x).sum() / wsum
+    ym = (weight * y).sum() / wsum
+    sxx = (weight * (x - xm) ** 2).sum()
+    slope = (weight * (x - xm) * (y - ym)).sum() / sxx if sxx > 0 else 0.0
+    return float(ym + slope * (at - xm))
