@@ -97,7 +97,9 @@ FLAG_TABLE: tuple[tuple[str, tuple[str, ...], str, str], ...] = (
     ("detection", ("strain_only",),
      "found from the strain gauges alone (no axle detectors): lower confidence", ""),
     ("detection", ("truncated",),
-     "the vehicle's time on the span starts before or ends after the record", ""),
+     "the vehicle's time on the span starts before or ends after the record, or the "
+     "gauges end the record away from where they started (it was cut with a vehicle on "
+     "the bridge): the vehicle is refused", ""),
     ("detection", ("unexplained_strain",),
      "strain activity outside the time on the span of every detected vehicle: e.g. a "
      "vehicle in a lane the axle detectors do not cover", ""),
