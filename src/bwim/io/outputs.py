@@ -213,21 +213,27 @@ class Manifest:
             json.dump({"batch": self.meta, "entries": self.entries}, f, indent=1)
 
 
-def _raise_interrupt(signum: int, frame: object) -> None:
-    raise KeyboardInterrupt(f"signal {signum}")
-
-
 @contextlib.contextmanager
 def signals_as_interrupt() -> Iterator[None]:
     """SIGTERM and SIGHUP raise KeyboardInterrupt in the main thread while the block runs
-    (a no-op outside the main thread)."""
+    (a no-op outside the main thread).  A signal whose KeyboardInterrupt Python swallowed
+    (it arrived while a weak reference's callback or a ``__del__`` ran, where exceptions
+    are only printed) still ends the block with KeyboardInterrupt when it completes."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
+    received: list[int] = []
+
+    def interrupt(signum: int, frame: object) -> None:
+        received.append(signum)
+        raise KeyboardInterrupt(f"signal {signum}")
+
     names = [s for s in ("SIGTERM", "SIGHUP") if hasattr(signal, s)]
-    old = {s: signal.signal(getattr(signal, s), _raise_interrupt) for s in names}
+    old = {s: signal.signal(getattr(signal, s), interrupt) for s in names}
     try:
         yield
     finally:
         for s, handler in old.items():
             signal.signal(getattr(signal, s), handler)
+    if received:  # the block ended normally although a signal came: it was swallowed
+        raise KeyboardInterrupt(f"signal {received[0]}")
