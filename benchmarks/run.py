@@ -14,12 +14,14 @@ from benchmarks import (  # noqa: E402
     bench_batch,
     bench_calibration,
     bench_detect_site,
+    bench_faults,
     bench_fe,
     bench_logger,
     bench_mfi,
     bench_mismatch,
     bench_multirun,
     bench_optimize,
+    bench_realsite,
     bench_site,
     bench_stream,
     bench_testday,
@@ -44,6 +46,8 @@ def main() -> None:
     bench_mismatch.main()
     bench_detect_site.main([])
     bench_stream.main([])
+    bench_realsite.main()
+    bench_faults.main()
 
 
 if __name__ == "__main__":
