@@ -144,3 +144,30 @@ def test_runs_of_trucks_of_other_weights_are_refused(site):
     assert 2.0 > RUN_SCALE_RANGE
     with pytest.raises(InputError, match=r"scale factors range from 0\.\d\d to 1\.\d\d"):
         calibrate_site(halved, setup)
+
+
+def _gauge_zeroed(rec, name):
+    k = [s.name for s in rec.sensors].index(name)
+    data = rec.data.copy()
+    data[:, k] = 0.0
+    return dataclasses.replace(rec, data=data)
+
+
+def test_a_run_with_a_dead_gauge_is_left_out(site):
+    """A gauge dead in one run (issue 22: sensor health on the calibration runs too): that
+    run is rejected naming the gauge; the others are used as without it."""
+    _, setup, runs = site
+    clean = calibrate_site(runs, setup)
+    used = [k for k, r in enumerate(clean.reasons) if not r]
+    broken = list(runs)
+    broken[used[0]] = _gauge_zeroed(runs[used[0]], "s05")
+    cal = calibrate_site(broken, setup)
+    assert "'s05' reads flat" in cal.reasons[used[0]]
+    assert [k for k, r in enumerate(cal.reasons) if not r] == used[1:]
+
+
+def test_a_gauge_dead_in_every_run_is_refused(site):
+    _, setup, runs = site
+    with pytest.raises(InputError, match=r"gauge 's05' reads flat \(dead or stuck\) in 6 of "
+                                         r"6 calibration runs: leave it out"):
+        calibrate_site([_gauge_zeroed(r, "s05") for r in runs], setup)

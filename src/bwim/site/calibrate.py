@@ -14,7 +14,9 @@ Contract
      peaks, with a note, when the runs cannot teach a response.
   2. **Detection** of every vehicle in every lane of each run (:mod:`bwim.site.lanes`).
   3. **Runs**: a run is used when its lane holds exactly one vehicle whose axle count
-     and spacings are the truck's (within :data:`SPACING_TOLERANCE`) and no other
+     and spacings are the truck's (within :data:`SPACING_TOLERANCE`), none of whose
+     gauges reads flat (dead or stuck; a gauge flat in half the runs or more is refused),
+     and no other
      vehicle is on the span at the same time in any lane (then it is rejected with that
      reason: "another vehicle on the bridge: lane 3, −x, 5 axles"); a used run keeps its
      detected speed, arrival and lateral position with the truck's spacings.  Gauge
@@ -76,6 +78,7 @@ from bwim.detect.signals import robust_sigma
 from bwim.errors import InputError
 from bwim.records import Passage, Record
 from bwim.site.drift import TemperatureDrift, TimeOfDayDrift, seconds_of_day
+from bwim.site.health import FLAT_NOISE
 from bwim.site.lanes import EventDetection, detect_lanes
 from bwim.site.setup import SiteSetup
 from bwim.wim import MultiRunCalibration, calibrate_lines
@@ -201,7 +204,8 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
     # pass 1, the span unknown: runs with no other vehicle anywhere in the record
     events = [detect_lanes(rec, setup, responses=responses, gauges=gauge_names(rec))
               for rec in records]
-    reasons, passages, kept = _truck_runs(events, setup, strict=True)
+    flat = _flat_runs(records)
+    reasons, passages, kept = _without(flat, *_truck_runs(events, setup, strict=True))
     if len(kept) >= 2:
         span = _site_calibration(records, setup, [Detection()] * len(records), reasons,
                                  passages, kept).lines.support
@@ -209,7 +213,7 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
         # at the same time as the truck
         events = [detect_lanes(rec, setup, responses=responses, span=span,
                                gauges=gauge_names(rec)) for rec in records]
-        reasons, passages, kept = _truck_runs(events, setup)
+        reasons, passages, kept = _without(flat, *_truck_runs(events, setup))
         # pass 3: the responses learned again from the runs of the truck alone (a run
         # with another vehicle on the detectors smears the learned shapes and every
         # speed found with them), and the runs detected again with them
@@ -217,7 +221,7 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
             responses = _responses(records, setup, [], learn_from=kept) or responses
             events = [detect_lanes(rec, setup, responses=responses, span=span,
                                    gauges=gauge_names(rec)) for rec in records]
-            reasons, passages, kept = _truck_runs(events, setup)
+            reasons, passages, kept = _without(flat, *_truck_runs(events, setup))
     cal = _site_calibration(records, setup,
                             [e.by_lane.get(setup.calibration_lane, Detection()) for e in events],
                             reasons, passages, kept)
@@ -229,6 +233,35 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
         time_of_day=_time_of_day(records, cal),
         temperature=_temperature(records, cal, setup),
         notes=tuple(notes))
+
+
+def _flat_runs(records: Sequence[Record]) -> dict[int, str]:
+    """Runs in which a gauge reads flat (dead or stuck: its sample-to-sample variation
+    below :data:`bwim.site.health.FLAT_NOISE` of the run's median gauge's: every working
+    gauge shows at least its noise), with the reason; a gauge flat in half the runs or
+    more is refused (a dead gauge)."""
+    names = gauge_names(records[0])
+    if not names or any(gauge_names(r) != names for r in records):
+        return {}
+    noise = np.array([np.std(np.diff(r.channels(names).data, axis=0), axis=0)
+                      for r in records]) / np.sqrt(2.0)  # (n_runs, n_gauges)
+    typical = np.median(noise, axis=1)  # each run's median gauge
+    flat = noise < FLAT_NOISE * typical[:, None]
+    dead = [n for n, f in zip(names, flat.T, strict=True) if f.sum() * 2 >= len(records)]
+    if dead and len(records) >= 2:
+        raise InputError(f"gauge {dead[0]!r} reads flat (dead or stuck) in "
+                         f"{int(flat[:, names.index(dead[0])].sum())} of {len(records)} "
+                         "calibration runs: leave it out of the scenario's [[sensors]]")
+    return {k: f"gauge {names[int(np.flatnonzero(row)[0])]!r} reads flat in this run "
+               "(dead or stuck)" for k, row in enumerate(flat) if row.any()}
+
+
+def _without(flat: Mapping[int, str], reasons: list[str], passages: list[Passage],
+             kept: list[int]) -> tuple[list[str], list[Passage], list[int]]:
+    """The runs of :func:`_truck_runs` less those with a flat gauge."""
+    reasons = [r or flat.get(k, "") for k, r in enumerate(reasons)]
+    keep = [i for i, k in enumerate(kept) if k not in flat]
+    return reasons, [passages[i] for i in keep], [kept[i] for i in keep]
 
 
 #: The used runs' scale factors span at most this ratio (largest over smallest): one truck
