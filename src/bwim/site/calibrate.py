@@ -18,8 +18,8 @@ Contract
      gauges reads flat (dead or stuck; a gauge flat in half the runs or more is refused),
      and no other vehicle is on the span at the same time in any lane (then it is
      rejected with that reason: "another vehicle on the bridge: lane 3, −x, 5 axles"); a
-     used run keeps its
-     detected speed, arrival and lateral position with the truck's spacings.  Gauge
+     used run keeps its detected speed, arrival and lateral position with the truck's
+     spacings.  Gauge
      activity that no detected vehicle explains next to the truck (a vehicle in a lane
      without detectors) rejects the run too.  The span is the lines' support, so this
      takes passes: first the runs with no other vehicle in the record at all give
