@@ -19,9 +19,9 @@ Contract
      and no other vehicle is on the span at the same time in any lane (then it is
      rejected with that reason: "another vehicle on the bridge: lane 3, −x, 5 axles"); a
      used run keeps its detected speed, arrival and lateral position with the truck's
-     spacings.  Gauge
-     activity that no detected vehicle explains next to the truck (a vehicle in a lane
-     without detectors) rejects the run too.  The span is the lines' support, so this
+     spacings.  Gauge activity that no detected vehicle explains next to the truck (a
+     vehicle in a lane without detectors) rejects the run too.  The span is the lines'
+     support, so this
      takes passes: first the runs with no other vehicle in the record at all give
      provisional lines, then every run is judged with their support; when runs were
      rejected, the calibration lane's responses are learned again from the runs kept
