@@ -21,12 +21,11 @@ Contract
      used run keeps its detected speed, arrival and lateral position with the truck's
      spacings.  Gauge activity that no detected vehicle explains next to the truck (a
      vehicle in a lane without detectors) rejects the run too.  The span is the lines'
-     support, so this
-     takes passes: first the runs with no other vehicle in the record at all give
-     provisional lines, then every run is judged with their support; when runs were
-     rejected, the calibration lane's responses are learned again from the runs kept
-     (another vehicle on the detectors smears the learned shapes) and every run is
-     detected and judged again with them.
+     support, so this takes passes: first the runs with no other vehicle in the record
+     at all give provisional lines, then every run is judged with their support; when
+     runs were rejected, the calibration lane's responses are learned again from the
+     runs kept (another vehicle on the detectors smears the learned shapes) and every
+     run is detected and judged again with them.
   4. **Lines** of every gauge from the used runs stacked (:func:`bwim.wim.calibrate_lines`:
      per-run scale factors, their trend, outlier runs rejected with a reason).
   5. **Drift**: the runs' factors over the time of day
