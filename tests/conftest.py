@@ -24,3 +24,15 @@ from hypothesis import settings as _hypothesis_settings  # noqa: E402
 _hypothesis_settings.register_profile("deterministic", derandomize=True, database=None)
 _hypothesis_settings.register_profile("explore", derandomize=False)
 _hypothesis_settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "deterministic"))
+
+
+@pytest.fixture(scope="session")
+def small_site(tmp_path_factory):
+    """A small realistic site (``short-span-4-lane``, seed 4: six calibration runs, half
+    with a lane-3 vehicle crossing, four traffic events, a 0.6 m mesh; a few seconds),
+    made once per session: tests read its files and write nowhere in it."""
+    from bwim.synthetic import make_test_day
+
+    return make_test_day(tmp_path_factory.mktemp("small_site") / "day",
+                         site="short-span-4-lane", seed=4, n_calibration=6, n_traffic=4,
+                         n_calibration_day_traffic=0, mesh=0.6)

@@ -13,16 +13,13 @@ import pytest
 
 from bwim.cli import main
 from bwim.io.outputs import MANIFEST_NAME
-from bwim.synthetic import make_test_day
 
 ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture(scope="module")
-def day(tmp_path_factory):
-    return make_test_day(tmp_path_factory.mktemp("outputs") / "day", site="short-span-4-lane",
-                         seed=4, n_calibration=6, n_traffic=4, n_calibration_day_traffic=0,
-                         mesh=0.6)
+def day(small_site):
+    return small_site
 
 
 @pytest.fixture(scope="module")

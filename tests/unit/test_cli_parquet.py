@@ -5,17 +5,14 @@ import pytest
 
 from bwim.cli import main
 from bwim.io.summary import read_summary
-from bwim.synthetic import make_test_day
 
 pytest.importorskip("pyarrow")
 from bwim.io.summary_parquet import read_summary_parquet
 
 
 @pytest.fixture(scope="module")
-def day(tmp_path_factory):
-    return make_test_day(tmp_path_factory.mktemp("parquet") / "day", site="short-span-4-lane",
-                         seed=4, n_calibration=6, n_traffic=4, n_calibration_day_traffic=0,
-                         mesh=0.6)
+def day(small_site):
+    return small_site
 
 
 def _argv(day, out, *extra):

@@ -11,7 +11,6 @@ import pytest
 from bwim.detect.assemble import END_SHARE, ends_loaded
 from bwim.scenario import build_site_setup, load_record, load_scenario
 from bwim.site import calibrate_site, weigh_event
-from bwim.synthetic import make_test_day
 
 FS = 512.0
 
@@ -43,10 +42,8 @@ def test_a_record_that_starts_loaded_is_caught_too():
 
 
 @pytest.fixture(scope="module")
-def site(tmp_path_factory):
-    day = make_test_day(tmp_path_factory.mktemp("cut") / "day", site="short-span-4-lane",
-                        seed=4, n_calibration=6, n_traffic=4, n_calibration_day_traffic=0,
-                        mesh=0.6)
+def site(small_site):
+    day = small_site
     scenario = load_scenario(day.scenario)
     cal = calibrate_site([load_record(p, scenario) for p in day.calibration],
                          build_site_setup(scenario))

@@ -26,7 +26,6 @@ from bwim.report.flags import explain
 from bwim.scenario import build_site_setup, load_record, load_scenario
 from bwim.site import calibrate_site, weigh_event
 from bwim.site.health import check_gauges, restrict_lines
-from bwim.synthetic import make_test_day
 from bwim.wim import weigh
 
 FAULTS = {
@@ -42,10 +41,8 @@ KIND = {"dead": "flat", "stuck": "flat", "reversed": "reversed", "gain x2": "gai
 
 
 @pytest.fixture(scope="module")
-def site(tmp_path_factory):
-    day = make_test_day(tmp_path_factory.mktemp("health") / "day", site="short-span-4-lane",
-                        seed=4, n_calibration=6, n_traffic=4, n_calibration_day_traffic=0,
-                        mesh=0.6)
+def site(small_site):
+    day = small_site
     scenario = load_scenario(day.scenario)
     calibration = calibrate_site([load_record(p, scenario) for p in day.calibration],
                                  build_site_setup(scenario))

@@ -25,14 +25,13 @@ from bwim.scenario import (
 )
 from bwim.site import DriftSetup, calibrate_site, weigh_event
 from bwim.stream import cut_file
-from bwim.synthetic import make_continuous, make_test_day
+from bwim.synthetic import make_continuous
 
 
 @pytest.fixture(scope="module")
-def day(tmp_path_factory):
+def day(tmp_path_factory, small_site):
     root = tmp_path_factory.mktemp("continuous")
-    site = make_test_day(root / "site", site="short-span-4-lane", seed=4, n_calibration=6,
-                         n_traffic=4, n_calibration_day_traffic=0, mesh=0.6)
+    site = small_site
     cont = make_continuous(site.out_dir, root / "long", seed=1)
     sc = load_scenario(site.scenario)
     setup = dataclasses.replace(build_site_setup(sc), drift=DriftSetup(method="none"))

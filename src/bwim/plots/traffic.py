@@ -47,6 +47,14 @@ def _empty(ax, text: str):
     return ax.figure
 
 
+def _limit_line(ax, limit: float | None) -> None:
+    """A weight ``limit`` (N), when given, as a red vertical line named beside the axes."""
+    if limit is None:
+        return
+    ax.axvline(limit / KILONEWTON, color="C3", lw=1.5, label=f"limit {limit / KILONEWTON:.0f} kN")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small")
+
+
 def plot_gvw_histogram(rows: Sequence, *, limit: float | None = None, width: float = 25.0,
                        ax=None):
     """Histogram of the weighed vehicles' gross weights (kN, bins ``width`` kN wide); a
@@ -59,10 +67,7 @@ def plot_gvw_histogram(rows: Sequence, *, limit: float | None = None, width: flo
     if not gvw.size:
         return _empty(ax, "no weighed vehicle")
     ax.hist(gvw, bins=_bins(gvw, width), color=_WEIGHED, edgecolor="white")
-    if limit is not None:
-        ax.axvline(limit / KILONEWTON, color="C3", lw=1.5,
-                   label=f"limit {limit / KILONEWTON:.0f} kN")
-        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small")
+    _limit_line(ax, limit)
     ax.grid(alpha=0.3)
     return ax.figure
 
@@ -81,10 +86,7 @@ def plot_axle_load_spectrum(rows: Sequence, *, limit: float | None = None,
         return _empty(ax, "no weighed axle")
     ax.hist(loads, bins=_bins(loads, width), color=_WEIGHED, edgecolor="white")
     ax.set_yscale("log")
-    if limit is not None:
-        ax.axvline(limit / KILONEWTON, color="C3", lw=1.5,
-                   label=f"limit {limit / KILONEWTON:.0f} kN")
-        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small")
+    _limit_line(ax, limit)
     ax.grid(alpha=0.3)
     return ax.figure
 

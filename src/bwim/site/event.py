@@ -81,6 +81,25 @@ def _why(exc: BaseException) -> str:
     return " ".join(str(exc).split()) or type(exc).__name__
 
 
+def _axle_weights(w: VehicleWeighing | EventWeighing) -> np.ndarray | None:
+    """A weighed vehicle's static axle weights, N: MFI's when it identified the forces,
+    else Moses'; None unless weighed."""
+    if not w.weighed:
+        return None
+    if w.identification is not None:
+        return w.identification.axle_weights
+    return w.weighing.axle_weights
+
+
+def _gvw(w: VehicleWeighing | EventWeighing) -> float | None:
+    """A weighed vehicle's gross weight, N (as :func:`_axle_weights`)."""
+    if not w.weighed:
+        return None
+    if w.identification is not None:
+        return float(w.identification.gvw[0])
+    return w.weighing.gvw
+
+
 @dataclass(frozen=True, kw_only=True, eq=False)
 class VehicleWeighing:
     """One vehicle of an event, weighed or not.
@@ -116,20 +135,12 @@ class VehicleWeighing:
     @property
     def axle_weights(self) -> np.ndarray | None:
         """Static axle weights, N (None unless weighed)."""
-        if not self.weighed:
-            return None
-        if self.identification is not None:
-            return self.identification.axle_weights
-        return self.weighing.axle_weights
+        return _axle_weights(self)
 
     @property
     def gvw(self) -> float | None:
         """Gross vehicle weight, N (None unless weighed)."""
-        if not self.weighed:
-            return None
-        if self.identification is not None:
-            return float(self.identification.gvw[0])
-        return self.weighing.gvw
+        return _gvw(self)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -190,20 +201,12 @@ class EventWeighing:
     @property
     def axle_weights(self) -> np.ndarray | None:
         """Static axle weights, N (None unless weighed)."""
-        if not self.weighed:
-            return None
-        if self.identification is not None:
-            return self.identification.axle_weights
-        return self.weighing.axle_weights
+        return _axle_weights(self)
 
     @property
     def gvw(self) -> float | None:
         """Gross vehicle weight, N (None unless weighed)."""
-        if not self.weighed:
-            return None
-        if self.identification is not None:
-            return float(self.identification.gvw[0])
-        return self.weighing.gvw
+        return _gvw(self)
 
     def time_at(self, t: float) -> datetime | dtime | None:
         """Wall-clock time of record time ``t`` (s): a datetime with the record's clock, a

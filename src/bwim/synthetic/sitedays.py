@@ -102,6 +102,7 @@ from bwim.synthetic.fleet import (
     traffic_vehicle,
 )
 from bwim.synthetic.layout import SHORT_SPAN_4_LANE, SiteLayout
+from bwim.synthetic.outfolder import checked_count, joined, prepare_folder
 from bwim.synthetic.thermal import ThermalDrift, draw_days
 from bwim.synthetic.traffic import calibration_truck
 
@@ -293,8 +294,8 @@ def make_site_days(
         raise InputError(f"layout must be a SiteLayout, got {type(layout).__name__}")
     if not layout.detector_lanes:
         raise InputError(f"layout {layout.name} has no axle detectors")
-    n_calibration = _count("n_calibration", n_calibration, 1)
-    n_traffic = _count("n_traffic", n_traffic, 0)
+    n_calibration = checked_count("n_calibration", n_calibration, 1)
+    n_traffic = checked_count("n_traffic", n_traffic, 0)
     if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
         raise InputError(f"seed must be a non-negative integer, got {seed!r}")
     if not isinstance(mesh, (int, float)) or not 0.1 <= mesh <= 0.6:
@@ -321,14 +322,14 @@ def make_site_days(
     traffic_hours = (TRAFFIC_WINDOW[1] - TRAFFIC_WINDOW[0]) / 3600.0
     if n_calibration_day_traffic is None:
         n_calibration_day_traffic = round(n_traffic * cal_window_hours / traffic_hours)
-    n_cdt = _count("n_calibration_day_traffic", n_calibration_day_traffic, 0)
+    n_cdt = checked_count("n_calibration_day_traffic", n_calibration_day_traffic, 0)
     if n_multiple is not None:
-        n_multiple = _count("n_multiple", n_multiple, 0)
+        n_multiple = checked_count("n_multiple", n_multiple, 0)
     for n, hours in ((n_traffic, traffic_hours), (n_cdt, cal_window_hours)):
         if n * MIN_GAP > 0.8 * hours * 3600.0:
             raise InputError(f"{n} events do not fit in {hours:g} h at least {MIN_GAP:g} s "
                              "apart")
-    out = _prepare_folder(out_dir)
+    out = prepare_folder(out_dir)
 
     fs = float(layout.sampling_rate)
     root = np.random.SeedSequence(int(seed))
@@ -397,27 +398,8 @@ def make_site_days(
 
 
 # --- validation ------------------------------------------------------------------------------
-def _count(name: str, value, minimum: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
-        raise InputError(f"{name} must be an integer >= {minimum}, got {value!r}")
-    return int(value)
 
 
-def _prepare_folder(out_dir) -> Path:
-    out = Path(out_dir)
-    if out.exists():
-        if not out.is_dir():
-            raise InputError(f"out_dir {out} exists and is not a folder")
-        if any(out.iterdir()):
-            raise InputError(f"out_dir {out} is not empty; refusing to overwrite it")
-    else:
-        try:
-            out.mkdir(parents=True)
-        except OSError as exc:
-            raise InputError(f"out_dir {out} cannot be created: {exc.strerror}") from None
-    if not os.access(out, os.W_OK | os.X_OK):
-        raise InputError(f"out_dir {out}: no permission to write in it")
-    return out
 
 
 # --- the model shared by all events ----------------------------------------------------------
@@ -772,8 +754,6 @@ def _simulate_and_write(plan: _Plan, out: Path, *, model: _Model, approach: floa
 
 
 # --- writing --------------------------------------------------------------------------------
-def _joined(values, fmt: str) -> str:
-    return ";".join(format(float(v), fmt) for v in values)
 
 
 def _iso(moment: dt.datetime) -> str:
@@ -790,8 +770,8 @@ def _write_reference(path: Path, events: list[SiteEvent], layout: SiteLayout) ->
                 continue
             v = e.vehicles[0]
             loads = v.static_axle_loads / KILONEWTON
-            w.writerow([e.name, v.vehicle.n_axles, _joined(v.vehicle.axle_spacings, ".3f"),
-                        _joined(loads, ".3f"), f"{loads.sum():.3f}", f"{v.speed:.3f}",
+            w.writerow([e.name, v.vehicle.n_axles, joined(v.vehicle.axle_spacings, ".3f"),
+                        joined(loads, ".3f"), f"{loads.sum():.3f}", f"{v.speed:.3f}",
                         _iso(v.gauge_time), v.lane, "+x" if v.direction > 0 else "-x"])
 
 
@@ -809,7 +789,7 @@ def _write_truth(path: Path, events: list[SiteEvent]) -> None:
                 loads = v.static_axle_loads / KILONEWTON
                 w.writerow([e.name, e.kind, e.date.isoformat(), k + 1, str(v.trigger).lower(),
                             e.n_vehicles, e.configuration, v.vehicle_type, v.vehicle.n_axles,
-                            _joined(v.vehicle.axle_spacings, ".3f"), _joined(loads, ".3f"),
+                            joined(v.vehicle.axle_spacings, ".3f"), joined(loads, ".3f"),
                             f"{loads.sum():.3f}", f"{loads[0]:.3f}", ";".join(v.tyres),
                             f"{v.loading:.3f}", f"{v.speed:.3f}", v.lane,
                             "+x" if v.direction > 0 else "-x", f"{v.lane_y:.3f}",

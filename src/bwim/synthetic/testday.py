@@ -110,6 +110,7 @@ from bwim.io.toml_writer import to_toml
 from bwim.road import ISO_CLASSES, RoadProfile
 from bwim.synthetic import site
 from bwim.synthetic.layout import SHORT_SPAN_4_LANE, SiteLayout
+from bwim.synthetic.outfolder import checked_count, joined, prepare_folder
 from bwim.synthetic.site import Drift
 from bwim.synthetic.sitedays import SiteDays, make_site_days
 from bwim.synthetic.traffic import (
@@ -325,11 +326,11 @@ def basic_test_day(
     """
     if progress is not None and not callable(progress):
         raise InputError("progress must be a callable (done, total) or None")
-    n_calibration = _count("n_calibration", n_calibration, 1)
-    n_traffic = _count("n_traffic", n_traffic, 0)
+    n_calibration = checked_count("n_calibration", n_calibration, 1)
+    n_traffic = checked_count("n_traffic", n_traffic, 0)
     if n_multiple is None:
         n_multiple = max(1, round(0.04 * n_traffic)) if n_traffic else 0
-    n_multiple = _count("n_multiple", n_multiple, 0)
+    n_multiple = checked_count("n_multiple", n_multiple, 0)
     if n_multiple > n_traffic:
         raise InputError(f"n_multiple ({n_multiple}) exceeds n_traffic ({n_traffic})")
     if not isinstance(mesh, (int, float)) or not 0.1 <= mesh <= 0.6:
@@ -348,7 +349,7 @@ def basic_test_day(
         raise InputError(f"roughness must be two numbers (m³/cycle), got {roughness!r}") from None
     if not 0 < lo_r <= hi_r < 1e-3:
         raise InputError(f"roughness must be 0 < low <= high < 1e-3 m³/cycle, got {roughness!r}")
-    out = _prepare_folder(out_dir)
+    out = prepare_folder(out_dir)
 
     root = np.random.SeedSequence(int(seed))
     site_ss, plan_ss = root.spawn(2)
@@ -409,27 +410,8 @@ def basic_test_day(
 
 
 # --- validation -----------------------------------------------------------------------------
-def _count(name: str, value, minimum: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
-        raise InputError(f"{name} must be an integer >= {minimum}, got {value!r}")
-    return int(value)
 
 
-def _prepare_folder(out_dir) -> Path:
-    out = Path(out_dir)
-    if out.exists():
-        if not out.is_dir():
-            raise InputError(f"out_dir {out} exists and is not a folder")
-        if any(out.iterdir()):
-            raise InputError(f"out_dir {out} is not empty; refusing to overwrite it")
-    else:
-        try:
-            out.mkdir(parents=True)
-        except OSError as exc:
-            raise InputError(f"out_dir {out} cannot be created: {exc.strerror}") from None
-    if not os.access(out, os.W_OK | os.X_OK):
-        raise InputError(f"out_dir {out}: no permission to write in it")
-    return out
 
 
 # --- planning -------------------------------------------------------------------------------
@@ -667,8 +649,6 @@ def _hhmmss(clock: float) -> str:
 
 
 # --- writing --------------------------------------------------------------------------------
-def _joined(values, fmt: str) -> str:
-    return ";".join(format(float(v), fmt) for v in values)
 
 
 def _write_reference(path: Path, events: list[Event]) -> None:
@@ -681,8 +661,8 @@ def _write_reference(path: Path, events: list[Event]) -> None:
                 continue
             for v in e.vehicles:
                 loads = v.static_axle_loads / KILONEWTON
-                w.writerow([e.name, v.vehicle.n_axles, _joined(v.vehicle.axle_spacings, ".3f"),
-                            _joined(loads, ".3f"), f"{loads.sum():.3f}", f"{v.speed:.3f}"])
+                w.writerow([e.name, v.vehicle.n_axles, joined(v.vehicle.axle_spacings, ".3f"),
+                            joined(loads, ".3f"), f"{loads.sum():.3f}", f"{v.speed:.3f}"])
 
 
 def _write_truth(path: Path, events: list[Event]) -> None:
@@ -698,7 +678,7 @@ def _write_truth(path: Path, events: list[Event]) -> None:
                 loads = v.static_axle_loads / KILONEWTON
                 w.writerow([e.name, e.kind, k + 1, e.n_vehicles, e.configuration,
                             v.vehicle_type, v.vehicle.n_axles,
-                            _joined(v.vehicle.axle_spacings, ".3f"), _joined(loads, ".3f"),
+                            joined(v.vehicle.axle_spacings, ".3f"), joined(loads, ".3f"),
                             f"{loads.sum():.3f}", f"{v.speed:.3f}", v.lane, f"{v.lane_y:.3f}",
                             f"{v.clock_time:.9f}", f"{e.start_time:.9f}",
                             f"{e.strain_factor:.6f}", f"{v.road_gd0:.4e}", v.road_seed,
