@@ -58,18 +58,23 @@ def _clock(name):
 
 def test_scenario_has_the_schema_of_issue_20(day):
     """scenario.toml: [logger] columns (19 + temp_C) and 512 Hz; the gauges as one
-    [[sensors]] table with their y; temp_C a temperature sensor; one [[axle_detectors]]
+    [[sensors]] table with their x (one line, mid-span) and y; temp_C a temperature
+    sensor; [bridge] the measured geometry with nominal concrete (not the simulation's
+    35 GPa and 2400 kg/m³) on a 0.75 m mesh; one [[axle_detectors]]
     per lane with detectors, channels in the order the lane's traffic meets them (lane 3
     travels -x: ad4 at x = 4.5 m first), 3.0 m apart; [vehicle] the calibration truck,
     whose loads sum to its 40 t × g."""
     d, _ = day
     sc = tomllib.loads(d.scenario.read_text())
-    assert set(sc) == {"logger", "sensors", "axle_detectors", "vehicle"}
+    assert set(sc) == {"bridge", "logger", "sensors", "axle_detectors", "vehicle"}
+    assert sc["bridge"] == {"kind": "plate", "length": 6.0, "width": 15.55, "nx": 8,
+                            "ny": 21, "thickness": 0.45, "E": 30e9, "mu": 2500 * 0.45,
+                            "poisson": 0.2, "damping_ratio": 0.03, "supports": "ss-free"}
     gauges = [f"s{k:02d}" for k in range(1, 13)]
     assert sc["logger"] == {"columns": ["time", "ad1", "ad2", *gauges, "ad3", "ad4", "-", "-",
                                         "temp_C"], "sampling_rate": 512.0}
     assert sc["sensors"] == [
-        {"name": gauges, "kind": "strain_x",
+        {"name": gauges, "kind": "strain_x", "x": 3.0,
          "y": [4.50, 5.18, 5.86, 6.55, 7.23, 7.91, 8.59, 9.27, 9.95, 10.64, 11.32, 12.00]},
         {"name": "temp_C", "kind": "temperature"}]
     assert sc["axle_detectors"] == [

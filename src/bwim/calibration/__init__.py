@@ -1,6 +1,7 @@
 """Calibration of the bridge FE model from strains under a truck of known weight."""
 
 from bwim.calibration.driver import Calibration, Refine, calibrate
+from bwim.calibration.logger import LoggerCalibration, calibrate_logger
 from bwim.calibration.meshdefect import MeshCorrection, mesh_defects
 from bwim.calibration.problem import (
     DynamicObjective,
@@ -29,6 +30,7 @@ __all__ = [
     "Calibration",
     "DynamicObjective",
     "Identifiability",
+    "LoggerCalibration",
     "MassFit",
     "MeshCorrection",
     "Method",
@@ -39,6 +41,7 @@ __all__ = [
     "StageResult",
     "StaticObjective",
     "calibrate",
+    "calibrate_logger",
     "calibrate_quasistatic",
     "estimate_noise",
     "fit_mass",

@@ -89,7 +89,8 @@ from bwim.optimize import OptimizeResult
 from bwim.records import Record
 from bwim.vehicles import Vehicle
 
-__all__ = ["MassFit", "QuasiStaticCalibration", "calibrate_quasistatic", "fit_mass"]
+__all__ = ["MassFit", "QuasiStaticCalibration", "calibrate_quasistatic", "fit_mass",
+           "moving_force_columns"]
 
 #: Default cut-off as a fraction of the starting model's first natural frequency.
 DEFAULT_CUTOFF_FRACTION = 0.6
@@ -220,47 +221,59 @@ class _Record:
         self.sensors = rec.sensors
 
     def design(self, bridge: Bridge, n_modes: int) -> tuple[np.ndarray, np.ndarray]:
-        """b (n_t·n_s,) and A (n_t·n_s, n_groups·K), filtered and weighted.
-
-        The unfiltered response to moving forces is the static one plus, for each of the
-        lowest ``n_modes`` modes, its dynamic correction ``ε_m (q_m − f_m/ω_m²)`` (mode
-        acceleration method): below f₁ the bridge is not static, a crossing's slow
-        loading is amplified by ≈ 1/(1 − (f/f₁)²).
-        """
-        ins = influence_surfaces(bridge, self.sensors)
-        n_t, n_w = self.x.shape
-        G = ins.at(self.x.ravel(), self.y.ravel()).reshape(n_t, n_w, -1) * self.P[None, :,
-                                                                                   None]
-        R = np.zeros((n_t, self.n_groups, G.shape[2]))
-        np.add.at(R, (slice(None), self.group), G)
-        K = self.basis.shape[2]
-        # force time functions of every column: base (1) then basis k, per group
-        fun = np.concatenate([np.ones((n_t, self.n_groups, 1)), self.basis], axis=2)
-        cols = R[:, :, None, :] * fun[:, :, :, None]  # (t, g, 1+K, s)
-        if n_modes:
-            model = bridge.model
-            modes = bridge.modes(n_modes)
-            xs, ys = self.x.ravel(), self.y.ravel()
-            on = model.grid.contains(xs, ys if bridge.is_plate else None)
-            phi_w = np.zeros((xs.size, modes.n))
-            if np.any(on):
-                rows = model.point_rows(xs[on], ys[on] if bridge.is_plate else None)
-                phi_w[on] = np.einsum("pk,pkm->pm", rows.vals, modes.shapes[rows.dofs])
-            phi_w = phi_w.reshape(n_t, n_w, modes.n) * self.P[None, :, None]
-            fm = np.zeros((n_t, self.n_groups, modes.n))
-            np.add.at(fm, (slice(None), self.group), phi_w)
-            eps = bridge.sensor_matrix(self.sensors) @ modes.shapes  # (s, m)
-            zeta = bridge.rayleigh.ratio(modes.omega)
-            for m in range(modes.n):
-                om, z = modes.omega[m], zeta[m]
-                num, den = _signal().bilinear([1.0], [1.0, 2 * z * om, om * om], fs=self.fs)
-                f = fm[:, :, m, None] * fun  # (t, g, 1+K)
-                q = _signal().lfilter(num, den, f, axis=0) - f / om**2
-                cols += q[:, :, :, None] * eps[None, None, None, :, m]
+        """b (n_t·n_s,) and A (n_t·n_s, n_groups·K), filtered and weighted
+        (:func:`moving_force_columns`)."""
+        fun = np.concatenate([np.ones((self.t.size, self.n_groups, 1)), self.basis], axis=2)
+        cols = moving_force_columns(bridge, self.sensors, self.x, self.y, self.P, self.group,
+                                    fun, fs=self.fs, n_modes=n_modes)
+        n_t, n_s, K = self.t.size, cols.shape[3], self.basis.shape[2]
         b = _signal().sosfiltfilt(self.sos, cols[:, :, 0].sum(axis=1), axis=0) * self.sqrt_w
         A = _signal().sosfiltfilt(self.sos, cols[:, :, 1:], axis=0) * self.sqrt_w
-        A = A.transpose(0, 3, 1, 2).reshape(n_t * G.shape[2], self.n_groups * K)
+        A = A.transpose(0, 3, 1, 2).reshape(n_t * n_s, self.n_groups * K)
         return b.ravel(), A
+
+
+def moving_force_columns(bridge: Bridge, sensors, x: np.ndarray, y: np.ndarray,
+                         P: np.ndarray, group: np.ndarray, fun: np.ndarray, *, fs: float,
+                         n_modes: int) -> np.ndarray:
+    """Readings of ``sensors`` under wheel forces ``P_w f_{g(w),k}(t)``, unfiltered.
+
+    ``x, y`` (n_t, n_w) wheel positions (m), ``P`` (n_w,) static wheel loads (N),
+    ``group`` (n_w,) each wheel's force group, ``fun`` (n_t, n_groups, F) the force time
+    functions of each group.  Returns (n_t, n_groups, F, n_s): column (g, k) is the reading
+    when group g's wheels carry ``P_w fun[:, g, k]``.  The static response plus, for each
+    of the lowest ``n_modes`` modes, its dynamic correction ``ε_m (q_m − f_m/ω_m²)`` (mode
+    acceleration method): below f₁ the bridge is not static, a crossing's slow loading is
+    amplified by ≈ 1/(1 − (f/f₁)²).
+    """
+    ins = influence_surfaces(bridge, sensors)
+    n_t, n_w = x.shape
+    n_groups = fun.shape[1]
+    G = ins.at(x.ravel(), y.ravel()).reshape(n_t, n_w, -1) * P[None, :, None]
+    R = np.zeros((n_t, n_groups, G.shape[2]))
+    np.add.at(R, (slice(None), group), G)
+    cols = R[:, :, None, :] * fun[:, :, :, None]  # (t, g, F, s)
+    if n_modes:
+        model = bridge.model
+        modes = bridge.modes(n_modes)
+        xs, ys = x.ravel(), y.ravel()
+        on = model.grid.contains(xs, ys if bridge.is_plate else None)
+        phi_w = np.zeros((xs.size, modes.n))
+        if np.any(on):
+            rows = model.point_rows(xs[on], ys[on] if bridge.is_plate else None)
+            phi_w[on] = np.einsum("pk,pkm->pm", rows.vals, modes.shapes[rows.dofs])
+        phi_w = phi_w.reshape(n_t, n_w, modes.n) * P[None, :, None]
+        fm = np.zeros((n_t, n_groups, modes.n))
+        np.add.at(fm, (slice(None), group), phi_w)
+        eps = bridge.sensor_matrix(sensors) @ modes.shapes  # (s, m)
+        zeta = bridge.rayleigh.ratio(modes.omega)
+        for m in range(modes.n):
+            om, z = modes.omega[m], zeta[m]
+            num, den = _signal().bilinear([1.0], [1.0, 2 * z * om, om * om], fs=fs)
+            f = fm[:, :, m, None] * fun  # (t, g, F)
+            q = _signal().lfilter(num, den, f, axis=0) - f / om**2
+            cols += q[:, :, :, None] * eps[None, None, None, :, m]
+    return cols
 
 
 def calibrate_quasistatic(

@@ -164,7 +164,16 @@ COMMANDS: tuple[Command, ...] = (
         "loads.  The scenario's [bridge] is the starting model and its [calibrate] section "
         "gives the defaults; the records must be crossings at the scenario's [run] speed, "
         "lane and approach, over its [road].\n\n"
-        "  bwim calibrate examples/paper_slab.toml crossing.h5 -o calibrated.toml",
+        "With a site's scenario ([logger], [[axle_detectors]], [vehicle], a [bridge] and the "
+        "gauges' x, y) the records are the calibration truck's logger files: the runs are "
+        "detected as bwim weigh detects them, runs with other traffic are left out, and the "
+        "model's stiffness ratio, the logger's gain(s), offsets and the detectors' place on "
+        "the deck are fitted without a road (docs/site_model.md).  The model is checked by "
+        "weighing each run with the model fitted without it; one that cannot weigh its own "
+        "runs within 10 % is written but not accepted (exit status 1), and bwim weigh "
+        "refuses it.\n\n"
+        "  bwim calibrate examples/paper_slab.toml crossing.h5 -o calibrated.toml\n"
+        "  bwim calibrate site/scenario.toml site/calibration -o site_model.toml",
         (_SCENARIO,
          _RECORDS.updated(
              help="records of the calibration truck (.h5 or .csv; folders expanded)"),
@@ -179,6 +188,11 @@ COMMANDS: tuple[Command, ...] = (
              help="correct the model's discretisation error by a model bisected N times "
              "(1-3), or as often as its sensors need (auto); default: the scenario's, "
              "else none"),
+         arg("--gains", choices=["common", "per_channel"],
+             help="a site's logger files: one logger scale for every gauge (common, the "
+             "default) or a gain per gauge"),
+         arg("--track-width", type=float, metavar="M",
+             help="a site's logger files: the calibration truck's track, m (default 1.9)"),
          _FORCE)),
     Command(
         "identify", identify_command,

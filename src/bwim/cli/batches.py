@@ -248,9 +248,13 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path, batch) -> int:
              else _continuous_items(paths, scenario, folder / EVENTS, resume=args.resume))
     bridge = options = None
     if args.bridge:
-        from bwim.scenario import load_bridge
+        from bwim.scenario import load_model
+        from bwim.site import SiteModel
 
-        bridge = load_bridge(args.bridge)
+        bridge = load_model(args.bridge)
+        if isinstance(bridge, SiteModel) and not bridge.accepted:
+            raise InputError(f"{args.bridge}: the model is not accepted ({bridge.reason}): "
+                             "bwim does not weigh with it")
         options = scenario.identify.kwargs() if scenario.identify is not None else {}
     site = _calibrate_site(record_paths(args.calibration_records, any_suffix=True),
                            scenario, folder)

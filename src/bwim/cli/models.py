@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from collections.abc import Sequence
 from pathlib import Path
+
+import numpy as np
 
 from bwim.cli.common import (
     CalibrationProgress,
@@ -59,10 +62,16 @@ def calibrate_command(args: argparse.Namespace) -> int:
     from bwim.scenario import build_bridge, build_road, build_vehicle, load_scenario, save_bridge
 
     check_jobs(args.jobs)
-    paths = record_paths(args.records)
+    scenario = load_scenario(args.scenario)
+    paths = record_paths(args.records, any_suffix=scenario.logger is not None)
     out = out_file(args.output, (".toml",), inputs=[args.scenario, *paths],
                     force=args.force)
-    scenario = load_scenario(args.scenario)
+    if scenario.logger is not None:
+        return _site_model(args, scenario, paths, out)
+    for key in ("gains", "track_width"):
+        if getattr(args, key, None) is not None:
+            raise InputError(f"--{key.replace('_', '-')} is for a site's logger files "
+                             "(a scenario with [logger])")
     start = build_bridge(scenario)
     vehicle = build_vehicle(scenario)
     road = build_road(scenario)
@@ -103,6 +112,62 @@ def calibrate_command(args: argparse.Namespace) -> int:
         print(f"mesh check: {cal.discretisation.summary().replace(chr(10), '; ')}")
     print(f"{cal.nfev} evaluations, wall time {cal.wall_time:.1f} s")
     print(f"calibrated model: {out}")
+    return 0
+
+
+def _site_model(args: argparse.Namespace, scenario, paths, out: Path) -> int:
+    """``bwim calibrate`` on a site's logger files: the FE model from the calibration runs
+    (:func:`bwim.site.calibrate_site_model`), saved with its gains and self-check."""
+    from bwim.scenario import build_bridge, build_site_setup, load_record, save_site_model
+    from bwim.site import calibrate_site, calibrate_site_model
+
+    if scenario.bridge is None:
+        raise InputError("calibrating a site's model needs a [bridge] in the scenario (the "
+                         "deck's geometry, a nominal E and mu) and every gauge's x and y")
+    for key in ("method", "seed", "mesh_correction"):
+        if getattr(args, key) is not None:
+            raise InputError(f"--{key.replace('_', '-')} is not used for a site's logger "
+                             "files (the road-free fit has no optimiser choice)")
+    start = build_bridge(scenario)
+    records = []
+    for p in paths:
+        records.append(load_record(p, scenario))
+    site = calibrate_site(records, build_site_setup(scenario))
+    print(f"calibrating the model from {site.n_used} of {len(records)} run(s) "
+          "(each model fitted again without each run to check it) ...", flush=True)
+    model = calibrate_site_model(records, site, start, gains=args.gains or "common",
+                                 track_width=args.track_width)
+    save_site_model(model, out, title=f"calibrated from {site.n_used} run(s) of "
+                    f"{scenario.title or scenario.source}")
+    fit = model.fit
+    rows = [(name, f"{v:.5g}", f"± {fit.uncertainty[name]:.2g}") for name, v in
+            fit.params.items()]
+    rows.append(("gain (logger units per strain)",
+                 " … ".join(f"{g:.5g}" for g in sorted({min(model.gains.values()),
+                                                        max(model.gains.values())})), ""))
+    print(Table("Calibrated (E_x is the scale reference; SI units):",
+                ("parameter", "value", "uncertainty"), rows).render())
+    checks = {r.index: r for r in model.runs}
+    runs = []
+    for k, (p, why) in enumerate(zip(paths, site.reasons, strict=True)):
+        c = checks.get(k)
+        runs.append((p.name, why or "used",
+                     "" if c is None else f"{100 * c.explained:.1f}",
+                     "" if c is None or not np.isfinite(c.gvw_error)
+                     else f"{100 * c.gvw_error:+.1f}"))
+    print()
+    print(Table("Calibration runs (explained: share of the filtered response; GVW: the run "
+                "weighed by the model fitted without it):",
+                ("run", "use", "explained %", "GVW error %"), runs).render())
+    print(f"\n{fit.mass_message}")
+    print(f"{fit.nfev} evaluations")
+    print(f"model: {out}")
+    if not model.accepted:
+        print(f"bwim: the model is not accepted: {model.reason}; bwim weigh refuses to "
+              "weigh with it", file=sys.stderr)
+        return 1
+    print(f"accepted: every run weighed within {100 * model.tolerance:.0f} % by the model "
+          "fitted without it")
     return 0
 
 

@@ -116,6 +116,7 @@ from bwim.scenario.parse import (
     scenario_from_dict,
     scenario_to_dict,
 )
+from bwim.scenario.sitemodel import load_model, load_site_model, save_site_model
 from bwim.scenario.specs import (
     VEHICLE_TYPES,
     AxleDetectorSpec,
@@ -156,10 +157,13 @@ __all__ = [
     "build_vehicle",
     "dump_scenario",
     "load_bridge",
+    "load_model",
     "load_record",
     "load_scenario",
+    "load_site_model",
     "read_toml",
     "save_bridge",
+    "save_site_model",
     "scenario_from_dict",
     "scenario_to_dict",
     "simulate_scenario",

@@ -39,6 +39,7 @@ from bwim.site.drift import (
 )
 from bwim.site.event import EventWeighing, VehicleWeighing, weigh_event
 from bwim.site.health import GaugeFault, GaugeHealth, check_gauges
+from bwim.site.model import ModelRun, SiteModel, calibrate_site_model
 from bwim.site.setup import DETECTION_METHODS, DetectorLane, Lane, SiteSetup
 from bwim.summary import SummaryRow
 
@@ -53,11 +54,14 @@ __all__ = [
     "GaugeFault",
     "GaugeHealth",
     "Lane",
+    "ModelRun",
     "SiteCalibration",
+    "SiteModel",
     "SiteSetup",
     "TrafficDrift",
     "VehicleWeighing",
     "calibrate_site",
+    "calibrate_site_model",
     "check_gauges",
     "correct_drift",
     "weigh_event",

@@ -66,6 +66,7 @@ from bwim.site.calibrate import (
 )
 from bwim.site.health import check_gauges
 from bwim.site.lanes import EventDetection, LaneVehicle, detect_lanes
+from bwim.site.model import SiteModel
 from bwim.summary import SummaryRow
 from bwim.wim import Weighing, weigh
 
@@ -261,7 +262,8 @@ class EventWeighing:
 
 
 # --- weigh_event -------------------------------------------------------------------------
-def weigh_event(record: Record, calibration: SiteCalibration, *, bridge: Bridge | None = None,
+def weigh_event(record: Record, calibration: SiteCalibration, *,
+                bridge: Bridge | SiteModel | None = None,
                 identify_options: Mapping[str, Any] | None = None) -> EventWeighing:
     """Detect and weigh every vehicle of one event (see the module docstring).
 
@@ -289,7 +291,9 @@ def weigh_event(record: Record, calibration: SiteCalibration, *, bridge: Bridge 
         why = (det.message if det is not None and det.message else ev.message) or \
             "no axle found"
         return EventWeighing(weighed=False, reason=why, detection=det, flags=flags, **base)
-    outcomes = tuple(_vehicle(record, ev, k, calibration, bridge, identify_options or {})
+    model = (None if bridge is None else bridge if isinstance(bridge, SiteModel)
+             else SiteModel.of_bridge(bridge))
+    outcomes = tuple(_vehicle(record, ev, k, calibration, model, identify_options or {})
                      for k in range(len(ev.vehicles)))
     principal = next((o for o in outcomes if o.weighed), None) or next(
         (o for o in outcomes if o.lane == setup.calibration_lane), outcomes[0])
@@ -316,7 +320,7 @@ def _single_lane(det: Detection, calibration: SiteCalibration) -> EventDetection
 
 
 def _vehicle(record: Record, ev: EventDetection, k: int, calibration: SiteCalibration,
-             bridge: Bridge | None, options: Mapping[str, Any]) -> VehicleWeighing:
+             model: SiteModel | None, options: Mapping[str, Any]) -> VehicleWeighing:
     """One vehicle's decision and weighing (see the module docstring)."""
     setup = calibration.setup
     lv = ev.vehicles[k]
@@ -352,8 +356,13 @@ def _vehicle(record: Record, ev: EventDetection, k: int, calibration: SiteCalibr
         factor, method, drift_flags = _drift_factor(record, v.passage, calibration)
     except InputError as exc:
         return refused(f"drift correction failed: {_why(exc)}")
-    if bridge is not None and lv.lane == setup.calibration_lane:
-        return _weigh_mfi(record, lv, flags, bridge, options, factor, method, drift_flags)
+    if model is not None and lv.lane == setup.calibration_lane:
+        if not model.accepted:
+            return refused(f"the bridge model is not accepted: {model.reason}")
+        if FLAG_MULTIPLE_PRESENCE in flags:
+            return refused("multiple presence: moving force identification models this "
+                           "vehicle's forces alone")
+        return _weigh_mfi(record, lv, flags, model, options, factor, method, drift_flags)
     try:
         health = check_gauges(record, v.passage, calibration.lines, combine=setup.combine,
                               alone=FLAG_MULTIPLE_PRESENCE not in flags)
@@ -411,32 +420,24 @@ def _drift_factor(record: Record, passage: Passage, calibration: SiteCalibration
     return f, "time_of_day", (*gap, *(("outside_calibration_time",) if outside else ()))
 
 
-def _weigh_mfi(record: Record, lv: LaneVehicle, flags: tuple[str, ...], bridge: Bridge,
+def _weigh_mfi(record: Record, lv: LaneVehicle, flags: tuple[str, ...], model: SiteModel,
                options: Mapping[str, Any], factor: float, method: str,
                drift_flags: tuple[str, ...]) -> VehicleWeighing:
-    """The detected vehicle weighed by moving force identification with ``bridge``."""
+    """The detected vehicle weighed by moving force identification with ``model``."""
     vehicle = lv.vehicle
 
     def refused(reason: str) -> VehicleWeighing:
         return VehicleWeighing(vehicle=vehicle, lane=lv.lane, direction=lv.direction,
                                weighed=False, reason=reason, flags=flags)
 
-    gauges = [s for s in record.sensors if s.kind.is_structural]
-    if any(s.x is None or s.y is None for s in gauges):
-        return refused("weighing by MFI needs every gauge's position (x, y) in the scenario")
     if vehicle.lateral_unit != "m" or not np.isfinite(vehicle.lateral):
         return refused("weighing by MFI needs the vehicle's lane in metres (gauge y positions)")
-    rec = record.channels(gauges)
-    # the model's bridge is at rest before the first axle arrives: the logger's offsets
-    # are the readings' mean until then (the pre-trigger)
-    before = vehicle.passage.axle_x(rec.time)[:, 0] < 0.0
-    if np.count_nonzero(before) < 8:
-        return refused("weighing by MFI needs readings before the first axle reaches the "
-                       "bridge (a pre-trigger) to zero the gauges")
-    data = (rec.data - rec.data[before].mean(axis=0)) / factor
-    rec = dataclasses.replace(rec, data=data, passages=(vehicle.passage,))
     try:
-        ident = identify_forces(bridge, rec, **options)
+        rec = model.readings(record, vehicle.passage, factor)
+    except InputError as exc:
+        return refused(_why(exc))
+    try:
+        ident = identify_forces(model.bridge, rec, **options)
     except _EVENT_ERRORS as exc:
         return refused(f"weighing by MFI failed: {_why(exc)}")
     flags = tuple(dict.fromkeys([*flags, *ident.vehicle_flags[0], *drift_flags]))

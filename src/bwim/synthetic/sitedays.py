@@ -20,7 +20,10 @@ writes what its logger would have recorded, plus the ground truth, into a new fo
     direction (half of them; 4–7 axles), side by side in the other lane of the same
     direction (30 %) or following in the same lane 3–7 m behind (20 %).
 ``scenario.toml``
-    ``[logger] columns, sampling_rate``; ``[[sensors]]`` the gauges (names, kind, y);
+    ``[bridge]`` the starting model an engineer would declare (the measured geometry,
+    nominal concrete: :data:`NOMINAL_MODULUS`, :data:`NOMINAL_DENSITY`; elements of about
+    :data:`MODEL_MESH` m, coarser than the simulation's); ``[logger] columns,
+    sampling_rate``; ``[[sensors]]`` the gauges (names, kind, x, y);
     ``[[axle_detectors]]`` per lane with detectors (lane, direction, channels in the order
     the lane's traffic meets them, distance, y); ``[vehicle]`` the calibration truck's
     nominal spacings and static axle loads (N).  With ``temperature_channel``, a
@@ -129,6 +132,11 @@ TRAFFIC_WINDOW = (6 * 3600.0, 20 * 3600.0)  #: s, clock window of the traffic da
 MIN_GAP = 12.0  #: s between event starts on one date
 REDRAWS = 10  #: attempts at a road on which no tyre loses contact
 CONFIG_SHARE = (("opposite", 0.5), ("side_by_side", 0.3), ("following", 0.2))
+#: The scenario's [bridge]: the starting model a user would declare (measured geometry,
+#: nominal concrete), coarser than the simulation's mesh (no inverse crime).
+MODEL_MESH = 0.75  #: m
+NOMINAL_MODULUS = 30e9  #: Pa
+NOMINAL_DENSITY = 2500.0  #: kg/m³
 CALIBRATION_TYRES = ("single", "dual", "wide", "wide", "wide")  #: the calibration truck's
 
 
@@ -801,8 +809,13 @@ def _write_truth(path: Path, events: list[SiteEvent]) -> None:
 
 def _write_scenario(path: Path, layout: SiteLayout, truck, loads, temperature: bool) -> None:
     columns = list(layout.columns) + (["temp_C"] if temperature else [])
-    sensors = [{"name": [g.name for g in layout.gauges], "kind": "strain_x",
-                "y": [float(g.y) for g in layout.gauges]}]
+    xs = {float(g.x) for g in layout.gauges}
+    if len(xs) == 1:  # one line of gauges: x once (a list of x and y would be a grid)
+        sensors = [{"name": [g.name for g in layout.gauges], "kind": "strain_x",
+                    "x": xs.pop(), "y": [float(g.y) for g in layout.gauges]}]
+    else:
+        sensors = [{"name": g.name, "kind": "strain_x", "x": float(g.x), "y": float(g.y)}
+                   for g in layout.gauges]
     if temperature:
         sensors.append({"name": "temp_C", "kind": "temperature"})
     detectors = []
@@ -812,7 +825,17 @@ def _write_scenario(path: Path, layout: SiteLayout, truck, loads, temperature: b
                           "channels": [d.name for d in pair],
                           "distance": round(abs(pair[1].x - pair[0].x), 6),
                           "y": float(pair[0].y)})
+    # the model an engineer would start from: the measured geometry, nominal concrete
+    # (not the simulation's modulus and density), elements of about MODEL_MESH m
+    nx = max(2, round(layout.span / MODEL_MESH))
+    ny = max(2, round(layout.width / MODEL_MESH))
     doc = {
+        "bridge": {"kind": "plate", "length": float(layout.span),
+                   "width": float(layout.width), "nx": nx, "ny": ny,
+                   "thickness": float(layout.thickness), "E": NOMINAL_MODULUS,
+                   "mu": NOMINAL_DENSITY * float(layout.thickness),
+                   "poisson": float(layout.poisson),
+                   "damping_ratio": float(layout.damping_ratio), "supports": "ss-free"},
         "logger": {"columns": columns, "sampling_rate": float(layout.sampling_rate)},
         "sensors": sensors,
         "axle_detectors": detectors,
@@ -889,8 +912,9 @@ def _write_readme(path: Path, layout: SiteLayout, events, dates, temperature: bo
     cols = list(layout.columns) + (["temp_C"] if temperature else [])
     text = f"""Simulated B-WIM installation {layout.name} (bwim.synthetic)
 
-scenario.toml             the installation's scenario ([logger], [[sensors]],
-                          [[axle_detectors]], [vehicle] = calibration truck)
+scenario.toml             the installation's scenario ([bridge] = a nominal starting
+                          model, [logger], [[sensors]], [[axle_detectors]],
+                          [vehicle] = calibration truck)
 calibration/              {n_cal} runs of the calibration truck on {dates[0]}
                           ({n_opp} with a vehicle in the other direction)
 calibration_day_traffic/  {n_cdt} traffic events on {dates[0]} (PL<lane>_...)

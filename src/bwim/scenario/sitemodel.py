@@ -1,0 +1,91 @@
+"""A site's calibrated model on disk: the bridge, the logger's gains and the detectors' frame.
+
+Contract
+--------
+* :func:`save_site_model` writes a :class:`~bwim.site.SiteModel` as TOML: the bridge as
+  :func:`~bwim.scenario.save_bridge` writes it (exact parameters), and a ``[site_model]``
+  table: ``channels`` and their ``gains`` (logger units per unit strain), ``origin`` and
+  ``lateral`` (m), ``track_width`` (m), ``tolerance``, ``accepted`` and ``reason``, and the
+  self-check's ``runs`` (``index`` from 1, ``explained``, ``gvw_error``, ``reason``).
+  Floats are written with :func:`repr`: a saved model reads back bit for bit.
+* :func:`load_site_model` reads it back (``fit`` is None: the fit's details stay with the
+  run that made it).  :func:`load_model` reads either such a file (a ``SiteModel``) or any
+  bridge or scenario file (a :class:`~bwim.fe.bridge.Bridge`), for ``--bridge``.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+from bwim.errors import InputError
+from bwim.fe.bridge import Bridge
+from bwim.io.atomic import atomic_open
+from bwim.io.toml_writer import to_toml
+from bwim.scenario.bridgefile import bridge_spec
+from bwim.scenario.build import build_bridge
+from bwim.scenario.parse import read_toml, scenario_from_dict, scenario_to_dict
+from bwim.scenario.specs import Scenario
+from bwim.site.model import ModelRun, SiteModel
+
+__all__ = ["load_model", "load_site_model", "save_site_model"]
+
+_KEYS = ("channels", "gains", "origin", "lateral", "track_width", "tolerance", "accepted",
+         "reason", "runs")
+
+
+def save_site_model(model: SiteModel, path: str | os.PathLike, *, title: str = "") -> None:
+    """Write ``model`` (module contract), atomically."""
+    doc = scenario_to_dict(Scenario(bridge=bridge_spec(model.bridge), title=title))
+    table: dict[str, Any] = {
+        "channels": list(model.gains), "gains": [float(g) for g in model.gains.values()],
+        "origin": float(model.origin), "lateral": float(model.lateral),
+        "track_width": None if model.track_width is None else float(model.track_width),
+        "tolerance": float(model.tolerance), "accepted": bool(model.accepted),
+        "reason": model.reason,
+        "runs": [{"index": r.index + 1, "explained": float(r.explained),
+                  "gvw_error": float(r.gvw_error), "reason": r.reason} for r in model.runs],
+    }
+    doc["site_model"] = table
+    header = ("bwim site model: the bridge calibrated from logger files, the logger's gains "
+              "and the axle detectors' frame.\nWeigh with: bwim weigh SITE.toml traffic/ "
+              "--calibration-records calibration/ --bridge THIS.toml")
+    with atomic_open(path) as f:
+        f.write(to_toml(doc, header=header))
+
+
+def load_site_model(path: str | os.PathLike) -> SiteModel:
+    """The :class:`~bwim.site.SiteModel` of a file :func:`save_site_model` wrote."""
+    model = load_model(path)
+    if not isinstance(model, SiteModel):
+        raise InputError(f"{path}: no [site_model] table: not a site model file")
+    return model
+
+
+def load_model(path: str | os.PathLike) -> SiteModel | Bridge:
+    """A site model file's :class:`~bwim.site.SiteModel`, or any scenario's bridge."""
+    doc = dict(read_toml(path))
+    table = doc.pop("site_model", None)
+    bridge = build_bridge(scenario_from_dict(doc, source=path))
+    if table is None:
+        return bridge
+    src = f"{path}: [site_model]"
+    if not isinstance(table, dict) or set(table) - set(_KEYS):
+        raise InputError(f"{src}: allowed keys are {', '.join(_KEYS)}")
+    try:
+        channels = [str(c) for c in table["channels"]]
+        gains = [float(g) for g in table["gains"]]
+        if len(channels) != len(gains) or any(not g > 0 for g in gains):
+            raise InputError(f"{src}: one positive gain per channel is needed")
+        runs = tuple(ModelRun(index=int(r["index"]) - 1, explained=float(r["explained"]),
+                              gvw_error=float(r["gvw_error"]), reason=str(r.get("reason", "")))
+                     for r in table.get("runs", ()))
+        track = table.get("track_width")
+        return SiteModel(bridge=bridge, gains=dict(zip(channels, gains, strict=True)),
+                         origin=float(table["origin"]), lateral=float(table["lateral"]),
+                         track_width=None if track is None else float(track),
+                         tolerance=float(table["tolerance"]),
+                         accepted=bool(table["accepted"]), reason=str(table.get("reason", "")),
+                         runs=runs)
+    except (KeyError, TypeError, ValueError) as exc:
+        raise InputError(f"{src}: missing or mistyped value ({exc})") from None

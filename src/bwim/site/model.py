@@ -1,0 +1,306 @@
+"""A site's finite-element model calibrated from its logger files, checked on its own runs.
+
+Contract
+--------
+* :func:`calibrate_site_model` takes the calibration runs (logger records, as for
+  :func:`~bwim.site.calibrate_site`), the site calibration made from them (its detection
+  of each run, its rejection of runs with other traffic, each run's drift factor) and a
+  starting bridge model (geometry, nominal modulus and density), and fits with
+  :func:`~bwim.calibration.calibrate_logger`:
+
+  - the stiffness ratios (``E_y`` of a plate) with ``E_x`` kept as the scale reference,
+  - the gains (one common logger scale by default: logger units per unit of model strain;
+    with gains fitted the overall modulus and the units are one unknown),
+  - the offsets and baseline slopes of every channel in every run,
+  - ``origin``: where the detectors' frame (x = 0 at the calibration lane's first axle
+    detector) lies on the model (m), and ``lateral``: the offset of detected lateral
+    positions (m),
+  - the mass from the free vibration when the records show it above the noise.
+
+  No passage and no road are given: the passages are the detected ones with the
+  calibration truck's declared spacings, each wheel pair ``track_width`` apart
+  (default :data:`DEFAULT_TRACK`, or the scenario's ``[vehicle] track_width``); the
+  road-free method needs no road (docs/theory.md §13).  Each run is divided by its drift
+  factor from the site calibration, so the gains belong to the same reference as the
+  drift correction of traffic.
+* **Self-consistency** (leave-one-out): each used run is weighed, exactly as traffic is
+  (:func:`~bwim.site.weigh_event` with detection, drift and plausibility checks), by the
+  model calibrated without it; its GVW error against the declared truck is
+  ``ModelRun.gvw_error``.  The model is **accepted** only when its fit succeeded (no
+  parameter at a bound) and every run is weighed within ``tolerance`` (default
+  :data:`DEFAULT_TOLERANCE`, the GVW tolerance of COST 323 class B(10)); otherwise
+  ``accepted`` is False with the reason, and :func:`~bwim.site.weigh_event` refuses every
+  vehicle it would weigh with this model (never a weight from a model that cannot weigh
+  its own calibration truck).
+* Weighing with the model (:meth:`SiteModel.readings`): the gauges' readings less their
+  mean before the first axle arrives, divided by the drift factor and by each gauge's
+  gain, the passage moved into the model's frame (``origin``, ``lateral``) with the
+  model's track.  Only the calibration lane's direction is weighed this way.
+* Units: N, m, s, Pa; gains in logger units per unit strain.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from bwim.calibration.logger import GAIN_MODES, LoggerCalibration, calibrate_logger
+from bwim.errors import InputError
+from bwim.fe.bridge import Bridge
+from bwim.records import Passage, Record
+
+if TYPE_CHECKING:  # pragma: no cover
+    from bwim.site.calibrate import SiteCalibration
+
+__all__ = ["DEFAULT_TOLERANCE", "DEFAULT_TRACK", "ModelRun", "SiteModel",
+           "calibrate_site_model"]
+
+#: m: a heavy vehicle's track, centre to centre of its wheels' contact (the calibration
+#: truck's when the scenario does not state it).
+DEFAULT_TRACK = 1.9
+#: The largest leave-one-out GVW error (fraction) of an accepted model: COST 323's GVW
+#: tolerance of class B(10).
+DEFAULT_TOLERANCE = 0.10
+
+
+@dataclass(frozen=True, kw_only=True)
+class ModelRun:
+    """One calibration run in the model's self-check.
+
+    Attributes
+    ----------
+    index : int
+        Position of the run in the records given.
+    explained : float
+        Share of the run's filtered load response the full model explains.
+    gvw_error : float
+        GVW weighed by the model fitted without this run, over the declared, minus 1
+        (nan when it was not weighed).
+    reason : str
+        Why the run was not weighed ("" when it was).
+    """
+
+    index: int
+    explained: float
+    gvw_error: float
+    reason: str = ""
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class SiteModel:
+    """A bridge model with the logger's gains and the detectors' frame (module contract).
+
+    Attributes
+    ----------
+    bridge : Bridge
+    gains : mapping of str to float
+        Logger units per unit of model strain, per gauge channel (a missing channel: 1).
+    origin, lateral : float
+        The detectors' frame on the model: x of its origin, offset of lateral positions (m).
+    track_width : float or None
+        The wheels' track of a weighed vehicle (m; None: the detected passage's own).
+    tolerance : float
+        The largest leave-one-out GVW error accepted (fraction).
+    accepted : bool
+    reason : str
+        Why the model is not accepted ("" when it is).
+    runs : tuple of ModelRun
+    fit : LoggerCalibration or None
+        The full fit (None for a model read from a file).
+    """
+
+    bridge: Bridge
+    gains: Mapping[str, float]
+    origin: float = 0.0
+    lateral: float = 0.0
+    track_width: float | None = None
+    tolerance: float = DEFAULT_TOLERANCE
+    accepted: bool = True
+    reason: str = ""
+    runs: tuple[ModelRun, ...] = ()
+    fit: LoggerCalibration | None = None
+
+    @classmethod
+    def of_bridge(cls, bridge: Bridge) -> SiteModel:
+        """A bridge used as it is: readings already in strain, passages in its frame."""
+        if not isinstance(bridge, Bridge):
+            raise InputError(f"bridge must be a Bridge or a SiteModel, got "
+                             f"{type(bridge).__name__}")
+        return cls(bridge=bridge, gains={})
+
+    @property
+    def gvw_errors(self) -> np.ndarray:
+        """The runs' leave-one-out GVW errors (fractions; nan: not weighed)."""
+        return np.array([r.gvw_error for r in self.runs])
+
+    def passage(self, passage: Passage) -> Passage:
+        """A detected passage in the model's frame, with the model's track."""
+        return dataclasses.replace(
+            passage, delay=passage.delay - self.origin / passage.speed,
+            lane=passage.lane + self.lateral,
+            track_width=self.track_width if self.track_width is not None
+            else passage.track_width)
+
+    def readings(self, record: Record, passage: Passage, factor: float) -> Record:
+        """The record's gauges as model strains with the passage in the model's frame
+        (module contract).  Raises InputError with the reason when it cannot."""
+        gauges = [s for s in record.sensors if s.kind.is_structural]
+        if not gauges or any(s.x is None or s.y is None for s in gauges):
+            raise InputError("weighing by MFI needs every gauge's position (x, y) in the "
+                             "scenario")
+        rec = record.channels(gauges)
+        moved = self.passage(passage)
+        before = moved.axle_x(rec.time)[:, 0] < 0.0
+        if np.count_nonzero(before) < 8:
+            raise InputError("weighing by MFI needs readings before the first axle reaches "
+                             "the bridge (a pre-trigger) to zero the gauges")
+        gains = np.array([float(self.gains.get(s.name, 1.0)) for s in gauges])
+        data = (rec.data - rec.data[before].mean(axis=0)) / (factor * gains)
+        return dataclasses.replace(rec, data=data, passages=(moved,))
+
+    def summary(self) -> str:
+        """A few lines: the fit, the self-check and the verdict."""
+        lines = []
+        if self.fit is not None:
+            f = self.fit
+            params = ", ".join(f"{k} = {v:.4g}" for k, v in f.params.items())
+            lines.append(f"fit: {params}; {'converged' if f.success else f.message}; "
+                         f"{f.mass_message}")
+        err = self.gvw_errors
+        done = err[np.isfinite(err)]
+        if done.size:
+            lines.append(f"leave-one-out GVW errors of {done.size} run(s): mean "
+                         f"{100 * done.mean():+.1f} %, largest {100 * np.abs(done).max():.1f} %"
+                         f" (tolerance {100 * self.tolerance:.0f} %)")
+        lines.append("accepted" if self.accepted else f"not accepted: {self.reason}")
+        return "\n".join(lines)
+
+
+def calibrate_site_model(
+    records: Sequence[Record],
+    calibration: SiteCalibration,
+    start_bridge: Bridge,
+    *,
+    track_width: float | None = None,
+    gains: str = "common",
+    tolerance: float = DEFAULT_TOLERANCE,
+    leave_one_out: bool = True,
+    identify_options: Mapping[str, Any] | None = None,
+    **fit_options: Any,
+) -> SiteModel:
+    """Calibrate ``start_bridge`` from the site's calibration runs and check it on them.
+
+    Parameters
+    ----------
+    records : sequence of Record
+        The calibration runs, the same as those ``calibration`` was made from.
+    calibration : SiteCalibration
+    start_bridge : Bridge
+        Geometry and nominal parameters; gauges need x, y in its frame.
+    track_width : float, optional
+        The calibration truck's track, m (default :data:`DEFAULT_TRACK`).
+    gains : "common" or "per_channel"
+    tolerance : float
+        The largest leave-one-out GVW error of an accepted model (fraction).
+    leave_one_out : bool
+        Run the self-check (without it the model is not accepted: nothing has checked it).
+    identify_options : mapping, optional
+        Options of :func:`bwim.identify_forces` for the self-check's weighing.
+    **fit_options
+        Passed to :func:`bwim.calibration.calibrate_logger` (``cutoff``, ``n_basis``...).
+    """
+    from bwim.site.event import weigh_event  # the event module weighs with a SiteModel
+
+    if records is None or len(records) != len(calibration.reasons):
+        raise InputError("records must be the calibration runs the site calibration was "
+                         "made from")
+    if gains not in GAIN_MODES:
+        raise InputError(f"gains must be one of {GAIN_MODES}, got {gains!r}")
+    if not 0 < float(tolerance) < 1:
+        raise InputError(f"tolerance must be a fraction in (0, 1), got {tolerance!r}")
+    track = DEFAULT_TRACK if track_width is None else float(track_width)
+    if not 0.5 <= track <= 3.0:
+        raise InputError(f"track_width must be a vehicle's track in 0.5-3 m, got {track!r}")
+    setup = calibration.setup
+    used = [k for k, (why, fit) in enumerate(zip(calibration.reasons, calibration.fits,
+                                                 strict=True))
+            if not why and fit is not None and np.isfinite(fit.scale)]
+    if len(used) < 2:
+        raise InputError(f"the site calibration used {len(used)} run(s): at least two are "
+                         "needed to calibrate a model")
+    runs = {k: _run(records[k], calibration, k, track) for k in used}
+    origin = -float(calibration.lines.support[0])
+    loads = setup.calibration_loads
+
+    def fit(keys: Sequence[int], start: Bridge, start_origin: float, start_lateral: float,
+            mass: bool) -> LoggerCalibration:
+        options = {"mass": mass, **fit_options}
+        return calibrate_logger(start, [runs[k] for k in keys], loads, origin=start_origin,
+                                lateral=start_lateral, gains=gains, **options)
+
+    full = fit(used, start_bridge, origin, 0.0, bool(fit_options.pop("mass", True)))
+    model = SiteModel(bridge=full.bridge, gains=(
+        dict(zip(full.channels, (float(g) for g in full.gains), strict=True))),
+        origin=full.origin, lateral=full.lateral, track_width=track,
+        tolerance=float(tolerance), fit=full)
+    explained = dict(zip(used, full.explained, strict=True))
+    checks = []
+    for k in used:
+        if not leave_one_out:
+            checks.append(ModelRun(index=k, explained=float(explained[k]),
+                                   gvw_error=float("nan"), reason="not checked"))
+            continue
+        # the full fit is the fold's start (its mass kept: one run changes it little)
+        fold = fit([j for j in used if j != k], full.bridge, full.origin, full.lateral,
+                   False)
+        fold_model = dataclasses.replace(
+            model, bridge=fold.bridge, origin=fold.origin, lateral=fold.lateral,
+            gains=(dict(zip(fold.channels, (float(g) for g in fold.gains),
+                                            strict=True))), fit=fold)
+        ev = weigh_event(records[k], calibration, bridge=fold_model,
+                         identify_options=identify_options)
+        mine = [v for v in ev.vehicles if v.lane == setup.calibration_lane]
+        if len(mine) == 1 and mine[0].weighed and mine[0].gvw is not None:
+            err = float(mine[0].gvw / float(np.sum(loads)) - 1)
+            checks.append(ModelRun(index=k, explained=float(explained[k]), gvw_error=err))
+        else:
+            why = mine[0].reason if len(mine) == 1 else f"{len(mine)} vehicles in its lane"
+            checks.append(ModelRun(index=k, explained=float(explained[k]),
+                                   gvw_error=float("nan"), reason=why or "not weighed"))
+    reason = _verdict(full, checks, float(tolerance), leave_one_out)
+    return dataclasses.replace(model, runs=tuple(checks), accepted=not reason, reason=reason)
+
+
+def _run(record: Record, calibration: SiteCalibration, k: int, track: float) -> Record:
+    """Run k's gauges divided by its drift factor, its detected passage with the truck's
+    declared spacings and ``track``."""
+    setup = calibration.setup
+    det = calibration.detections[k]
+    p = det.single.passage
+    passage = Passage(speed=p.speed, lane=p.lane, delay=p.delay,
+                      axle_spacings=setup.calibration_spacings, track_width=track)
+    gauges = [s for s in record.sensors if s.kind.is_structural]
+    rec = record.channels(gauges)
+    scale = float(calibration.fits[k].scale)
+    return dataclasses.replace(rec, data=rec.data / scale, passages=(passage,))
+
+
+def _verdict(full: LoggerCalibration, checks: list[ModelRun], tolerance: float,
+             leave_one_out: bool) -> str:
+    if not full.success:
+        return f"the fit failed: {full.message}"
+    if not leave_one_out:
+        return "not checked on its own runs (leave_one_out=False)"
+    missed = [c for c in checks if c.reason]
+    if missed:
+        return (f"{len(missed)} calibration run(s) not weighed by the model: "
+                f"run {missed[0].index + 1}: {missed[0].reason}")
+    worst = max(checks, key=lambda c: abs(c.gvw_error))
+    if abs(worst.gvw_error) > tolerance:
+        return (f"it weighs its own calibration run {worst.index + 1} at "
+                f"{100 * worst.gvw_error:+.1f} % (tolerance {100 * tolerance:.0f} %)")
+    return ""
