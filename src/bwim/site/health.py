@@ -90,6 +90,15 @@ SIGNIFICANCE = 1.0
 #: samples with an axle on the support) is below this, either sign, does not respond
 #: to the load at all (a broken gauge whose logger channel still shows its noise).
 SILENT_CORRELATION = 0.5
+#: A channel held at its maximum or minimum for at least this many consecutive samples...
+CLIP_RUN = 5
+#: ... is clipped when a run that long is this unlikely from its own rate of repeated
+#: samples at rest (``(n − 1) q^(run − 1)``: n samples, q the rate).
+CLIP_CHANCE = 1e-3
+#: A channel's baseline change over the record (the change of its residual's
+#: least-squares line) may differ from what the other gauges show by up to this many
+#: times its noise at rest in the calibration runs before it is a drift fault.
+DRIFT_NOISE = 20.0
 #: Channels needed to compare one channel's ratio with the others' (a line and a check).
 MIN_COMPARED = 4
 
@@ -201,10 +210,12 @@ def check_gauges(record: Record, passage: Passage, lines: MultiRunCalibration, *
     names = [c.name for c in lines.channels]
     readings = read_channels(record, lines.channels)
     faults = list(_flat(readings, lines))
+    faults += _clipped(readings, lines, _at_rest(record, passage, lines),
+                       skip={f.gauge for f in faults})
     bad = {f.gauge for f in faults}
     ratios: dict[str, float] = {}
     while len(names) - len(bad) >= MIN_COMPARED and 2 * len(bad) < len(names):
-        fault, ratios = _worst_gain(record, passage, lines,
+        fault, ratios = _worst(record, passage, lines,
                                     [n for n in names if n not in bad], combine)
         if fault is None:
             break
@@ -255,10 +266,59 @@ def _positions(lines: MultiRunCalibration) -> np.ndarray:
     return np.array(ys, dtype=float)
 
 
-def _worst_gain(record: Record, passage: Passage, lines: MultiRunCalibration,
-                names: list[str], combine: str) -> tuple[GaugeFault | None, dict[str, float]]:
-    """Step 2: the most significant gain fault among ``names`` (None when every one
-    passes or the weighing fails) and every channel's ratio (empty when it fails)."""
+def _at_rest(record: Record, passage: Passage, lines: MultiRunCalibration) -> np.ndarray:
+    """Samples with no axle of the vehicle on the lines' support (True at rest)."""
+    x0, x1 = lines.support
+    x = passage.axle_x(record.time)
+    return ~np.any((x >= x0) & (x <= x1), axis=1)
+
+
+def _runs(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Start and length of each run of True in a boolean vector."""
+    edges = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
+    starts = np.flatnonzero(edges == 1)
+    return starts, np.flatnonzero(edges == -1) - starts
+
+
+def _clipped(readings: np.ndarray, lines: MultiRunCalibration, rest: np.ndarray, *,
+             skip: set[str]) -> list[GaugeFault]:
+    """Step 1b: channels held at their extreme for longer than chance explains."""
+    out = []
+    n = readings.shape[0]
+    if n < CLIP_RUN + 1:
+        return out
+    rest_step = rest[1:] & rest[:-1]
+    for k, c in enumerate(lines.channels):
+        if c.name in skip:
+            continue
+        y = readings[:, k]
+        still = np.diff(y) == 0.0
+        for label, extreme in (("maximum", y.max()), ("minimum", y.min())):
+            starts, lengths = _runs(y == extreme)
+            j = int(np.argmax(lengths))
+            run = int(lengths[j])
+            if run < CLIP_RUN:
+                continue
+            # the channel's own rate of repeated samples at rest, the held run left out
+            usable = rest_step.copy() if np.count_nonzero(rest_step) >= 2 * CLIP_RUN \
+                else np.ones(n - 1, dtype=bool)
+            usable[max(int(starts[j]) - 1, 0):int(starts[j]) + run] = False
+            repeat = float(still[usable].mean()) if usable.any() else 0.0
+            chance = (n - 1) * repeat ** (run - 1)
+            if chance < CLIP_CHANCE:
+                out.append(GaugeFault(
+                    gauge=c.name, kind="clipped", ratio=float("nan"),
+                    detail=f"held at its {label} {extreme:.6g} for {run} consecutive "
+                           f"samples (repeats a sample {repeat:.0%} of the time at rest: "
+                           "a rail, clipped)"))
+                break
+    return out
+
+
+def _worst(record: Record, passage: Passage, lines: MultiRunCalibration,
+           names: list[str], combine: str) -> tuple[GaugeFault | None, dict[str, float]]:
+    """Step 2: the most significant gain or drift fault among ``names`` (None when every
+    one passes or the weighing fails) and every channel's ratio (empty when it fails)."""
     sub = restrict_lines(lines, names)
     try:
         w = weigh(record, passage, sub, combine=combine, scale_correction=False)
@@ -266,36 +326,97 @@ def _worst_gain(record: Record, passage: Passage, lines: MultiRunCalibration,
         return None, {}
     if not np.isfinite(w.gvw) or w.gvw <= 0:
         return None, {}
+    c = _compare(w, sub)
+    if c is None:
+        return None, {}
+    trend = _trends(record, w, sub)
+    noise = sub.channel_noise
+    y = _positions(sub)
+    worst, score, ratios = None, SIGNIFICANCE, {}
+    drifting, excess = None, 1.0
+    for g in range(len(names)):
+        others = np.arange(len(names)) != g
+        weight = c.snr[others] ** 2
+        expected = _line_at(y[others], c.gain[others], weight, y[g])
+        if expected > 0:
+            ratio = float(c.gain[g] / expected)
+            ratios[names[g]] = ratio
+            off = ratio <= 0 or abs(np.log(ratio)) > np.log(GAIN_TOLERANCE)
+            significance = abs(c.gain[g] - expected) * c.snr[g]
+            if off and significance > score:
+                kind = ("silent" if abs(c.corr[g]) < SILENT_CORRELATION
+                        else "reversed" if ratio < 0 else "gain")
+                worst, score = GaugeFault(
+                    gauge=names[g], kind=kind, ratio=ratio,
+                    detail=f"gain {ratio:.2f} × what the other gauges predict "
+                           f"({significance:.1f} residual deviations)"), significance
+        # drift: the residual's change over the record beyond what the others' show
+        # (their changes in proportion to their signals, on a line across the deck)
+        shown = _line_at(y[others], trend[others] / c.rms[others], weight, y[g]) * c.rms[g]
+        change = abs(trend[g] - shown) / noise[g] if noise[g] > 0 else 0.0
+        if change / DRIFT_NOISE > excess:
+            drifting, excess = GaugeFault(
+                gauge=names[g], kind="drift", ratio=float("nan"),
+                detail=f"baseline change {trend[g]:.3g} over the record, "
+                       f"{change:.0f} × its noise beyond what the other gauges "
+                       "show"), change / DRIFT_NOISE
+    if worst is None:  # a gain fault first: its residual has a trend too...
+        worst = drifting
+    elif drifting is not None and drifting.gauge == worst.gauge and \
+            _explains_drift(record, w, sub, names.index(worst.gauge)):
+        worst = drifting  # ... unless a baseline change explains its residual better
+    return worst, ratios
+
+
+def _residuals(record: Record, w: Weighing, sub: MultiRunCalibration) -> np.ndarray:
+    """Each channel's residual over the whole record: reading − offset − fitted static
+    reading (0 with no axle on the support), logger units, shape (n_t, n_channels)."""
+    r = read_channels(record, sub.channels) - w.offsets
+    r[np.isin(record.time, w.time)] -= w.fitted
+    return r
+
+
+def _trends(record: Record, w: Weighing, sub: MultiRunCalibration) -> np.ndarray:
+    """Each channel's residual's least-squares straight line in time: its change from the
+    first sample to the last, logger units."""
+    t = record.time - record.time.mean()
+    return (t @ _residuals(record, w, sub)) / (t @ t) * float(record.time[-1] - record.time[0])
+
+
+def _explains_drift(record: Record, w: Weighing, sub: MultiRunCalibration, g: int) -> bool:
+    """Whether channel ``g``'s residual is explained better by a straight line in time (a
+    baseline change) than by a multiple of its fitted static reading (a gain error): the
+    larger sum of squares explained by the one regressor."""
+    r = _residuals(record, w, sub)[:, g]
+    f = np.zeros_like(r)
+    f[np.isin(record.time, w.time)] = w.fitted[:, g]
+    t = record.time - record.time.mean()
+    return bool((r @ t) ** 2 / (t @ t) > (r @ f) ** 2 / max(f @ f, 1e-300))
+
+
+@dataclass(frozen=True, kw_only=True)
+class _Comparison:
+    gain: np.ndarray  # a_g = <m_g, f_g> / <f_g, f_g>
+    corr: np.ndarray  # the correlation of m_g with f_g
+    snr: np.ndarray  # rms(f_g) / σ_g
+    rms: np.ndarray  # rms(f_g)
+
+
+def _compare(w: Weighing, sub: MultiRunCalibration) -> _Comparison | None:
+    """Each channel's gain ratio, correlation and signal against its fitted static
+    reading over the samples with an axle on the support (None when degenerate)."""
     m, f = w.measured, w.fitted
     power = (f * f).sum(axis=0)
     if m.shape[0] == 0 or np.any(power <= 0):
-        return None, {}
+        return None
     a = (m * f).sum(axis=0) / power
     # the shape alone: a channel that does not respond is uncorrelated with its fit
     mc, fc = m - m.mean(axis=0), f - f.mean(axis=0)
     corr = (mc * fc).sum(axis=0) / np.sqrt(np.maximum((mc * mc).sum(axis=0)
                                                       * (fc * fc).sum(axis=0), 1e-300))
     sd = np.sqrt(np.clip(np.diag(sub.error_covariance(w.gvw)), np.finfo(float).tiny, None))
-    snr = np.sqrt(power / m.shape[0]) / sd
-    y = _positions(sub)
-    worst, score, ratios = None, SIGNIFICANCE, {}
-    for g in range(len(names)):
-        others = np.arange(len(names)) != g
-        expected = _line_at(y[others], a[others], snr[others] ** 2, y[g])
-        if not expected > 0:
-            continue
-        ratio = float(a[g] / expected)
-        ratios[names[g]] = ratio
-        off = ratio <= 0 or abs(np.log(ratio)) > np.log(GAIN_TOLERANCE)
-        significance = abs(a[g] - expected) * snr[g]
-        if off and significance > score:
-            kind = ("silent" if abs(corr[g]) < SILENT_CORRELATION
-                    else "reversed" if ratio < 0 else "gain")
-            worst, score = GaugeFault(
-                gauge=names[g], kind=kind, ratio=ratio,
-                detail=f"gain {ratio:.2f} × what the other gauges predict "
-                       f"({significance:.1f} residual deviations)"), significance
-    return worst, ratios
+    rms = np.sqrt(power / m.shape[0])
+    return _Comparison(gain=a, corr=corr, snr=rms / sd, rms=rms)
 
 
 def _line_at(x: np.ndarray, y: np.ndarray, weight: np.ndarray, at: float) -> float:
