@@ -446,3 +446,20 @@ def test_a_drifting_gauge_is_named_and_left_out(site, truck, gauge, shape):
     v = weigh_event(record, calibration).vehicles[0]
     assert v.weighed and _gauge_faults(v.flags) == [f"gauge_fault:{gauge}"]
     assert v.gvw == pytest.approx(clean.gvw, rel=0.02)
+
+
+@pytest.mark.parametrize("gauge", ["s02", "s05", "s09"])
+def test_a_large_drift_is_told_from_a_gain_error(site, truck, gauge):
+    """A baseline ramp of 60 × the noise over the record moves the gauge's readings under
+    the truck enough that its gain ratio is off as well (the gain check alone calls it
+    ``gain``); its residual is a straight line in time rather than a multiple of its
+    fitted reading, so it is named ``drift``."""
+    _, scenario, calibration = site
+    path, clean = truck
+    noise = calibration.lines.channel_noise[[c.name for c in calibration.lines.channels]
+                                            .index(gauge)]
+    record = _with(load_record(path, scenario), gauge,
+                   lambda y, t: y + 60.0 * noise * (t - t[0]) / (t[-1] - t[0]))
+    health = check_gauges(record, clean.vehicle.passage, calibration.lines,
+                          combine=calibration.setup.combine)
+    assert [(f.gauge, f.kind) for f in health.faults] == [(gauge, "drift")]

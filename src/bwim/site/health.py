@@ -1,11 +1,12 @@
-"""Gauge health of one vehicle: a dead, stuck, reversed or gain-changed gauge is found
-against the calibration and the other gauges, left out, and named.
+"""Gauge health of one vehicle: a dead, stuck, clipped, reversed, gain-changed or
+drifting gauge is found against the calibration and the other gauges, left out, and
+named.
 
 Contract
 --------
 * :func:`check_gauges` judges every channel of the calibration's lines
   (:class:`~bwim.wim.multirun.MultiRunCalibration`) in one vehicle's record, before it
-  is weighed, in two steps:
+  is weighed, in three steps:
 
   1. **Flat** (a dead gauge, or one stuck at a value): the channel's sample-to-sample
      variation in the record, ``std(diff(reading)) / √2``, is below :data:`FLAT_NOISE` ×
@@ -14,7 +15,16 @@ Contract
      deviation, not a robust one: a logger whose noise is below its resolution repeats
      most samples, and a median of the steps would call it flat.)  No weighing is
      needed for this step.
-  2. **Gain** (reversed polarity, a changed gain): the vehicle is weighed with the
+  2. **Clipped** (a logger at its rail): the channel's readings hold its maximum (or
+     minimum) over the record for ``L`` ≥ :data:`CLIP_RUN` consecutive samples, and a
+     run that long is unlikely from the channel's own rate ``q`` of repeated samples at
+     rest (no axle on the lines' support; the run itself left out):
+     ``(n − 1) q^(L − 1) <`` :data:`CLIP_CHANCE` (``n`` samples).  A logger finer than
+     its noise never repeats a sample, so a few held samples are a rail; a coarse one
+     repeats many, and needs a long run.  Runs that touch the record's first or last
+     sample count as well (a rail at the resting reading: the first sample is then the
+     channel's extreme; :func:`bwim.io.read_logger`'s clipping check leaves those out).
+  3. **Gain** (reversed polarity, a changed gain): the vehicle is weighed with the
      remaining channels (:func:`bwim.wim.weigh`, the readings undivided by any drift
      factor: a factor common to all gauges does not change their ratios), and each
      channel's gain ratio ``a_g = ⟨m_g, f_g⟩ / ⟨f_g, f_g⟩`` is taken between its
@@ -35,8 +45,18 @@ Contract
      - the difference is significant: ``|a_g − â_g| snr_g >`` :data:`SIGNIFICANCE`
        (the residual the gain error adds, in units of the residual deviation expected).
 
-     The most significant faulty channel is left out and the vehicle weighed again with
-     the others, until every remaining channel passes.
+     **Drift** (a baseline that wanders during the record), in the same weighing: each
+     channel's residual over the whole record (reading − offset − fitted static reading,
+     the latter 0 with no axle on the support) has a least-squares straight line in time
+     whose change from the first sample to the last is ``D_g``; the others' changes, in
+     proportion to their signals (``D_j / rms(f_j)``, a line against ``y`` as above),
+     predict ``D̂_g``; the channel drifts when ``|D_g − D̂_g| >`` :data:`DRIFT_NOISE` ×
+     its noise at rest in the calibration runs (``channel_noise``).  A channel off by
+     both tests is named by what explains its residual better (the larger sum of squares
+     explained by a straight line in time or by a multiple of its fitted reading).
+
+     The most significant gain fault (else the largest drift) is left out and the
+     vehicle weighed again with the others, until every remaining channel passes.
 * A faulty channel is **left out** and named in the flag ``gauge_fault:NAME``
   (:data:`FLAG_GAUGE_FAULT` + ``:`` + the channel's name): a soft flag, the weights of
   the healthy channels are kept with quality ``warning`` (:meth:`GaugeHealth.mark`).
@@ -47,7 +67,11 @@ Contract
   vehicle flagged ``multiple_presence``): the other vehicle's strain is no part of this
   vehicle's fit, so a gauge whose ratio is off may be faulty or may feel the other
   vehicle: the vehicle is refused with that reason, and no gauge is named for it
-  (a flat gauge still is: it has no noise whatever is on the deck).
+  (a flat or clipped gauge still is: no vehicle stops a gauge's noise or holds it at a
+  rail).
+* :func:`gain_ratios` gives the ratios ``a_g / â_g`` of step 3 for any weighing (e.g.
+  the one a vehicle was weighed with: the day's table of gauge health,
+  :mod:`bwim.batch.gauges`).
 * With fewer than :data:`MIN_COMPARED` channels only the flat check is made; a weighing
   that fails here (a singular fit) leaves the gain check out, and the caller's own
   weighing decides.
@@ -70,11 +94,15 @@ from bwim.wim import Weighing, weigh
 from bwim.wim.influence_line import read_channels
 from bwim.wim.multirun import MultiRunCalibration
 
-__all__ = ["FLAG_GAUGE_FAULT", "FLAT_NOISE", "GAIN_TOLERANCE", "MIN_COMPARED", "SIGNIFICANCE",
-           "SILENT_CORRELATION", "GaugeFault", "GaugeHealth", "check_gauges", "restrict_lines"]
+__all__ = ["CLIP_CHANCE", "CLIP_RUN", "DRIFT_NOISE", "FAULT_KINDS", "FLAG_GAUGE_FAULT",
+           "FLAT_NOISE", "GAIN_TOLERANCE", "MIN_COMPARED", "SIGNIFICANCE",
+           "SILENT_CORRELATION", "GaugeFault", "GaugeHealth", "check_gauges", "gain_ratios",
+           "restrict_lines"]
 
 #: The flag of a faulty gauge, written ``gauge_fault:NAME``.
 FLAG_GAUGE_FAULT = "gauge_fault"
+#: Every kind of fault (:attr:`GaugeFault.kind`), in the order of the checks.
+FAULT_KINDS = ("flat", "clipped", "silent", "reversed", "gain", "drift")
 #: A channel whose noise in the record is below this fraction of its calibration noise
 #: at rest is flat (dead or stuck).
 FLAT_NOISE = 0.1
@@ -115,13 +143,14 @@ class GaugeFault:
     gauge : str
         The channel's name.
     kind : str
-        ``"flat"`` (dead or stuck: no noise), ``"silent"`` (noise but no response to the
-        load: uncorrelated with its fit, :data:`SILENT_CORRELATION`),
-        ``"reversed"`` (a negative ratio) or ``"gain"`` (a ratio off by more than
-        :data:`GAIN_TOLERANCE`).
+        ``"flat"`` (dead or stuck: no noise), ``"clipped"`` (held at a rail),
+        ``"silent"`` (noise but no response to the load: uncorrelated with its fit,
+        :data:`SILENT_CORRELATION`), ``"reversed"`` (a negative ratio), ``"gain"`` (a
+        ratio off by more than :data:`GAIN_TOLERANCE`) or ``"drift"`` (a baseline change
+        beyond :data:`DRIFT_NOISE`).
     ratio : float
         Its gain ratio over what the other channels predict, ``a_g / â_g`` (nan for a
-        flat channel).
+        flat, clipped or drifting channel).
     detail : str
         One line: what was measured.
     """
@@ -282,7 +311,7 @@ def _runs(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def _clipped(readings: np.ndarray, lines: MultiRunCalibration, rest: np.ndarray, *,
              skip: set[str]) -> list[GaugeFault]:
-    """Step 1b: channels held at their extreme for longer than chance explains."""
+    """Step 2: channels held at their extreme for longer than chance explains."""
     out = []
     n = readings.shape[0]
     if n < CLIP_RUN + 1:
@@ -317,7 +346,7 @@ def _clipped(readings: np.ndarray, lines: MultiRunCalibration, rest: np.ndarray,
 
 def _worst(record: Record, passage: Passage, lines: MultiRunCalibration,
            names: list[str], combine: str) -> tuple[GaugeFault | None, dict[str, float]]:
-    """Step 2: the most significant gain or drift fault among ``names`` (None when every
+    """Step 3: the most significant gain or drift fault among ``names`` (None when every
     one passes or the weighing fails) and every channel's ratio (empty when it fails)."""
     sub = restrict_lines(lines, names)
     try:
@@ -332,17 +361,17 @@ def _worst(record: Record, passage: Passage, lines: MultiRunCalibration,
     trend = _trends(record, w, sub)
     noise = sub.channel_noise
     y = _positions(sub)
-    worst, score, ratios = None, SIGNIFICANCE, {}
+    expected = _predicted(y, c.gain, c.snr)
+    ratios = {n: float(c.gain[g] / expected[g]) for g, n in enumerate(names)
+              if expected[g] > 0}
+    worst, score = None, SIGNIFICANCE
     drifting, excess = None, 1.0
+    shown = _predicted(y, trend / c.rms, c.snr) * c.rms
     for g in range(len(names)):
-        others = np.arange(len(names)) != g
-        weight = c.snr[others] ** 2
-        expected = _line_at(y[others], c.gain[others], weight, y[g])
-        if expected > 0:
-            ratio = float(c.gain[g] / expected)
-            ratios[names[g]] = ratio
+        if names[g] in ratios:
+            ratio = ratios[names[g]]
             off = ratio <= 0 or abs(np.log(ratio)) > np.log(GAIN_TOLERANCE)
-            significance = abs(c.gain[g] - expected) * c.snr[g]
+            significance = abs(c.gain[g] - expected[g]) * c.snr[g]
             if off and significance > score:
                 kind = ("silent" if abs(c.corr[g]) < SILENT_CORRELATION
                         else "reversed" if ratio < 0 else "gain")
@@ -352,8 +381,7 @@ def _worst(record: Record, passage: Passage, lines: MultiRunCalibration,
                            f"({significance:.1f} residual deviations)"), significance
         # drift: the residual's change over the record beyond what the others' show
         # (their changes in proportion to their signals, on a line across the deck)
-        shown = _line_at(y[others], trend[others] / c.rms[others], weight, y[g]) * c.rms[g]
-        change = abs(trend[g] - shown) / noise[g] if noise[g] > 0 else 0.0
+        change = abs(trend[g] - shown[g]) / noise[g] if noise[g] > 0 else 0.0
         if change / DRIFT_NOISE > excess:
             drifting, excess = GaugeFault(
                 gauge=names[g], kind="drift", ratio=float("nan"),
@@ -417,6 +445,36 @@ def _compare(w: Weighing, sub: MultiRunCalibration) -> _Comparison | None:
     sd = np.sqrt(np.clip(np.diag(sub.error_covariance(w.gvw)), np.finfo(float).tiny, None))
     rms = np.sqrt(power / m.shape[0])
     return _Comparison(gain=a, corr=corr, snr=rms / sd, rms=rms)
+
+
+def _predicted(y: np.ndarray, values: np.ndarray, snr: np.ndarray) -> np.ndarray:
+    """For each channel, the weighted straight line through the other channels' values
+    against their positions ``y`` (weights ``snr²``), at its own position."""
+    out = np.empty(len(values))
+    for g in range(len(values)):
+        others = np.arange(len(values)) != g
+        out[g] = _line_at(y[others], values[others], snr[others] ** 2, y[g])
+    return out
+
+
+def gain_ratios(weighing: Weighing, lines: MultiRunCalibration) -> dict[str, float]:
+    """Each channel of ``weighing``'s gain ratio over what the other channels predict,
+    ``a_g / â_g`` (step 3 of the module docstring), from its measured and fitted
+    readings; ``lines`` holds (at least) the weighing's channels.  Empty with fewer than
+    :data:`MIN_COMPARED` channels or a degenerate weighing; a channel whose prediction
+    is not positive is left out."""
+    names = [c.name for c in weighing.channels]
+    if len(names) < MIN_COMPARED or not (np.isfinite(weighing.gvw) and weighing.gvw > 0):
+        return {}
+    sub = restrict_lines(lines, names)
+    if [c.name for c in sub.channels] != names:  # columns in another order than the lines'
+        return {}
+    c = _compare(weighing, sub)
+    if c is None:
+        return {}
+    expected = _predicted(_positions(sub), c.gain, c.snr)
+    return {n: float(c.gain[g] / expected[g]) for g, n in enumerate(names)
+            if expected[g] > 0}
 
 
 def _line_at(x: np.ndarray, y: np.ndarray, weight: np.ndarray, at: float) -> float:
