@@ -239,6 +239,7 @@ def _print_weighed(report, title: str) -> None:
 def _weigh_site(args: argparse.Namespace, scenario, folder: Path, batch) -> int:
     """``bwim weigh`` on a real installation's logger files (scenario with [logger])."""
     from bwim.batch import Item, executor_for, weigh_events
+    from bwim.io.gauge_health import GAUGE_HEALTH_NAME
 
     if not args.calibration_records:
         raise InputError("weighing logger files needs --calibration-records (runs of the "
@@ -264,6 +265,8 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path, batch) -> int:
         return out
 
     batch.finalize = finalize
+    batch.gauge_table = folder / GAUGE_HEALTH_NAME
+    batch.gauge_names = tuple(c.name for c in site.lines.channels)
     executor = executor_for(args.jobs, args.scheduler)
     report = _run_batch(batch, items,
                         lambda todo: weigh_events(todo, site, read=_read(scenario),
@@ -276,8 +279,20 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path, batch) -> int:
     _print_weighed(report, "Static weights (moving force identification with the FE "
                    "model):" if bridge else "Static weights (multi-run influence lines, "
                    "gauges combined):")
-    print(f"summary: {batch.summary}")
+    _print_gauges(batch)
+    print(f"summary: {batch.summary}\ngauge health: {batch.gauge_table}")
     return _report_failures(report)
+
+
+def _print_gauges(batch) -> None:
+    """One line per gauge left out of any vehicle: how often and why."""
+    from bwim.batch.gauges import tally_gauges
+
+    for t in tally_gauges(batch.gauge_names, batch.vehicle_gauges()):
+        if t.left_out:
+            why = ", ".join(f"{k} {n}" for k, n in t.kinds.items() if n)
+            print(f"gauge {t.gauge}: left out of {t.left_out} of {t.judged} vehicle(s) "
+                  f"({why or 'kind unknown'})")
 
 
 #: Subfolder of a ``weigh --continuous`` output with the events cut from the long files.
@@ -312,6 +327,7 @@ def _continuous_items(paths: Sequence[Path], scenario, events: Path, *, resume: 
 
 def weigh_command(args: argparse.Namespace) -> int:
     from bwim.batch import BatchFolder
+    from bwim.io.gauge_health import GAUGE_HEALTH_NAME
     from bwim.io.outputs import refuse_input_overwrite
     from bwim.scenario import load_scenario
 
@@ -328,6 +344,7 @@ def weigh_command(args: argparse.Namespace) -> int:
     folder = out_folder(args.output)  # created once the inputs are known to exist
     if site:
         outputs = [folder / "calibration_runs.csv", folder / "influence_lines.h5",
+                   folder / GAUGE_HEALTH_NAME,
                    *([folder / EVENTS] if args.continuous and not args.resume else [])]
     else:  # each record's weights, and the line unless it is given
         outputs = [*(folder / f"{stem}_static.h5" for stem in unique_stems(paths)),
