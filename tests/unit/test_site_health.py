@@ -1,7 +1,8 @@
-"""A faulty gauge never yields a silent weight (issue 22 item 1): a dead, stuck, reversed
-or gain-changed gauge of an event is found (bwim.site.health), left out, named in the
-flag ``gauge_fault:NAME`` (quality ``warning``), and the vehicle weighed with the other
-gauges; with too few healthy gauges the vehicle is refused.
+"""A faulty gauge never yields a silent weight (issue 22 item 1): a dead, stuck,
+clipped, reversed, gain-changed or drifting gauge of an event is found
+(bwim.site.health), left out, named in the flag ``gauge_fault:NAME`` (quality
+``warning``), and the vehicle weighed with the other gauges; with too few healthy gauges
+the vehicle is refused.
 
 Data: a tiny realistic site (:mod:`bwim.synthetic`, ``short-span-4-lane``: an FE plate
 with vehicle dynamics, gauge noise, offsets and drift; calibrated by influence lines, so
