@@ -422,9 +422,10 @@ def test_a_drifting_gauge_is_named_and_left_out(site, truck, gauge, shape):
     zero shift).  Found as ``drift`` (not as a gain error: a straight line in time
     explains its residual better), left out and flagged; weighed within 2 % of the clean
     weight (measured: -0.6 … +1.4 %; weighed with the drifting gauge: +0.6 … +1.1 %, the
-    offsets fitted before and after the truck absorb most of a change on this site).  On a 60-event day (seed 31, 64 vehicles and 12
-    runs, every gauge) the clean changes beyond what the others show reach 7.8 × the
-    noise, against the limit 20 (DRIFT_NOISE); no drift fault there."""
+    offsets fitted before and after the truck absorb most of a change on this site).  On
+    a 60-event day (seed 31, 64 vehicles and 12 runs, every gauge) the clean changes
+    beyond what the others show reach 7.8 × the noise, against the limit 20
+    (DRIFT_NOISE); no drift fault there."""
     _, scenario, calibration = site
     path, clean = truck
     record = load_record(path, scenario)
