@@ -344,18 +344,19 @@ def weigh_command(args: argparse.Namespace) -> int:
     folder = out_folder(args.output)  # created once the inputs are known to exist
     if site:
         outputs = [folder / "calibration_runs.csv", folder / "influence_lines.h5",
-                   folder / GAUGE_HEALTH_NAME,
                    *([folder / EVENTS] if args.continuous and not args.resume else [])]
     else:  # each record's weights, and the line unless it is given
         outputs = [*(folder / f"{stem}_static.h5" for stem in unique_stems(paths)),
                    *([] if args.influence else [folder / "influence_line.h5"])]
-    refuse_input_overwrite([folder / "summary.csv", *outputs],
+    tables = [folder / GAUGE_HEALTH_NAME] if site else []
+    refuse_input_overwrite([folder / "summary.csv", *outputs, *tables],
                            [args.scenario, *paths, *cal,
                             *([args.influence] if args.influence else []),
                             *([args.bridge] if args.bridge else [])])
     with locked(folder):
         if _fresh(args, folder):  # no output of a command replaced without --force
             refuse_existing_outputs(outputs, force=args.force)
+            refuse_existing_outputs(tables, force=args.force)
         batch = BatchFolder(folder, resume=args.resume, force=args.force, meta=_meta(
             "weigh", scenario=args.scenario, calibration=sorted(cal, key=str),
             influence=args.influence, bridge=args.bridge), parquet=args.parquet)
