@@ -5,7 +5,10 @@ seed 41, never used while developing; 80 traffic events, a 0.6 m mesh; cached un
 ``BWIM_BENCH_CACHE`` like ``bench_realsite``).  Each of the first ``N_VEHICLES`` lane-1
 trucks weighed from its clean file is weighed again with one gauge made faulty, for every
 gauge and every fault type: dead (0), stuck at its first reading, reversed, gain ×2,
-gain ×0.5.  The reference is the same truck weighed from the clean file.
+gain ×0.5, clipped (held at a rail halfway from its first reading to its peak, or at its
+first reading: the logger reader's clipping check passes the latter), drifting (a
+baseline ramp of 30 × its calibration noise over the record).  The reference is the
+same truck weighed from the clean file.
 
 Printed per fault type: faults found (the truck flagged ``gauge_fault:<that gauge>``),
 trucks refused, **silent wrong weights** (weighed without a ``gauge_fault`` flag and more
@@ -32,12 +35,28 @@ from bwim.synthetic import make_test_day
 SEED = 41
 N_TRAFFIC = 80
 N_VEHICLES = 15
+
+
+def _rail(y: np.ndarray, fraction: float) -> np.ndarray:
+    """``y`` held at a rail ``fraction`` of the way from its first reading to its farthest
+    (a logger's saturation: the readings beyond it read the rail)."""
+    up, down = y.max() - y[0], y[0] - y.min()
+    if up >= down:
+        return np.minimum(y, y[0] + fraction * up)
+    return np.maximum(y, y[0] - fraction * down)
+
+
+#: Each fault as ``fault(readings, noise)``, ``noise`` the gauge's noise at rest in the
+#: calibration runs (logger units).
 FAULTS = {
-    "dead": lambda y: np.zeros_like(y),
-    "stuck": lambda y: np.full_like(y, y[0]),
-    "reversed": lambda y: -y,
-    "gain ×2": lambda y: 2.0 * y,
-    "gain ×0.5": lambda y: 0.5 * y,
+    "dead": lambda y, _: np.zeros_like(y),
+    "stuck": lambda y, _: np.full_like(y, y[0]),
+    "reversed": lambda y, _: -y,
+    "gain ×2": lambda y, _: 2.0 * y,
+    "gain ×0.5": lambda y, _: 0.5 * y,
+    "clipped halfway": lambda y, _: _rail(y, 0.5),
+    "clipped at rest": lambda y, _: _rail(y, 0.0),
+    "drift 30σ": lambda y, noise: y + 30.0 * noise * np.linspace(0.0, 1.0, y.size),
 }
 
 
@@ -51,10 +70,10 @@ def _day() -> Path:
     return folder
 
 
-def _faulty(record, name: str, fault) -> object:
+def _faulty(record, name: str, fault, noise: float) -> object:
     k = [s.name for s in record.sensors].index(name)
     data = record.data.copy()
-    data[:, k] = fault(data[:, k])
+    data[:, k] = fault(data[:, k], noise)
     return dataclasses.replace(record, data=data)
 
 
@@ -65,6 +84,7 @@ def main() -> None:
                           for p in sorted((day / "calibration").glob("*.txt"))],
                          build_site_setup(scenario))
     gauges = [c.name for c in cal.lines.channels]
+    noise = dict(zip(gauges, cal.lines.channel_noise, strict=True))
     t0 = time.perf_counter()
     clean, false_alarms, n_clean = [], 0, 0
     for path in sorted((day / "traffic").glob("*.txt")):
@@ -83,7 +103,7 @@ def main() -> None:
         for rec, k, gvw in clean:
             for g in gauges:
                 cases += 1
-                ev = weigh_event(_faulty(rec, g, fault), cal)
+                ev = weigh_event(_faulty(rec, g, fault, noise[g]), cal)
                 v = ev.vehicles[k] if k < len(ev.vehicles) else None
                 if v is None or not v.weighed:
                     refused += 1

@@ -12,7 +12,8 @@ Contract
   place in the input), on the executor given (:mod:`bwim.batch.executors`; default
   :class:`~bwim.batch.executors.Serial`).  An outcome's ``rows`` are its summary rows
   (:class:`~bwim.summary.SummaryRow`, one per vehicle): ``bwim.accuracy.assess`` takes
-  them as they are.
+  them as they are.  A weighing's outcome also carries what each vehicle's gauges did
+  (``gauges``, :mod:`bwim.batch.gauges`), for the day's table of gauge health.
 * A bad item never ends the batch: an unreadable file, or a record the method cannot
   process, gives one row of status ``"failed"`` with the reason; a vehicle that is seen
   but not weighed gives a ``"refused"`` row with the reason.  No weight leaves without its
@@ -107,6 +108,9 @@ class Outcome:
         :func:`identify_records` with ``keep=True``.
     result : str or None
         The file written for the item (identification into an output folder).
+    gauges : tuple of VehicleGauges
+        :func:`weigh_events`: what the gauges of each judged vehicle did
+        (:func:`bwim.batch.gauges.vehicle_gauges`; small, kept with ``keep=False`` too).
     """
 
     index: int
@@ -115,6 +119,7 @@ class Outcome:
     event: Any = None
     identification: Any = None
     result: str | None = None
+    gauges: tuple = ()
 
     @property
     def failed(self) -> bool:
@@ -186,6 +191,7 @@ def load_for_weighing(job_read: Callable[[Path], Record] | None, item: Item) -> 
 
 def weigh_item(job: WeighJob, item: Item) -> Outcome:
     """Weigh one item (see :func:`weigh_events`)."""
+    from bwim.batch.gauges import vehicle_gauges
     from bwim.site import weigh_event
 
     rec = _read(job.read, item)
@@ -195,9 +201,11 @@ def weigh_item(job: WeighJob, item: Item) -> Outcome:
         ev = weigh_event(rec, job.calibration, bridge=job.bridge,
                          identify_options=job.options)
         rows = ev.to_summary_rows(item.name)
+        gauges = vehicle_gauges(rec, ev, job.calibration)
     except BATCH_ERRORS as exc:
         return _failure(item, reason_of(exc))
-    return Outcome(index=-1, name=item.name, rows=rows, event=ev if job.keep else None)
+    return Outcome(index=-1, name=item.name, rows=rows, event=ev if job.keep else None,
+                   gauges=gauges)
 
 
 def identify_item(job: IdentifyJob, item: Item) -> Outcome:
@@ -251,7 +259,8 @@ def _run(task: Task, items: list[Item], shared: Any, executor: Executor | None
          ) -> Iterator[Outcome]:
     for i, out in (executor or Serial()).map(task, items, shared):
         yield Outcome(index=i, name=out.name, rows=out.rows, event=out.event,
-                      identification=out.identification, result=out.result)
+                      identification=out.identification, result=out.result,
+                      gauges=out.gauges)
 
 
 def weigh_events(items: Iterable[Item | str | os.PathLike | Record], calibration, *,

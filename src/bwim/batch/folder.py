@@ -17,6 +17,13 @@ Contract
   model: the manifest's ``meta``) is refused.  Without ``resume`` (or with it but no
   manifest in the folder: nothing to resume), an existing summary or manifest is refused
   unless ``force`` (then the batch starts afresh).
+* **Gauge health** (``gauge_table``, a path, set by the caller once the calibration is
+  known, with ``gauge_names``, the calibration's gauges): the manifest keeps, per input,
+  what each of its judged vehicles' gauges did (:class:`bwim.batch.gauges.VehicleGauges`,
+  an outcome's ``gauges``), and the final save writes the day's table over every input
+  the folder holds (resumed ones included) to ``gauge_table`` atomically
+  (:func:`bwim.io.gauge_health.write_gauge_health`).  Whether it may be replaced is the
+  caller's to check, as for the other outputs of the command.
 * :func:`run_into` drains an iterator of :class:`~bwim.batch.events.Outcome` into a
   folder with a progress callback and returns a :class:`BatchReport`.
 """
@@ -30,8 +37,10 @@ from pathlib import Path
 from typing import Any
 
 from bwim.batch.events import Item, Outcome
+from bwim.batch.gauges import VehicleGauges, tally_gauges
 from bwim.errors import InputError
-from bwim.io.outputs import MANIFEST_NAME, Manifest, refuse_existing
+from bwim.io.gauge_health import write_gauge_health
+from bwim.io.outputs import MANIFEST_NAME, Manifest, file_key, refuse_existing
 from bwim.io.summary import from_cells, to_cells, write_summary
 from bwim.io.summary_parquet import require_pyarrow, write_summary_parquet
 from bwim.summary import SummaryRow
@@ -87,6 +96,8 @@ class BatchFolder:
                              "inputs, or use another folder (or --force without --resume)")
         self.manifest.meta = dict(meta)
         self.finalize = finalize
+        self.gauge_table: Path | None = None
+        self.gauge_names: tuple[str, ...] = ()
         self._order: list[Path] = []
         self._last = time.perf_counter()
         self._cost = 0.0
@@ -108,7 +119,15 @@ class BatchFolder:
         self.manifest.record(source, result=outcome.result,
                              rows=[to_cells(r) for r in outcome.rows],
                              error=outcome.reason or None, save=False)
+        if outcome.gauges:
+            self.manifest.entries[file_key(source)]["gauges"] = [
+                g.to_json() for g in outcome.gauges]
         self.maybe_save()
+
+    def vehicle_gauges(self) -> list[VehicleGauges]:
+        """What the judged vehicles' gauges did, over every input the folder holds."""
+        return [VehicleGauges.from_json(g) for entry in self.manifest.entries.values()
+                for g in entry.get("gauges", ())]
 
     def rows(self) -> list[SummaryRow]:
         """Every row the folder holds: the inputs of this run in order, then the others;
@@ -139,6 +158,9 @@ class BatchFolder:
         write_summary(self.summary, rows)
         if final and self.parquet is not None:
             write_summary_parquet(self.parquet, rows)
+        if final and self.gauge_table is not None:
+            write_gauge_health(self.gauge_table, [
+                t.as_row() for t in tally_gauges(self.gauge_names, self.vehicle_gauges())])
         self._last = time.perf_counter()
         self._cost = self._last - t
 

@@ -239,6 +239,7 @@ def _print_weighed(report, title: str) -> None:
 def _weigh_site(args: argparse.Namespace, scenario, folder: Path, batch) -> int:
     """``bwim weigh`` on a real installation's logger files (scenario with [logger])."""
     from bwim.batch import Item, executor_for, weigh_events
+    from bwim.io.gauge_health import GAUGE_HEALTH_NAME
 
     if not args.calibration_records:
         raise InputError("weighing logger files needs --calibration-records (runs of the "
@@ -268,6 +269,8 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path, batch) -> int:
         return out
 
     batch.finalize = finalize
+    batch.gauge_table = folder / GAUGE_HEALTH_NAME
+    batch.gauge_names = tuple(c.name for c in site.lines.channels)
     executor = executor_for(args.jobs, args.scheduler)
     report = _run_batch(batch, items,
                         lambda todo: weigh_events(todo, site, read=_read(scenario),
@@ -280,8 +283,20 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path, batch) -> int:
     _print_weighed(report, "Static weights (moving force identification with the FE "
                    "model):" if bridge else "Static weights (multi-run influence lines, "
                    "gauges combined):")
-    print(f"summary: {batch.summary}")
+    _print_gauges(batch)
+    print(f"summary: {batch.summary}\ngauge health: {batch.gauge_table}")
     return _report_failures(report)
+
+
+def _print_gauges(batch) -> None:
+    """One line per gauge left out of any vehicle: how often and why."""
+    from bwim.batch.gauges import tally_gauges
+
+    for t in tally_gauges(batch.gauge_names, batch.vehicle_gauges()):
+        if t.left_out:
+            why = ", ".join(f"{k} {n}" for k, n in t.kinds.items() if n)
+            print(f"gauge {t.gauge}: left out of {t.left_out} of {t.judged} vehicle(s) "
+                  f"({why or 'kind unknown'})")
 
 
 #: Subfolder of a ``weigh --continuous`` output with the events cut from the long files.
@@ -316,6 +331,7 @@ def _continuous_items(paths: Sequence[Path], scenario, events: Path, *, resume: 
 
 def weigh_command(args: argparse.Namespace) -> int:
     from bwim.batch import BatchFolder
+    from bwim.io.gauge_health import GAUGE_HEALTH_NAME
     from bwim.io.outputs import refuse_input_overwrite
     from bwim.scenario import load_scenario
 
@@ -336,13 +352,15 @@ def weigh_command(args: argparse.Namespace) -> int:
     else:  # each record's weights, and the line unless it is given
         outputs = [*(folder / f"{stem}_static.h5" for stem in unique_stems(paths)),
                    *([] if args.influence else [folder / "influence_line.h5"])]
-    refuse_input_overwrite([folder / "summary.csv", *outputs],
+    tables = [folder / GAUGE_HEALTH_NAME] if site else []
+    refuse_input_overwrite([folder / "summary.csv", *outputs, *tables],
                            [args.scenario, *paths, *cal,
                             *([args.influence] if args.influence else []),
                             *([args.bridge] if args.bridge else [])])
     with locked(folder):
         if _fresh(args, folder):  # no output of a command replaced without --force
             refuse_existing_outputs(outputs, force=args.force)
+            refuse_existing_outputs(tables, force=args.force)
         batch = BatchFolder(folder, resume=args.resume, force=args.force, meta=_meta(
             "weigh", scenario=args.scenario, calibration=sorted(cal, key=str),
             influence=args.influence, bridge=args.bridge), parquet=args.parquet)

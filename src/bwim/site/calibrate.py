@@ -49,7 +49,13 @@ Contract
     runs' tolerance :data:`SPACING_TOLERANCE` accepts each run, but all of them
     disagreeing the same way is the declaration's error, not the detection's).
     Without axle detectors the truck is found with its declared spacings, which the
-    strain then cannot contradict.
+    strain then cannot contradict;
+  - the loads' order after the lines (with axle detectors): the lines are fitted to the
+    used runs again with the declared loads in reverse order, and when those leave a
+    relative residual under :data:`REVERSED_FIT` × the declared order's, the loads were
+    declared last axle first and are refused with that hint (a line absorbs part of a
+    wrong load distribution, but not all of it).  Loads within :data:`REVERSED_SAME` of
+    their reverse (a symmetric truck) are not checked.
 * Raises :class:`~bwim.errors.InputError` when fewer than two runs are usable, naming
   each run's reason, or when the declaration contradicts the data (above).
 """
@@ -84,9 +90,10 @@ from bwim.wim import MultiRunCalibration, calibrate_lines
 from bwim.wim.multirun import RunFit
 from bwim.wim.scale_trend import ScaleTrend
 
-__all__ = ["MIN_AXLE_LOAD", "MIN_TRUCK_AXLES", "MIN_TRUCK_WEIGHT", "RUN_SCALE_RANGE",
-           "SPACING_BIAS", "SPACING_TOLERANCE", "STRAIN_ONLY_PASSES", "SiteCalibration",
-           "calibrate_site", "gauge_names", "record_temperature", "temperature_channel"]
+__all__ = ["MIN_AXLE_LOAD", "MIN_TRUCK_AXLES", "MIN_TRUCK_WEIGHT", "REVERSED_FIT",
+           "REVERSED_SAME", "RUN_SCALE_RANGE", "SPACING_BIAS", "SPACING_TOLERANCE",
+           "STRAIN_ONLY_PASSES", "SiteCalibration", "calibrate_site", "gauge_names",
+           "record_temperature", "temperature_channel"]
 
 #: A calibration run whose detected axle spacings differ from the truck's by more than
 #: this (m) is rejected: the detection, not the truck, is wrong.
@@ -95,6 +102,13 @@ SPACING_TOLERANCE = 0.3
 #: this (m), all on the same side, is refused: the detectors measure the truck's
 #: spacings to a few centimetres (tests/unit/test_site_declaration.py states the spread).
 SPACING_BIAS = 0.05
+#: The lines fitted with the declared loads in reverse order leave less than this fraction
+#: of the declared order's relative residual: the loads were declared in reverse order
+#: (tests/unit/test_site_load_order.py states the residuals of both orders).
+REVERSED_FIT = 0.75
+#: Loads within this relative difference of their reverse order are a symmetric truck:
+#: the order is not checked.
+REVERSED_SAME = 0.02
 #: Gravity, m/s², for the loads' message in tonnes.
 _G = 9.81
 #: A calibration truck's axle is heavier than this, N (an empty car's axle is ≈ 5 kN).
@@ -226,6 +240,7 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
                             reasons, passages, kept)
     _check_spacings(events, cal.reasons, setup)
     _check_scales(records, cal)
+    _check_load_order(records, passages, kept, cal.lines, setup)
     return SiteCalibration(
         lines=cal.lines, detections=cal.detections, reasons=cal.reasons, fits=cal.fits,
         setup=setup, responses=MappingProxyType(dict(responses)),
@@ -298,6 +313,29 @@ def _check_loads(setup: SiteSetup) -> None:
     raise InputError(f"the calibration truck's declared axle loads are implausible: {why}; "
                      "give the static axle loads in N, not kg or kN (1 kg weighs 9.81 N; "
                      "[vehicle] axle_loads)")
+
+
+def _check_load_order(records: Sequence[Record], passages: Sequence[Passage],
+                      kept: Sequence[int], lines: MultiRunCalibration,
+                      setup: SiteSetup) -> None:
+    """The declared loads against the same loads in reverse order, on the runs and
+    passages the lines were fitted to (module docstring)."""
+    loads = setup.calibration_loads
+    reverse = loads[::-1]
+    if np.allclose(loads, reverse, rtol=REVERSED_SAME, atol=0.0):
+        return  # a truck of (nearly) symmetric loads: either order is the same truck
+    try:
+        other = calibrate_lines([records[k] for k in kept], passages, reverse,
+                                lateral=setup.lateral)
+    except (InputError, ArithmeticError, ValueError, np.linalg.LinAlgError):
+        return  # the reverse order cannot even be fitted: the declared one stands
+    declared, reversed_ = float(lines.line.residual), float(other.line.residual)
+    if reversed_ < REVERSED_FIT * declared:
+        raise InputError(
+            f"the calibration runs fit markedly better with the declared axle loads in "
+            f"reverse order (relative residual {reversed_:.3f} against {declared:.3f} as "
+            "declared): give [vehicle] axle_loads from the first axle to the last, in the "
+            "truck's direction of travel, as axle_spacings")
 
 
 def _check_spacings(events: Sequence[EventDetection], reasons: Sequence[str],

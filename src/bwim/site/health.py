@@ -1,11 +1,12 @@
-"""Gauge health of one vehicle: a dead, stuck, reversed or gain-changed gauge is found
-against the calibration and the other gauges, left out, and named.
+"""Gauge health of one vehicle: a dead, stuck, clipped, reversed, gain-changed or
+drifting gauge is found against the calibration and the other gauges, left out, and
+named.
 
 Contract
 --------
 * :func:`check_gauges` judges every channel of the calibration's lines
   (:class:`~bwim.wim.multirun.MultiRunCalibration`) in one vehicle's record, before it
-  is weighed, in two steps:
+  is weighed, in three steps:
 
   1. **Flat** (a dead gauge, or one stuck at a value): the channel's sample-to-sample
      variation in the record, ``std(diff(reading)) / √2``, is below :data:`FLAT_NOISE` ×
@@ -14,7 +15,16 @@ Contract
      deviation, not a robust one: a logger whose noise is below its resolution repeats
      most samples, and a median of the steps would call it flat.)  No weighing is
      needed for this step.
-  2. **Gain** (reversed polarity, a changed gain): the vehicle is weighed with the
+  2. **Clipped** (a logger at its rail): the channel's readings hold its maximum (or
+     minimum) over the record for ``L`` ≥ :data:`CLIP_RUN` consecutive samples, and a
+     run that long is unlikely from the channel's own rate ``q`` of repeated samples at
+     rest (no axle on the lines' support; the run itself left out):
+     ``(n − 1) q^(L − 1) <`` :data:`CLIP_CHANCE` (``n`` samples).  A logger finer than
+     its noise never repeats a sample, so a few held samples are a rail; a coarse one
+     repeats many, and needs a long run.  Runs that touch the record's first or last
+     sample count as well (a rail at the resting reading: the first sample is then the
+     channel's extreme; :func:`bwim.io.read_logger`'s clipping check leaves those out).
+  3. **Gain** (reversed polarity, a changed gain): the vehicle is weighed with the
      remaining channels (:func:`bwim.wim.weigh`, the readings undivided by any drift
      factor: a factor common to all gauges does not change their ratios), and each
      channel's gain ratio ``a_g = ⟨m_g, f_g⟩ / ⟨f_g, f_g⟩`` is taken between its
@@ -35,8 +45,18 @@ Contract
      - the difference is significant: ``|a_g − â_g| snr_g >`` :data:`SIGNIFICANCE`
        (the residual the gain error adds, in units of the residual deviation expected).
 
-     The most significant faulty channel is left out and the vehicle weighed again with
-     the others, until every remaining channel passes.
+     **Drift** (a baseline that wanders during the record), in the same weighing: each
+     channel's residual over the whole record (reading − offset − fitted static reading,
+     the latter 0 with no axle on the support) has a least-squares straight line in time
+     whose change from the first sample to the last is ``D_g``; the others' changes, in
+     proportion to their signals (``D_j / rms(f_j)``, a line against ``y`` as above),
+     predict ``D̂_g``; the channel drifts when ``|D_g − D̂_g| >`` :data:`DRIFT_NOISE` ×
+     its noise at rest in the calibration runs (``channel_noise``).  A channel off by
+     both tests is named by what explains its residual better (the larger sum of squares
+     explained by a straight line in time or by a multiple of its fitted reading).
+
+     The most significant gain fault (else the largest drift) is left out and the
+     vehicle weighed again with the others, until every remaining channel passes.
 * A faulty channel is **left out** and named in the flag ``gauge_fault:NAME``
   (:data:`FLAG_GAUGE_FAULT` + ``:`` + the channel's name): a soft flag, the weights of
   the healthy channels are kept with quality ``warning`` (:meth:`GaugeHealth.mark`).
@@ -47,7 +67,11 @@ Contract
   vehicle flagged ``multiple_presence``): the other vehicle's strain is no part of this
   vehicle's fit, so a gauge whose ratio is off may be faulty or may feel the other
   vehicle: the vehicle is refused with that reason, and no gauge is named for it
-  (a flat gauge still is: it has no noise whatever is on the deck).
+  (a flat or clipped gauge still is: no vehicle stops a gauge's noise or holds it at a
+  rail).
+* :func:`gain_ratios` gives the ratios ``a_g / â_g`` of step 3 for any weighing (e.g.
+  the one a vehicle was weighed with: the day's table of gauge health,
+  :mod:`bwim.batch.gauges`).
 * With fewer than :data:`MIN_COMPARED` channels only the flat check is made; a weighing
   that fails here (a singular fit) leaves the gain check out, and the caller's own
   weighing decides.
@@ -70,11 +94,15 @@ from bwim.wim import Weighing, weigh
 from bwim.wim.influence_line import read_channels
 from bwim.wim.multirun import MultiRunCalibration
 
-__all__ = ["FLAG_GAUGE_FAULT", "FLAT_NOISE", "GAIN_TOLERANCE", "MIN_COMPARED", "SIGNIFICANCE",
-           "SILENT_CORRELATION", "GaugeFault", "GaugeHealth", "check_gauges", "restrict_lines"]
+__all__ = ["CLIP_CHANCE", "CLIP_RUN", "DRIFT_NOISE", "FAULT_KINDS", "FLAG_GAUGE_FAULT",
+           "FLAT_NOISE", "GAIN_TOLERANCE", "MIN_COMPARED", "SIGNIFICANCE",
+           "SILENT_CORRELATION", "GaugeFault", "GaugeHealth", "check_gauges", "gain_ratios",
+           "restrict_lines"]
 
 #: The flag of a faulty gauge, written ``gauge_fault:NAME``.
 FLAG_GAUGE_FAULT = "gauge_fault"
+#: Every kind of fault (:attr:`GaugeFault.kind`), in the order of the checks.
+FAULT_KINDS = ("flat", "clipped", "silent", "reversed", "gain", "drift")
 #: A channel whose noise in the record is below this fraction of its calibration noise
 #: at rest is flat (dead or stuck).
 FLAT_NOISE = 0.1
@@ -90,6 +118,15 @@ SIGNIFICANCE = 1.0
 #: samples with an axle on the support) is below this, either sign, does not respond
 #: to the load at all (a broken gauge whose logger channel still shows its noise).
 SILENT_CORRELATION = 0.5
+#: A channel held at its maximum or minimum for at least this many consecutive samples...
+CLIP_RUN = 5
+#: ... is clipped when a run that long is this unlikely from its own rate of repeated
+#: samples at rest (``(n − 1) q^(run − 1)``: n samples, q the rate).
+CLIP_CHANCE = 1e-3
+#: A channel's baseline change over the record (the change of its residual's
+#: least-squares line) may differ from what the other gauges show by up to this many
+#: times its noise at rest in the calibration runs before it is a drift fault.
+DRIFT_NOISE = 20.0
 #: Channels needed to compare one channel's ratio with the others' (a line and a check).
 MIN_COMPARED = 4
 
@@ -106,13 +143,14 @@ class GaugeFault:
     gauge : str
         The channel's name.
     kind : str
-        ``"flat"`` (dead or stuck: no noise), ``"silent"`` (noise but no response to the
-        load: uncorrelated with its fit, :data:`SILENT_CORRELATION`),
-        ``"reversed"`` (a negative ratio) or ``"gain"`` (a ratio off by more than
-        :data:`GAIN_TOLERANCE`).
+        ``"flat"`` (dead or stuck: no noise), ``"clipped"`` (held at a rail),
+        ``"silent"`` (noise but no response to the load: uncorrelated with its fit,
+        :data:`SILENT_CORRELATION`), ``"reversed"`` (a negative ratio), ``"gain"`` (a
+        ratio off by more than :data:`GAIN_TOLERANCE`) or ``"drift"`` (a baseline change
+        beyond :data:`DRIFT_NOISE`).
     ratio : float
         Its gain ratio over what the other channels predict, ``a_g / â_g`` (nan for a
-        flat channel).
+        flat, clipped or drifting channel).
     detail : str
         One line: what was measured.
     """
@@ -201,10 +239,12 @@ def check_gauges(record: Record, passage: Passage, lines: MultiRunCalibration, *
     names = [c.name for c in lines.channels]
     readings = read_channels(record, lines.channels)
     faults = list(_flat(readings, lines))
+    faults += _clipped(readings, lines, _at_rest(record, passage, lines),
+                       skip={f.gauge for f in faults})
     bad = {f.gauge for f in faults}
     ratios: dict[str, float] = {}
     while len(names) - len(bad) >= MIN_COMPARED and 2 * len(bad) < len(names):
-        fault, ratios = _worst_gain(record, passage, lines,
+        fault, ratios = _worst(record, passage, lines,
                                     [n for n in names if n not in bad], combine)
         if fault is None:
             break
@@ -255,10 +295,59 @@ def _positions(lines: MultiRunCalibration) -> np.ndarray:
     return np.array(ys, dtype=float)
 
 
-def _worst_gain(record: Record, passage: Passage, lines: MultiRunCalibration,
-                names: list[str], combine: str) -> tuple[GaugeFault | None, dict[str, float]]:
-    """Step 2: the most significant gain fault among ``names`` (None when every one
-    passes or the weighing fails) and every channel's ratio (empty when it fails)."""
+def _at_rest(record: Record, passage: Passage, lines: MultiRunCalibration) -> np.ndarray:
+    """Samples with no axle of the vehicle on the lines' support (True at rest)."""
+    x0, x1 = lines.support
+    x = passage.axle_x(record.time)
+    return ~np.any((x >= x0) & (x <= x1), axis=1)
+
+
+def _runs(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Start and length of each run of True in a boolean vector."""
+    edges = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
+    starts = np.flatnonzero(edges == 1)
+    return starts, np.flatnonzero(edges == -1) - starts
+
+
+def _clipped(readings: np.ndarray, lines: MultiRunCalibration, rest: np.ndarray, *,
+             skip: set[str]) -> list[GaugeFault]:
+    """Step 2: channels held at their extreme for longer than chance explains."""
+    out = []
+    n = readings.shape[0]
+    if n < CLIP_RUN + 1:
+        return out
+    rest_step = rest[1:] & rest[:-1]
+    for k, c in enumerate(lines.channels):
+        if c.name in skip:
+            continue
+        y = readings[:, k]
+        still = np.diff(y) == 0.0
+        for label, extreme in (("maximum", y.max()), ("minimum", y.min())):
+            starts, lengths = _runs(y == extreme)
+            j = int(np.argmax(lengths))
+            run = int(lengths[j])
+            if run < CLIP_RUN:
+                continue
+            # the channel's own rate of repeated samples at rest, the held run left out
+            usable = rest_step.copy() if np.count_nonzero(rest_step) >= 2 * CLIP_RUN \
+                else np.ones(n - 1, dtype=bool)
+            usable[max(int(starts[j]) - 1, 0):int(starts[j]) + run] = False
+            repeat = float(still[usable].mean()) if usable.any() else 0.0
+            chance = (n - 1) * repeat ** (run - 1)
+            if chance < CLIP_CHANCE:
+                out.append(GaugeFault(
+                    gauge=c.name, kind="clipped", ratio=float("nan"),
+                    detail=f"held at its {label} {extreme:.6g} for {run} consecutive "
+                           f"samples (repeats a sample {repeat:.0%} of the time at rest: "
+                           "a rail, clipped)"))
+                break
+    return out
+
+
+def _worst(record: Record, passage: Passage, lines: MultiRunCalibration,
+           names: list[str], combine: str) -> tuple[GaugeFault | None, dict[str, float]]:
+    """Step 3: the most significant gain or drift fault among ``names`` (None when every
+    one passes or the weighing fails) and every channel's ratio (empty when it fails)."""
     sub = restrict_lines(lines, names)
     try:
         w = weigh(record, passage, sub, combine=combine, scale_correction=False)
@@ -266,36 +355,126 @@ def _worst_gain(record: Record, passage: Passage, lines: MultiRunCalibration,
         return None, {}
     if not np.isfinite(w.gvw) or w.gvw <= 0:
         return None, {}
+    c = _compare(w, sub)
+    if c is None:
+        return None, {}
+    trend = _trends(record, w, sub)
+    noise = sub.channel_noise
+    y = _positions(sub)
+    expected = _predicted(y, c.gain, c.snr)
+    ratios = {n: float(c.gain[g] / expected[g]) for g, n in enumerate(names)
+              if expected[g] > 0}
+    worst, score = None, SIGNIFICANCE
+    drifting, excess = None, 1.0
+    shown = _predicted(y, trend / c.rms, c.snr) * c.rms
+    for g in range(len(names)):
+        if names[g] in ratios:
+            ratio = ratios[names[g]]
+            off = ratio <= 0 or abs(np.log(ratio)) > np.log(GAIN_TOLERANCE)
+            significance = abs(c.gain[g] - expected[g]) * c.snr[g]
+            if off and significance > score:
+                kind = ("silent" if abs(c.corr[g]) < SILENT_CORRELATION
+                        else "reversed" if ratio < 0 else "gain")
+                worst, score = GaugeFault(
+                    gauge=names[g], kind=kind, ratio=ratio,
+                    detail=f"gain {ratio:.2f} × what the other gauges predict "
+                           f"({significance:.1f} residual deviations)"), significance
+        # drift: the residual's change over the record beyond what the others' show
+        # (their changes in proportion to their signals, on a line across the deck)
+        change = abs(trend[g] - shown[g]) / noise[g] if noise[g] > 0 else 0.0
+        if change / DRIFT_NOISE > excess:
+            drifting, excess = GaugeFault(
+                gauge=names[g], kind="drift", ratio=float("nan"),
+                detail=f"baseline change {trend[g]:.3g} over the record, "
+                       f"{change:.0f} × its noise beyond what the other gauges "
+                       "show"), change / DRIFT_NOISE
+    if worst is None:  # a gain fault first: its residual has a trend too...
+        worst = drifting
+    elif drifting is not None and drifting.gauge == worst.gauge and \
+            _explains_drift(record, w, sub, names.index(worst.gauge)):
+        worst = drifting  # ... unless a baseline change explains its residual better
+    return worst, ratios
+
+
+def _residuals(record: Record, w: Weighing, sub: MultiRunCalibration) -> np.ndarray:
+    """Each channel's residual over the whole record: reading − offset − fitted static
+    reading (0 with no axle on the support), logger units, shape (n_t, n_channels)."""
+    r = read_channels(record, sub.channels) - w.offsets
+    r[np.isin(record.time, w.time)] -= w.fitted
+    return r
+
+
+def _trends(record: Record, w: Weighing, sub: MultiRunCalibration) -> np.ndarray:
+    """Each channel's residual's least-squares straight line in time: its change from the
+    first sample to the last, logger units."""
+    t = record.time - record.time.mean()
+    return (t @ _residuals(record, w, sub)) / (t @ t) * float(record.time[-1] - record.time[0])
+
+
+def _explains_drift(record: Record, w: Weighing, sub: MultiRunCalibration, g: int) -> bool:
+    """Whether channel ``g``'s residual is explained better by a straight line in time (a
+    baseline change) than by a multiple of its fitted static reading (a gain error): the
+    larger sum of squares explained by the one regressor."""
+    r = _residuals(record, w, sub)[:, g]
+    f = np.zeros_like(r)
+    f[np.isin(record.time, w.time)] = w.fitted[:, g]
+    t = record.time - record.time.mean()
+    return bool((r @ t) ** 2 / (t @ t) > (r @ f) ** 2 / max(f @ f, 1e-300))
+
+
+@dataclass(frozen=True, kw_only=True)
+class _Comparison:
+    gain: np.ndarray  # a_g = <m_g, f_g> / <f_g, f_g>
+    corr: np.ndarray  # the correlation of m_g with f_g
+    snr: np.ndarray  # rms(f_g) / σ_g
+    rms: np.ndarray  # rms(f_g)
+
+
+def _compare(w: Weighing, sub: MultiRunCalibration) -> _Comparison | None:
+    """Each channel's gain ratio, correlation and signal against its fitted static
+    reading over the samples with an axle on the support (None when degenerate)."""
     m, f = w.measured, w.fitted
     power = (f * f).sum(axis=0)
     if m.shape[0] == 0 or np.any(power <= 0):
-        return None, {}
+        return None
     a = (m * f).sum(axis=0) / power
     # the shape alone: a channel that does not respond is uncorrelated with its fit
     mc, fc = m - m.mean(axis=0), f - f.mean(axis=0)
     corr = (mc * fc).sum(axis=0) / np.sqrt(np.maximum((mc * mc).sum(axis=0)
                                                       * (fc * fc).sum(axis=0), 1e-300))
     sd = np.sqrt(np.clip(np.diag(sub.error_covariance(w.gvw)), np.finfo(float).tiny, None))
-    snr = np.sqrt(power / m.shape[0]) / sd
-    y = _positions(sub)
-    worst, score, ratios = None, SIGNIFICANCE, {}
-    for g in range(len(names)):
-        others = np.arange(len(names)) != g
-        expected = _line_at(y[others], a[others], snr[others] ** 2, y[g])
-        if not expected > 0:
-            continue
-        ratio = float(a[g] / expected)
-        ratios[names[g]] = ratio
-        off = ratio <= 0 or abs(np.log(ratio)) > np.log(GAIN_TOLERANCE)
-        significance = abs(a[g] - expected) * snr[g]
-        if off and significance > score:
-            kind = ("silent" if abs(corr[g]) < SILENT_CORRELATION
-                    else "reversed" if ratio < 0 else "gain")
-            worst, score = GaugeFault(
-                gauge=names[g], kind=kind, ratio=ratio,
-                detail=f"gain {ratio:.2f} × what the other gauges predict "
-                       f"({significance:.1f} residual deviations)"), significance
-    return worst, ratios
+    rms = np.sqrt(power / m.shape[0])
+    return _Comparison(gain=a, corr=corr, snr=rms / sd, rms=rms)
+
+
+def _predicted(y: np.ndarray, values: np.ndarray, snr: np.ndarray) -> np.ndarray:
+    """For each channel, the weighted straight line through the other channels' values
+    against their positions ``y`` (weights ``snr²``), at its own position."""
+    out = np.empty(len(values))
+    for g in range(len(values)):
+        others = np.arange(len(values)) != g
+        out[g] = _line_at(y[others], values[others], snr[others] ** 2, y[g])
+    return out
+
+
+def gain_ratios(weighing: Weighing, lines: MultiRunCalibration) -> dict[str, float]:
+    """Each channel of ``weighing``'s gain ratio over what the other channels predict,
+    ``a_g / â_g`` (step 3 of the module docstring), from its measured and fitted
+    readings; ``lines`` holds (at least) the weighing's channels.  Empty with fewer than
+    :data:`MIN_COMPARED` channels or a degenerate weighing; a channel whose prediction
+    is not positive is left out."""
+    names = [c.name for c in weighing.channels]
+    if len(names) < MIN_COMPARED or not (np.isfinite(weighing.gvw) and weighing.gvw > 0):
+        return {}
+    sub = restrict_lines(lines, names)
+    if [c.name for c in sub.channels] != names:  # columns in another order than the lines'
+        return {}
+    c = _compare(weighing, sub)
+    if c is None:
+        return {}
+    expected = _predicted(_positions(sub), c.gain, c.snr)
+    return {n: float(c.gain[g] / expected[g]) for g, n in enumerate(names)
+            if expected[g] > 0}
 
 
 def _line_at(x: np.ndarray, y: np.ndarray, weight: np.ndarray, at: float) -> float:
