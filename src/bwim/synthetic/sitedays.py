@@ -109,7 +109,8 @@ from bwim.synthetic.outfolder import checked_count, joined, prepare_folder
 from bwim.synthetic.thermal import ThermalDrift, draw_days
 from bwim.synthetic.traffic import calibration_truck
 
-__all__ = ["CALIBRATION_TYRES", "SiteDays", "SiteEvent", "VehicleRun", "make_site_days"]
+__all__ = ["CALIBRATION_TYRES", "SiteDays", "SiteEvent", "VehicleRun", "make_site_days",
+           "nominal_bridge"]
 
 PRE_TRIGGER = 154  #: samples before the first axle enters the bridge (0.30 s at 512 Hz)
 POST_TRIGGER = 0.2  #: s after the last axle leaves
@@ -807,6 +808,18 @@ def _write_truth(path: Path, events: list[SiteEvent]) -> None:
                             f"{v.force_ratio[1]:.4f}"])
 
 
+def nominal_bridge(layout: SiteLayout) -> dict:
+    """The scenario's ``[bridge]`` table: the model an engineer would start from, the
+    layout's measured geometry with nominal concrete (:data:`NOMINAL_MODULUS`,
+    :data:`NOMINAL_DENSITY`, not the simulation's), elements of about :data:`MODEL_MESH` m."""
+    return {"kind": "plate", "length": float(layout.span), "width": float(layout.width),
+            "nx": max(2, round(layout.span / MODEL_MESH)),
+            "ny": max(2, round(layout.width / MODEL_MESH)),
+            "thickness": float(layout.thickness), "E": NOMINAL_MODULUS,
+            "mu": NOMINAL_DENSITY * float(layout.thickness), "poisson": float(layout.poisson),
+            "damping_ratio": float(layout.damping_ratio), "supports": "ss-free"}
+
+
 def _write_scenario(path: Path, layout: SiteLayout, truck, loads, temperature: bool) -> None:
     columns = list(layout.columns) + (["temp_C"] if temperature else [])
     xs = {float(g.x) for g in layout.gauges}
@@ -825,17 +838,8 @@ def _write_scenario(path: Path, layout: SiteLayout, truck, loads, temperature: b
                           "channels": [d.name for d in pair],
                           "distance": round(abs(pair[1].x - pair[0].x), 6),
                           "y": float(pair[0].y)})
-    # the model an engineer would start from: the measured geometry, nominal concrete
-    # (not the simulation's modulus and density), elements of about MODEL_MESH m
-    nx = max(2, round(layout.span / MODEL_MESH))
-    ny = max(2, round(layout.width / MODEL_MESH))
     doc = {
-        "bridge": {"kind": "plate", "length": float(layout.span),
-                   "width": float(layout.width), "nx": nx, "ny": ny,
-                   "thickness": float(layout.thickness), "E": NOMINAL_MODULUS,
-                   "mu": NOMINAL_DENSITY * float(layout.thickness),
-                   "poisson": float(layout.poisson),
-                   "damping_ratio": float(layout.damping_ratio), "supports": "ss-free"},
+        "bridge": nominal_bridge(layout),
         "logger": {"columns": columns, "sampling_rate": float(layout.sampling_rate)},
         "sensors": sensors,
         "axle_detectors": detectors,
