@@ -386,7 +386,8 @@ def sweep_bytes(model: MFIModel, n_lam: int, *, keep: bool = False,
                 keep_forces: bool = False) -> float:
     """Bytes :func:`sweep` holds for ``n_lam`` λ in one chunk: the per-step model arrays
     it builds once, and per λ the feedback gains, the trajectory, the seminorm's
-    increments and what is kept."""
+    increments and what is kept (counted as copies, which it is when the λ go in several
+    chunks; one chunk hands out views, so this is an upper bound)."""
     N, nf, nx, ns = model.n_steps, model.n_f, model.n_x, model.n_s
     fixed = N * ((nx + 1) * (nf + 1) + nx * nf + nx + 2 * ns)
     per_lam = N * (nf * (nx + 1) + (nx + 1) + nf + (nx + nf if keep else 0)
