@@ -8,7 +8,13 @@ records at 1 kHz, clean and with 2 % gauge noise, all measured in this run (the 
 linear in the record length (time per sample flat); peak memory (numpy allocations,
 ``tracemalloc``) within the memory limit of :mod:`bwim.limits`.
 
-Second table: the growth with record length at 20 given modes and the DP solve against
+Second table (the floor of the first): one stacked pass of the recursion with L λ
+(:func:`bwim.mfi.dp.sweep`, trajectories kept) against one sweep of one λ, on the same
+models.  The L-curve search solves its fine grid (at least 8 λ with the default ``n_lam``,
+more when it is extended) in such a pass on the record's model, so "L-curve / sweep"
+cannot fall below the 8-λ ratio of this table while the search solves those λ.
+
+Third table: the growth with record length at 20 given modes and the DP solve against
 the dense stacked Tikhonov solve of the same problem (they must agree), both measured in
 this run.
 """
@@ -126,7 +132,39 @@ def run_sweep_ratio(durations=(1.0, 2.0, 4.0, 8.0, 16.0), noise: float = 0.0,
     return rows
 
 
-def main() -> None:
+def run_stacked(durations=(1.0, 4.0, 16.0), n_lams=(1, 2, 4, 8, 16), repeat: int = 3):
+    """Rows of the second table (module docstring): per record length, the wall time of
+    one stacked sweep of ``n`` λ (around the record's L-curve corner, trajectories kept)
+    for each ``n`` in ``n_lams``, and its ratio to the 1-λ sweep, best of ``repeat``
+    interleaved runs; the stacked answers are checked against one-λ sweeps first."""
+    rows = []
+    for dur in durations:
+        bridge, rec = _record(dur)
+        ident = identify_forces(bridge, rec)
+        scale = float(np.abs(rec.data).max())
+        model = build_model(bridge, bridge.modes(ident.n_modes), rec, scale,
+                            unknowns=ident.unknowns, order=ident.order)
+        d = rec.data / scale
+        grids = {n: ident.lam_scaled * np.geomspace(0.1, 10.0, n) if n > 1
+                 else np.array([ident.lam_scaled]) for n in n_lams}
+        top = grids[max(n_lams)]
+        stacked = sweep(model, d, top, keep=True)
+        alone = sweep(model, d, top[-1:], keep=True)
+        assert np.abs(stacked.X[-1] - alone.X[0]).max() <= 1e-9 * np.abs(alone.X).max()
+        best = dict.fromkeys(n_lams, np.inf)
+        for _ in range(repeat):
+            for n, lams in grids.items():
+                t0 = time.perf_counter()
+                sweep(model, d, lams, keep=True)
+                best[n] = min(best[n], time.perf_counter() - t0)
+        one = best[n_lams[0]]
+        rows.append([f"{dur:g}", rec.time.size, ident.n_modes, f"{one:.3f}",
+                     *(f"{best[n]:.3f} ({best[n] / one:.1f}×)" for n in n_lams[1:])])
+    return rows
+
+
+def main(argv: list[str] | None = None) -> None:
+    """All three tables; ``argv == ["search"]`` prints the first two only (the λ search)."""
     header = ["record (s)", "data mesh", "noise", "samples", "modes", "λ solved", "L-curve",
               "fixed λ",
               "one sweep", "L-curve / sweep", "L-curve / fixed", "µs per sample",
@@ -138,6 +176,15 @@ def main() -> None:
         header, run_sweep_ratio() + run_sweep_ratio(noise=0.02, data_mesh=(24, 16)),
     )
     print_table(
+        "MFI: one stacked sweep of L λ (trajectories kept) against one λ, on the record's "
+        "model (paper truck and bridge, 1 kHz, clean 12 × 8 data, model order from the "
+        "record; wall time, s, and ratio to one λ)",
+        ["record (s)", "samples", "modes", "1 λ", "2 λ", "4 λ", "8 λ", "16 λ"],
+        run_stacked(),
+    )
+    if argv and argv[0] == "search":
+        return
+    print_table(
         "MFI: paper truck and bridge, 18 channels, 20 modes, 1 kHz (wall time, s; "
         "rows with a batch time are the DP solve alone on a short record)",
         ["record (s)", "samples", "one λ (DP)", "L-curve", "batch dense", "DP speed-up",
@@ -147,4 +194,6 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    import sys
+
+    main(sys.argv[1:])

@@ -23,6 +23,18 @@ def test_mfi_benchmark_smoke():
     assert len(rows) == 2 and rows[1][5].endswith("×")
 
 
+def test_mfi_search_benchmark_smoke():
+    """The L-curve-against-one-sweep table and the stacked-λ table run on a short record;
+    each checks its timed answers against a one-λ sweep before timing (the L-curve's
+    forces are the trajectory of the λ it chose; the stacked λ equal the single ones)."""
+    from benchmarks import bench_mfi
+
+    rows = bench_mfi.run_sweep_ratio(durations=(0.4,), repeat=1)
+    assert len(rows) == 1 and rows[0][-1].startswith("≤ 3×")
+    stacked = bench_mfi.run_stacked(durations=(0.4,), n_lams=(1, 2), repeat=1)
+    assert len(stacked) == 1 and stacked[0][-1].endswith("×)")
+
+
 def test_calibration_benchmark_smoke():
     """The calibration benchmark runs; it checks the dynamic objective (scaled modes)
     against a plain simulation of the same trial before timing."""

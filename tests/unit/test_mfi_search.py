@@ -119,3 +119,28 @@ def test_sweep_splits_lambdas_by_the_memory_limit(crossing, monkeypatch):
     monkeypatch.setenv(ENV_VAR, str(int(0.5 * sweep_bytes(model, 1, keep=True))))
     with pytest.raises(InputError, match="memory"):
         sweep(model, d, lams, keep=True)
+
+
+def test_kept_trajectories_and_the_searchs_copy(crossing):
+    """A one-chunk sweep hands out its trajectories as views of the pass's arrays, in λ
+    order: each equals a fresh one-λ sweep at that λ (reference; round-off only, measured
+    5e-15 of the peak state).  The search's solution is a contiguous copy of the chosen
+    λ's trajectory, not a view that would keep every λ's arrays alive."""
+    from bwim.mfi.lcurve import _solution
+
+    beam, rec = crossing
+    scale = float(np.abs(rec.data).max())
+    model = build_model(beam, beam.modes(3), rec, scale, unknowns=ForceUnknowns.AXLE,
+                        order=Order.FIRST)
+    d = rec.data / scale
+    lams = np.geomspace(1e-3, 10.0, 4)
+    sw = sweep(model, d, lams, keep=True)
+    peak = np.abs(sw.X).max()
+    for i, lam in enumerate(lams):
+        one = sweep(model, d, [lam], keep=True)
+        np.testing.assert_allclose(sw.X[i], one.X[0], rtol=0, atol=5e-14 * peak)
+        np.testing.assert_allclose(sw.r[i], one.r[0], rtol=0, atol=5e-14 * peak)
+    sol = _solution(sw, 2)
+    assert sol.X.flags.c_contiguous and not np.shares_memory(sol.X, sw.X)
+    assert not np.shares_memory(sol.r, sw.r)
+    np.testing.assert_array_equal(sol.X, sw.X[2])

@@ -207,7 +207,9 @@ class Sweep:
     residual_norm, seminorm : ndarray (n_lam,)
         ρ = ‖W^{1/2}(d − Q X)‖ and η = ‖r‖ for each λ.
     X : ndarray (n_lam, N, n_x) or None
-        The trajectories when asked for (``keep=True``).
+        The trajectories when asked for (``keep=True``); like ``r`` and ``forces``, a
+        λ-first view of the pass's step-first arrays when all λ went in one chunk (index
+        the λ wanted; copy it to let the others go).
     r : ndarray (n_lam, N − 1, n_f) or None
     forces : ndarray (n_lam, N, n_f) or None
         The scaled forces, when asked for (``keep=True`` or ``keep_forces=True``).
@@ -372,9 +374,11 @@ def _sweep_chunk(model: MFIModel, lams: np.ndarray, d: np.ndarray, W: np.ndarray
         fit *= fit
         res[j] = np.sqrt(fit.sum(axis=0) @ W)
     eta = np.sqrt(np.einsum("klf,klf->l", r, r))
-    Xk = X[:, :, :nx].transpose(1, 0, 2).copy() if keep else None
-    rk = r.transpose(1, 0, 2).copy() if keep else None
-    fk = X[:, :, nz:nx].transpose(1, 0, 2).copy() if keep or keep_forces else None
+    # λ-first views of the step-first arrays, not copies: the caller takes the one λ it
+    # needs (a copy of all of them cost as much as a tenth of the pass)
+    Xk = X[:, :, :nx].transpose(1, 0, 2) if keep else None
+    rk = r.transpose(1, 0, 2) if keep else None
+    fk = X[:, :, nz:nx].transpose(1, 0, 2) if keep or keep_forces else None
     return res, eta, Xk, rk, fk
 
 
@@ -382,7 +386,8 @@ def sweep_bytes(model: MFIModel, n_lam: int, *, keep: bool = False,
                 keep_forces: bool = False) -> float:
     """Bytes :func:`sweep` holds for ``n_lam`` λ in one chunk: the per-step model arrays
     it builds once, and per λ the feedback gains, the trajectory, the seminorm's
-    increments and what is kept."""
+    increments and what is kept (counted as copies, which it is when the λ go in several
+    chunks; one chunk hands out views, so this is an upper bound)."""
     N, nf, nx, ns = model.n_steps, model.n_f, model.n_x, model.n_s
     fixed = N * ((nx + 1) * (nf + 1) + nx * nf + nx + 2 * ns)
     per_lam = N * (nf * (nx + 1) + (nx + 1) + nf + (nx + nf if keep else 0)
@@ -417,7 +422,9 @@ def sweep(model: MFIModel, d: np.ndarray, lams, weights: np.ndarray | None = Non
              for i in range(0, lams.size, step)]
 
     def joined(i):
-        return np.concatenate([p[i] for p in parts]) if parts[0][i] is not None else None
+        if parts[0][i] is None:
+            return None
+        return parts[0][i] if len(parts) == 1 else np.concatenate([p[i] for p in parts])
 
     return Sweep(lam=lams.copy(), residual_norm=joined(0), seminorm=joined(1), X=joined(2),
                  r=joined(3), forces=joined(4))

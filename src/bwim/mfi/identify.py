@@ -301,7 +301,8 @@ def identify_forces(
         lam_s = model.lam_scaled(float(lam))
     if sol is None:
         best = sweep(model, d_scaled, [lam_s], W, keep=True)
-        sol = Solution(X=best.X[0], r=best.r[0], residual_norm=float(best.residual_norm[0]),
+        sol = Solution(X=np.ascontiguousarray(best.X[0]), r=np.ascontiguousarray(best.r[0]),
+                       residual_norm=float(best.residual_norm[0]),
                        seminorm=float(best.seminorm[0]))
     ident = _result(model, sol, record, unknowns, order, lam_s, curve, windows)
     return replace(ident, n_modes=modes.n)

@@ -180,7 +180,9 @@ class CornerSearch:
 
 
 def _solution(sw, i: int) -> Solution:
-    return Solution(X=sw.X[i], r=sw.r[i], residual_norm=float(sw.residual_norm[i]),
+    # copies: the sweep's arrays (all its λ) are freed once the search returns
+    return Solution(X=np.ascontiguousarray(sw.X[i]), r=np.ascontiguousarray(sw.r[i]),
+                    residual_norm=float(sw.residual_norm[i]),
                     seminorm=float(sw.seminorm[i]))
 
 
