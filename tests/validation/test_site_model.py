@@ -121,3 +121,24 @@ def test_model_file_round_trip(fitted, tmp_path):
     # a plain bridge file is a bridge
     save_bridge(model.bridge, tmp_path / "bridge.toml")
     assert not isinstance(load_model(tmp_path / "bridge.toml"), SiteModel)
+
+
+def test_a_dead_gauge_is_left_out_of_the_mfi_weighing(fitted):
+    """A gauge under the wheel path dead (constant) on the traffic truck: the health check
+    names it (``gauge_fault:s02``), the model weighs with the other gauges and the GVW stays
+    within 10 % of the static weight (measured +3.0 %, +2.9 % with every gauge healthy;
+    the dead gauge kept in the MFI, -20.7 %: a silent wrong weight); the row's quality is
+    a warning."""
+    day, scenario, _, site, model = fitted
+    with open(day.reference, newline="") as f:
+        r = next(r for r in csv.DictReader(f) if r["lane"] == "1")
+    rec = load_record(day.out_dir / "traffic" / r["record"], scenario)
+    k = [s.name for s in rec.sensors].index("s02")
+    data = rec.data.copy()
+    data[:, k] = data[0, k]
+    ev = weigh_event(dataclasses.replace(rec, data=data), site, bridge=model)
+    assert ev.weighed and ev.identification is not None, ev.reason
+    assert "gauge_fault:s02" in ev.flags
+    assert ev.identification.fitted.shape[1] == len(model.gains) - 1
+    assert ev.gvw / (float(r["gvw_kN"]) * 1e3) - 1 == pytest.approx(0.0, abs=0.10)
+    assert ev.to_summary_row(r["record"]).quality == "warning"

@@ -18,7 +18,8 @@ Contract
   λ on low-order models of records with per-channel noise (``benchmarks/mfi_accuracy.py``
   compares the two rules).
 * Unknowns are per wheel or per axle (``unknowns="auto"``: wheels when the strain sensors
-  sit at two or more transverse positions on a plate, else axles).  Axle force = sum of
+  sit at two or more transverse positions on a plate and there are at least as many
+  channels as wheels, else axles).  Axle force = sum of
   its wheels.  Static axle weight = mean identified axle force over the central
   ``central`` fraction (default 80 %) of the axle's time on the deck; GVW = their sum.
 """
@@ -181,7 +182,10 @@ def _auto_unknowns(bridge: Bridge, record: Record) -> ForceUnknowns:
     if not bridge.is_plate or all(p.track_width is None for p in record.passages):
         return ForceUnknowns.AXLE
     ys = {round(s.y, 6) for s in record.sensors if s.kind.is_strain and s.y is not None}
-    return ForceUnknowns.WHEEL if len(ys) >= 2 else ForceUnknowns.AXLE
+    wheels = sum(p.n_axles * p.wheels_per_axle for p in record.passages)
+    # wheels need transverse information and at least one channel per wheel force
+    return (ForceUnknowns.WHEEL if len(ys) >= 2 and len(record.sensors) >= wheels
+            else ForceUnknowns.AXLE)
 
 
 def identify_forces(

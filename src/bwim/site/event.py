@@ -10,8 +10,8 @@ Contract
   - a vehicle that shares the span with another vehicle travelling its way (side by side
     or following) is refused (``multiple_presence``): one record cannot tell their weights
     apart with lines of one vehicle;
-  - any other vehicle's gauges are judged first (:func:`bwim.site.health.check_gauges`;
-    not for a vehicle weighed by MFI, below): a dead, stuck, reversed or gain-changed
+  - any other vehicle's gauges are judged first (:func:`bwim.site.health.check_gauges`,
+    also for a vehicle weighed by MFI, below): a dead, stuck, reversed or gain-changed
     gauge is left out and named (``gauge_fault:NAME``, quality ``warning``); too few
     healthy gauges refuse it, and so does a gauge that disagrees while a vehicle of the
     other direction is on the span;
@@ -29,10 +29,15 @@ Contract
   trend over the time of day, their trend over absolute time, or 1.  The traffic method
   works on a whole batch's rows afterwards (:func:`bwim.site.correct_drift`); per event
   it starts from the time of day.
-* With a calibrated FE model (``bridge``) the calibration lane's vehicle is weighed by
-  moving force identification instead (:func:`bwim.identify_forces` with
-  ``identify_options``): the gauges then need positions (x, y) in the model's frame and
-  the readings strain units (``[logger] scale``).
+* With a calibrated FE model (``bridge``: a :class:`~bwim.site.SiteModel`, or a bare
+  :class:`~bwim.fe.bridge.Bridge` whose readings are strains and whose frame is the
+  detectors') the calibration lane's vehicle is weighed by moving force identification
+  instead (:func:`bwim.identify_forces` with ``identify_options``; the readings as
+  :meth:`~bwim.site.SiteModel.readings` gives them, the gauges the health check found
+  faulty left out): the gauges then need positions (x, y) in the model's frame.  A model
+  that is not accepted weighs nothing (each such vehicle is refused with its reason), and
+  a vehicle with another vehicle on the span is refused (MFI models one vehicle's
+  forces).  Its row's quality is the identification's, made a warning by any flag.
 * :class:`EventWeighing` keeps its first weighed vehicle (else the first in the
   calibration lane) as the event's own (``weighed``, ``gvw``, ``weighing``...), and
   every vehicle in ``vehicles``; :meth:`EventWeighing.to_summary_rows` gives one row each.
@@ -56,7 +61,7 @@ from bwim.detect.result import FLAG_MULTIPLE_PRESENCE, FLAG_TRUNCATED
 from bwim.errors import BwimError, InputError
 from bwim.fe.bridge import Bridge
 from bwim.mfi import ForceIdentification, identify_forces
-from bwim.plausibility import HARD_FLAGS
+from bwim.plausibility import HARD_FLAGS, quality_of
 from bwim.records import Passage, Record
 from bwim.site.calibrate import (
     SiteCalibration,
@@ -238,8 +243,10 @@ class EventWeighing:
         p = v.passage
         w, ident = vw.weighing, vw.identification
         lateral = float(v.lateral) if np.isfinite(v.lateral) else None
-        if ident is not None:
-            residual, quality, lam = ident.residual, ident.vehicle_quality[0], ident.lam
+        if ident is not None:  # the vehicle's own flags (drift, gauges) count too
+            residual, lam = ident.residual, ident.lam
+            own = ident.vehicle_quality[0]
+            quality = own if own != "ok" else quality_of(vw.flags)
         elif w is not None:
             residual, quality, lam = w.residual, w.quality, None
         else:
@@ -356,18 +363,24 @@ def _vehicle(record: Record, ev: EventDetection, k: int, calibration: SiteCalibr
         factor, method, drift_flags = _drift_factor(record, v.passage, calibration)
     except InputError as exc:
         return refused(f"drift correction failed: {_why(exc)}")
-    if model is not None and lv.lane == setup.calibration_lane:
-        if not model.accepted:
-            return refused(f"the bridge model is not accepted: {model.reason}")
-        if FLAG_MULTIPLE_PRESENCE in flags:
-            return refused("multiple presence: moving force identification models this "
-                           "vehicle's forces alone")
-        return _weigh_mfi(record, lv, flags, model, options, factor, method, drift_flags)
+    mfi = model is not None and lv.lane == setup.calibration_lane
+    if mfi and not model.accepted:
+        return refused(f"the bridge model is not accepted: {model.reason}")
+    if mfi and FLAG_MULTIPLE_PRESENCE in flags:
+        return refused("multiple presence: moving force identification models this "
+                       "vehicle's forces alone")
     try:
         health = check_gauges(record, v.passage, calibration.lines, combine=setup.combine,
                               alone=FLAG_MULTIPLE_PRESENCE not in flags)
-        if not health.usable:
-            return refused(health.reason, flags=(*flags, *health.flags))
+    except _EVENT_ERRORS as exc:
+        return refused(f"weighing failed: {_why(exc)}")
+    if not health.usable:
+        return refused(health.reason, flags=(*flags, *health.flags))
+    if mfi:  # the gauges the lines found faulty are left out of the MFI too
+        faulty = {f.gauge for f in health.faults}
+        return _weigh_mfi(record, lv, (*flags, *health.flags), model, options, factor,
+                          method, drift_flags, faulty)
+    try:
         w = health.mark(weigh(record, v.passage, health.lines, combine=setup.combine,
                               scale_correction=method == "trend",
                               scale=None if method == "trend" else factor))
@@ -422,8 +435,9 @@ def _drift_factor(record: Record, passage: Passage, calibration: SiteCalibration
 
 def _weigh_mfi(record: Record, lv: LaneVehicle, flags: tuple[str, ...], model: SiteModel,
                options: Mapping[str, Any], factor: float, method: str,
-               drift_flags: tuple[str, ...]) -> VehicleWeighing:
-    """The detected vehicle weighed by moving force identification with ``model``."""
+               drift_flags: tuple[str, ...], faulty: set[str]) -> VehicleWeighing:
+    """The detected vehicle weighed by moving force identification with ``model``,
+    without the ``faulty`` gauges."""
     vehicle = lv.vehicle
 
     def refused(reason: str) -> VehicleWeighing:
@@ -432,6 +446,8 @@ def _weigh_mfi(record: Record, lv: LaneVehicle, flags: tuple[str, ...], model: S
 
     if vehicle.lateral_unit != "m" or not np.isfinite(vehicle.lateral):
         return refused("weighing by MFI needs the vehicle's lane in metres (gauge y positions)")
+    if faulty:
+        record = record.channels([s for s in record.sensors if s.name not in faulty])
     try:
         rec = model.readings(record, vehicle.passage, factor)
     except InputError as exc:
