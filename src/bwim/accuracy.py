@@ -641,6 +641,9 @@ def assess(summary_rows: Sequence[SummaryRow], reference_rows: Sequence[Referenc
     rep = _repeatability(repeatability)
     env = _environment(environment)
     spacing = require_positive("group_spacing", group_spacing)
+    for name, rows in (("summary_rows", summary_rows), ("reference_rows", reference_rows)):
+        if rows is None or isinstance(rows, (str, bytes)) or not hasattr(rows, "__iter__"):
+            raise InputError(f"{name} must be a sequence of rows, got {type(rows).__name__}")
     summary = _summaries(summary_rows)
     reference = _references(reference_rows)
     if not reference:

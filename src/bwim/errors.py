@@ -25,6 +25,7 @@ __all__ = [
     "BwimError",
     "InputError",
     "NumericalError",
+    "as_floats",
     "parse_enum",
     "require_axis",
     "require_choice",
@@ -124,12 +125,21 @@ def parse_enum(enum: type[E], value: object, name: str, *, context: str = "") ->
         ) from None
 
 
+def as_floats(name: str, values, *, ndmin: int = 0) -> np.ndarray:
+    """``values`` as a float array, else InputError naming ``name`` (text, None, a
+    ragged list)."""
+    import numpy as np
+
+    try:
+        return np.array(values, dtype=float, ndmin=ndmin)
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be numbers, got {type(values).__name__}") from None
+
+
 def require_axis(name: str, values, what: str = "samples") -> np.ndarray:
     """``values`` as a float array: 1-D, at least two ``what``, finite and strictly
     increasing (a time or position axis), else InputError naming ``name``."""
-    import numpy as np
-
-    a = np.asarray(values, dtype=float)
+    a = as_floats(name, values)
     if a.ndim != 1 or a.size < 2:
         raise InputError(f"{name} must be a 1-D array of at least two {what}")
     if not np.all(np.isfinite(a)) or np.any(np.diff(a) <= 0):
@@ -140,9 +150,7 @@ def require_axis(name: str, values, what: str = "samples") -> np.ndarray:
 def require_columns(name: str, values, shape: tuple[int, int], labels: str) -> np.ndarray:
     """``values`` as a float table of ``shape`` (a 1-D array is one column), else
     InputError naming ``name`` and the expected ``labels``, e.g. ``"(n_t, n_sensors)"``."""
-    import numpy as np
-
-    a = np.asarray(values, dtype=float)
+    a = as_floats(name, values)
     if a.ndim == 1:
         a = a[:, None]
     if a.shape != tuple(shape):

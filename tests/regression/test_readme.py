@@ -49,9 +49,9 @@ def _steps(text: str) -> list[tuple[str, str]]:
 
 
 def test_the_walk_through_is_what_the_test_runs():
-    """The parser finds the section's four commands and its Python block."""
+    """The parser finds the section's six commands and its Python block."""
     steps = _steps(_section("A real installation"))
-    assert [kind for kind, _ in steps] == ["sh"] * 4 + ["python"]
+    assert [kind for kind, _ in steps] == ["sh"] * 6 + ["python"]
     assert steps[0][1].startswith("python examples/test_day/make_test_day.py")
 
 
@@ -94,6 +94,10 @@ def test_the_real_installation_walk_through_runs(tmp_path):
     assert (tmp_path / "site-report.html").stat().st_size > 0
     summary = (tmp_path / "site-out" / "summary.csv").read_text().splitlines()
     assert len(summary) > 12 and any(",weighed," in line for line in summary)
+    # the FE model from the same logger files, then MFI weighing with it
+    assert "accepted = true" in (tmp_path / "site-model.toml").read_text()
+    mfi = (tmp_path / "site-out-mfi" / "summary.csv").read_text().splitlines()
+    assert any(",weighed," in line and ",mfi," in line for line in mfi)
 
 
 def _bwim_lines() -> list[str]:

@@ -36,6 +36,7 @@ import scipy.sparse as sp
 from bwim.errors import (
     InputError,
     NumericalError,
+    as_floats,
     require_finite,
     require_positive,
     require_range,
@@ -129,7 +130,7 @@ STIFFNESS_MASS_RANGE = (1e-30, 1e30)
 
 
 def _param_array(name: str, value: Any, n: int) -> np.ndarray:
-    arr = np.array(value, dtype=float, ndmin=1)
+    arr = as_floats(name, value, ndmin=1)
     if arr.size == 1 and n != 1:
         arr = np.full(n, arr.item())
     if arr.shape != (n,):

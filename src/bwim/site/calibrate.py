@@ -207,6 +207,12 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
     """
     if records is None or len(records) == 0:
         raise InputError("records: give at least one calibration run")
+    if not isinstance(setup, SiteSetup):
+        raise InputError(f"setup must be a SiteSetup, got {type(setup).__name__}")
+    bad = next((k for k, r in enumerate(records) if not isinstance(r, Record)), None)
+    if bad is not None:
+        raise InputError(f"records[{bad}] must be a bwim.Record, got "
+                         f"{type(records[bad]).__name__}")
     _check_loads(setup)
     if not setup.lanes:
         if int(strain_passes) < 0:

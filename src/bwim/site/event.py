@@ -274,10 +274,19 @@ def weigh_event(record: Record, calibration: SiteCalibration, *,
                 identify_options: Mapping[str, Any] | None = None) -> EventWeighing:
     """Detect and weigh every vehicle of one event (see the module docstring).
 
-    Never raises for a record it can read: detection or weighing failures come back as an
+    Raises InputError for arguments of the wrong kind; never raises for a record it can
+    read: detection or weighing failures come back as an
     :class:`EventWeighing` with ``weighed=False`` and the reason.  The result carries the
     record's clock (:meth:`EventWeighing.time_at`, the summary's ``time``).
     """
+    if not isinstance(record, Record):
+        raise InputError(f"record must be a bwim.Record, got {type(record).__name__}")
+    if not isinstance(calibration, SiteCalibration):
+        raise InputError(f"calibration must be a SiteCalibration (bwim.calibrate_site), got "
+                         f"{type(calibration).__name__}")
+    if identify_options is not None and not isinstance(identify_options, Mapping):
+        raise InputError(f"identify_options must be a mapping of identify_forces' options, "
+                         f"got {type(identify_options).__name__}")
     t0 = float(record.time[0])
     base = {"clock": record.clock, "clock_of_day": record.clock is None and 0.0 < t0 < 86400.0}
     setup = calibration.setup

@@ -215,13 +215,21 @@ def calibrate_site_model(
     """
     from bwim.site.event import weigh_event  # the event module weighs with a SiteModel
 
-    if records is None or len(records) != len(calibration.reasons):
+    from bwim.site.calibrate import SiteCalibration
+
+    if not isinstance(calibration, SiteCalibration):
+        raise InputError(f"calibration must be a SiteCalibration (bwim.calibrate_site), got "
+                         f"{type(calibration).__name__}")
+    if isinstance(records, (str, bytes)) or not isinstance(records, Sequence) or len(
+            records) != len(calibration.reasons):
         raise InputError("records must be the calibration runs the site calibration was "
                          "made from")
     if gains not in GAIN_MODES:
         raise InputError(f"gains must be one of {GAIN_MODES}, got {gains!r}")
-    if not 0 < float(tolerance) < 1:
+    if not isinstance(tolerance, (int, float)) or not 0 < float(tolerance) < 1:
         raise InputError(f"tolerance must be a fraction in (0, 1), got {tolerance!r}")
+    if track_width is not None and not isinstance(track_width, (int, float)):
+        raise InputError(f"track_width must be a length in m, got {track_width!r}")
     track = DEFAULT_TRACK if track_width is None else float(track_width)
     if not 0.5 <= track <= 3.0:
         raise InputError(f"track_width must be a vehicle's track in 0.5-3 m, got {track!r}")
