@@ -118,13 +118,15 @@ class ForceIdentification:
     order: Order
     residual: float = float("nan")
     n_modes: int = 0
+    residual_limit: float = MAX_RESIDUAL
 
     @property
     def vehicle_flags(self) -> tuple[tuple[str, ...], ...]:
         """Plausibility flags of each vehicle's weights (:mod:`bwim.plausibility`):
         implausible axle weights or GVW; ``negative_force`` (an axle pushing up by more
         than 10 % of its weight, or 1 kN, while weighed); ``residual_high`` (the forces
-        reproduce the readings worse than :data:`MAX_RESIDUAL`)."""
+        reproduce the readings worse than ``residual_limit``, by default
+        :data:`MAX_RESIDUAL`)."""
         out, a0 = [], 0
         t = self.time
         for p in self.passages:
@@ -138,7 +140,7 @@ class ForceIdentification:
                 if inside.any() and self.axle_forces[inside, a].min() < floor:
                     flags.append("negative_force")
                     break
-            if not self.residual <= MAX_RESIDUAL and np.isfinite(self.residual):
+            if not self.residual <= self.residual_limit and np.isfinite(self.residual):
                 flags.append("residual_high")
             out.append(ordered_flags(flags))
         return tuple(out)
@@ -201,6 +203,7 @@ def identify_forces(
     lam_range: tuple[float, float] = (1e-6, 1e3),
     n_lam: int = 16,
     central: float = 0.8,
+    max_residual: float = MAX_RESIDUAL,
 ) -> ForceIdentification:
     """Identify the moving forces of a record (see module docstring).
 
@@ -233,8 +236,14 @@ def identify_forces(
         :data:`SMALL_MODEL_MODES` modes).
     central : float
         Fraction of each axle's time on the deck used for its static weight.
+    max_residual : float
+        Relative residual above which the weights are flagged ``residual_high`` (a
+        caller that knows the readings' noise and its model's error sets it from them).
     """
     _check_arguments(bridge, record, n_modes, lam, weights, lam_range, n_lam, central)
+    if not isinstance(max_residual, (int, float)) or not max_residual > 0:
+        raise InputError(f"max_residual must be a positive fraction, got {max_residual!r}")
+    max_residual = float(max_residual)
     if not record.passages:
         raise InputError("the record has no passage: speed, lane and axle layout are needed "
                          "to place the forces")
@@ -309,7 +318,7 @@ def identify_forces(
                        residual_norm=float(best.residual_norm[0]),
                        seminorm=float(best.seminorm[0]))
     ident = _result(model, sol, record, unknowns, order, lam_s, curve, windows)
-    return replace(ident, n_modes=modes.n)
+    return replace(ident, n_modes=modes.n, residual_limit=max_residual)
 
 
 def _weighed(time: np.ndarray, windows: np.ndarray, axles: np.ndarray) -> np.ndarray:

@@ -461,6 +461,7 @@ def _weigh_mfi(record: Record, lv: LaneVehicle, flags: tuple[str, ...], model: S
         rec = model.readings(record, vehicle.passage, factor)
     except InputError as exc:
         return refused(_why(exc))
+    options = {"max_residual": model.residual_limit(rec), **options}
     try:
         ident = identify_forces(model.bridge, rec, **options)
     except _EVENT_ERRORS as exc:

@@ -44,20 +44,23 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from functools import partial
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from bwim.calibration.logger import GAIN_MODES, LoggerCalibration, calibrate_logger
+from bwim.calibration.problem import estimate_noise
 from bwim.errors import InputError
 from bwim.fe.bridge import Bridge
+from bwim.mfi.identify import MAX_RESIDUAL
 from bwim.records import Passage, Record
 
 if TYPE_CHECKING:  # pragma: no cover
     from bwim.site.calibrate import SiteCalibration
 
-__all__ = ["DEFAULT_TOLERANCE", "DEFAULT_TRACK", "ModelRun", "SiteModel",
-           "calibrate_site_model"]
+__all__ = ["DEFAULT_TOLERANCE", "DEFAULT_TRACK", "RESIDUAL_FACTOR", "ModelRun", "SiteModel",
+           "calibrate_site_model", "noise_share"]
 
 #: m: a heavy vehicle's track, centre to centre of its wheels' contact (the calibration
 #: truck's when the scenario does not state it).
@@ -65,6 +68,9 @@ DEFAULT_TRACK = 1.9
 #: The largest leave-one-out GVW error (fraction) of an accepted model: COST 323's GVW
 #: tolerance of class B(10).
 DEFAULT_TOLERANCE = 0.10
+#: A weighing's relative residual may be this many times what the readings' noise and the
+#: model's error on its own runs explain (``residual_high`` beyond).
+RESIDUAL_FACTOR = 1.5
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -111,6 +117,12 @@ class SiteModel:
     runs : tuple of ModelRun
     fit : LoggerCalibration or None
         The full fit (None for a model read from a file).
+    weighing_scale : float
+        The factor the fit's gains were multiplied by so that the model's MFI weighs its
+        runs right on average (already in ``gains``; 1 for a bare bridge).
+    model_error : float or None
+        The model's error on its own runs: the RMS over them of the MFI's relative
+        residual beyond what their noise explains (None: not measured).
     """
 
     bridge: Bridge
@@ -123,6 +135,8 @@ class SiteModel:
     reason: str = ""
     runs: tuple[ModelRun, ...] = ()
     fit: LoggerCalibration | None = None
+    weighing_scale: float = 1.0
+    model_error: float | None = None
 
     @classmethod
     def of_bridge(cls, bridge: Bridge) -> SiteModel:
@@ -162,6 +176,15 @@ class SiteModel:
         data = (rec.data - rec.data[before].mean(axis=0)) / (factor * gains)
         return dataclasses.replace(rec, data=data, passages=(moved,))
 
+    def residual_limit(self, readings: Record) -> float:
+        """The relative residual beyond which an MFI weighing of ``readings`` (as
+        :meth:`readings` gives them) is ``residual_high``: :data:`RESIDUAL_FACTOR` × what
+        the readings' noise and the model's error explain together (the MFI's default
+        without a measured model error)."""
+        if self.model_error is None:
+            return MAX_RESIDUAL
+        return RESIDUAL_FACTOR * float(np.hypot(noise_share(readings), self.model_error))
+
     def summary(self) -> str:
         """A few lines: the fit, the self-check and the verdict."""
         lines = []
@@ -176,6 +199,9 @@ class SiteModel:
             lines.append(f"leave-one-out GVW errors of {done.size} run(s): mean "
                          f"{100 * done.mean():+.1f} %, largest {100 * np.abs(done).max():.1f} %"
                          f" (tolerance {100 * self.tolerance:.0f} %)")
+        if self.model_error is not None:
+            lines.append(f"weighing scale {self.weighing_scale:.4f} (the MFI on its own runs), "
+                         f"model error {100 * self.model_error:.1f} % of the readings")
         lines.append("accepted" if self.accepted else f"not accepted: {self.reason}")
         return "\n".join(lines)
 
@@ -251,10 +277,10 @@ def calibrate_site_model(
                                 lateral=start_lateral, gains=gains, **options)
 
     full = fit(used, start_bridge, origin, 0.0, bool(fit_options.pop("mass", True)))
-    model = SiteModel(bridge=full.bridge, gains=(
-        dict(zip(full.channels, (float(g) for g in full.gains), strict=True))),
-        origin=full.origin, lateral=full.lateral, track_width=track,
-        tolerance=float(tolerance), fit=full)
+    base = SiteModel(bridge=full.bridge, gains={}, track_width=track,
+                     tolerance=float(tolerance))
+    weigh = partial(weigh_event, calibration=calibration, identify_options=identify_options)
+    model = _scaled(base, full, used, records, weigh, setup)
     explained = dict(zip(used, full.explained, strict=True))
     checks = []
     for k in used:
@@ -263,24 +289,69 @@ def calibrate_site_model(
                                    gvw_error=float("nan"), reason="not checked"))
             continue
         # the full fit is the fold's start (its mass kept: one run changes it little)
-        fold = fit([j for j in used if j != k], full.bridge, full.origin, full.lateral,
-                   False)
-        fold_model = dataclasses.replace(
-            model, bridge=fold.bridge, origin=fold.origin, lateral=fold.lateral,
-            gains=(dict(zip(fold.channels, (float(g) for g in fold.gains),
-                                            strict=True))), fit=fold)
-        ev = weigh_event(records[k], calibration, bridge=fold_model,
-                         identify_options=identify_options)
-        mine = [v for v in ev.vehicles if v.lane == setup.calibration_lane]
-        if len(mine) == 1 and mine[0].weighed and mine[0].gvw is not None:
-            err = float(mine[0].gvw / float(np.sum(loads)) - 1)
-            checks.append(ModelRun(index=k, explained=float(explained[k]), gvw_error=err))
-        else:
-            why = mine[0].reason if len(mine) == 1 else f"{len(mine)} vehicles in its lane"
-            checks.append(ModelRun(index=k, explained=float(explained[k]),
-                                   gvw_error=float("nan"), reason=why or "not weighed"))
-    reason = _verdict(full, checks, float(tolerance), leave_one_out)
+        others = [j for j in used if j != k]
+        fold = _scaled(base, fit(others, full.bridge, full.origin, full.lateral, False),
+                       others, records, weigh, setup)
+        checks.append(_check(k, float(explained[k]), weigh(records[k], bridge=fold),
+                             setup))
+    reason = _verdict(model, checks, float(tolerance), leave_one_out)
     return dataclasses.replace(model, runs=tuple(checks), accepted=not reason, reason=reason)
+
+
+def noise_share(record: Record) -> float:
+    """The share of a record's readings its noise accounts for: ``√(n_t Σ σ_s²) / ‖data‖``
+    (σ_s each channel's noise, :func:`~bwim.calibration.estimate_noise`)."""
+    sigma = estimate_noise([record])[0]
+    norm = float(np.linalg.norm(record.data))
+    return float(np.sqrt(record.data.shape[0] * float((sigma**2).sum())) / norm) if norm else 0.0
+
+
+def _mine(ev, setup):
+    """The calibration lane's vehicle of an event weighed with a model (or None)."""
+    mine = [v for v in ev.vehicles if v.lane == setup.calibration_lane]
+    return mine[0] if len(mine) == 1 else None
+
+
+def _scaled(base: SiteModel, fit: LoggerCalibration, keys: Sequence[int],
+            records: Sequence[Record], weigh, setup) -> SiteModel:
+    """The model of ``fit`` with its gains scaled so that its MFI weighs runs ``keys``
+    right on average (weighed as traffic is), and its error measured on them.
+
+    The fit pins the model's strain per newton over each run's whole time on the span;
+    the weight the MFI reports is the mean of a regularised force over the central part
+    of each axle's time, and a model-form error (a point gauge for one that averages over
+    the load's spread, a coarse mesh) moves the two apart by a few per cent.  The truck of
+    known weight calibrates the weighing as it is done.
+    """
+    gains = dict(zip(fit.channels, (float(g) for g in fit.gains), strict=True))
+    model = dataclasses.replace(base, bridge=fit.bridge, gains=gains, origin=fit.origin,
+                                lateral=fit.lateral, fit=fit)
+    ratios, excess = [], []
+    for k in keys:
+        v = _mine(weigh(records[k], bridge=model), setup)
+        if v is None or not v.weighed or v.identification is None:
+            continue
+        ident = v.identification
+        ratios.append(float(v.gvw) / float(np.sum(setup.calibration_loads)))
+        rec = model.readings(records[k], v.vehicle.passage, float(v.drift_factor))
+        excess.append(max(ident.residual**2 - noise_share(rec) ** 2, 0.0))
+    if not ratios:
+        return model
+    scale = float(np.mean(ratios))
+    return dataclasses.replace(model, gains={n: g * scale for n, g in gains.items()},
+                               weighing_scale=scale,
+                               model_error=float(np.sqrt(np.mean(excess))))
+
+
+def _check(k: int, explained: float, ev, setup) -> ModelRun:
+    """Run k weighed by the model fitted without it."""
+    v = _mine(ev, setup)
+    loads = setup.calibration_loads
+    if v is not None and v.weighed and v.gvw is not None:
+        return ModelRun(index=k, explained=explained,
+                        gvw_error=float(v.gvw / float(np.sum(loads)) - 1))
+    why = (v.reason if v is not None else "not one vehicle in its lane") or "not weighed"
+    return ModelRun(index=k, explained=explained, gvw_error=float("nan"), reason=why)
 
 
 def _run(record: Record, calibration: SiteCalibration, k: int, track: float) -> Record:
@@ -297,8 +368,9 @@ def _run(record: Record, calibration: SiteCalibration, k: int, track: float) -> 
     return dataclasses.replace(rec, data=rec.data / scale, passages=(passage,))
 
 
-def _verdict(full: LoggerCalibration, checks: list[ModelRun], tolerance: float,
+def _verdict(model: SiteModel, checks: list[ModelRun], tolerance: float,
              leave_one_out: bool) -> str:
+    full = model.fit
     if not full.success:
         return f"the fit failed: {full.message}"
     if not leave_one_out:
