@@ -239,9 +239,8 @@ def calibrate_site_model(
     **fit_options
         Passed to :func:`bwim.calibration.calibrate_logger` (``cutoff``, ``n_basis``...).
     """
-    from bwim.site.event import weigh_event  # the event module weighs with a SiteModel
-
     from bwim.site.calibrate import SiteCalibration
+    from bwim.site.event import weigh_event  # the event module weighs with a SiteModel
 
     if not isinstance(calibration, SiteCalibration):
         raise InputError(f"calibration must be a SiteCalibration (bwim.calibrate_site), got "
