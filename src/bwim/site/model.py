@@ -19,10 +19,21 @@ Contract
 
   No passage and no road are given: the passages are the detected ones with the
   calibration truck's declared spacings, each wheel pair ``track_width`` apart
-  (default :data:`DEFAULT_TRACK`, or the scenario's ``[vehicle] track_width``); the
+  (``track_width``, default :data:`DEFAULT_TRACK`); the
   road-free method needs no road (docs/theory.md §13).  Each run is divided by its drift
   factor from the site calibration, so the gains belong to the same reference as the
   drift correction of traffic.
+* **The weighing calibrated as it is done**: the fit pins the model's strain per newton
+  over each run's whole time on the span, while the MFI's weight is a regularised force's
+  mean over the central part of each axle's time; a model-form error (point gauges for
+  gauges that average over the load's spread, a coarse mesh) moves the two apart by a
+  few per cent.  So the used runs are weighed by MFI as traffic is, and the gains are
+  multiplied by the mean ratio of weighed to declared GVW (``weighing_scale``); the
+  RMS over the runs of the MFI's relative residual beyond their noise is the model's
+  error (``model_error``), and a vehicle's weighing is ``residual_high`` beyond
+  :data:`RESIDUAL_FACTOR` × what its noise (:func:`noise_share`) and that error explain
+  (:meth:`SiteModel.residual_limit`).  Each fold of the self-check does the same with its
+  own runs.
 * **Self-consistency** (leave-one-out): each used run is weighed, exactly as traffic is
   (:func:`~bwim.site.weigh_event` with detection, drift and plausibility checks), by the
   model calibrated without it; its GVW error against the declared truck is
