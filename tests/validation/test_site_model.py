@@ -19,7 +19,6 @@ import pytest
 
 import bwim
 from bwim.mfi.identify import MAX_RESIDUAL
-
 from bwim.scenario import (
     build_bridge,
     build_site_setup,

@@ -6,7 +6,7 @@ Contract
   :func:`~bwim.scenario.save_bridge` writes it (exact parameters), and a ``[site_model]``
   table: ``channels`` and their ``gains`` (logger units per unit strain), ``origin`` and
   ``lateral`` (m), ``track_width`` (m), ``tolerance``, ``accepted`` and ``reason``,
-  ``weighing_scale`` and ``model_error``, and the
+  ``weighing_scale``, ``model_error`` and ``truck_weight`` (N), and the
   self-check's ``runs`` (``index`` from 1, ``explained``, ``gvw_error``, ``reason``).
   Floats are written with :func:`repr`: a saved model reads back bit for bit.
 * :func:`load_site_model` reads it back (``fit`` is None: the fit's details stay with the
@@ -32,7 +32,7 @@ from bwim.site.model import ModelRun, SiteModel
 __all__ = ["load_model", "load_site_model", "save_site_model"]
 
 _KEYS = ("channels", "gains", "origin", "lateral", "track_width", "tolerance", "accepted",
-         "reason", "weighing_scale", "model_error", "runs")
+         "reason", "weighing_scale", "model_error", "truck_weight", "runs")
 
 
 def save_site_model(model: SiteModel, path: str | os.PathLike, *, title: str = "") -> None:
@@ -45,6 +45,7 @@ def save_site_model(model: SiteModel, path: str | os.PathLike, *, title: str = "
         "tolerance": float(model.tolerance), "accepted": bool(model.accepted),
         "reason": model.reason, "weighing_scale": float(model.weighing_scale),
         "model_error": None if model.model_error is None else float(model.model_error),
+        "truck_weight": None if model.truck_weight is None else float(model.truck_weight),
         "runs": [{"index": r.index + 1, "explained": float(r.explained),
                   "gvw_error": float(r.gvw_error), "reason": r.reason} for r in model.runs],
     }
@@ -84,12 +85,14 @@ def load_model(path: str | os.PathLike) -> SiteModel | Bridge:
                      for r in table.get("runs", ()))
         track = table.get("track_width")
         error = table.get("model_error")
+        truck = table.get("truck_weight")
         return SiteModel(bridge=bridge, gains=dict(zip(channels, gains, strict=True)),
                          origin=float(table["origin"]), lateral=float(table["lateral"]),
                          track_width=None if track is None else float(track),
                          tolerance=float(table["tolerance"]),
                          accepted=bool(table["accepted"]), reason=str(table.get("reason", "")),
                          weighing_scale=float(table.get("weighing_scale", 1.0)),
-                         model_error=None if error is None else float(error), runs=runs)
+                         model_error=None if error is None else float(error),
+                         truck_weight=None if truck is None else float(truck), runs=runs)
     except (KeyError, TypeError, ValueError) as exc:
         raise InputError(f"{src}: missing or mistyped value ({exc})") from None

@@ -35,9 +35,11 @@ Contract
   instead (:func:`bwim.identify_forces` with ``identify_options``; the readings as
   :meth:`~bwim.site.SiteModel.readings` gives them, the gauges the health check found
   faulty left out): the gauges then need positions (x, y) in the model's frame.  A model
-  that is not accepted weighs nothing (each such vehicle is refused with its reason), and
-  a vehicle with another vehicle on the span is refused (MFI models one vehicle's
-  forces).  Its row's quality is the identification's, made a warning by any flag.
+  that is not accepted weighs nothing (each such vehicle is refused with its reason).  As
+  with the lines, a vehicle with one of the other direction on the span is weighed and
+  flagged ``multiple_presence``, and the residual check (the model's own limit,
+  :meth:`~bwim.site.SiteModel.residual_limit`) refuses a weighing the other vehicle
+  spoils.  Its row's quality is the identification's, made a warning by any flag.
 * :class:`EventWeighing` keeps its first weighed vehicle (else the first in the
   calibration lane) as the event's own (``weighed``, ``gvw``, ``weighing``...), and
   every vehicle in ``vehicles``; :meth:`EventWeighing.to_summary_rows` gives one row each.
@@ -375,9 +377,6 @@ def _vehicle(record: Record, ev: EventDetection, k: int, calibration: SiteCalibr
     mfi = model is not None and lv.lane == setup.calibration_lane
     if mfi and not model.accepted:
         return refused(f"the bridge model is not accepted: {model.reason}")
-    if mfi and FLAG_MULTIPLE_PRESENCE in flags:
-        return refused("multiple presence: moving force identification models this "
-                       "vehicle's forces alone")
     try:
         health = check_gauges(record, v.passage, calibration.lines, combine=setup.combine,
                               alone=FLAG_MULTIPLE_PRESENCE not in flags)
@@ -461,11 +460,13 @@ def _weigh_mfi(record: Record, lv: LaneVehicle, flags: tuple[str, ...], model: S
         rec = model.readings(record, vehicle.passage, factor)
     except InputError as exc:
         return refused(_why(exc))
-    options = {"max_residual": model.residual_limit(rec), **options}
     try:
         ident = identify_forces(model.bridge, rec, **options)
     except _EVENT_ERRORS as exc:
         return refused(f"weighing by MFI failed: {_why(exc)}")
+    if "max_residual" not in options:  # the model's own limit, for this vehicle's weight
+        ident = dataclasses.replace(ident, residual_limit=model.residual_limit(
+            rec, float(ident.gvw[0]) if np.isfinite(ident.gvw[0]) else None))
     flags = tuple(dict.fromkeys([*flags, *ident.vehicle_flags[0], *drift_flags]))
     common = {"vehicle": vehicle, "lane": lv.lane, "direction": lv.direction,
               "identification": ident, "flags": flags, "drift_factor": factor,

@@ -31,9 +31,9 @@ Contract
   multiplied by the mean ratio of weighed to declared GVW (``weighing_scale``); the
   RMS over the runs of the MFI's relative residual beyond their noise is the model's
   error (``model_error``), and a vehicle's weighing is ``residual_high`` beyond
-  :data:`RESIDUAL_FACTOR` × what its noise (:func:`noise_share`) and that error explain
-  (:meth:`SiteModel.residual_limit`).  Each fold of the self-check does the same with its
-  own runs.
+  :data:`RESIDUAL_FACTOR` × what its noise (:func:`noise_share`) and that error (grown as
+  √(truck / weight) for a lighter vehicle) explain (:meth:`SiteModel.residual_limit`).
+  Each fold of the self-check does the same with its own runs.
 * **Self-consistency** (leave-one-out): each used run is weighed, exactly as traffic is
   (:func:`~bwim.site.weigh_event` with detection, drift and plausibility checks), by the
   model calibrated without it; its GVW error against the declared truck is
@@ -134,6 +134,8 @@ class SiteModel:
     model_error : float or None
         The model's error on its own runs: the RMS over them of the MFI's relative
         residual beyond what their noise explains (None: not measured).
+    truck_weight : float or None
+        The calibration truck's declared GVW, N (the weight ``model_error`` belongs to).
     """
 
     bridge: Bridge
@@ -148,6 +150,7 @@ class SiteModel:
     fit: LoggerCalibration | None = None
     weighing_scale: float = 1.0
     model_error: float | None = None
+    truck_weight: float | None = None
 
     @classmethod
     def of_bridge(cls, bridge: Bridge) -> SiteModel:
@@ -187,14 +190,20 @@ class SiteModel:
         data = (rec.data - rec.data[before].mean(axis=0)) / (factor * gains)
         return dataclasses.replace(rec, data=data, passages=(moved,))
 
-    def residual_limit(self, readings: Record) -> float:
+    def residual_limit(self, readings: Record, weight: float | None = None) -> float:
         """The relative residual beyond which an MFI weighing of ``readings`` (as
         :meth:`readings` gives them) is ``residual_high``: :data:`RESIDUAL_FACTOR` × what
         the readings' noise and the model's error explain together (the MFI's default
-        without a measured model error)."""
+        without a measured model error).  For a vehicle of ``weight`` (N) lighter than
+        the calibration truck the model's relative error grows as √(truck / weight): a
+        lighter vehicle bounces relatively more (the dynamic part's variance taken
+        proportional to the weight, as for the lines, docs/theory.md §15)."""
         if self.model_error is None:
             return MAX_RESIDUAL
-        return RESIDUAL_FACTOR * float(np.hypot(noise_share(readings), self.model_error))
+        error = self.model_error
+        if weight is not None and self.truck_weight is not None and 0 < weight:
+            error *= float(np.sqrt(max(self.truck_weight / weight, 1.0)))
+        return RESIDUAL_FACTOR * float(np.hypot(noise_share(readings), error))
 
     def summary(self) -> str:
         """A few lines: the fit, the self-check and the verdict."""
@@ -350,7 +359,8 @@ def _scaled(base: SiteModel, fit: LoggerCalibration, keys: Sequence[int],
     scale = float(np.mean(ratios))
     return dataclasses.replace(model, gains={n: g * scale for n, g in gains.items()},
                                weighing_scale=scale,
-                               model_error=float(np.sqrt(np.mean(excess))))
+                               model_error=float(np.sqrt(np.mean(excess))),
+                               truck_weight=float(np.sum(setup.calibration_loads)))
 
 
 def _check(k: int, explained: float, ev, setup) -> ModelRun:
