@@ -167,3 +167,17 @@ def test_the_residual_limit_counts_the_noise_and_the_models_error(fitted):
     assert model.residual_limit(noise) == pytest.approx(
         RESIDUAL_FACTOR * np.hypot(noise_share(noise), model.model_error))
     assert SiteModel.of_bridge(model.bridge).residual_limit(noise) == MAX_RESIDUAL
+
+
+def test_the_models_residual_limit_decides_the_weighing(fitted):
+    """The traffic truck's MFI residual (measured 0.196) is within its limit with the
+    model's measured error (0.223) and far outside it with a model claiming no error:
+    then the weighing is refused as ``residual_high``, not written."""
+    day, scenario, _, site, model = fitted
+    with open(day.reference, newline="") as f:
+        r = next(r for r in csv.DictReader(f) if r["lane"] == "1")
+    rec = load_record(day.out_dir / "traffic" / r["record"], scenario)
+    assert weigh_event(rec, site, bridge=model).weighed
+    exact = dataclasses.replace(model, model_error=1e-4)
+    ev = weigh_event(rec, site, bridge=exact)
+    assert not ev.weighed and "residual_high" in ev.reason
