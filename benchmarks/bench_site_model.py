@@ -60,7 +60,11 @@ def _cell(res, name: str) -> str:
 
 
 def run_day(seed: int, jobs: int = 2) -> dict:
-    day = site_day(seed)
+    return run_folder(site_day(seed), seed, jobs)
+
+
+def run_folder(day, seed: int, jobs: int = 2) -> dict:
+    """One simulated site's folder: the model, and both weighings of its traffic date."""
     scenario = site_scenario(day)
     runs = sorted((day / "calibration").glob("*.txt"))
     records = [load_record(p, scenario) for p in runs]

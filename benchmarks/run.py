@@ -23,6 +23,7 @@ from benchmarks import (  # noqa: E402
     bench_optimize,
     bench_realsite,
     bench_site,
+    bench_site_model,
     bench_stream,
     bench_testday,
     bench_vbi,
@@ -48,6 +49,7 @@ def main() -> None:
     bench_stream.main([])
     bench_realsite.main()
     bench_faults.main()
+    bench_site_model.main()
 
 
 if __name__ == "__main__":

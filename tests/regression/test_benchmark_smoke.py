@@ -42,3 +42,13 @@ def test_calibration_benchmark_smoke():
 
     rows = bench_calibration.run_objectives(approach=5.0, repeat=1, number=2)
     assert [r[0].split()[0] for r in rows] == ["static", "dynamic,", "dynamic,"]
+
+
+def test_site_model_benchmark_smoke(small_site):
+    """The site-model benchmark runs on the session's small site (both weighings of its
+    traffic date, the model accepted)."""
+    from benchmarks import bench_site_model
+
+    out = bench_site_model.run_folder(small_site.out_dir, 4, jobs=1)
+    assert out["model"].accepted and len(out["results"]) == 4
+    assert all(res.n_reference >= 1 for res in out["results"].values())
