@@ -126,12 +126,13 @@ def parse_enum(enum: type[E], value: object, name: str, *, context: str = "") ->
 
 
 def as_floats(name: str, values, *, ndmin: int = 0) -> np.ndarray:
-    """``values`` as a float array, else InputError naming ``name`` (text, None, a
-    ragged list)."""
+    """``values`` as a float array (no copy of a float array; at least ``ndmin``
+    dimensions), else InputError naming ``name`` (text, None, a ragged list)."""
     import numpy as np
 
-    try:
-        return np.array(values, dtype=float, ndmin=ndmin)
+    try:  # no copy of an array that is already float
+        a = np.asarray(values, dtype=float)
+        return a.reshape((1,) * (ndmin - a.ndim) + a.shape) if a.ndim < ndmin else a
     except (TypeError, ValueError):
         raise InputError(f"{name} must be numbers, got {type(values).__name__}") from None
 

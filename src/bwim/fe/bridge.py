@@ -130,7 +130,7 @@ STIFFNESS_MASS_RANGE = (1e-30, 1e30)
 
 
 def _param_array(name: str, value: Any, n: int) -> np.ndarray:
-    arr = as_floats(name, value, ndmin=1)
+    arr = as_floats(name, value, ndmin=1).copy()  # the bridge owns its parameters
     if arr.size == 1 and n != 1:
         arr = np.full(n, arr.item())
     if arr.shape != (n,):
