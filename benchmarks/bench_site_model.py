@@ -59,18 +59,18 @@ def _cell(res, name: str) -> str:
     return "-" if c is None else f"{c.mean:+.1f} ± {c.std:.1f} {c.class_name}"
 
 
-def run_day(seed: int, jobs: int = 2) -> dict:
-    return run_folder(site_day(seed), seed, jobs)
+def run_day(seed: int, jobs: int = 2, gains: str = "common") -> dict:
+    return run_folder(site_day(seed), seed, jobs, gains)
 
 
-def run_folder(day, seed: int, jobs: int = 2) -> dict:
+def run_folder(day, seed: int, jobs: int = 2, gains: str = "common") -> dict:
     """One simulated site's folder: the model, and both weighings of its traffic date."""
     scenario = site_scenario(day)
     runs = sorted((day / "calibration").glob("*.txt"))
     records = [load_record(p, scenario) for p in runs]
     site = calibrate_site(records, build_site_setup(scenario))
     t0 = time.perf_counter()
-    model = calibrate_site_model(records, site, build_bridge(scenario))
+    model = calibrate_site_model(records, site, build_bridge(scenario), gains=gains)
     t_model = time.perf_counter() - t0
     paths = (sorted((day / "calibration_day_traffic").glob("*.txt"))
              + sorted((day / "traffic").glob("*.txt")))
@@ -90,8 +90,14 @@ def run_folder(day, seed: int, jobs: int = 2) -> dict:
             "rates": rates, "n_used": site.n_used, "n_runs": len(runs)}
 
 
-def main() -> None:
-    days = [run_day(seed) for seed in SEEDS]
+def main(argv: list[str] | None = None) -> None:
+    import argparse
+
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--gains", choices=["common", "per_channel"], default="common",
+                        help="the logger's gains: one for all gauges or one per gauge")
+    args = parser.parse_args([] if argv is None else argv)
+    days = [run_day(seed, gains=args.gains) for seed in SEEDS]
     rows = []
     for d in days:
         m = d["model"]
@@ -102,8 +108,8 @@ def main() -> None:
                      f"{np.mean(list(m.gains.values())):.4g}",
                      " ".join(f"{100 * e:+.1f}" for e in err),
                      "yes" if m.accepted else f"no: {m.reason}", f"{d['t_model']:.0f} s"])
-    print_table("The site model calibrated from the logger files (E_y/E_x: the deck is "
-                "isotropic, 1; origin: ad1 stands at x = 1.5 m; gain: logger units per unit "
+    print_table(f"The site model calibrated from the logger files ({args.gains} gains; "
+                "E_y/E_x: the deck is isotropic, 1; origin: ad1 stands at x = 1.5 m; gain: logger units per unit "
                 "model strain)",
                 ["seed", "runs used", "E_y/E_x", "origin (m)", "lateral (m)", "gain",
                  "leave-one-out GVW errors %", "accepted", "calibration time"], rows)
@@ -120,4 +126,6 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    import sys
+
+    main(sys.argv[1:])

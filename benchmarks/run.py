@@ -49,7 +49,7 @@ def main() -> None:
     bench_stream.main([])
     bench_realsite.main()
     bench_faults.main()
-    bench_site_model.main()
+    bench_site_model.main([])
 
 
 if __name__ == "__main__":
