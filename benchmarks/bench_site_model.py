@@ -109,8 +109,8 @@ def main(argv: list[str] | None = None) -> None:
                      " ".join(f"{100 * e:+.1f}" for e in err),
                      "yes" if m.accepted else f"no: {m.reason}", f"{d['t_model']:.0f} s"])
     print_table(f"The site model calibrated from the logger files ({args.gains} gains; "
-                "E_y/E_x: the deck is isotropic, 1; origin: ad1 stands at x = 1.5 m; gain: logger units per unit "
-                "model strain)",
+                "E_y/E_x: the deck is isotropic, 1; origin: ad1 stands at x = 1.5 m; gain: "
+                "logger units per unit model strain, the mean)",
                 ["seed", "runs used", "E_y/E_x", "origin (m)", "lateral (m)", "gain",
                  "leave-one-out GVW errors %", "accepted", "calibration time"], rows)
     for d in days:
