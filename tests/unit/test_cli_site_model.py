@@ -1,0 +1,21 @@
+"""``bwim weigh --bridge`` with a site model file: a model that is not accepted is refused
+with a one-line error before anything is weighed or written (issue 23: never weigh with
+a model that cannot weigh its own calibration truck).  Data: the session's small site."""
+
+from bwim.cli import main
+from bwim.scenario import build_bridge, load_scenario, save_site_model
+from bwim.site import SiteModel
+
+
+def test_weigh_refuses_a_model_that_is_not_accepted(small_site, tmp_path, capsys):
+    bridge = build_bridge(load_scenario(small_site.scenario))
+    path = tmp_path / "model.toml"
+    save_site_model(SiteModel(bridge=bridge, gains={"s01": 1e6}, accepted=False,
+                              reason="it weighs its own calibration run 2 at +14.0 %"), path)
+    out = tmp_path / "out"
+    code = main(["weigh", str(small_site.scenario), str(small_site.out_dir / "traffic"),
+                 "--calibration-records", str(small_site.out_dir / "calibration"),
+                 "--bridge", str(path), "-o", str(out)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code != 0 and not (out / "summary.csv").exists()
+    assert len(err) == 1 and "not accepted" in err[0] and "+14.0 %" in err[0]
