@@ -18,6 +18,7 @@ from benchmarks import (  # noqa: E402
     bench_fe,
     bench_logger,
     bench_mfi,
+    bench_mfi_static,
     bench_mismatch,
     bench_multirun,
     bench_optimize,
@@ -36,6 +37,7 @@ def main() -> None:
     bench_fe.main()
     bench_vbi.main()
     bench_mfi.main()
+    bench_mfi_static.main()
     bench_batch.main()
     bench_wim.main()
     bench_multirun.main()
