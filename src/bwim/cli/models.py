@@ -135,8 +135,10 @@ def _site_model(args: argparse.Namespace, scenario, paths, out: Path) -> int:
     site = calibrate_site(records, build_site_setup(scenario))
     print(f"calibrating the model from {site.n_used} of {len(records)} run(s) "
           "(each model fitted again without each run to check it) ...", flush=True)
+    # the weighing scale and the self-check weigh as bwim weigh will: its [identify] options
+    options = scenario.identify.kwargs() if scenario.identify is not None else None
     model = calibrate_site_model(records, site, start, gains=args.gains or "common",
-                                 track_width=args.track_width)
+                                 track_width=args.track_width, identify_options=options)
     save_site_model(model, out, title=f"calibrated from {site.n_used} run(s) of "
                     f"{scenario.title or scenario.source}")
     fit = model.fit
