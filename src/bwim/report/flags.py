@@ -77,10 +77,10 @@ FLAG_TABLE: tuple[tuple[str, tuple[str, ...], str, str], ...] = (
      "weights are less certain than their sum", ""),
     ("soft", ("gauge_fault",),
      "a gauge was found faulty in this event and left out: the vehicle was weighed with "
-     "the healthy gauges. Written gauge_fault:NAME, one per faulty gauge. Faulty: flat "
-     "(dead, or stuck at a value: less than a tenth of its noise in the calibration runs) "
-     "or its response against what the other gauges predict reversed or off by more than "
-     "a factor 1.3 (bwim.site.health). When the healthy gauges are not more than half of "
+     "the healthy gauges (also when it is weighed by MFI). Written gauge_fault:NAME, one "
+     "per faulty gauge. Faulty: flat, clipped, silent, reversed, off in gain or drifting "
+     "(the kinds of gauge fault below; bwim.site.health). When the healthy gauges are not "
+     "more than half of "
      'them, the vehicle is refused ("too few healthy gauges"); with another vehicle on '
      "the span, a gauge that disagrees refuses the vehicle instead (its strain cannot be "
      "told from a faulty gauge)", ""),
