@@ -34,11 +34,10 @@ fitted from the free vibration, which fixes the ratio of stiffness to mass.
 
 Method
 ------
-For trial nonlinear parameters z = (log stiffness ratios, x₀) the model is linear in the
-nuisance: with a common gain, in (g, g c, o, r) jointly over all records (one
-least-squares solve); with a gain per channel, bilinear, solved by alternation (the
-nuisance given the gains, then each gain given the nuisance) to a relative change below
-1e-8.  z minimises the projected residual (variable projection, Golub & Pereyra;
+For trial nonlinear parameters z = (log stiffness ratios, x₀, y₀) the model is linear in
+the nuisance: with a common gain, in (g, g c, o, r) jointly over all records (one
+least-squares solve); with a gain per channel, bilinear, solved by Gauss–Newton from the
+common gain's solution to a relative step below 1e-10.  z minimises the projected residual (variable projection, Golub & Pereyra;
 ``scipy.optimize.least_squares``, finite differences).  The mass is fitted afterwards from
 the free vibration (:func:`~bwim.calibration.quasistatic.fit_mass`) on the readings less
 their fitted offsets, when the readings after exit stand out of the noise
@@ -95,8 +94,8 @@ ORIGIN_RANGE = 1.5
 #: The mass is fitted only when the readings after exit exceed the noise this many times
 #: (RMS): below it, the free-vibration fit's optimum is set by the noise.
 MIN_FREE_SNR = 3.0
-#: Most alternations of the per-channel gains' fit.
-MAX_ALTERNATIONS = 200
+#: Most Gauss–Newton steps of the per-channel gains' fit.
+MAX_ALTERNATIONS = 50
 #: A parameter within this fraction of its bound's range is at its bound.
 AT_BOUND = 1e-3
 _RATIOS = ("E_y", "E_girder")
@@ -424,32 +423,46 @@ class _Problem:
                       parts=parts)
 
     def _per_channel(self, cols, detail: bool = False) -> _State:
-        """Alternation: the force nuisance given the gains, each gain given the nuisance
-        (offsets projected off by detrending throughout)."""
+        """The gains and the force nuisance jointly by Gauss–Newton on the bilinear model
+        ``g_s (b + A c_r)_s`` (offsets projected off by detrending throughout), from the
+        common gain's solution; the normal equations are assembled record by record (the
+        gains couple the records, each record's nuisance only itself)."""
         n_s = len(self.channels)
-        g = np.full(n_s, self._common(cols).gains[0])
         det = [(self._detrend(k, b), self._detrend(k, A), self._detrend(k, self.data[k]))
                for k, (b, A) in enumerate(cols)]
+        g = np.full(n_s, self._common(cols).gains[0])
+        cs = []
+        for bd, Ad, dd in det:
+            M = (Ad * g[None, :, None]).reshape(bd.size, -1)
+            cs.append(np.linalg.lstsq(M, (dd - bd * g).ravel(), rcond=None)[0]
+                      if M.shape[1] else np.zeros(0))
+        sizes = [c.size for c in cs]
+        n = n_s + sum(sizes)
         for _ in range(MAX_ALTERNATIONS):
-            preds = []
-            for bd, Ad, dd in det:
-                M = (Ad * g[None, :, None]).reshape(bd.size, -1)
-                rhs = (dd - bd * g[None, :]).ravel()
-                c = np.linalg.lstsq(M, rhs, rcond=None)[0] if M.shape[1] else np.zeros(0)
-                preds.append(bd + Ad @ c)  # the detrended model response, (t, s)
-            num = sum((dd * p).sum(axis=0) for (_, _, dd), p in zip(det, preds, strict=True))
-            den = sum((p * p).sum(axis=0) for p in preds)
-            new = num / np.maximum(den, 1e-300)
-            change = float(np.max(np.abs(new / g - 1)))
-            g = new
-            if change < 1e-8:
+            H, rhs = np.zeros((n, n)), np.zeros(n)
+            off = n_s
+            for (bd, Ad, dd), c, m in zip(det, cs, sizes, strict=True):
+                P = bd + Ad @ c if m else bd  # (t, s) the model before the gains
+                r = dd - g * P
+                H[np.arange(n_s), np.arange(n_s)] += (P * P).sum(axis=0)
+                rhs[:n_s] += (P * r).sum(axis=0)
+                if m:
+                    gA = (Ad * g[None, :, None])
+                    H[:n_s, off:off + m] += np.einsum("ts,tsm->sm", P, gA)
+                    flat = gA.reshape(-1, m)
+                    H[off:off + m, off:off + m] += flat.T @ flat
+                    rhs[off:off + m] += flat.T @ r.ravel()
+                off += m
+            H[n_s:, :n_s] = H[:n_s, n_s:].T
+            step = np.linalg.lstsq(H, rhs, rcond=None)[0]
+            g = g + step[:n_s]
+            cs = [c + step[o:o + m] for c, o, m in
+                  zip(cs, np.cumsum([n_s, *sizes[:-1]]), sizes, strict=True)]
+            if float(np.max(np.abs(step[:n_s] / g))) < 1e-10:
                 break
         res, offsets, parts = [], [], []
-        for k, ((bd, Ad, dd), (b, A)) in enumerate(zip(det, cols, strict=True)):
-            M = (Ad * g[None, :, None]).reshape(bd.size, -1)
-            rhs = (dd - bd * g[None, :]).ravel()
-            c = np.linalg.lstsq(M, rhs, rcond=None)[0] if M.shape[1] else np.zeros(0)
-            r = (rhs - M @ c).reshape(bd.shape)
+        for k, ((bd, Ad, dd), (b, A), c) in enumerate(zip(det, cols, cs, strict=True)):
+            r = dd - g * (bd + Ad @ c if c.size else bd)
             res.append(r.ravel())
             offsets.append(self._offsets(k, b, A, g, detail))
             parts.append((r, dd))
