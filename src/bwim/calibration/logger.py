@@ -37,8 +37,9 @@ Method
 For trial nonlinear parameters z = (log stiffness ratios, x₀, y₀) the model is linear in
 the nuisance: with a common gain, in (g, g c, o, r) jointly over all records (one
 least-squares solve); with a gain per channel, bilinear, solved by Gauss–Newton from the
-common gain's solution to a relative step below 1e-10.  z minimises the projected residual (variable projection, Golub & Pereyra;
-``scipy.optimize.least_squares``, finite differences).  The mass is fitted afterwards from
+common gain's solution to a relative step below 1e-10.  z minimises the projected
+residual (variable projection, Golub & Pereyra; ``scipy.optimize.least_squares``, finite
+differences).  The mass is fitted afterwards from
 the free vibration (:func:`~bwim.calibration.quasistatic.fit_mass`) on the readings less
 their fitted offsets, when the readings after exit stand out of the noise
 (:data:`MIN_FREE_SNR`); a mass fit that is not tried, fails or stops at its bound keeps
