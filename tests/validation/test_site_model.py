@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 
 import bwim
+from bwim.errors import InputError
 from bwim.mfi.identify import MAX_RESIDUAL
 from bwim.scenario import (
     build_bridge,
@@ -181,3 +182,14 @@ def test_the_models_residual_limit_decides_the_weighing(fitted):
     exact = dataclasses.replace(model, model_error=1e-4)
     ev = weigh_event(rec, site, bridge=exact)
     assert not ev.weighed and "residual_high" in ev.reason
+
+
+def test_a_gauge_the_model_has_no_gain_for_is_refused(fitted):
+    """A record whose gauge the model was not calibrated with (renamed): refused with the
+    reason, never weighed with a gain of 1."""
+    _, _, records, site, model = fitted
+    rec = records[0]
+    renamed = dataclasses.replace(rec, sensors=tuple(
+        dataclasses.replace(s, name="s99") if s.name == "s05" else s for s in rec.sensors))
+    with pytest.raises(InputError, match="no gain for gauge"):
+        model.readings(renamed, site.detections[0].vehicles[0].passage, 1.0)

@@ -115,7 +115,8 @@ class SiteModel:
     ----------
     bridge : Bridge
     gains : mapping of str to float
-        Logger units per unit of model strain, per gauge channel (a missing channel: 1).
+        Logger units per unit of model strain, per gauge channel (empty: readings already
+        in strain; otherwise a gauge without a gain is refused).
     origin, lateral : float
         The detectors' frame on the model: x of its origin, offset of lateral positions (m).
     track_width : float or None
@@ -180,6 +181,10 @@ class SiteModel:
         if not gauges or any(s.x is None or s.y is None for s in gauges):
             raise InputError("weighing by MFI needs every gauge's position (x, y) in the "
                              "scenario")
+        missing = [s.name for s in gauges if self.gains and s.name not in self.gains]
+        if missing:
+            raise InputError(f"the model has no gain for gauge(s) {', '.join(missing)}: it "
+                             "was calibrated with other channels")
         rec = record.channels(gauges)
         moved = self.passage(passage)
         before = moved.axle_x(rec.time)[:, 0] < 0.0
