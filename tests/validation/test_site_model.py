@@ -193,3 +193,13 @@ def test_a_gauge_the_model_has_no_gain_for_is_refused(fitted):
         dataclasses.replace(s, name="s99") if s.name == "s05" else s for s in rec.sensors))
     with pytest.raises(InputError, match="no gain for gauge"):
         model.readings(renamed, site.detections[0].vehicles[0].passage, 1.0)
+
+
+def test_the_self_check_plot(fitted):
+    """One bar per used run at its leave-one-out error (%), the tolerance band drawn."""
+    model = fitted[4]
+    fig = model.plot()
+    ax = fig.axes[0]
+    heights = [p.get_height() for p in ax.patches if p.get_width() < 1.0]
+    np.testing.assert_allclose(sorted(heights), sorted(100 * model.gvw_errors))
+    assert "accepted" in ax.get_title()

@@ -210,6 +210,13 @@ class SiteModel:
             error *= float(np.sqrt(max(self.truck_weight / weight, 1.0)))
         return RESIDUAL_FACTOR * float(np.hypot(noise_share(readings), error))
 
+    def plot(self, ax=None):
+        """Each run's leave-one-out GVW error against the tolerance
+        (:func:`bwim.plots.site_model.plot_site_model`); returns the figure."""
+        from bwim.plots.site_model import plot_site_model
+
+        return plot_site_model(self, ax=ax)
+
     def summary(self) -> str:
         """A few lines: the fit, the self-check and the verdict."""
         lines = []
