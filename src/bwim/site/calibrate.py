@@ -56,6 +56,14 @@ Contract
     declared last axle first and are refused with that hint (a line absorbs part of a
     wrong load distribution, but not all of it).  Loads within :data:`REVERSED_SAME` of
     their reverse (a symmetric truck) are not checked.
+* **A gauge faulty in one run** (reversed, or its gain changed) would corrupt its line
+  for the whole day: after the lines, each used run is weighed with them and each
+  gauge's gain ratio ``⟨m, f⟩ / ⟨f, f⟩`` (its reading against its fitted reading) is
+  compared with the same gauge's median over the runs, where its reading stands
+  :data:`RUN_GAUGE_SNR` times out of its noise.  A run whose ratio is negative or off by
+  more than :data:`~bwim.site.health.GAIN_TOLERANCE` is left out with the gauge named,
+  and the lines are fitted again without it.  With only two runs seeing the gauge, a
+  disagreement cannot be attributed: InputError, asking for more runs.
 * Raises :class:`~bwim.errors.InputError` when fewer than two runs are usable, naming
   each run's reason, or when the declaration contradicts the data (above).
 """
@@ -80,13 +88,13 @@ from bwim.detect import (
 from bwim.detect.response import band_pass, peak_polarity
 from bwim.detect.result import FLAG_MULTIPLE_PRESENCE
 from bwim.detect.signals import robust_sigma
-from bwim.errors import InputError
+from bwim.errors import BwimError, InputError
 from bwim.records import Passage, Record
 from bwim.site.drift import TemperatureDrift, TimeOfDayDrift, seconds_of_day
-from bwim.site.health import FLAT_NOISE
+from bwim.site.health import FLAT_NOISE, GAIN_TOLERANCE
 from bwim.site.lanes import EventDetection, detect_lanes
 from bwim.site.setup import SiteSetup
-from bwim.wim import MultiRunCalibration, calibrate_lines
+from bwim.wim import MultiRunCalibration, calibrate_lines, weigh
 from bwim.wim.multirun import RunFit
 from bwim.wim.scale_trend import ScaleTrend
 
@@ -121,6 +129,9 @@ MIN_TRUCK_AXLES = 5
 TRANSFERRED_SPREAD = float(np.log(2.0))
 #: Without axle detectors: passes of (lines from the runs, runs re-detected against them).
 STRAIN_ONLY_PASSES = 2
+#: A gauge is compared between calibration runs where its reading is this many times its
+#: noise (RMS over the samples with an axle on the lines' support).
+RUN_GAUGE_SNR = 10.0
 
 
 def gauge_names(record: Record) -> list[str]:
@@ -241,9 +252,14 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
             events = [detect_lanes(rec, setup, responses=responses, span=span,
                                    gauges=gauge_names(rec)) for rec in records]
             reasons, passages, kept = _without(flat, *_truck_runs(events, setup))
-    cal = _site_calibration(records, setup,
-                            [e.by_lane.get(setup.calibration_lane, Detection()) for e in events],
-                            reasons, passages, kept)
+    lane_detections = [e.by_lane.get(setup.calibration_lane, Detection()) for e in events]
+    cal = _site_calibration(records, setup, lane_detections, reasons, passages, kept)
+    faulty = _faulty_gauge_runs(records, setup, cal, passages, kept)
+    if faulty:  # a run whose gauge disagrees with the same gauge in the others: out
+        reasons = [faulty.get(k, why) for k, why in enumerate(reasons)]
+        keep = [i for i, k in enumerate(kept) if k not in faulty]
+        passages, kept = [passages[i] for i in keep], [kept[i] for i in keep]
+        cal = _site_calibration(records, setup, lane_detections, reasons, passages, kept)
     _check_spacings(events, cal.reasons, setup)
     _check_scales(records, cal)
     _check_load_order(records, passages, kept, cal.lines, setup)
@@ -253,6 +269,61 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
         time_of_day=_time_of_day(records, cal),
         temperature=_temperature(records, cal, setup),
         notes=tuple(notes))
+
+
+def _faulty_gauge_runs(records: Sequence[Record], setup: SiteSetup, cal: _Lines,
+                       passages: Sequence[Passage], kept: Sequence[int]) -> dict[int, str]:
+    """Runs in which a gauge disagrees with the same gauge in the other runs: ``{run:
+    reason}`` (see the module docstring).  Raises InputError when only two runs are
+    compared and they disagree (which one is faulty cannot be told)."""
+    lines = cal.lines
+    names = [c.name for c in lines.channels]
+    ratios: dict[int, np.ndarray] = {}
+    for p, k in zip(passages, kept, strict=True):
+        fit = cal.fits[k]
+        if cal.reasons[k] or fit is None or not np.isfinite(fit.scale):
+            continue
+        try:
+            w = weigh(records[k], p, lines, combine=setup.combine, scale=fit.scale)
+        except (BwimError, ArithmeticError, ValueError, np.linalg.LinAlgError):
+            continue
+        if [c.name for c in w.channels] != names or w.measured.shape[0] == 0:
+            continue
+        m, f = w.measured, w.fitted
+        power = (f * f).sum(axis=0)
+        a = (m * f).sum(axis=0) / np.maximum(power, np.finfo(float).tiny)
+        # the reading's own strength (a line two disagreeing runs cancel is near zero)
+        snr = np.sqrt((m * m).sum(axis=0) / m.shape[0]) / np.maximum(
+            lines.channel_noise, np.finfo(float).tiny)
+        ratios[k] = np.where(snr >= RUN_GAUGE_SNR, a, np.nan)
+    runs = list(ratios)
+    if len(runs) < 2:
+        return {}
+    table = np.array([ratios[k] for k in runs])
+    faulty: dict[int, str] = {}
+    for j, name in enumerate(names):
+        col = table[:, j]
+        seen = np.flatnonzero(np.isfinite(col))
+        if seen.size < 2:
+            continue
+        if seen.size == 2:
+            q = col[seen[0]] / col[seen[1]]
+            if q <= 0 or abs(np.log(q)) > np.log(GAIN_TOLERANCE):
+                raise InputError(
+                    f"gauge {name} disagrees between the only two calibration runs that "
+                    f"see it (runs {runs[seen[0]] + 1} and {runs[seen[1]] + 1}, gain ratio "
+                    f"{q:.2f}): one of them has a faulty gauge; give more runs")
+            continue
+        ref = float(np.median(col[seen]))
+        for i in seen:
+            q = col[i] / ref
+            if q <= 0:
+                faulty.setdefault(runs[i], f"gauge {name} reversed in this run (its "
+                                  "response against the other runs' is negative)")
+            elif abs(np.log(q)) > np.log(GAIN_TOLERANCE):
+                faulty.setdefault(runs[i], f"gauge {name} at {q:.2f} × its gain in the other "
+                                  "runs")
+    return faulty
 
 
 def _flat_runs(records: Sequence[Record]) -> dict[int, str]:
