@@ -335,8 +335,8 @@ class _Problem:
         return self.space.bridge(self.theta0 * np.exp(z[:len(self.names)]), base)
 
     def columns(self, z: np.ndarray, base: Bridge) -> list:
-        """Per record: b (t, s), A (t, s, n_g·K), offset columns (t, 2), weighted and in
-        noise units (b and A filtered)."""
+        """Per record: b (t, s) and A (t, s, n_g·K), the filtered model columns, weighted
+        and in noise units (the offsets are projected off later, channel by channel)."""
         bridge = self.bridge(z, base)
         n = len(self.names)
         x0 = float(z[n])
