@@ -29,6 +29,15 @@ def crossing():
     return beam, rec
 
 
+def _axle_model(crossing):
+    """The crossing's first-order, per-axle model (3 modes) and its scaled readings."""
+    beam, rec = crossing
+    scale = float(np.abs(rec.data).max())
+    model = build_model(beam, beam.modes(3), rec, scale, unknowns=ForceUnknowns.AXLE,
+                        order=Order.FIRST)
+    return model, rec.data / scale
+
+
 def _dense_corner(beam, rec, ident):
     """log λ (scaled) of the corner rule (maximum spline curvature among admissible λ)
     on a grid of 73 λ over the range (eight per decade) of the record's model."""
@@ -94,11 +103,7 @@ def test_sweep_splits_lambdas_by_the_memory_limit(crossing, monkeypatch):
     in X, 6e-14 in ρ, relative); a limit below one λ is refused."""
     from bwim.mfi import dp
 
-    beam, rec = crossing
-    scale = float(np.abs(rec.data).max())
-    model = build_model(beam, beam.modes(3), rec, scale, unknowns=ForceUnknowns.AXLE,
-                        order=Order.FIRST)
-    d = rec.data / scale
+    model, d = _axle_model(crossing)
     lams = np.geomspace(1e-3, 10.0, 5)
     whole = sweep(model, d, lams, keep=True)
     chunks = []
@@ -128,11 +133,7 @@ def test_kept_trajectories_and_the_searchs_copy(crossing):
     λ's trajectory, not a view that would keep every λ's arrays alive."""
     from bwim.mfi.lcurve import _solution
 
-    beam, rec = crossing
-    scale = float(np.abs(rec.data).max())
-    model = build_model(beam, beam.modes(3), rec, scale, unknowns=ForceUnknowns.AXLE,
-                        order=Order.FIRST)
-    d = rec.data / scale
+    model, d = _axle_model(crossing)
     lams = np.geomspace(1e-3, 10.0, 4)
     sw = sweep(model, d, lams, keep=True)
     peak = np.abs(sw.X).max()

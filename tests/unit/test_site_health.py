@@ -78,6 +78,18 @@ def _corrupted(path: Path, out: Path, scenario, gauges, fault) -> Path:
 def _gauge_faults(flags) -> list[str]:
     return [f for f in flags if f.startswith("gauge_fault")]
 
+def _left_out(record, clean, calibration, gauge, kind):
+    """The health check names ``gauge`` of ``kind`` alone; the vehicle is weighed without
+    it, flagged, within 4 % of its clean weight; the weighing."""
+    health = check_gauges(record, clean.vehicle.passage, calibration.lines,
+                          combine=calibration.setup.combine)
+    assert [(f.gauge, f.kind) for f in health.faults] == [(gauge, kind)]
+    v = weigh_event(record, calibration).vehicles[0]
+    assert v.weighed and _gauge_faults(v.flags) == [f"gauge_fault:{gauge}"]
+    assert v.gvw == pytest.approx(clean.gvw, rel=0.04)
+    return v
+
+
 
 def test_no_false_alarm_on_the_clean_events(site, truck):
     """Every clean event of the fixture (4 traffic events, 6 calibration runs; 14
@@ -240,12 +252,7 @@ def test_a_gauge_that_reads_only_noise_is_silent(site, truck, gauge):
     data = record.data.copy()
     data[:, k] = data[0, k] + np.random.default_rng(1).normal(0.0, noise, data.shape[0])
     record = dataclasses.replace(record, data=data)
-    health = check_gauges(record, clean.vehicle.passage, calibration.lines,
-                          combine=calibration.setup.combine)
-    assert [(f.gauge, f.kind) for f in health.faults] == [(gauge, "silent")]
-    v = weigh_event(record, calibration).vehicles[0]
-    assert v.weighed and _gauge_faults(v.flags) == [f"gauge_fault:{gauge}"]
-    assert v.gvw == pytest.approx(clean.gvw, rel=0.04)
+    _left_out(record, clean, calibration, gauge, "silent")
 
 
 def test_a_logger_coarser_than_its_noise_is_not_flat(site, truck):
@@ -374,12 +381,7 @@ def test_a_clipped_gauge_is_named_and_left_out(site, truck, gauge):
     _, scenario, calibration = site
     path, clean = truck
     record = _with(load_record(path, scenario), gauge, _rail(0.5))
-    health = check_gauges(record, clean.vehicle.passage, calibration.lines,
-                          combine=calibration.setup.combine)
-    assert [(f.gauge, f.kind) for f in health.faults] == [(gauge, "clipped")]
-    v = weigh_event(record, calibration).vehicles[0]
-    assert v.weighed and _gauge_faults(v.flags) == [f"gauge_fault:{gauge}"]
-    assert v.gvw == pytest.approx(clean.gvw, rel=0.04)
+    _left_out(record, clean, calibration, gauge, "clipped")
 
 
 def test_a_gauge_clipped_at_its_resting_reading_is_found(site, truck, tmp_path):
@@ -402,12 +404,7 @@ def test_a_gauge_clipped_at_its_resting_reading_is_found(site, truck, tmp_path):
     bad.write_text("\n".join("\t".join(r) for r in rows) + "\n")
     record = load_record(bad, scenario)
     assert record.data[0, k] == record.data[:, k].max()
-    health = check_gauges(record, clean.vehicle.passage, calibration.lines,
-                          combine=calibration.setup.combine)
-    assert [(f.gauge, f.kind) for f in health.faults] == [("s02", "clipped")]
-    v = weigh_event(record, calibration).vehicles[0]
-    assert v.weighed and _gauge_faults(v.flags) == ["gauge_fault:s02"]
-    assert v.gvw == pytest.approx(clean.gvw, rel=0.04)
+    v = _left_out(record, clean, calibration, "s02", "clipped")
     unchecked = weigh(record, v.vehicle.passage, calibration.lines,
                       combine=calibration.setup.combine, scale=v.drift_factor)
     assert abs(unchecked.gvw / clean.gvw - 1.0) > 0.05
