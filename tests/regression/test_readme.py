@@ -94,6 +94,7 @@ def test_the_real_installation_walk_through_runs(tmp_path):
     assert (tmp_path / "site-report.html").stat().st_size > 0
     summary = (tmp_path / "site-out" / "summary.csv").read_text().splitlines()
     assert len(summary) > 12 and any(",weighed," in line for line in summary)
+    assert (tmp_path / "site-out" / "gauge_health.csv").read_text().startswith("gauge,")
     # the FE model from the same logger files, then MFI weighing with it
     assert "accepted = true" in (tmp_path / "site-model.toml").read_text()
     mfi = (tmp_path / "site-out-mfi" / "summary.csv").read_text().splitlines()
