@@ -1,0 +1,49 @@
+"""Issue 22: a faulty axle detector never yields a weight.  One of the lane's two
+detectors dead, replaced by noise, reversed or at three times its gain: the truck is not
+weighed (no axle fits the learned responses of the pair), never weighed with a wrong
+speed or axle layout.
+
+Data: the session's small realistic site, its lane-1 traffic truck (weighed +2.3 % with
+both detectors healthy), one detector channel changed about its first sample."""
+
+import csv
+import dataclasses
+
+import numpy as np
+import pytest
+
+from bwim.scenario import build_site_setup, load_record, load_scenario
+from bwim.site import calibrate_site, weigh_event
+
+
+@pytest.fixture(scope="module")
+def truck(small_site):
+    scenario = load_scenario(small_site.scenario)
+    site = calibrate_site([load_record(p, scenario) for p in small_site.calibration],
+                          build_site_setup(scenario))
+    with open(small_site.reference, newline="") as f:
+        ref = next(r for r in csv.DictReader(f) if r["lane"] == "1")
+    return site, load_record(small_site.out_dir / "traffic" / ref["record"], scenario)
+
+
+def _faulty(column: np.ndarray, kind: str) -> np.ndarray:
+    rest = column[0]
+    if kind == "dead":
+        return np.full_like(column, rest)
+    if kind == "noise":
+        sigma = float(np.std(np.diff(column[:20])))
+        return rest + np.random.default_rng(0).normal(0.0, sigma, column.size)
+    return rest + {"reversed": -1.0, "gain3": 3.0}[kind] * (column - rest)
+
+
+@pytest.mark.parametrize("channel", ["ad1", "ad2"])
+@pytest.mark.parametrize("kind", ["dead", "noise", "reversed", "gain3"])
+def test_a_faulty_detector_gives_no_weight(truck, channel, kind):
+    site, rec = truck
+    assert weigh_event(rec, site).weighed
+    k = [s.name for s in rec.sensors].index(channel)
+    data = rec.data.copy()
+    data[:, k] = _faulty(data[:, k], kind)
+    ev = weigh_event(dataclasses.replace(rec, data=data), site)
+    assert not ev.weighed and not any(v.weighed for v in ev.vehicles)
+    assert ev.reason
