@@ -36,3 +36,20 @@ def small_site(tmp_path_factory):
     return make_test_day(tmp_path_factory.mktemp("small_site") / "day",
                          site="short-span-4-lane", seed=4, n_calibration=6, n_traffic=4,
                          n_calibration_day_traffic=0, mesh=0.6)
+
+
+@pytest.fixture(scope="session")
+def small_site_truck(small_site):
+    """The small site's calibration (``bwim.calibrate_site``) and its one single-vehicle
+    lane-1 traffic truck's record (6 axles), for tests that break the truck's record."""
+    import csv
+
+    from bwim.scenario import build_site_setup, load_record, load_scenario
+    from bwim.site import calibrate_site
+
+    scenario = load_scenario(small_site.scenario)
+    site = calibrate_site([load_record(p, scenario) for p in small_site.calibration],
+                          build_site_setup(scenario))
+    with open(small_site.reference, newline="") as f:
+        ref = next(r for r in csv.DictReader(f) if r["lane"] == "1")
+    return site, load_record(small_site.out_dir / "traffic" / ref["record"], scenario)

@@ -6,24 +6,17 @@ speed or axle layout.
 Data: the session's small realistic site, its lane-1 traffic truck (weighed +2.3 % with
 both detectors healthy), one detector channel changed about its first sample."""
 
-import csv
 import dataclasses
 
 import numpy as np
 import pytest
 
-from bwim.scenario import build_site_setup, load_record, load_scenario
-from bwim.site import calibrate_site, weigh_event
+from bwim.site import weigh_event
 
 
-@pytest.fixture(scope="module")
-def truck(small_site):
-    scenario = load_scenario(small_site.scenario)
-    site = calibrate_site([load_record(p, scenario) for p in small_site.calibration],
-                          build_site_setup(scenario))
-    with open(small_site.reference, newline="") as f:
-        ref = next(r for r in csv.DictReader(f) if r["lane"] == "1")
-    return site, load_record(small_site.out_dir / "traffic" / ref["record"], scenario)
+@pytest.fixture
+def truck(small_site_truck):
+    return small_site_truck
 
 
 def _faulty(column: np.ndarray, kind: str) -> np.ndarray:

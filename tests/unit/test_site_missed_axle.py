@@ -6,25 +6,17 @@ Data: the session's small realistic site, its one lane-1 traffic truck (6 axles;
 lines weigh it +2.3 % with every axle), its two detector channels held at their resting
 level from midway between the last detected axles on (each detector at its own time)."""
 
-import csv
 import dataclasses
 
 import numpy as np
 import pytest
 
-from bwim.scenario import build_site_setup, load_record, load_scenario
-from bwim.site import calibrate_site, weigh_event
+from bwim.site import weigh_event
 
 
-@pytest.fixture(scope="module")
-def truck(small_site):
-    scenario = load_scenario(small_site.scenario)
-    site = calibrate_site([load_record(p, scenario) for p in small_site.calibration],
-                          build_site_setup(scenario))
-    with open(small_site.reference, newline="") as f:
-        ref = next(r for r in csv.DictReader(f) if r["lane"] == "1")
-    rec = load_record(small_site.out_dir / "traffic" / ref["record"], scenario)
-    return site, rec
+@pytest.fixture
+def truck(small_site_truck):
+    return small_site_truck
 
 
 @pytest.mark.parametrize("missed", [1, 2])
