@@ -39,17 +39,26 @@ def small_site(tmp_path_factory):
 
 
 @pytest.fixture(scope="session")
-def small_site_truck(small_site):
-    """The small site's calibration (``bwim.calibrate_site``) and its one single-vehicle
-    lane-1 traffic truck's record (6 axles), for tests that break the truck's record."""
-    import csv
-
+def small_site_calibrated(small_site):
+    """The small site's day, scenario, calibration runs (records) and their calibration
+    (``bwim.calibrate_site``), made once per session; tests only read them."""
     from bwim.scenario import build_site_setup, load_record, load_scenario
     from bwim.site import calibrate_site
 
     scenario = load_scenario(small_site.scenario)
-    site = calibrate_site([load_record(p, scenario) for p in small_site.calibration],
-                          build_site_setup(scenario))
-    with open(small_site.reference, newline="") as f:
+    records = [load_record(p, scenario) for p in small_site.calibration]
+    return small_site, scenario, records, calibrate_site(records, build_site_setup(scenario))
+
+
+@pytest.fixture(scope="session")
+def small_site_truck(small_site_calibrated):
+    """The small site's calibration and its one single-vehicle lane-1 traffic truck's
+    record (6 axles), for tests that break the truck's record."""
+    import csv
+
+    from bwim.scenario import load_record
+
+    day, scenario, _, site = small_site_calibrated
+    with open(day.reference, newline="") as f:
         ref = next(r for r in csv.DictReader(f) if r["lane"] == "1")
-    return site, load_record(small_site.out_dir / "traffic" / ref["record"], scenario)
+    return site, load_record(day.out_dir / "traffic" / ref["record"], scenario)

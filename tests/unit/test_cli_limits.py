@@ -21,15 +21,10 @@ import pytest
 from bwim.cli import COMMANDS, main
 from bwim.synthetic import make_test_day
 
+from tests.cli_checks import one_line_error
+
 ROOT = Path(__file__).resolve().parents[2]
 ENV = {**os.environ, "PYTHONPATH": str(ROOT / "src")}
-
-
-def _one_line_error(code, err, *needles):
-    assert code == 2, err
-    assert err.startswith("bwim: error: ") and err.count("\n") == 1, err
-    for n in needles:
-        assert n in err, err
 
 
 @pytest.fixture(scope="module")
@@ -82,7 +77,7 @@ def test_nul_byte_in_paths(day, tmp_path, capsys):
                   str(tmp_path / "r\x00.h5")],
                  _weigh_argv(day, tmp_path / "o1", records=[str(tmp_path / "e\x00.txt")]),
                  _weigh_argv(day, tmp_path / "o\x002")):
-        _one_line_error(main(argv), capsys.readouterr().err)
+        one_line_error(main(argv), capsys.readouterr().err)
     assert not list(tmp_path.iterdir())
 
 
@@ -90,7 +85,7 @@ def test_deeply_nested_toml(tmp_path, capsys):
     scenario = tmp_path / "deep.toml"
     scenario.write_text("a = " + "[" * 5000 + "]" * 5000 + "\n")
     code = main(["simulate", str(scenario), "-o", str(tmp_path / "r.h5")])
-    _one_line_error(code, capsys.readouterr().err, "nested too deeply")
+    one_line_error(code, capsys.readouterr().err, "nested too deeply")
     assert not (tmp_path / "r.h5").exists()
 
 
@@ -109,7 +104,7 @@ def test_full_disk_while_an_output_is_written(day, tmp_path, capsys, monkeypatch
     monkeypatch.setattr(os, "fsync", fsync)
     out = tmp_path / "out"
     code = main(_weigh_argv(day, out))
-    _one_line_error(code, capsys.readouterr().err, name, "no space left on device")
+    one_line_error(code, capsys.readouterr().err, name, "no space left on device")
     assert not (out / name).exists()
     assert not _tmp_files(tmp_path)
 
@@ -124,7 +119,7 @@ def test_unreadable_calibration_runs_give_their_reason(day, tmp_path, capsys):
     scenario.write_text(text.replace('"-", "-",\n]', '"-",\n]'))
     code = main(_weigh_argv(day, tmp_path / "out", scenario=scenario))
     err = capsys.readouterr().err
-    _one_line_error(code, err, f"{len(day.calibration)} file(s) unreadable",
+    one_line_error(code, err, f"{len(day.calibration)} file(s) unreadable",
                     day.calibration[0].name, "columns of the format")
     assert "give at least one calibration run" not in err
 
@@ -135,7 +130,7 @@ def test_decimal_comma_is_hinted(day, tmp_path, capsys):
     for p in day.calibration:
         (runs / p.name).write_text(p.read_text().replace(".", ","))
     code = main(_weigh_argv(day, tmp_path / "out", calibration=runs))
-    _one_line_error(code, capsys.readouterr().err, 'decimal = ","')
+    one_line_error(code, capsys.readouterr().err, 'decimal = ","')
 
 
 def test_version(capsys):
@@ -184,7 +179,7 @@ def test_fifo_and_device_refused_at_once(day, tmp_path, capsys, where):
             signal.alarm(20)
             code = main(_weigh_argv(day, tmp_path / "out", **kw))
             signal.alarm(0)
-            _one_line_error(code, capsys.readouterr().err, str(path), "not a regular file")
+            one_line_error(code, capsys.readouterr().err, str(path), "not a regular file")
             assert not (tmp_path / "out" / "summary.csv").exists()
     finally:
         signal.alarm(0)
@@ -195,7 +190,7 @@ def test_garbage_memory_limit_refused_first(day, tmp_path, capsys, monkeypatch):
     monkeypatch.setenv("BWIM_MEMORY_LIMIT", "lots")
     out = tmp_path / "out"
     code = main(_weigh_argv(day, out))
-    _one_line_error(code, capsys.readouterr().err, "BWIM_MEMORY_LIMIT: not a size: 'lots'")
+    one_line_error(code, capsys.readouterr().err, "BWIM_MEMORY_LIMIT: not a size: 'lots'")
     assert not out.exists()
 
 
@@ -203,7 +198,7 @@ def test_weigh_honours_the_memory_limit(day, tmp_path, capsys):
     """A limit too small for one logger file (a few MiB of values): refused, with the
     need and the limit in the message; nothing weighed."""
     code = main(["--memory-limit", "64K", *_weigh_argv(day, tmp_path / "out")])
-    _one_line_error(code, capsys.readouterr().err, "more than the limit of 64 KiB")
+    one_line_error(code, capsys.readouterr().err, "more than the limit of 64 KiB")
     assert not (tmp_path / "out" / "summary.csv").exists()
 
 
@@ -219,7 +214,7 @@ def test_logger_file_over_the_size_limit_refused_by_size(day, tmp_path, capsys):
     t0 = time.perf_counter()
     code = main(_weigh_argv(day, tmp_path / "out", calibration=runs))
     elapsed = time.perf_counter() - t0
-    _one_line_error(code, capsys.readouterr().err, "huge.txt",
+    one_line_error(code, capsys.readouterr().err, "huge.txt",
                     f"more than max_bytes = {MAX_LOGGER_BYTES}, the logger file limit")
     assert elapsed < 5.0
 

@@ -14,6 +14,8 @@ import pytest
 from bwim.cli import main
 from bwim.io.outputs import MANIFEST_NAME
 
+from tests.cli_checks import one_line_error
+
 ROOT = Path(__file__).resolve().parents[2]
 
 
@@ -39,13 +41,6 @@ def _weigh_argv(day, records, out, *more) -> list[str]:
 def _rows(summary: Path) -> list[dict[str, str]]:
     with summary.open(newline="", encoding="utf-8") as f:
         return list(csv.DictReader(f))
-
-
-def _one_line_error(code, err, *needles):
-    assert code == 2, err
-    assert err.startswith("bwim: error: ") and err.count("\n") == 1, err
-    for n in needles:
-        assert n in err, err
 
 
 def _copy(src: Path, dst: Path) -> Path:
@@ -79,7 +74,7 @@ def test_resume_without_a_manifest_does_not_replace_a_summary(day, tmp_path, cap
     out.mkdir()
     (out / "summary.csv").write_text("record\nmine\n")
     code = main(_weigh_argv(day, [day.traffic[0]], out, "--resume"))
-    _one_line_error(code, capsys.readouterr().err, "summary.csv exists", "--force")
+    one_line_error(code, capsys.readouterr().err, "summary.csv exists", "--force")
     assert (out / "summary.csv").read_text() == "record\nmine\n"
     assert not (out / MANIFEST_NAME).exists()
 
@@ -93,7 +88,7 @@ def test_site_outputs_need_force(day, tmp_path, capsys, name, resume):
     out.mkdir()
     (out / name).write_text("keep me")
     code = main(_weigh_argv(day, [day.traffic[0]], out, *(["--resume"] if resume else [])))
-    _one_line_error(code, capsys.readouterr().err, f"{name} exists", "--force")
+    one_line_error(code, capsys.readouterr().err, f"{name} exists", "--force")
     assert sorted(p.name for p in out.iterdir()) == [name]
     assert (out / name).read_text() == "keep me"
 
@@ -135,7 +130,7 @@ def test_every_output_file_needs_force(beam, tmp_path, capsys, argv, existing):
     (out / existing).write_text("keep me")
     values = {"scen": beam["scen"], "a": beam["a"], "out": out}
     code = main([a.format(**values) for a in argv])
-    _one_line_error(code, capsys.readouterr().err, f"{existing} exists", "--force")
+    one_line_error(code, capsys.readouterr().err, f"{existing} exists", "--force")
     assert sorted(p.name for p in out.iterdir()) == [existing]
     assert (out / existing).read_text() == "keep me"
 
@@ -194,5 +189,5 @@ def test_a_record_result_file_never_replaces_an_input(beam, tmp_path, capsys):
     before = Path(other).read_bytes()
     code = main(["weigh", str(beam["scen"]), str(a), str(other), "--calibration-records",
                  str(a), "-o", str(tmp_path), "--force"])
-    _one_line_error(code, capsys.readouterr().err, "is the input", "a_static.h5")
+    one_line_error(code, capsys.readouterr().err, "is the input", "a_static.h5")
     assert Path(other).read_bytes() == before

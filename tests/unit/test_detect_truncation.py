@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from bwim.detect.assemble import END_SHARE, ends_loaded
-from bwim.scenario import build_site_setup, load_record, load_scenario
-from bwim.site import calibrate_site, weigh_event
+from bwim.scenario import load_record
+from bwim.site import weigh_event
 
 FS = 512.0
 
@@ -42,11 +42,8 @@ def test_a_record_that_starts_loaded_is_caught_too():
 
 
 @pytest.fixture(scope="module")
-def site(small_site):
-    day = small_site
-    scenario = load_scenario(day.scenario)
-    cal = calibrate_site([load_record(p, scenario) for p in day.calibration],
-                         build_site_setup(scenario))
+def site(small_site_calibrated):
+    day, scenario, _, cal = small_site_calibrated
     return day, scenario, cal
 
 

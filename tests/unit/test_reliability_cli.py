@@ -19,6 +19,8 @@ import pytest
 from bwim.cli import main
 from bwim.io.outputs import LOCK_NAME, MANIFEST_NAME, OutputLock, refuse_input_overwrite
 
+from tests.cli_checks import one_line_error
+
 ROOT = Path(__file__).resolve().parents[2]
 BEAM = ROOT / "examples" / "beam.toml"
 
@@ -40,13 +42,6 @@ def _run(argv, capsys):
     return code, out.out, out.err
 
 
-def _one_line_error(code, err, *needles):
-    assert code == 2, err
-    assert err.startswith("bwim: error: ") and err.count("\n") == 1, err
-    for n in needles:
-        assert n in err, err
-
-
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
     d = tmp_path_factory.mktemp("rel")
@@ -66,12 +61,12 @@ def test_outputs_never_overwrite_inputs(files, tmp_path, capsys):
     b.write_bytes(files["b"].read_bytes())
     before = b.read_bytes()
     code, _, err = _run(["identify", files["scen"], b, "-o", b], capsys)
-    _one_line_error(code, err, "input")
+    one_line_error(code, err, "input")
     assert b.read_bytes() == before
     scen = _scenario(tmp_path)
     text = scen.read_text()
     code, _, err = _run(["calibrate", scen, files["a"], "-o", scen], capsys)
-    _one_line_error(code, err, "input")
+    one_line_error(code, err, "input")
     assert scen.read_text() == text
     with pytest.raises(Exception, match="input"):
         refuse_input_overwrite([tmp_path / "." / "s.toml"], [scen])
@@ -81,7 +76,7 @@ def test_existing_output_needs_force(files, tmp_path, capsys):
     out = tmp_path / "r.h5"
     out.write_text("precious")
     code, _, err = _run(["simulate", files["scen"], "-o", out], capsys)
-    _one_line_error(code, err, "--force")
+    one_line_error(code, err, "--force")
     assert out.read_text() == "precious"
     code, _, err = _run(["simulate", files["scen"], "-o", out, "--force"], capsys)
     assert code == 0, err
@@ -94,7 +89,7 @@ def test_output_folder_lock(files, tmp_path, capsys):
     out.mkdir()
     with OutputLock(out):  # another run holds the folder
         code, _, err = _run(["identify", files["scen"], files["a"], "-o", out], capsys)
-        _one_line_error(code, err, LOCK_NAME)
+        one_line_error(code, err, LOCK_NAME)
         assert not (out / "summary.csv").exists()
     code, _, err = _run(["identify", files["scen"], files["a"], "-o", out], capsys)
     assert code == 0, err
@@ -155,7 +150,7 @@ def test_a_second_run_into_the_folder_resumes_or_is_refused(files, tmp_path, cap
     assert code == 0, err
     first = (out / "summary.csv").read_text()
     code, _, err = _run(["identify", files["scen"], files["b"], "-o", out], capsys)
-    _one_line_error(code, err, "summary.csv")
+    one_line_error(code, err, "summary.csv")
     assert (out / "summary.csv").read_text() == first
     code, stdout, err = _run(["identify", files["scen"], files["b"], "-o", out, "--resume"],
                              capsys)
@@ -167,7 +162,7 @@ def test_a_second_run_into_the_folder_resumes_or_is_refused(files, tmp_path, cap
     assert {r["record"] for r in _summary(out)} == {"a.h5", "b.csv"}
     other = _scenario(tmp_path)
     code, _, err = _run(["identify", other, files["a"], "-o", out, "--resume"], capsys)
-    _one_line_error(code, err, "another batch")
+    one_line_error(code, err, "another batch")
 
 
 def test_interrupt_keeps_finished_records_and_leaves_no_tmp(files, tmp_path, capsys,
@@ -273,7 +268,7 @@ def test_full_disk_when_writing_hdf5(files, tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(records, "_put_record", full)
     out = tmp_path / "r.h5"
     code, _, err = _run(["simulate", files["scen"], "-o", out], capsys)
-    _one_line_error(code, err, "no space left")
+    one_line_error(code, err, "no space left")
     assert not out.exists() and not _tmp_files(tmp_path)
 
 
@@ -295,14 +290,14 @@ def test_reproduce_out_is_a_file_or_read_only(tmp_path, capsys):
     f = tmp_path / "file"
     f.write_text("x")
     code, _, err = _run(["reproduce", "5.1", "--quick", "--out", f], capsys)
-    _one_line_error(code, err, "file")
+    one_line_error(code, err, "file")
     ro = tmp_path / "ro"
     ro.mkdir(mode=0o500)
     try:
         if os.access(ro, os.W_OK):
             pytest.skip("permissions are not enforced for root")
         code, _, err = _run(["reproduce", "5.1", "--quick", "--out", ro / "sub"], capsys)
-        _one_line_error(code, err, "ro")
+        one_line_error(code, err, "ro")
     finally:
         ro.chmod(0o700)
 
@@ -319,7 +314,7 @@ def test_reproduce_out_is_a_file_or_read_only(tmp_path, capsys):
 def test_scenario_values_refused(tmp_path, capsys, subs, needle):
     scen = _scenario(tmp_path, subs=subs)
     code, _, err = _run(["simulate", scen, "-o", tmp_path / "r.h5"], capsys)
-    _one_line_error(code, err, needle)
+    one_line_error(code, err, needle)
     assert "road" not in err
 
 
@@ -328,7 +323,7 @@ def test_jobs_minus_five_refused(files, tmp_path, capsys):
                  ["calibrate", files["scen"], files["a"], "-o", tmp_path / "m.toml",
                   "--jobs", "-5"]):
         code, _, err = _run(argv, capsys)
-        _one_line_error(code, err, "--jobs")
+        one_line_error(code, err, "--jobs")
 
 
 # --- security ---------------------------------------------------------------------------
@@ -340,15 +335,15 @@ def test_profile_outside_the_scenario_folder_is_refused(tmp_path, capsys):
     road = '[road]\nprofile = "../../secret.csv"\n'
     scen = _scenario(sub, subs={'[road]\nroughness = "A"': road, "seed = 3\n": ""})
     code, _, err = _run(["simulate", scen, "-o", tmp_path / "r.h5"], capsys)
-    _one_line_error(code, err, "outside")
+    one_line_error(code, err, "outside")
     scen = _scenario(sub, subs={'[road]\nroughness = "A"': '[road]\nprofile = "/etc/passwd"',
                                 "seed = 3\n": ""})
     code, _, err = _run(["simulate", scen, "-o", tmp_path / "r.h5"], capsys)
-    _one_line_error(code, err, "outside")
+    one_line_error(code, err, "outside")
     # a file inside the folder that is not a profile: its content is never echoed
     (sub / "p.csv").write_text("root:x:0:0:root:/root:/bin/bash\n1,2\n")
     scen = _scenario(sub, subs={'[road]\nroughness = "A"': '[road]\nprofile = "p.csv"',
                                 "seed = 3\n": ""})
     code, _, err = _run(["simulate", scen, "-o", tmp_path / "r.h5"], capsys)
-    _one_line_error(code, err, "not a road profile")
+    one_line_error(code, err, "not a road profile")
     assert "bin/bash" not in err and "x:0:0" not in err

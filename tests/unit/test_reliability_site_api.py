@@ -11,18 +11,16 @@ import pytest
 
 import bwim
 from bwim.errors import InputError
-from bwim.scenario import build_bridge, build_site_setup, load_record, load_scenario
+from bwim.scenario import build_bridge, load_record
 from bwim.site import calibrate_site, calibrate_site_model, weigh_event
 
 
 @pytest.fixture(scope="module")
-def setup(small_site):
-    scenario = load_scenario(small_site.scenario)
-    records = [load_record(p, scenario) for p in small_site.calibration]
-    site_setup = build_site_setup(scenario)
-    return {"records": records, "setup": site_setup,
-            "site": calibrate_site(records, site_setup), "bridge": build_bridge(scenario),
-            "event": load_record(small_site.traffic[0], scenario)}
+def setup(small_site_calibrated):
+    day, scenario, records, site = small_site_calibrated
+    return {"records": records, "setup": site.setup, "site": site,
+            "bridge": build_bridge(scenario),
+            "event": load_record(day.traffic[0], scenario)}
 
 
 CASES = {

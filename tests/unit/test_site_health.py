@@ -24,8 +24,8 @@ import pytest
 from bwim.cli import main
 from bwim.errors import InputError
 from bwim.report.flags import explain
-from bwim.scenario import build_site_setup, load_record, load_scenario
-from bwim.site import calibrate_site, weigh_event
+from bwim.scenario import load_record
+from bwim.site import weigh_event
 from bwim.site.health import check_gauges, restrict_lines
 from bwim.wim import weigh
 
@@ -42,11 +42,8 @@ KIND = {"dead": "flat", "stuck": "flat", "reversed": "reversed", "gain x2": "gai
 
 
 @pytest.fixture(scope="module")
-def site(small_site):
-    day = small_site
-    scenario = load_scenario(day.scenario)
-    calibration = calibrate_site([load_record(p, scenario) for p in day.calibration],
-                                 build_site_setup(scenario))
+def site(small_site_calibrated):
+    day, scenario, _, calibration = small_site_calibrated
     return day, scenario, calibration
 
 

@@ -22,24 +22,19 @@ from bwim.errors import InputError
 from bwim.mfi.identify import MAX_RESIDUAL
 from bwim.scenario import (
     build_bridge,
-    build_site_setup,
     load_model,
     load_record,
-    load_scenario,
     save_bridge,
     save_site_model,
 )
-from bwim.site import SiteModel, calibrate_site, calibrate_site_model, weigh_event
+from bwim.site import SiteModel, calibrate_site_model, weigh_event
 from bwim.site.model import RESIDUAL_FACTOR, noise_share
 from bwim.synthetic.layout import SHORT_SPAN_4_LANE
 
 
 @pytest.fixture(scope="module")
-def fitted(small_site):
-    day = small_site
-    scenario = load_scenario(day.scenario)
-    records = [load_record(p, scenario) for p in day.calibration]
-    site = calibrate_site(records, build_site_setup(scenario))
+def fitted(small_site_calibrated):
+    day, scenario, records, site = small_site_calibrated
     model = calibrate_site_model(records, site, build_bridge(scenario))
     return day, scenario, records, site, model
 

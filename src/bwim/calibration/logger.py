@@ -95,6 +95,8 @@ ORIGIN_RANGE = 1.5
 #: The mass is fitted only when the readings after exit exceed the noise this many times
 #: (RMS): below it, the free-vibration fit's optimum is set by the noise.
 MIN_FREE_SNR = 3.0
+#: The mass scale's search range (× the start's); a fit at either end is no answer.
+MASS_BOUNDS = (0.4, 2.5)
 #: Most Gauss–Newton steps of the per-channel gains' fit.
 MAX_ALTERNATIONS = 50
 #: A parameter within this fraction of its bound's range is at its bound.
@@ -208,33 +210,32 @@ def calibrate_logger(
     opt, nfev, nit = _solve(problem, z0, start_bridge)
     bridge = problem.bridge(opt.x, start_bridge)
     mfit, mass_message = None, "mass not fitted (mass=False): the start's is kept"
+    state = problem.evaluate(opt.x, start_bridge, detail=mass)
     if mass:
-        state = problem.evaluate(opt.x, start_bridge, detail=True)
         zeroed = problem.zeroed(state, opt.x)
         snr = _free_snr(zeroed, problem.sigma, problem.length)
-        mfit = fit_mass(bridge, zeroed, n_modes=n_free_modes,
-                        min_periods=min_free_periods, weights=problem.weights)
-        lo, hi = 0.4, 2.5
-        if snr < MIN_FREE_SNR:
-            mfit = None
+        if snr < MIN_FREE_SNR:  # the fit's optimum would be the noise's: not tried
             mass_message = (f"mass not identified (the free vibration after exit is "
                             f"{snr:.1f} × the noise, below {MIN_FREE_SNR:g}): the start's "
                             "is kept")
-        elif not mfit.success:
-            mass_message = f"mass not identified ({mfit.message}): the start's is kept"
-        elif min(mfit.x / lo, hi / mfit.x) < 1 + 1e-2:
-            mass_message = (f"mass not identified (the free-vibration fit stops at its bound, "
-                            f"{mfit.x:.2f} × the start's): the start's is kept")
         else:
-            mass_message = f"mass from the free vibration: {mfit.x:.3f} × the start's"
-            base = bridge.with_params(**{n: bridge.params[n] * mfit.x
-                                         for n in _MASS if n in bridge.params})
-            if inertia_modes:  # the dynamic correction depends on the mass: fit again
-                opt, nfev2, nit2 = _solve(problem, opt.x, base)
-                nfev, nit = nfev + nfev2, nit + nit2
-            bridge = problem.bridge(opt.x, base)
-            start_bridge = base
-    state = problem.evaluate(opt.x, start_bridge)
+            mfit = fit_mass(bridge, zeroed, n_modes=n_free_modes, bounds=MASS_BOUNDS,
+                            min_periods=min_free_periods, weights=problem.weights)
+            lo, hi = MASS_BOUNDS
+            if not mfit.success:
+                mass_message = f"mass not identified ({mfit.message}): the start's is kept"
+            elif min(mfit.x / lo, hi / mfit.x) < 1 + 1e-2:
+                mass_message = (f"mass not identified (the free-vibration fit stops at its "
+                                f"bound, {mfit.x:.2f} × the start's): the start's is kept")
+            else:
+                mass_message = f"mass from the free vibration: {mfit.x:.3f} × the start's"
+                base = bridge.with_params(**{n: bridge.params[n] * mfit.x
+                                             for n in _MASS if n in bridge.params})
+                if inertia_modes:  # the dynamic correction depends on the mass: fit again
+                    opt, nfev2, nit2 = _solve(problem, opt.x, base)
+                    nfev, nit = nfev + nfev2, nit + nit2
+                bridge = problem.bridge(opt.x, base)
+                state = problem.evaluate(opt.x, base)
     return _result(problem, opt, state, bridge, nfev, nit, mfit, mass_message)
 
 

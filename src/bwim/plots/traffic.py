@@ -55,21 +55,31 @@ def _limit_line(ax, limit: float | None) -> None:
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small")
 
 
+def _weight_histogram(ax, values: np.ndarray, *, width: float, limit: float | None,
+                      xlabel: str, ylabel: str, title: str, empty: str, log: bool = False):
+    """Weights (kN) in bins ``width`` kN wide, a ``limit`` (N) as a red line."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    if not values.size:
+        return _empty(ax, empty)
+    ax.hist(values, bins=_bins(values, width), color=_WEIGHED, edgecolor="white")
+    if log:
+        ax.set_yscale("log")
+    _limit_line(ax, limit)
+    ax.grid(alpha=0.3)
+    return ax.figure
+
+
 def plot_gvw_histogram(rows: Sequence, *, limit: float | None = None, width: float = 25.0,
                        ax=None):
     """Histogram of the weighed vehicles' gross weights (kN, bins ``width`` kN wide); a
     gross weight ``limit`` (N), when given, as a red line."""
-    ax = axes(ax, figsize=_SIZE)
     gvw = np.array([r.gvw for r in rows if r.weighed]) / KILONEWTON
-    ax.set_xlabel("gross vehicle weight (kN)")
-    ax.set_ylabel("vehicles")
-    ax.set_title(f"Gross vehicle weight, {gvw.size} weighed vehicles")
-    if not gvw.size:
-        return _empty(ax, "no weighed vehicle")
-    ax.hist(gvw, bins=_bins(gvw, width), color=_WEIGHED, edgecolor="white")
-    _limit_line(ax, limit)
-    ax.grid(alpha=0.3)
-    return ax.figure
+    return _weight_histogram(axes(ax, figsize=_SIZE), gvw, width=width, limit=limit,
+                             xlabel="gross vehicle weight (kN)", ylabel="vehicles",
+                             title=f"Gross vehicle weight, {gvw.size} weighed vehicles",
+                             empty="no weighed vehicle")
 
 
 def plot_axle_load_spectrum(rows: Sequence, *, limit: float | None = None,
@@ -77,18 +87,11 @@ def plot_axle_load_spectrum(rows: Sequence, *, limit: float | None = None,
     """The axle-load spectrum: every weighed axle's load in classes ``width`` kN wide,
     counts on a log scale (the heavy tail matters for fatigue and pavement damage); an
     axle ``limit`` (N), when given, as a red line."""
-    ax = axes(ax, figsize=_SIZE)
     loads = np.array([w for r in rows if r.weighed for w in r.axle_weights]) / KILONEWTON
-    ax.set_xlabel("axle load (kN)")
-    ax.set_ylabel("axles")
-    ax.set_title(f"Axle-load spectrum, {loads.size} axles")
-    if not loads.size:
-        return _empty(ax, "no weighed axle")
-    ax.hist(loads, bins=_bins(loads, width), color=_WEIGHED, edgecolor="white")
-    ax.set_yscale("log")
-    _limit_line(ax, limit)
-    ax.grid(alpha=0.3)
-    return ax.figure
+    return _weight_histogram(axes(ax, figsize=_SIZE), loads, width=width, limit=limit,
+                             xlabel="axle load (kN)", ylabel="axles",
+                             title=f"Axle-load spectrum, {loads.size} axles",
+                             empty="no weighed axle", log=True)
 
 
 def plot_speed_distribution(rows: Sequence, *, width: float = 5.0, ax=None):
