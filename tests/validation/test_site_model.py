@@ -198,3 +198,32 @@ def test_the_self_check_plot(fitted):
     heights = [p.get_height() for p in ax.patches if p.get_width() < 1.0]
     np.testing.assert_allclose(sorted(heights), sorted(100 * model.gvw_errors))
     assert "accepted" in ax.get_title()
+
+
+def test_weigh_with_the_model_on_a_dask_scheduler(fitted, tmp_path):
+    """``bwim weigh --bridge model.toml --scheduler`` (issue 23 item 2): the site model
+    travels to a dask worker and weighs the traffic date's events as one local process
+    does, row for row (the reference: the same command with ``--jobs 1``)."""
+    distributed = pytest.importorskip("distributed")
+    from bwim.cli import main
+
+    day, scenario, _, _, model = fitted
+    path = tmp_path / "model.toml"
+    save_site_model(model, path)
+    common = ["weigh", str(day.scenario), str(day.out_dir / "traffic"),
+              "--calibration-records", str(day.out_dir / "calibration"),
+              "--bridge", str(path)]
+    assert main(common + ["--jobs", "1", "-o", str(tmp_path / "local")]) == 0
+    with distributed.LocalCluster(processes=False, n_workers=1, threads_per_worker=1,
+                                  dashboard_address=None) as cluster:
+        assert main(common + ["--scheduler", cluster.scheduler_address,
+                              "-o", str(tmp_path / "dask")]) == 0
+
+    def rows(folder):
+        with open(folder / "summary.csv", newline="") as f:
+            return sorted((r["record"], r["vehicle"], r["gvw_kN"], r["flags"], r["reason"])
+                          for r in csv.DictReader(f))
+
+    local = rows(tmp_path / "local")
+    assert any(gvw for _, _, gvw, _, _ in local)  # something was weighed
+    assert rows(tmp_path / "dask") == local
