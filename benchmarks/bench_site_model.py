@@ -17,6 +17,14 @@ took) and COST 323 (RR2, I) of the traffic date's single-vehicle lane-1 trucks w
 with the lines and with the model, each with the runs' time-of-day drift factor and with
 the traffic's own drift correction (the default).  ``python benchmarks/bench_site_model.py``
 (the days are cached as for ``bench_realsite``; about ten minutes with the days cached).
+
+Last table (issue 23: "the mesh correction chosen as the mesh check asks, ``auto`` as the
+default where it costs little; measure what it costs"): per seed, the model calibrated
+with no mesh correction, with ``auto`` (the default) and with one bisection: the
+bisections made, E_y/E_x, the weighing scale, the leave-one-out errors, the wall time of
+the calibration (self-check included) and its ratio to no correction, and the time of
+one traffic event's weighing with the model.  ``--mesh-correction N`` weighs the traffic
+with that model instead of the default's.
 """
 
 from __future__ import annotations
@@ -38,7 +46,7 @@ from bwim.scenario import (
     read_toml,
     scenario_from_dict,
 )
-from bwim.site import calibrate_site, calibrate_site_model, correct_drift
+from bwim.site import calibrate_site, calibrate_site_model, correct_drift, weigh_event
 from bwim.synthetic.layout import SHORT_SPAN_4_LANE
 from bwim.synthetic.sitedays import nominal_bridge
 
@@ -59,18 +67,53 @@ def _cell(res, name: str) -> str:
     return "-" if c is None else f"{c.mean:+.1f} ± {c.std:.1f} {c.class_name}"
 
 
-def run_day(seed: int, jobs: int = 2, gains: str = "common") -> dict:
-    return run_folder(site_day(seed), seed, jobs, gains)
+def run_day(seed: int, jobs: int = 2, gains: str = "common",
+            mesh_correction: int | str = "auto") -> dict:
+    return run_folder(site_day(seed), seed, jobs, gains, mesh_correction)
 
 
-def run_folder(day, seed: int, jobs: int = 2, gains: str = "common") -> dict:
+def mesh_cost(seed: int) -> list[list]:
+    """Rows of the last table (module docstring) for the day of ``seed``."""
+    day = site_day(seed)
+    scenario = site_scenario(day)
+    records = [load_record(p, scenario) for p in sorted((day / "calibration").glob("*.txt"))]
+    site = calibrate_site(records, build_site_setup(scenario))
+    event = load_record(sorted((day / "traffic").glob("*.txt"))[0], scenario)
+    rows, base = [], None
+    for mc in (0, "auto", 1):
+        t0 = time.perf_counter()
+        model = calibrate_site_model(records, site, build_bridge(scenario),
+                                     mesh_correction=mc)
+        dt = time.perf_counter() - t0
+        base = dt if base is None else base
+        weigh = min(_timed(lambda m=model: weigh_event(event, site, bridge=m))
+                    for _ in range(3))
+        corr = model.fit.mesh_correction
+        g = model.bridge.model.grid
+        rows.append([seed, str(mc), corr.levels if corr else 0, f"{g.nx}x{g.ny}",
+                     f"{model.bridge.params['E_y'][0] / model.bridge.params['E_x'][0]:.3f}",
+                     f"{model.weighing_scale:.4f}",
+                     " ".join(f"{100 * e:+.1f}" for e in model.gvw_errors),
+                     f"{dt:.0f} s ({dt / base:.2f}×)", f"{weigh:.2f} s"])
+    return rows
+
+
+def _timed(fn) -> float:
+    t0 = time.perf_counter()
+    fn()
+    return time.perf_counter() - t0
+
+
+def run_folder(day, seed: int, jobs: int = 2, gains: str = "common",
+               mesh_correction: int | str = "auto") -> dict:
     """One simulated site's folder: the model, and both weighings of its traffic date."""
     scenario = site_scenario(day)
     runs = sorted((day / "calibration").glob("*.txt"))
     records = [load_record(p, scenario) for p in runs]
     site = calibrate_site(records, build_site_setup(scenario))
     t0 = time.perf_counter()
-    model = calibrate_site_model(records, site, build_bridge(scenario), gains=gains)
+    model = calibrate_site_model(records, site, build_bridge(scenario), gains=gains,
+                                 mesh_correction=mesh_correction)
     t_model = time.perf_counter() - t0
     paths = (sorted((day / "calibration_day_traffic").glob("*.txt"))
              + sorted((day / "traffic").glob("*.txt")))
@@ -96,8 +139,12 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--gains", choices=["common", "per_channel"], default="common",
                         help="the logger's gains: one for all gauges or one per gauge")
+    parser.add_argument("--mesh-correction", default="auto",
+                        help="the model's mesh correction: auto (default), 0, 1 or 2")
     args = parser.parse_args([] if argv is None else argv)
-    days = [run_day(seed, gains=args.gains) for seed in SEEDS]
+    mc = args.mesh_correction
+    mc = int(mc) if mc.isdigit() else mc
+    days = [run_day(seed, gains=args.gains, mesh_correction=mc) for seed in SEEDS]
     rows = []
     for d in days:
         m = d["model"]
@@ -108,7 +155,8 @@ def main(argv: list[str] | None = None) -> None:
                      f"{np.mean(list(m.gains.values())):.4g}",
                      " ".join(f"{100 * e:+.1f}" for e in err),
                      "yes" if m.accepted else f"no: {m.reason}", f"{d['t_model']:.0f} s"])
-    print_table(f"The site model calibrated from the logger files ({args.gains} gains; "
+    print_table(f"The site model calibrated from the logger files ({args.gains} gains, mesh "
+                f"correction {mc}; "
                 "E_y/E_x: the deck is isotropic, 1; origin: ad1 stands at x = 1.5 m; gain: "
                 "logger units per unit model strain, the mean)",
                 ["seed", "runs used", "E_y/E_x", "origin (m)", "lateral (m)", "gain",
@@ -123,6 +171,12 @@ def main(argv: list[str] | None = None) -> None:
                      for label, res in d["results"].items()])
         print("events/s (2 processes): " + ", ".join(f"{k} {v:.1f}"
                                                       for k, v in d["rates"].items()))
+    print_table("The mesh correction's cost: the model calibrated with none, auto (the "
+                "default) and one bisection (time: calibration with its self-check, and "
+                "its ratio to none; weighing: one traffic event with the model, best of 3)",
+                ["seed", "mesh correction", "bisections", "model mesh", "E_y/E_x",
+                 "weighing scale", "leave-one-out GVW errors %", "calibration time",
+                 "weighing"], [r for seed in SEEDS for r in mesh_cost(seed)])
 
 
 if __name__ == "__main__":

@@ -34,11 +34,11 @@ def _sensors():
                  for k, y in enumerate((1.0, 2.0, 3.0, 4.0, 5.0)))
 
 
-def _records(gains, rng):
-    """Crossings at three lateral positions on the true model, quasi-static, in logger
-    units with offsets and slopes; passages in a frame ORIGIN behind the model's and
-    LATERAL to the side."""
-    truth = _start().with_params(E_y=RATIO * 30e9)
+def _records(gains, rng, truth=None):
+    """Crossings at three lateral positions on the true model (default the start's mesh
+    with E_y = RATIO E_x), quasi-static, in logger units with offsets and slopes; passages
+    in a frame ORIGIN behind the model's and LATERAL to the side."""
+    truth = _start().with_params(E_y=RATIO * 30e9) if truth is None else truth
     out = []
     for speed, lane in ((18.0, 2.2), (22.0, 2.8), (20.0, 3.4)):
         detected = Passage(speed=speed, lane=lane - LATERAL, axle_spacings=SPACINGS,
@@ -102,3 +102,59 @@ def test_inputs_refused_with_one_line_messages():
                                                  for s in r.sensors)) for r in records]
     with pytest.raises(InputError, match="position"):
         calibrate_logger(_start(), no_x, LOADS)
+
+
+def test_the_mesh_correction_fits_the_bisected_models_parameters():
+    """Readings made on the start's mesh bisected once (16 × 12), fitted with the 8 × 6
+    model.  Without the correction the coarse mesh biases the fit (measured: the E_y
+    ratio off by 5.3e-2, x₀ by 3.0 mm, the gain by 4.2e-3).  With ``mesh_correction=1``
+    the passes' fixed point is the finer model's own calibration (Stetter 1978: the
+    corrected normal equations are the finer model's; exact when it fits the data, as
+    here), so the fit returns the parameters the readings were made with (measured:
+    within 2.3e-6; tolerance 2e-5) and the model it reports is the bisected one."""
+    from bwim.fe.convergence import refine
+
+    rng = np.random.default_rng(5)
+    gains = np.full(5, 2.5e5)
+    truth = refine(_start().with_params(E_y=RATIO * 30e9))
+    records = [dataclasses.replace(r, data=r.data + 1e-6 * rng.standard_normal(r.data.shape))
+               for r in _records(gains, rng, truth=truth)]
+    kw = {"origin": 1.0, "lateral": 0.0, "n_basis": 2, "inertia_modes": 0, "mass": False}
+    plain = calibrate_logger(_start(), records, LOADS, **kw)
+    fixed = calibrate_logger(_start(), records, LOADS, mesh_correction=1, **kw)
+    assert plain.mesh_correction is None
+    assert abs(plain.params["E_y"] / 30e9 / RATIO - 1) > 1e-2  # the bias it removes
+    assert fixed.success and fixed.mesh_correction.converged, fixed.message
+    assert fixed.mesh_correction.mesh == (16, 12)
+    grid = fixed.bridge.model.grid
+    assert (grid.nx, grid.ny) == (16, 12)
+    assert fixed.params["E_y"] / 30e9 == pytest.approx(RATIO, rel=2e-5)
+    assert fixed.origin == pytest.approx(ORIGIN, abs=2e-5)
+    assert fixed.lateral == pytest.approx(LATERAL, abs=2e-5)
+    np.testing.assert_allclose(fixed.gains, gains, rtol=2e-5)
+
+
+def test_auto_mesh_correction_follows_the_mesh_check():
+    """``"auto"`` bisects as often as the mesh check of the start at the gauges asks
+    (:func:`bwim.fe.convergence.check_mesh` at 5 %, the reference, called here on the
+    truck's wheel loads at mid-span): the same fit as that many bisections asked for; a
+    wrong value is a one-line InputError."""
+    from bwim.fe.convergence import check_mesh
+    from bwim.loads import PointLoad
+
+    rng = np.random.default_rng(6)
+    records = [dataclasses.replace(r, data=r.data + 1e-6 * rng.standard_normal(r.data.shape))
+               for r in _records(np.full(5, 2.5e5), rng)]
+    wheels = [PointLoad(x=x, y=y, P=p / 2) for x, p in zip((0.5, 4.0, 9.0), LOADS,
+                                                           strict=True) for y in (2.3, 4.1)]
+    mc = check_mesh(_start(), records[0].sensors, [w for w in wheels if 0 < w.x < 8.0],
+                    tol=0.05, max_levels=3)
+    levels = mc.meshes.index(mc.adequate) if mc.adequate else 2
+    kw = {"origin": 1.0, "lateral": 0.0, "n_basis": 2, "inertia_modes": 0, "mass": False}
+    auto = calibrate_logger(_start(), records, LOADS, mesh_correction="auto", **kw)
+    asked = calibrate_logger(_start(), records, LOADS, mesh_correction=levels, **kw)
+    assert levels >= 1 and auto.mesh_correction.levels == levels
+    np.testing.assert_array_equal(auto.x, asked.x)
+    for bad in ("fine", 7, -1):
+        with pytest.raises(InputError, match="mesh_correction"):
+            calibrate_logger(_start(), records, LOADS, mesh_correction=bad, **kw)

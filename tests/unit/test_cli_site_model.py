@@ -19,3 +19,14 @@ def test_weigh_refuses_a_model_that_is_not_accepted(small_site, tmp_path, capsys
     err = capsys.readouterr().err.strip().splitlines()
     assert code != 0 and not (out / "summary.csv").exists()
     assert len(err) == 1 and "not accepted" in err[0] and "+14.0 %" in err[0]
+
+
+def test_calibrate_refuses_a_bad_mesh_correction_in_one_line(small_site, tmp_path, capsys):
+    """``bwim calibrate SITE calibration/ --mesh-correction fine``: exit 2, one line
+    naming the option, no model written."""
+    out = tmp_path / "model.toml"
+    code = main(["calibrate", str(small_site.scenario), str(small_site.out_dir / "calibration"),
+                 "-o", str(out), "--mesh-correction", "fine"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "mesh_correction" in err[0]
+    assert not out.exists()

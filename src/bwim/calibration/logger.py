@@ -46,6 +46,17 @@ their fitted offsets, when the readings after exit stand out of the noise
 the start's mass and says so (``mass_message``): a short record tail on a stiff, damped
 deck carries too little free vibration to weigh the deck.
 
+Mesh defect correction (``mesh_correction``; docs/theory.md §12): the model's filtered
+prediction at the fit (gains, force nuisance, frame) on the model bisected ``levels`` times
+less the model's own is taken off the readings, and the nonlinear parameters are fitted
+again, until no parameter moves by :data:`~bwim.calibration.meshdefect.TOL` (stiffness
+ratios relative, x₀ and y₀ relative to the span).  ``"auto"``: as many bisections as
+:func:`bwim.fe.convergence.check_mesh` of the start needs at the channels, under the
+truck's static wheel loads where the first run's response peaks, to bring its estimated
+error below :data:`~bwim.calibration.meshdefect.AUTO_TOL`; none if it is already there.
+The answer's ``bridge`` is then the bisected model at the fitted parameters (the model
+the gains belong to; ``mesh_correction`` reports the passes).
+
 Contract
 --------
 * SI units; gains in logger units per unit strain; x₀ in m; stiffness in Pa.
@@ -67,11 +78,19 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.optimize as so
 from numpy.polynomial import legendre
 
+from bwim.calibration.meshdefect import (
+    AUTO_MAX_LEVELS,
+    AUTO_TOL,
+    DefectCorrection,
+    MeshCorrection,
+    requested_levels,
+)
 from bwim.calibration.problem import ParameterSpace, estimate_noise
 from bwim.calibration.quasistatic import (
     DEFAULT_CUTOFF_FRACTION,
@@ -81,6 +100,7 @@ from bwim.calibration.quasistatic import (
 )
 from bwim.errors import InputError, NumericalError
 from bwim.fe.bridge import Bridge
+from bwim.fe.convergence import check_mesh
 from bwim.optimize import OptimizeResult
 from bwim.records import Record
 
@@ -139,6 +159,9 @@ class LoggerCalibration(OptimizeResult):
     mass : MassFit or None
     mass_message : str
         What became of the mass (fitted, or kept and why).
+    mesh_correction : MeshCorrection or None
+        The defect correction's passes (``mesh_correction=``); its ``bridge`` is
+        ``bridge``.
     """
 
     bridge: Bridge
@@ -154,6 +177,7 @@ class LoggerCalibration(OptimizeResult):
     cutoff: float
     mass: MassFit | None
     mass_message: str
+    mesh_correction: MeshCorrection | None = None
 
 
 def calibrate_logger(
@@ -172,6 +196,7 @@ def calibrate_logger(
     mass: bool = True,
     n_free_modes: int = 3,
     min_free_periods: float = 3.0,
+    mesh_correction: int | str = 0,
 ) -> LoggerCalibration:
     """Calibrate a bridge model from logger records of a vehicle of known axle loads.
 
@@ -200,7 +225,15 @@ def calibrate_logger(
         Modes whose dynamic correction is added to the static response.
     mass : bool
         Fit the mass from the free vibration after exit.
+    mesh_correction : int or "auto"
+        Bisections of the model that correct its discretisation error (module docstring;
+        0: none, 1 to :data:`~bwim.calibration.meshdefect.MAX_LEVELS`, or ``"auto"``).
     """
+    levels = mesh_correction if isinstance(mesh_correction, str) else requested_levels(
+        mesh_correction)
+    if isinstance(levels, str) and levels.strip().lower() != "auto":
+        raise InputError(f"mesh_correction must be an integer or 'auto', got "
+                         f"{mesh_correction!r}")
     problem = _Problem(start_bridge, records, axle_loads, origin=origin, lateral=lateral,
                        gains=gains,
                        unknowns=unknowns, cutoff=cutoff, n_basis=n_basis,
@@ -236,7 +269,19 @@ def calibrate_logger(
                     nfev, nit = nfev + nfev2, nit + nit2
                 bridge = problem.bridge(opt.x, base)
                 state = problem.evaluate(opt.x, base)
-    return _result(problem, opt, state, bridge, nfev, nit, mfit, mass_message)
+    if isinstance(levels, str):
+        levels = _auto_levels(problem, state, opt.x, bridge)
+    correction = None
+    if levels:
+        base = bridge.with_params(**{n: bridge.params[n] for n in _MASS
+                                     if n in bridge.params})
+        fixer = _LoggerCorrection(levels, problem=problem, base=base)
+        correction = fixer.solve(_Pass(opt=opt, state=state))
+        opt, state = fixer.state.opt, fixer.state.state
+        nfev += sum(p.opt.nfev for p in fixer.states)
+        nit += sum(int(p.opt.njev or 0) for p in fixer.states)
+        bridge = correction.bridge
+    return _result(problem, opt, state, bridge, nfev, nit, mfit, mass_message, correction)
 
 
 # --- the problem -----------------------------------------------------------------------------
@@ -385,6 +430,14 @@ class _Problem:
         flat = a.reshape(a.shape[0], -1)
         return (flat - B @ (pinv @ flat)).reshape(a.shape)
 
+    def nuisance(self, k: int, b: np.ndarray, A: np.ndarray, g: np.ndarray) -> np.ndarray:
+        """Record k's force nuisance c at gains ``g`` (least squares on the detrended
+        readings; the same minimiser as the projected fit's)."""
+        dd, bd, Ad = (self._detrend(k, a) for a in (self.data[k], b, A))
+        M = (Ad * g[None, :, None]).reshape(b.size, -1)
+        return (np.linalg.lstsq(M, (dd - bd * g).ravel(), rcond=None)[0] if M.shape[1]
+                else np.zeros(0))
+
     def _offsets(self, k: int, b: np.ndarray, A: np.ndarray, g: np.ndarray,
                  detail: bool) -> np.ndarray:
         """(2, s): each channel's offset and slope in record k (logger units): those of
@@ -392,10 +445,7 @@ class _Problem:
         ``detail``."""
         if not detail:
             return np.zeros((2, len(self.channels)))
-        dd, bd, Ad = (self._detrend(k, a) for a in (self.data[k], b, A))
-        M = (Ad * g[None, :, None]).reshape(b.size, -1)
-        c = (np.linalg.lstsq(M, (dd - bd * g).ravel(), rcond=None)[0] if M.shape[1]
-             else np.zeros(0))
+        c = self.nuisance(k, b, A, g)
         rest = self.data[k] - g * (b + A @ c)
         _, pinv = self.trend[k]
         return (pinv @ rest) * (self.noise / self.sqrt_w[k])[None, :]
@@ -493,6 +543,72 @@ class _Problem:
         return np.array(lo), np.array(hi)
 
 
+# --- the mesh defect correction ---------------------------------------------------------------
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class _Pass:
+    """One fit of the nonlinear parameters and its projected state."""
+
+    opt: Any
+    state: _State
+
+
+class _LoggerCorrection(DefectCorrection):
+    """The logger fit's defect correction (module docstring): the filtered, weighted
+    prediction at the fitted gains and force nuisance on the corrector model less the
+    model's own, taken off the problem's readings; each pass refits z.  A state is a
+    :class:`_Pass`."""
+
+    def __init__(self, levels: int, *, problem: _Problem, base: Bridge) -> None:
+        super().__init__(levels)
+        self.problem, self.base = problem, base
+        self.measured = list(problem.data)
+        self.peak = max(float(np.abs(d).max()) for d in self.measured)
+
+    def model(self, state: _Pass) -> Bridge:
+        return self.problem.bridge(state.opt.x, self.base)
+
+    def correct(self, state: _Pass, coarse: Bridge, fine: Bridge) -> float:
+        pb, z, g = self.problem, state.opt.x, state.state.gains
+        worst = 0.0  # the force nuisance is the state's own: fitted to the data it fitted
+        defects = []
+        for k, ((bc, Ac), (bf, Af)) in enumerate(zip(pb.columns(z, coarse),
+                                                     pb.columns(z, fine), strict=True)):
+            c = pb.nuisance(k, bc, Ac, g)
+            dk = g * ((bf - bc) + ((Af - Ac) @ c if c.size else 0.0))
+            defects.append(dk)
+            worst = max(worst, float(np.abs(dk).max()))
+        pb.data = [d - dk for d, dk in zip(self.measured, defects, strict=True)]
+        return worst / self.peak
+
+    def refit(self, state: _Pass, k: int) -> _Pass:
+        opt, _, _ = _solve(self.problem, state.opt.x, self.base)
+        return _Pass(opt=opt, state=self.problem.evaluate(opt.x, self.base, detail=True))
+
+    def change(self, old: _Pass, new: _Pass) -> float:
+        n = len(self.problem.names)
+        ratios = np.abs(np.exp(new.opt.x[:n] - old.opt.x[:n]) - 1)
+        frame = np.abs(new.opt.x[n:] - old.opt.x[n:]) / self.problem.length
+        return float(np.max(np.concatenate([ratios, frame])))
+
+
+def _auto_levels(problem: _Problem, state: _State, z: np.ndarray, bridge: Bridge) -> int:
+    """Bisections ``"auto"`` asks for: the mesh check of ``bridge`` at the channels under
+    the truck's static wheel loads where the model's response to the first run peaks."""
+    from bwim.loads import PointLoad
+
+    rec = problem.zeroed(state, z)[0]
+    b, _ = problem.columns(z, bridge)[0]
+    k = int(np.argmax(np.abs(b).sum(axis=1)))
+    p = rec.passage
+    x = p.wheel_x(rec.time[k:k + 1])[0]
+    loads = [PointLoad(x=float(xi), y=float(yi), P=float(f))
+             for xi, yi, f in zip(x, p.wheel_y, problem.wheel_loads[0], strict=True)
+             if 0 < xi < bridge.length]
+    mc = check_mesh(bridge, rec.sensors, loads, tol=AUTO_TOL, max_levels=AUTO_MAX_LEVELS + 1)
+    return AUTO_MAX_LEVELS if mc.adequate is None else mc.meshes.index(mc.adequate)
+
+
 def _free_snr(records: list[Record], sigma: list[np.ndarray], length: float) -> float:
     """RMS of the readings after the last axle leaves over their noise's RMS, pooled."""
     num = den = 0.0
@@ -515,7 +631,8 @@ def _solve(problem: _Problem, z0: np.ndarray, base: Bridge):
 
 
 def _result(problem: _Problem, opt, state: _State, bridge: Bridge, nfev: int, nit: int,
-            mfit: MassFit | None, mass_message: str) -> LoggerCalibration:
+            mfit: MassFit | None, mass_message: str,
+            correction: MeshCorrection | None) -> LoggerCalibration:
     lo, hi = problem.bounds()
     labels = (*problem.names, "origin", *(("lateral",) if problem.lateral else ()))
     tol = AT_BOUND * (hi - lo)
@@ -547,4 +664,4 @@ def _result(problem: _Problem, opt, state: _State, bridge: Bridge, nfev: int, ni
         uncertainty=unc, x=opt.x.copy(),
         fun=float(2 * opt.cost), nfev=nfev, nit=nit, success=success, message=message,
         at_bound=at_bound, explained=explained, misfit=misfit, cutoff=problem.cutoff,
-        mass=mfit, mass_message=mass_message)
+        mass=mfit, mass_message=mass_message, mesh_correction=correction)

@@ -187,7 +187,7 @@ COMMANDS: tuple[Command, ...] = (
          arg("--mesh-correction", metavar="N|auto",
              help="correct the model's discretisation error by a model bisected N times "
              "(1-3), or as often as its sensors need (auto); default: the scenario's, "
-             "else none"),
+             "else none (a site's logger files: else auto)"),
          arg("--gains", choices=["common", "per_channel"],
              help="a site's logger files: one logger scale for every gauge (common, the "
              "default) or a gain per gauge"),

@@ -124,7 +124,7 @@ def _site_model(args: argparse.Namespace, scenario, paths, out: Path) -> int:
     if scenario.bridge is None:
         raise InputError("calibrating a site's model needs a [bridge] in the scenario (the "
                          "deck's geometry, a nominal E and mu) and every gauge's x and y")
-    for key in ("method", "seed", "mesh_correction"):
+    for key in ("method", "seed"):
         if getattr(args, key) is not None:
             raise InputError(f"--{key.replace('_', '-')} is not used for a site's logger "
                              "files (the road-free fit has no optimiser choice)")
@@ -137,8 +137,11 @@ def _site_model(args: argparse.Namespace, scenario, paths, out: Path) -> int:
           "(each model fitted again without each run to check it) ...", flush=True)
     # the weighing scale and the self-check weigh as bwim weigh will: its [identify] options
     options = scenario.identify.kwargs() if scenario.identify is not None else None
+    given = scenario.calibrate.mesh_correction if scenario.calibrate is not None else None
+    mc = str(args.mesh_correction or ("auto" if given is None else given)).strip().lower()
     model = calibrate_site_model(records, site, start, gains=args.gains or "common",
-                                 track_width=args.track_width, identify_options=options)
+                                 track_width=args.track_width, identify_options=options,
+                                 mesh_correction=int(mc) if mc.isdigit() else mc)
     save_site_model(model, out, title=f"calibrated from {site.n_used} run(s) of "
                     f"{scenario.title or scenario.source}")
     fit = model.fit
@@ -162,6 +165,11 @@ def _site_model(args: argparse.Namespace, scenario, paths, out: Path) -> int:
                 "weighed by the model fitted without it):",
                 ("run", "use", "explained %", "GVW error %"), runs).render())
     print(f"\n{fit.mass_message}")
+    if fit.mesh_correction is not None:
+        print(f"{fit.mesh_correction.summary()}; the model is saved on that mesh")
+    else:
+        print("mesh: the start's mesh is fine enough at the gauges (no correction)"
+              if mc == "auto" else "mesh: not corrected (--mesh-correction 0)")
     print(f"{fit.nfev} evaluations")
     print(f"model: {out}")
     if not model.accepted:

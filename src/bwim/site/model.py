@@ -15,7 +15,10 @@ Contract
   - ``origin``: where the detectors' frame (x = 0 at the calibration lane's first axle
     detector) lies on the model (m), and ``lateral``: the offset of detected lateral
     positions (m),
-  - the mass from the free vibration when the records show it above the noise.
+  - the mass from the free vibration when the records show it above the noise,
+  - the mesh's discretisation error, by defect correction with a bisected model when the
+    start's mesh check at the gauges asks for it (``mesh_correction="auto"``; the model
+    is then the bisected one).
 
   No passage and no road are given: the passages are the detected ones with the
   calibration truck's declared spacings, each wheel pair ``track_width`` apart
@@ -248,6 +251,7 @@ def calibrate_site_model(
     tolerance: float = DEFAULT_TOLERANCE,
     leave_one_out: bool = True,
     identify_options: Mapping[str, Any] | None = None,
+    mesh_correction: int | str = "auto",
     **fit_options: Any,
 ) -> SiteModel:
     """Calibrate ``start_bridge`` from the site's calibration runs and check it on them.
@@ -268,6 +272,11 @@ def calibrate_site_model(
         Run the self-check (without it the model is not accepted: nothing has checked it).
     identify_options : mapping, optional
         Options of :func:`bwim.identify_forces` for the self-check's weighing.
+    mesh_correction : int or "auto"
+        The mesh defect correction of the fit (:func:`bwim.calibration.calibrate_logger`):
+        ``"auto"`` (default) bisects the start's mesh as often as its mesh check at the
+        gauges asks, none when it is fine enough; the model is then the bisected one.
+        Each fold of the self-check uses the full fit's number of bisections.
     **fit_options
         Passed to :func:`bwim.calibration.calibrate_logger` (``cutoff``, ``n_basis``...).
     """
@@ -302,12 +311,17 @@ def calibrate_site_model(
     loads = setup.calibration_loads
 
     def fit(keys: Sequence[int], start: Bridge, start_origin: float, start_lateral: float,
-            mass: bool) -> LoggerCalibration:
+            mass: bool, levels: int | str) -> LoggerCalibration:
         options = {"mass": mass, **fit_options}
         return calibrate_logger(start, [runs[k] for k in keys], loads, origin=start_origin,
-                                lateral=start_lateral, gains=gains, **options)
+                                lateral=start_lateral, gains=gains, mesh_correction=levels,
+                                **options)
 
-    full = fit(used, start_bridge, origin, 0.0, bool(fit_options.pop("mass", True)))
+    full = fit(used, start_bridge, origin, 0.0, bool(fit_options.pop("mass", True)),
+               mesh_correction)
+    levels = full.mesh_correction.levels if full.mesh_correction is not None else 0
+    # the folds start from the full fit's parameters on the start's mesh
+    fitted = start_bridge.with_params(**full.bridge.params)
     base = SiteModel(bridge=full.bridge, gains={}, track_width=track,
                      tolerance=float(tolerance))
     weigh = partial(weigh_event, calibration=calibration, identify_options=identify_options)
@@ -321,7 +335,7 @@ def calibrate_site_model(
             continue
         # the full fit is the fold's start (its mass kept: one run changes it little)
         others = [j for j in used if j != k]
-        fold = _scaled(base, fit(others, full.bridge, full.origin, full.lateral, False),
+        fold = _scaled(base, fit(others, fitted, full.origin, full.lateral, False, levels),
                        others, records, weigh, setup)
         checks.append(_check(k, float(explained[k]), weigh(records[k], bridge=fold),
                              setup))
