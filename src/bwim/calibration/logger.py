@@ -16,7 +16,9 @@ modelled as
 ``g_s`` the gain of channel s (logger units per unit of model strain; one common ``g``
 with ``gains="common"``), ``x₀`` the bridge-frame position of the passages' origin (m),
 ``y₀`` an offset of the passages' lateral positions (m; unless ``lateral=None``),
-``o_s, r_s`` a channel's offset and baseline slope in each record, and the rest as in
+``o_s, r_s`` a channel's offset and baseline slope in each record (a zoned plate has a
+stiffness ratio per zone: a longitudinal joint's own, :mod:`bwim.fe.joints`), and the
+rest as in
 :mod:`bwim.calibration.quasistatic` (the low-pass 𝓛 below the first natural frequency,
 the Legendre force nuisance ``c`` with zero mean over each axle's time on the span, the
 dynamic correction of the lowest modes).
@@ -110,6 +112,8 @@ __all__ = ["GAIN_MODES", "LoggerCalibration", "calibrate_logger"]
 GAIN_MODES = ("common", "per_channel")
 #: Stiffness ratios are bounded to [1/RATIO_BOUND, RATIO_BOUND] × the start's.
 RATIO_BOUND = 5.0
+#: A joint zone's E_y ratio may fall to 1 / JOINT_BOUND of the start's.
+JOINT_BOUND = 1e3
 #: x₀ is searched within ± this many metres of its start.
 ORIGIN_RANGE = 1.5
 #: The mass is fitted only when the readings after exit exceed the noise this many times
@@ -197,6 +201,7 @@ def calibrate_logger(
     n_free_modes: int = 3,
     min_free_periods: float = 3.0,
     mesh_correction: int | str = 0,
+    joints: Sequence[int] = (),
 ) -> LoggerCalibration:
     """Calibrate a bridge model from logger records of a vehicle of known axle loads.
 
@@ -228,6 +233,11 @@ def calibrate_logger(
     mesh_correction : int or "auto"
         Bisections of the model that correct its discretisation error (module docstring;
         0: none, 1 to :data:`~bwim.calibration.meshdefect.MAX_LEVELS`, or ``"auto"``).
+    joints : sequence of int
+        Zones that are longitudinal joints (:mod:`bwim.fe.joints`: zone k + 1 for joint
+        k): their ``E_y`` ratio may fall to 1 / :data:`JOINT_BOUND` of the start's (a
+        joint may pass almost no bending), where the deck's is bounded by
+        :data:`RATIO_BOUND`.
     """
     levels = mesh_correction if isinstance(mesh_correction, str) else requested_levels(
         mesh_correction)
@@ -237,8 +247,8 @@ def calibrate_logger(
     problem = _Problem(start_bridge, records, axle_loads, origin=origin, lateral=lateral,
                        gains=gains,
                        unknowns=unknowns, cutoff=cutoff, n_basis=n_basis,
-                       filter_order=filter_order, inertia_modes=inertia_modes)
-    z0 = np.array([*np.zeros(len(problem.names)), float(origin),
+                       filter_order=filter_order, inertia_modes=inertia_modes, joints=joints)
+    z0 = np.array([*np.zeros(problem.n_theta), float(origin),
                    *([] if lateral is None else [float(lateral)])])
     opt, nfev, nit = _solve(problem, z0, start_bridge)
     bridge = problem.bridge(opt.x, start_bridge)
@@ -305,7 +315,7 @@ class _State:
 
 class _Problem:
     def __init__(self, start, records, axle_loads, *, origin, lateral, gains, unknowns, cutoff,
-                 n_basis, filter_order, inertia_modes) -> None:
+                 n_basis, filter_order, inertia_modes, joints=()) -> None:
         if not isinstance(start, Bridge):
             raise InputError(f"start_bridge must be a Bridge, got {type(start).__name__}")
         records = list(records) if isinstance(records, (list, tuple)) else [records]
@@ -338,6 +348,16 @@ class _Problem:
                              f"reference when gains are fitted), got {self.names}")
         self.space = ParameterSpace(start, self.names) if self.names else None
         self.theta0 = self.space.vector() if self.space else np.zeros(0)
+        self.n_theta = int(self.theta0.size)
+        # (family, zone) of each entry; a family of one entry is labelled by its name
+        self.index = self.space.family_index() if self.space else []
+        self.labels = tuple(f if self.space.sizes[self.names.index(f)] == 1 else f"{f}[{i}]"
+                            for f, i in self.index)
+        zones = start.model.n_zones
+        self.joints = frozenset(int(k) for k in joints)
+        if any(not 0 < k < zones for k in self.joints):
+            raise InputError(f"joints must be zone labels 1 … {zones - 1} of the model (zone "
+                             f"0 is the deck), got {sorted(self.joints)}")
         self.origin0 = float(origin)
         self.lateral = lateral is not None
         self.lateral0 = 0.0 if lateral is None else float(lateral)
@@ -378,13 +398,13 @@ class _Problem:
     def bridge(self, z: np.ndarray, base: Bridge) -> Bridge:
         if not self.names:
             return base
-        return self.space.bridge(self.theta0 * np.exp(z[:len(self.names)]), base)
+        return self.space.bridge(self.theta0 * np.exp(z[:self.n_theta]), base)
 
     def columns(self, z: np.ndarray, base: Bridge) -> list:
         """Per record: b (t, s) and A (t, s, n_g·K), the filtered model columns, weighted
         and in noise units (the offsets are projected off later, channel by channel)."""
         bridge = self.bridge(z, base)
-        n = len(self.names)
+        n = self.n_theta
         x0 = float(z[n])
         y0 = float(z[n + 1]) if self.lateral else 0.0
         out = []
@@ -523,7 +543,7 @@ class _Problem:
     def zeroed(self, state: _State, z: np.ndarray) -> list[Record]:
         """The records less their fitted offsets and slopes (logger units), passages in
         the model's frame."""
-        n = len(self.names)
+        n = self.n_theta
         x0, y0 = float(z[n]), float(z[n + 1]) if self.lateral else 0.0
         out = []
         for rec, o, ramp in zip(self.records, state.offsets, self.ramp, strict=True):
@@ -534,8 +554,10 @@ class _Problem:
         return out
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        n = len(self.names)
-        lo = [*np.full(n, -np.log(RATIO_BOUND)), self.origin0 - ORIGIN_RANGE]
+        n = self.n_theta
+        soft = [f == "E_y" and i in self.joints for f, i in self.index]
+        lo = [*np.where(soft, -np.log(JOINT_BOUND), -np.log(RATIO_BOUND)),
+              self.origin0 - ORIGIN_RANGE]
         hi = [*np.full(n, np.log(RATIO_BOUND)), self.origin0 + ORIGIN_RANGE]
         if self.lateral:
             lo.append(self.lateral0 - ORIGIN_RANGE)
@@ -586,7 +608,7 @@ class _LoggerCorrection(DefectCorrection):
         return _Pass(opt=opt, state=self.problem.evaluate(opt.x, self.base, detail=True))
 
     def change(self, old: _Pass, new: _Pass) -> float:
-        n = len(self.problem.names)
+        n = self.problem.n_theta
         ratios = np.abs(np.exp(new.opt.x[:n] - old.opt.x[:n]) - 1)
         frame = np.abs(new.opt.x[n:] - old.opt.x[n:]) / self.problem.length
         return float(np.max(np.concatenate([ratios, frame])))
@@ -634,7 +656,7 @@ def _result(problem: _Problem, opt, state: _State, bridge: Bridge, nfev: int, ni
             mfit: MassFit | None, mass_message: str,
             correction: MeshCorrection | None) -> LoggerCalibration:
     lo, hi = problem.bounds()
-    labels = (*problem.names, "origin", *(("lateral",) if problem.lateral else ()))
+    labels = (*problem.labels, "origin", *(("lateral",) if problem.lateral else ()))
     tol = AT_BOUND * (hi - lo)
     at_bound = tuple(n for n, v, a, b, t in zip(labels, opt.x, lo, hi, tol, strict=True)
                      if v - a < t or b - v < t)
@@ -645,10 +667,11 @@ def _result(problem: _Problem, opt, state: _State, bridge: Bridge, nfev: int, ni
     except np.linalg.LinAlgError:
         se = np.full(opt.x.size, np.nan)
     params, unc = {}, {}
-    for i, n in enumerate(problem.names):
-        v = float(np.atleast_1d(bridge.params[n])[0])
-        params[n], unc[n] = v, v * float(se[i])
-    n = len(problem.names)
+    for i, (label, (family, zone)) in enumerate(zip(problem.labels, problem.index,
+                                                     strict=True)):
+        v = float(np.atleast_1d(bridge.params[family])[zone or 0])
+        params[label], unc[label] = v, v * float(se[i])
+    n = problem.n_theta
     for i, label in enumerate(labels[n:]):
         params[label], unc[label] = float(opt.x[n + i]), float(se[n + i])
     explained = np.array([1 - float((r**2).sum()) / max(float((d**2).sum()), 1e-300)

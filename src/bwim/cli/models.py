@@ -139,9 +139,11 @@ def _site_model(args: argparse.Namespace, scenario, paths, out: Path) -> int:
     options = scenario.identify.kwargs() if scenario.identify is not None else None
     given = scenario.calibrate.mesh_correction if scenario.calibrate is not None else None
     mc = str(args.mesh_correction or ("auto" if given is None else given)).strip().lower()
+    joints = range(1, len(scenario.bridge.joints or ()) + 1)  # bwim.fe.joints' zones
     model = calibrate_site_model(records, site, start, gains=args.gains or "common",
                                  track_width=args.track_width, identify_options=options,
-                                 mesh_correction=int(mc) if mc.isdigit() else mc)
+                                 mesh_correction=int(mc) if mc.isdigit() else mc,
+                                 joints=tuple(joints))
     save_site_model(model, out, title=f"calibrated from {site.n_used} run(s) of "
                     f"{scenario.title or scenario.source}")
     fit = model.fit

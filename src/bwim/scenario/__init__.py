@@ -44,6 +44,8 @@ Contract
       ``x0``, ``x_end``, ``y0``, ``y_end`` → ``"free" | "simple" | "clamped"``],
       [``zones`` = [nzx, nzy] (plate) or n (beam)] or [``zone_map``: a zone label per
       element, (nx, ny) nested list or (n_elements,) list, with optional ``n_zones``].
+      Plate: or [``joints``: the y of each longitudinal joint, m; the column of elements
+      holding it is a zone of its own (:mod:`bwim.fe.joints`)].
       Moduli and masses are a number or one value per zone.
   ``[[bridge.girders]]``
       ``y``, ``E``, ``mu`` (kg/m), [``J`` = 0], [``poisson`` = 0.2] and either ``I`` and

@@ -35,6 +35,7 @@ from bwim.dynamics import DEFAULT_APPROACH, simulate
 from bwim.errors import InputError, require_positive
 from bwim.fe.bridge import Bridge
 from bwim.fe.girder import Girder, composite_section
+from bwim.fe.joints import with_joints
 from bwim.fe.mesh import grid_lines
 from bwim.io._csv import read_numeric_csv
 from bwim.io.clock import ClockSpec
@@ -134,6 +135,9 @@ def _plate(spec: BridgeSpec, src: str) -> Bridge:
             supports=spec.supports if spec.supports is not None else "ss-free",
             girders=girders,
         )
+        if spec.joints is not None:  # the deck, then a zone per joint (bwim.fe.joints)
+            return with_joints(Bridge.plate(**geometry, E=_values(spec.E), E_x=_values(
+                spec.E_x), E_y=_values(spec.E_y), mu=_values(spec.mu)), spec.joints)
         if spec.zone_map is None:
             return Bridge.plate(
                 **geometry, E=_values(spec.E), E_x=_values(spec.E_x), E_y=_values(spec.E_y),

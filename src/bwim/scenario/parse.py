@@ -71,6 +71,8 @@ def _parse_bridge(table: Any, src: str) -> BridgeSpec:
     spec = parse_table(BridgeSpec, table, at, kind=kind)
     if spec.zones is not None and spec.zone_map is not None:
         raise at.error("give zones or zone_map, not both")
+    if spec.joints is not None and (spec.zones is not None or spec.zone_map is not None):
+        raise at.error("joints make the zones: give joints, or zones / zone_map, not both")
     if spec.n_zones is not None and spec.zone_map is None:
         raise at.error("n_zones needs a zone_map")
     if kind == "plate" and isinstance(spec.zones, int):

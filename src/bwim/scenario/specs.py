@@ -179,6 +179,7 @@ class BridgeSpec:
     zones: int | tuple[int, ...] | None = opt(int_or_ints)
     zone_map: tuple | None = opt(int_grid)
     n_zones: int | None = opt(integer)
+    joints: tuple[float, ...] | None = opt(numbers, None, _PLATE)
     girders: tuple[GirderSpec, ...] = opt(_GIRDER_TABLES, (), _PLATE)
 
 

@@ -8,7 +8,8 @@ Contract
   starting bridge model (geometry, nominal modulus and density), and fits with
   :func:`~bwim.calibration.calibrate_logger`:
 
-  - the stiffness ratios (``E_y`` of a plate) with ``E_x`` kept as the scale reference,
+  - the stiffness ratios (``E_y`` of a plate, one per zone: each declared joint's own,
+    ``joints=`` passed to the fit) with ``E_x`` kept as the scale reference,
   - the gains (one common logger scale by default: logger units per unit of model strain;
     with gains fitted the overall modulus and the units are one unknown),
   - the offsets and baseline slopes of every channel in every run,

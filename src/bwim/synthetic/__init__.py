@@ -16,7 +16,14 @@ detectors: :mod:`bwim.synthetic.detector`; drift: :mod:`bwim.synthetic.thermal`;
 from bwim.synthetic.continuous import ContinuousRecording, Placement, make_continuous
 from bwim.synthetic.detector import DetectorResponse
 from bwim.synthetic.fleet import FLEET_KINDS, TrafficVehicle, traffic_vehicle
-from bwim.synthetic.layout import SHORT_SPAN_4_LANE, AxleDetector, Gauge, Lane, SiteLayout
+from bwim.synthetic.layout import (
+    SHORT_SPAN_4_LANE,
+    AxleDetector,
+    Gauge,
+    Joint,
+    Lane,
+    SiteLayout,
+)
 from bwim.synthetic.site import Drift, site_bridge
 from bwim.synthetic.sitedays import SiteDays, SiteEvent, VehicleRun, make_site_days
 from bwim.synthetic.testday import (
@@ -44,6 +51,7 @@ __all__ = [
     "Drift",
     "Event",
     "Gauge",
+    "Joint",
     "Lane",
     "Placement",
     "SiteDays",

@@ -17,6 +17,9 @@ Contract
   with the mesh.
 * :class:`AxleDetector`: a logger channel (name) at (x, y) serving ``lane``; its
   response model is the layout's :class:`~bwim.synthetic.detector.DetectorResponse`.
+* :class:`Joint`: a longitudinal joint along ``y`` (m): a strip ``width`` m wide over the
+  whole span whose transverse modulus is the slab's × ``stiffness`` (a construction joint
+  that passes less bending across it; :mod:`bwim.fe.joints`).  None by default.
 * ``columns``: the logger file's columns in order (``"time"``, channel names, ``"-"`` for
   a column the weighing skips, e.g. a digital status).
 * **Mirror frame.**  The slab and its supports are symmetric under x → span − x, so a
@@ -36,6 +39,8 @@ import numpy as np
 
 from bwim.errors import InputError, require_positive
 from bwim.fe.bridge import Bridge
+from bwim.fe.joints import with_joints
+from bwim.fe.mesh import grid_lines
 from bwim.sensors import Sensor
 from bwim.synthetic.detector import DetectorResponse
 
@@ -78,6 +83,16 @@ class AxleDetector:
     y: float
 
 
+@dataclass(frozen=True, kw_only=True)
+class Joint:
+    """A longitudinal joint: centre line ``y`` (m), strip ``width`` (m) and the strip's
+    transverse modulus over the slab's (``stiffness``)."""
+
+    y: float
+    stiffness: float
+    width: float = 0.3
+
+
 @dataclass(frozen=True, kw_only=True, eq=False)
 class GaugePoints:
     """Soffit points that gauges average, and the averaging matrix.
@@ -109,6 +124,7 @@ class SiteLayout:
     columns: tuple[str, ...]
     sampling_rate: float = 512.0
     load_spread: tuple[float, float] = (0.75, 0.85)
+    joints: tuple[Joint, ...] = ()
     note: str = ""
 
     def __post_init__(self) -> None:
@@ -137,6 +153,11 @@ class SiteLayout:
         for n in {d.lane for d in self.detectors}:
             if len(self.lane_detectors(n)) != 2:
                 raise InputError(f"layout {self.name}: lane {n} needs two axle detectors")
+        for j in self.joints:
+            if not (j.width > 0 and j.stiffness > 0 and j.width / 2 < j.y < self.width
+                    - j.width / 2):
+                raise InputError(f"layout {self.name}: a joint needs a positive width and "
+                                 f"stiffness and its strip on the deck, got {j}")
         names = [*(g.name for g in self.gauges), *(d.name for d in self.detectors)]
         if len(set(names)) != len(names):
             raise InputError(f"layout {self.name}: channel names must be unique")
@@ -165,14 +186,23 @@ class SiteLayout:
 
     # --- finite elements -------------------------------------------------------------------
     def bridge(self, mesh: float) -> Bridge:
-        """The slab on a uniform grid of elements at most ``mesh`` m square."""
+        """The slab on a grid of elements at most ``mesh`` m square (uniform; with joints,
+        grid lines at each joint strip's edges and a zone per joint)."""
         mesh = require_positive("mesh", mesh)
         nx = max(int(np.ceil(self.span / mesh - 1e-9)), 2)
         ny = max(int(np.ceil(self.width / mesh - 1e-9)), 2)
-        return Bridge.plate(length=self.span, width=self.width, nx=nx, ny=ny,
-                            thickness=self.thickness, mu=self.density * self.thickness,
-                            E=self.modulus, poisson=self.poisson,
-                            damping_ratio=self.damping_ratio)
+        edges = sorted(y for j in self.joints for y in (j.y - j.width / 2, j.y + j.width / 2))
+        y_lines = grid_lines(self.width, max(ny, len(edges) + 1), through=edges) if edges \
+            else None
+        plate = Bridge.plate(length=self.span, width=self.width, nx=nx,
+                             ny=None if edges else ny, y_lines=y_lines,
+                             thickness=self.thickness, mu=self.density * self.thickness,
+                             E=self.modulus, poisson=self.poisson,
+                             damping_ratio=self.damping_ratio)
+        if not self.joints:
+            return plate
+        return with_joints(plate, [j.y for j in self.joints],
+                           [j.stiffness for j in self.joints])
 
     def spread_points(self, locations, *, mirrored: bool = False,
                       prefix: str = "p") -> GaugePoints:

@@ -811,13 +811,16 @@ def _write_truth(path: Path, events: list[SiteEvent]) -> None:
 def nominal_bridge(layout: SiteLayout) -> dict:
     """The scenario's ``[bridge]`` table: the model an engineer would start from, the
     layout's measured geometry with nominal concrete (:data:`NOMINAL_MODULUS`,
-    :data:`NOMINAL_DENSITY`, not the simulation's), elements of about :data:`MODEL_MESH` m."""
+    :data:`NOMINAL_DENSITY`, not the simulation's), elements of about :data:`MODEL_MESH` m;
+    the joints' lines where the layout has joints (an engineer knows them from the
+    drawings; their stiffness is for the calibration to find)."""
     return {"kind": "plate", "length": float(layout.span), "width": float(layout.width),
             "nx": max(2, round(layout.span / MODEL_MESH)),
             "ny": max(2, round(layout.width / MODEL_MESH)),
             "thickness": float(layout.thickness), "E": NOMINAL_MODULUS,
             "mu": NOMINAL_DENSITY * float(layout.thickness), "poisson": float(layout.poisson),
-            "damping_ratio": float(layout.damping_ratio), "supports": "ss-free"}
+            "damping_ratio": float(layout.damping_ratio), "supports": "ss-free",
+            **({"joints": [float(j.y) for j in layout.joints]} if layout.joints else {})}
 
 
 def _write_scenario(path: Path, layout: SiteLayout, truck, loads, temperature: bool) -> None:
