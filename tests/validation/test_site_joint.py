@@ -76,3 +76,22 @@ def test_the_jointed_model_weighs_traffic(jointed):
                      bridge=dataclasses.replace(model, accepted=True))
     assert ev.weighed, ev.reason
     assert ev.gvw / (float(ref["gvw_kN"]) * 1e3) - 1 == pytest.approx(0.0, abs=0.10)
+
+
+def test_bwim_calibrate_fits_the_scenarios_joints(jointed, tmp_path, monkeypatch):
+    """``bwim calibrate`` hands the scenario's joints to the fit as its zones 1…n (the
+    fit itself is the tests above): the call is intercepted with the fixture's model."""
+    import bwim.site
+    from bwim.cli import main
+
+    day, _, _, model, _ = jointed
+    seen = {}
+
+    def fake(records, site, start, **kw):
+        seen.update(kw, zones=start.model.n_zones)
+        return dataclasses.replace(model, accepted=True)
+
+    monkeypatch.setattr(bwim.site, "calibrate_site_model", fake)
+    assert main(["calibrate", str(day.scenario), str(day.out_dir / "calibration"), "-o",
+                 str(tmp_path / "m.toml")]) == 0
+    assert seen["joints"] == (1,) and seen["zones"] == 2
