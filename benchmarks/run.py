@@ -14,6 +14,7 @@ from benchmarks import (  # noqa: E402
     bench_batch,
     bench_calibration,
     bench_detect_site,
+    bench_drift,
     bench_faults,
     bench_fe,
     bench_logger,
@@ -50,6 +51,7 @@ def main() -> None:
     bench_detect_site.main([])
     bench_stream.main([])
     bench_realsite.main()
+    bench_drift.main()
     bench_faults.main()
     bench_site_model.main([])
 

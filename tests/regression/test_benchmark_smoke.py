@@ -61,3 +61,19 @@ def test_mfi_static_benchmark_smoke():
 
     rows = bench_mfi_static.run(n_cases=1)
     assert len(rows) == 1 and abs(rows[0][3] - rows[0][4]) < 0.25
+
+
+def test_drift_benchmark_smoke(tmp_path):
+    """The drift-methods benchmark runs on a small site with its temperature channel: each
+    method weighs the reference truck; one row per thinning of the traffic."""
+    from benchmarks import bench_drift
+
+    from bwim.synthetic import make_test_day
+
+    day = make_test_day(tmp_path / "day", site="short-span-4-lane", seed=4, n_calibration=6,
+                        n_traffic=6, n_calibration_day_traffic=0, mesh=0.6,
+                        temperature_channel=True)
+    out = bench_drift.run(day.out_dir, jobs=1)
+    assert set(out["methods"]) == set(bench_drift.METHODS)
+    assert all(res.n_reference >= 1 for res, _ in out["methods"].values())
+    assert len(out["thin"]) == len(bench_drift.THINNING)
