@@ -65,6 +65,7 @@ from __future__ import annotations
 import itertools
 
 import numpy as np
+from scipy.ndimage import maximum_filter1d
 
 from .assemble import VehicleEstimate
 from .groups import choose_groups
@@ -115,38 +116,54 @@ def _speed(y: np.ndarray, fs: float, distance: float, speed_range: tuple[float, 
     return None if lag is None else distance / (lag / fs)
 
 
-def _best_new(pb: Problem, res: np.ndarray, v: float, taken: np.ndarray, min_gap: float,
-              slack: int = 0) -> tuple[float, float]:
+class _Matcher:
     """The axle time whose atoms (both detectors, one amplitude in their gain ratio) best
-    match the residual ``res`` (all samples); the second detector's atom may be up to
-    ``slack`` samples off the speed ``v``.  Returns the time at detector 1 and the time
-    the second detector's atom says (both at detector 1 for the speed ``v``)."""
-    n = pb.t.size
-    corr = []
-    energy = 0.0
-    for c, (u, k, _) in enumerate(pb.grids):
-        d = pb.shift[c]
-        m_lo = int(np.floor((u[0] + d) / v * pb.fs)) - 1
-        m_hi = int(np.ceil((u[-1] + d) / v * pb.fs)) + 1
-        scale = pb.w[c] * (pb.ratio if c else 1.0)
-        atom = np.interp(v * np.arange(m_lo, m_hi + 1) / pb.fs - d, u, k, left=0.0,
-                         right=0.0) * scale
-        energy += float(atom @ atom)
-        lo, hi = max(0, -m_lo), max(0, m_hi)
-        r = np.concatenate([np.zeros(lo), res[:, c], np.zeros(hi)])
-        corr.append(np.correlate(r, atom, mode="valid")[m_lo + lo:m_lo + lo + n])
-    if slack:
-        padded = np.concatenate([np.full(slack, -np.inf), corr[1], np.full(slack, -np.inf)])
-        stack = np.lib.stride_tricks.sliding_window_view(padded, 2 * slack + 1)
-        off = np.argmax(stack, axis=1) - slack
-        c2 = corr[1][np.arange(n) + off]
-    else:
-        off, c2 = np.zeros(n, dtype=int), corr[1]
-    score = np.maximum(corr[0] + c2, 0.0) ** 2 / max(energy, 1e-300)
-    for tk in taken:  # not on an axle already found
-        score[np.abs(pb.t - tk) < min_gap / v] = 0.0
-    m = int(np.argmax(score))
-    return float(pb.t[m]), float(pb.t[m + off[m]])
+    match a residual (all samples) at the speed ``v``; the second detector's atom may be
+    up to ``slack`` samples off that speed.  The atoms are made once (the speed is fixed
+    while the pursuit runs)."""
+
+    def __init__(self, pb: Problem, v: float, slack: int = 0):
+        self.pb, self.v, self.slack = pb, v, slack
+        self.parts = []
+        energy = 0.0
+        for c, (u, k, _) in enumerate(pb.grids):
+            d = pb.shift[c]
+            m_lo = int(np.floor((u[0] + d) / v * pb.fs)) - 1
+            m_hi = int(np.ceil((u[-1] + d) / v * pb.fs)) + 1
+            scale = pb.w[c] * (pb.ratio if c else 1.0)
+            atom = np.interp(v * np.arange(m_lo, m_hi + 1) / pb.fs - d, u, k, left=0.0,
+                             right=0.0) * scale
+            energy += float(atom @ atom)
+            self.parts.append((m_lo, max(0, -m_lo), max(0, m_hi), atom))
+        self.energy = max(energy, 1e-300)
+
+    def best(self, res: np.ndarray, taken: np.ndarray, min_gap: float) -> tuple[float, float]:
+        """The best new axle for the residual ``res`` (n_t, 2), not within ``min_gap`` m
+        of travel of the times ``taken``: its time at detector 1 and the time the second
+        detector's atom says (both at detector 1 for the speed ``v``)."""
+        pb, v, slack = self.pb, self.v, self.slack
+        t = pb.t
+        n = t.size
+        corr = []
+        for c, (m_lo, lo, hi, atom) in enumerate(self.parts):
+            r = np.concatenate([np.zeros(lo), res[:, c], np.zeros(hi)])
+            corr.append(np.correlate(r, atom, mode="valid")[m_lo + lo:m_lo + lo + n])
+        # the second detector's best within ±slack samples (the largest value: exact)
+        c2 = (maximum_filter1d(corr[1], 2 * slack + 1, mode="constant", cval=-np.inf)
+              if slack else corr[1])
+        score = np.maximum(corr[0] + c2, 0.0) ** 2 / self.energy
+        gap = min_gap / v
+        for tk in taken:  # not on an axle already found (t ascending: a slice holds them)
+            a = max(int(np.searchsorted(t, tk - gap)) - 1, 0)
+            b = int(np.searchsorted(t, tk + gap, side="right")) + 1
+            near = t[a:b]
+            score[a:b][np.abs(near - tk) < gap] = 0.0
+        m = int(np.argmax(score))
+        off = 0
+        if slack:  # where that best was (the first of equals, as argmax)
+            a = max(m - slack, 0)
+            off = a + int(np.argmax(corr[1][a:m + slack + 1])) - m
+        return float(t[m]), float(t[m + off])
 
 
 def pursue_axles(record_time: np.ndarray, y: np.ndarray, learned: LearnedResponses, *,
@@ -183,9 +200,9 @@ def pursue_axles(record_time: np.ndarray, y: np.ndarray, learned: LearnedRespons
     refused = np.zeros(0)  # candidates one detector does not see: not tried again
     lag = learned.distance / v0
     slack = int(np.ceil(SPEED_SLACK * lag * fs))
+    matcher = _Matcher(pb, v0, slack)
     for _ in range(2 * MAX_AXLES):
-        tk, tk2 = _best_new(pb, omp.res, v0, np.append(omp.taus, refused),
-                            EXCLUDE * min_sp, slack)
+        tk, tk2 = matcher.best(omp.res, np.append(omp.taus, refused), EXCLUDE * min_sp)
         amps, chi_new, state = omp.trial(tk, tk2)
         gain = omp.chi - chi_new
         first = max(first, gain)
