@@ -34,6 +34,7 @@ Contract
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -41,8 +42,8 @@ import numpy as np
 from .response import HIGH_PASS, LearnedResponses, high_pass
 
 __all__ = ["CONVERGED", "MAX_LM", "MIN_RATIO_BOUND", "RATIO_SPREADS", "REACH",
-           "WINDOW_SAMPLES", "Problem", "VehicleFit", "make_problem", "refine", "relative",
-           "solve", "window"]
+           "WINDOW_SAMPLES", "Problem", "Rows", "VehicleFit", "make_problem", "refine",
+           "relative", "solve", "window"]
 
 #: A vehicle's fit looks this far beyond its first and last axle, m of travel.
 REACH = 2.0
@@ -79,11 +80,14 @@ class Problem:
     step: int  # every step-th sample in a vehicle's window
 
     def atoms(self, taus: np.ndarray, v: float, rows: slice | np.ndarray = slice(None),
-              slopes: bool = False, only: int | None = None):
+              slopes: bool = False, only: int | None = None,
+              dt: np.ndarray | None = None):
         """Per detector the weighted columns K(v (t − τ_i) − D_d), (n_rows, n), K linear
         between its ordinates; with ``slopes`` also their slopes dK/du (of the linear
-        pieces) at the same points; with ``only`` that detector's (None for the other)."""
-        t = self.t[rows]
+        pieces) at the same points; with ``only`` that detector's (None for the other).
+        ``dt``: the rows' times less ``taus`` (n_rows, n), when already made."""
+        if dt is None:
+            dt = self.t[rows][:, None] - taus[None, :]
         out, der = [], []
         for c, (u, k, _) in enumerate(self.grids):
             if only is not None and c != only:
@@ -91,7 +95,7 @@ class Problem:
                 der.append(None)
                 continue
             du = u[1] - u[0]
-            x = (v * (t[:, None] - taus[None, :]) - (self.shift[c] + u[0])) * (1.0 / du)
+            x = (v * dt - (self.shift[c] + u[0])) * (1.0 / du)
             np.clip(x, 0.0, u.size - 1.000001, out=x)  # the grids end in zeros
             j = x.astype(np.intp)
             x -= j
@@ -168,54 +172,85 @@ def window(pb: Problem, taus: np.ndarray, v: float) -> np.ndarray:
     return np.arange(lo, hi, pb.step)
 
 
+class Rows:
+    """What every fit on one vehicle's window reads: the sampled rows' times, readings and
+    rest columns (copied once per window)."""
+
+    def __init__(self, pb: Problem, rows: np.ndarray):
+        self.rows = rows
+        self.t = pb.t[rows]
+        self.y = tuple(pb.y[rows, c] for c in range(2))
+        self.rest = tuple(pb.rest[c][rows] for c in range(2))
+
+
+class _Solution:
+    """Per detector the least-squares amplitudes and rest of the axles ``taus`` at speed
+    ``v`` on a window's rows (see :func:`solve`); the Jacobian on request."""
+
+    def __init__(self, pb: Problem, taus: np.ndarray, v: float, w: Rows, slopes: bool):
+        n = taus.size
+        self.pb, self.taus, self.v, self.w = pb, taus, v, w
+        self.dt = w.t[:, None] - taus[None, :]
+        if slopes:
+            X, self.dX = pb.atoms(taus, v, w.rows, slopes=True, dt=self.dt)
+        else:
+            X = pb.atoms(taus, v, w.rows, dt=self.dt)
+        res, self.M, self.Ginv = [], [], []
+        amps, gains = np.zeros((n, 2)), np.zeros(n)
+        for c in range(2):
+            M = np.hstack([X[c], w.rest[c]])
+            yc = w.y[c]
+            G = M.T @ M
+            G.ravel()[::G.shape[0] + 1] += 1e-12 * (np.trace(G) / G.shape[0] + 1e-300)
+            try:
+                Ginv = np.linalg.inv(G)
+            except np.linalg.LinAlgError:
+                Ginv = np.linalg.pinv(G)
+            coef = Ginv @ (M.T @ yc)
+            res.append(yc - M @ coef)
+            a = coef[:n]
+            amps[:, c] = a
+            # removing regressor i raises the misfit by coef_i² / [(MᵀM)⁻¹]_ii
+            gains += a**2 / np.maximum(Ginv.diagonal()[:n], 1e-300)
+            self.M.append(M)
+            self.Ginv.append(Ginv)
+        # every step-th sample: scaled to the misfit of all samples
+        self.k = math.sqrt(pb.step)
+        self.res = np.concatenate(res) * self.k
+        self.amps, self.gains = amps, gains * pb.step
+
+    def jacobian(self) -> np.ndarray:
+        """The variable-projection Jacobian (Kaufman) of the residual in (τ_1 … τ_n, v)."""
+        n, v, jac = self.taus.size, self.v, []
+        for c in range(2):
+            a, dX, M, Ginv = self.amps[:, c], self.dX[c], self.M[c], self.Ginv[c]
+            D = np.empty((self.w.t.size, n + 1))
+            D[:, :n] = -v * dX * a  # ∂(X a)/∂τ_i
+            D[:, n] = (dX * self.dt) @ a  # ∂(X a)/∂v
+            jac.append(M @ (Ginv @ (M.T @ D)) - D)
+        return np.vstack(jac) * self.k
+
+
 def solve(pb: Problem, taus: np.ndarray, v: float, rows: np.ndarray, slopes: bool):
     """Per detector the least-squares amplitudes and rest on ``rows`` (free in sign), the
     residual; with ``slopes`` the variable-projection Jacobian (Kaufman) of the residual
     with respect to (τ_1 … τ_n, v); each axle's removal cost.  Residual and costs are
     scaled by the window's sampling step (misfits of all samples)."""
-    n = taus.size
-    if slopes:
-        X, dX = pb.atoms(taus, v, rows, slopes=True)
-    else:
-        X = pb.atoms(taus, v, rows)
-    res, jac, amps, gains = [], [], np.zeros((n, 2)), np.zeros(n)
-    for c in range(2):
-        M = np.hstack([X[c], pb.rest[c][rows]])
-        yc = pb.y[rows, c]
-        G = M.T @ M
-        G.flat[::G.shape[0] + 1] += 1e-12 * (np.trace(G) / G.shape[0] + 1e-300)
-        try:
-            Ginv = np.linalg.inv(G)
-        except np.linalg.LinAlgError:
-            Ginv = np.linalg.pinv(G)
-        coef = Ginv @ (M.T @ yc)
-        r = yc - M @ coef
-        res.append(r)
-        a = coef[:n]
-        amps[:, c] = a
-        # removing regressor i raises the misfit by coef_i² / [(MᵀM)⁻¹]_ii
-        gains += a**2 / np.maximum(np.diag(Ginv)[:n], 1e-300)
-        if slopes:
-            D = np.empty((rows.size, n + 1))
-            D[:, :n] = -v * dX[c] * a  # ∂(X a)/∂τ_i
-            D[:, n] = (dX[c] * (pb.t[rows][:, None] - taus[None, :])) @ a  # ∂(X a)/∂v
-            jac.append(M @ (Ginv @ (M.T @ D)) - D)
-    # every step-th sample: scaled to the misfit of all samples
-    k = np.sqrt(pb.step)
-    return (np.concatenate(res) * k, (np.vstack(jac) * k if slopes else None), amps,
-            gains * pb.step)
+    sol = _Solution(pb, taus, v, rows if isinstance(rows, Rows) else Rows(pb, rows), slopes)
+    return sol.res, (sol.jacobian() if slopes else None), sol.amps, sol.gains
 
 
 def refine(pb: Problem, taus: np.ndarray, v: float, iterations: int = MAX_LM) -> VehicleFit:
     """The vehicle's axle times and speed by Levenberg–Marquardt on the variable
     projection (amplitudes and rest by least squares inside), on a fixed window."""
     taus = np.sort(np.asarray(taus, dtype=float))
-    rows = window(pb, taus, v)
+    rows = Rows(pb, window(pb, taus, v))
     p = np.append(taus, v)
-    r, J, amps, gains = solve(pb, taus, v, rows, True)
+    sol = _Solution(pb, taus, v, rows, True)
+    r, J, amps, gains = sol.res, sol.jacobian(), sol.amps, sol.gains
     cost = float(r @ r)
     lam = 1e-3
-    scale = np.append(np.full(taus.size, 1.0 / v), 1.0 / v)  # τ in s, v in m/s: metres
+    scale = np.full(taus.size + 1, 1.0 / v)  # τ in s, v in m/s: metres
     for _ in range(iterations):
         Js = J * scale
         A = Js.T @ Js
@@ -228,11 +263,12 @@ def refine(pb: Problem, taus: np.ndarray, v: float, iterations: int = MAX_LM) ->
             if vv <= 0:
                 lam *= 10.0
                 continue
-            r2, J2, amps2, gains2 = solve(pb, tt, vv, rows, True)
-            c2 = float(r2 @ r2)
+            sol = _Solution(pb, tt, vv, rows, True)
+            c2 = float(sol.res @ sol.res)
             if c2 < cost:
                 rel = (cost - c2) / max(cost, 1e-300)
-                p, r, J, amps, gains, cost = np.append(tt, vv), r2, J2, amps2, gains2, c2
+                p, r, J, amps, gains, cost = (np.append(tt, vv), sol.res, sol.jacobian(),
+                                              sol.amps, sol.gains, c2)
                 lam = max(lam / 3.0, 1e-7)
                 improved = True
                 break
