@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -105,6 +106,36 @@ class Problem:
                 der.append(step * (self.w[c] / du))
         return (out, der) if slopes else out
 
+    @cached_property
+    def _both(self):
+        """Both detectors' grids as one (for :meth:`both_atoms`): offsets, scales and
+        bounds of shape (2, 1, 1), K and its differences end to end, each's first index."""
+        def col(values, dtype=float):
+            return np.array(values, dtype=dtype)[:, None, None]
+
+        u = [g[0] for g in self.grids]
+        du = [ui[1] - ui[0] for ui in u]
+        return (col([self.shift[c] + u[c][0] for c in range(2)]),
+                col([1.0 / d for d in du]), col([ui.size - 1.000001 for ui in u]),
+                np.concatenate([g[1] for g in self.grids]), np.concatenate(self.steps),
+                col([0, u[0].size], np.intp), col(self.w),
+                col([self.w[c] / du[c] for c in range(2)]))
+
+    def both_atoms(self, v: float, dt: np.ndarray, slopes: bool = False):
+        """:meth:`atoms` of both detectors as one array (2, n_rows, n), the same numbers,
+        from the rows' times less the axles' ``dt`` (n_rows, n); with ``slopes`` also the
+        slopes (2, n_rows, n)."""
+        off, inv_du, top, k, steps, first, w, w_du = self._both
+        x = (v * dt - off) * inv_du
+        np.maximum(x, 0.0, out=x)  # the grids end in zeros (np.clip: the same numbers)
+        np.minimum(x, top, out=x)
+        j = x.astype(np.intp)
+        x -= j
+        j += first
+        step = steps[j]
+        out = (k[j] + x * step) * w
+        return (out, step * w_du) if slopes else (out, None)
+
     def log_ratio(self, amps: np.ndarray) -> np.ndarray:
         """``ln(A_2 / (ratio A_1))`` per axle (±inf where one detector sees nothing)."""
         a1 = np.maximum(amps[:, 0], 0.0)
@@ -173,62 +204,59 @@ def window(pb: Problem, taus: np.ndarray, v: float) -> np.ndarray:
 
 
 class Rows:
-    """What every fit on one vehicle's window reads: the sampled rows' times, readings and
-    rest columns (copied once per window)."""
+    """What every fit on one vehicle's window reads: the sampled rows' times, readings
+    (2, n_rows, 1) and rest columns (2, n_rows, k), copied once per window."""
 
     def __init__(self, pb: Problem, rows: np.ndarray):
         self.rows = rows
         self.t = pb.t[rows]
-        self.y = tuple(pb.y[rows, c] for c in range(2))
-        self.rest = tuple(pb.rest[c][rows] for c in range(2))
+        self.y = np.stack([pb.y[rows, c] for c in range(2)])[..., None]
+        self.rest = np.stack([pb.rest[c][rows] for c in range(2)])
 
 
 class _Solution:
-    """Per detector the least-squares amplitudes and rest of the axles ``taus`` at speed
-    ``v`` on a window's rows (see :func:`solve`); the Jacobian on request."""
+    """Both detectors' least-squares amplitudes and rest of the axles ``taus`` at speed
+    ``v`` on a window's rows (see :func:`solve`), as one stack of two problems; the
+    Jacobian on request."""
 
     def __init__(self, pb: Problem, taus: np.ndarray, v: float, w: Rows, slopes: bool):
         n = taus.size
-        self.pb, self.taus, self.v, self.w = pb, taus, v, w
+        self.taus, self.v, self.w = taus, v, w
         self.dt = w.t[:, None] - taus[None, :]
-        if slopes:
-            X, self.dX = pb.atoms(taus, v, w.rows, slopes=True, dt=self.dt)
-        else:
-            X = pb.atoms(taus, v, w.rows, dt=self.dt)
-        res, self.M, self.Ginv = [], [], []
-        amps, gains = np.zeros((n, 2)), np.zeros(n)
-        for c in range(2):
-            M = np.hstack([X[c], w.rest[c]])
-            yc = w.y[c]
-            G = M.T @ M
-            G.ravel()[::G.shape[0] + 1] += 1e-12 * (np.trace(G) / G.shape[0] + 1e-300)
-            try:
-                Ginv = np.linalg.inv(G)
-            except np.linalg.LinAlgError:
-                Ginv = np.linalg.pinv(G)
-            coef = Ginv @ (M.T @ yc)
-            res.append(yc - M @ coef)
-            a = coef[:n]
-            amps[:, c] = a
-            # removing regressor i raises the misfit by coef_i² / [(MᵀM)⁻¹]_ii
-            gains += a**2 / np.maximum(Ginv.diagonal()[:n], 1e-300)
-            self.M.append(M)
-            self.Ginv.append(Ginv)
+        X, self.dX = pb.both_atoms(v, self.dt, slopes)
+        M = np.concatenate([X, w.rest], axis=2)
+        Mt = M.transpose(0, 2, 1)
+        G = Mt @ M
+        p = G.shape[1]
+        diag = G.reshape(2, -1)[:, ::p + 1]  # a view
+        diag += 1e-12 * (diag.sum(axis=-1) / p + 1e-300)[:, None]
+        try:
+            Ginv = np.linalg.inv(G)
+        except np.linalg.LinAlgError:
+            Ginv = np.empty_like(G)
+            for c in range(2):
+                try:
+                    Ginv[c] = np.linalg.inv(G[c])
+                except np.linalg.LinAlgError:
+                    Ginv[c] = np.linalg.pinv(G[c])
+        coef = Ginv @ (Mt @ w.y)
+        a = coef[:, :n, 0]
+        # removing regressor i raises the misfit by coef_i² / [(MᵀM)⁻¹]_ii
+        gains = a**2 / np.maximum(Ginv.diagonal(axis1=1, axis2=2)[:, :n], 1e-300)
         # every step-th sample: scaled to the misfit of all samples
         self.k = math.sqrt(pb.step)
-        self.res = np.concatenate(res) * self.k
-        self.amps, self.gains = amps, gains * pb.step
+        self.res = (w.y - M @ coef).reshape(-1) * self.k
+        self.amps, self.gains = a.T.copy(), (gains[0] + gains[1]) * pb.step
+        self.M, self.Mt, self.Ginv, self.a = M, Mt, Ginv, a
 
     def jacobian(self) -> np.ndarray:
         """The variable-projection Jacobian (Kaufman) of the residual in (τ_1 … τ_n, v)."""
-        n, v, jac = self.taus.size, self.v, []
-        for c in range(2):
-            a, dX, M, Ginv = self.amps[:, c], self.dX[c], self.M[c], self.Ginv[c]
-            D = np.empty((self.w.t.size, n + 1))
-            D[:, :n] = -v * dX * a  # ∂(X a)/∂τ_i
-            D[:, n] = (dX * self.dt) @ a  # ∂(X a)/∂v
-            jac.append(M @ (Ginv @ (M.T @ D)) - D)
-        return np.vstack(jac) * self.k
+        n, v, dX = self.taus.size, self.v, self.dX
+        D = np.empty((2, self.w.t.size, n + 1))
+        D[:, :, :n] = -v * dX * self.a[:, None, :]  # ∂(X a)/∂τ_i
+        D[:, :, n] = ((dX * self.dt) @ self.a[..., None])[..., 0]  # ∂(X a)/∂v
+        J = self.M @ (self.Ginv @ (self.Mt @ D)) - D
+        return J.reshape(-1, n + 1) * self.k
 
 
 def solve(pb: Problem, taus: np.ndarray, v: float, rows: np.ndarray, slopes: bool):
