@@ -62,7 +62,7 @@ from .result import (
     FLAG_SPEED_VARIES,
     Detection,
 )
-from .signals import parabolic_vertex, remove_baseline, robust_sigma
+from .signals import channel_data, parabolic_vertex, remove_baseline, robust_sigma
 
 __all__ = ["detect_axles"]
 
@@ -374,7 +374,7 @@ def _detect_learned(record: Record, detectors: Sequence[str], distance: float,
         raise InputError(f"the responses were learned for detectors {responses.distance:g} m "
                          f"apart, not {distance:g} m")
     method = "learned responses"
-    y = record.channels(list(detectors)).data
+    y = channel_data(record, detectors)
     g = None
     if responses.gauges:
         names = {s.name for s in record.sensors}
@@ -382,7 +382,7 @@ def _detect_learned(record: Record, detectors: Sequence[str], distance: float,
         if missing:
             raise InputError(f"the responses were learned with gauges {missing} that this "
                              "record does not have")
-        g = record.channels(list(responses.gauges)).data
+        g = channel_data(record, responses.gauges)
     estimates = pursue_axles(record.time, y, responses, speed_range=opts.speed_range,
                              min_axle_spacing=opts.min_axle_spacing,
                              max_axle_spacing=opts.max_axle_spacing,
