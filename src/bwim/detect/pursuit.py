@@ -191,7 +191,8 @@ def pursue_axles(record_time: np.ndarray, y: np.ndarray, learned: LearnedRespons
                 np.array([r.sign for r in learned.responses]))
     if v0 is None:
         return []
-    pb = make_problem(t, y, gauges, learned, v0)
+    pb = make_problem(t, y, gauges, learned, v0, fs=fs,
+                      bending=None if gauges is None else bend)
     thr2 = snr_threshold**2
     min_sp = max(min_axle_spacing, MIN_SPACING_WIDTH * float(np.mean(
         [r.fwhm for r in learned.responses])))
@@ -247,38 +248,39 @@ def _acceptable(pb: Problem, amps: np.ndarray, min_height: float) -> bool:
 class _Pursuit:
     """Orthogonal matching pursuit over the whole record: the axles' responses with each
     detector's rest projected out, their Gram matrix and least-squares amplitudes kept up
-    to date as axles are added."""
+    to date as axles are added.  Both detectors' problems as one stack of two (numpy
+    gives the same numbers as two separate ones)."""
 
     def __init__(self, pb: Problem, v: float):
         self.pb, self.v = pb, v
         self.taus = np.zeros(0)  # at detector 1
         self.taus2 = np.zeros(0)  # the second detector's, less D / v
-        self.y = []
+        y = []
         for c in range(2):
             Q = pb.q_rest[c]
-            self.y.append(pb.y[:, c] - Q @ (Q.T @ pb.y[:, c]))
-        self.cols = [np.zeros((pb.t.size, 0)), np.zeros((pb.t.size, 0))]
-        self.res = np.column_stack(self.y)
+            y.append(pb.y[:, c] - Q @ (Q.T @ pb.y[:, c]))
+        self.Q = np.stack(pb.q_rest)  # (2, n_t, k)
+        self.Qt = self.Q.transpose(0, 2, 1)
+        self.y = np.stack(y)[..., None]  # (2, n_t, 1)
+        self.cols = np.zeros((2, pb.t.size, 0))
+        self.res = np.column_stack(y)
         self.chi = float(np.sum(self.res**2))
 
     def trial(self, tk: float, tk2: float):
         """Amplitudes (n + 1, 2; the new axle last), misfit and state with an axle at
         ``tk`` added (at ``tk2`` for the second detector)."""
-        new = [self.pb.atoms(np.array([tk]), self.v, only=0)[0],
-               self.pb.atoms(np.array([tk2]), self.v, only=1)[1]]
-        cols, amps, res = [], np.zeros((self.taus.size + 1, 2)), np.empty_like(self.res)
-        for c in range(2):
-            Q = self.pb.q_rest[c]
-            x = new[c][:, 0]
-            x = x - Q @ (Q.T @ x)
-            X = np.column_stack([self.cols[c], x])
-            G = X.T @ X
-            G.flat[::G.shape[0] + 1] += 1e-12 * (np.trace(G) / G.shape[0] + 1e-300)
-            a = np.linalg.solve(G, X.T @ self.y[c])
-            amps[:, c] = a
-            res[:, c] = self.y[c] - X @ a
-            cols.append(X)
-        return amps, float(np.sum(res**2)), (cols, res)
+        dt = self.pb.t[None, :, None] - np.array([tk, tk2])[:, None, None]
+        x = self.pb.both_atoms(self.v, dt)[0]  # (2, n_t, 1)
+        x = x - self.Q @ (self.Qt @ x)
+        X = np.concatenate([self.cols, x], axis=2)
+        Xt = X.transpose(0, 2, 1)
+        G = Xt @ X
+        p = G.shape[1]
+        diag = G.reshape(2, -1)[:, ::p + 1]  # a view
+        diag += 1e-12 * (diag.sum(axis=-1) / p + 1e-300)[:, None]
+        a = np.linalg.solve(G, Xt @ self.y)
+        res = (self.y - X @ a)[..., 0].T.copy()  # (n_t, 2)
+        return a[..., 0].T.copy(), float(np.sum(res**2)), (X, res)
 
     def accept(self, tk: float, tk2: float, chi: float, state) -> None:
         self.cols, self.res = state

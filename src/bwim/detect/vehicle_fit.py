@@ -161,8 +161,14 @@ class VehicleFit:
 
 
 def make_problem(t: np.ndarray, y: np.ndarray, gauges: np.ndarray | None,
-             learned: LearnedResponses, v: float) -> Problem:
-    fs = 1.0 / float(np.median(np.diff(t)))
+                 learned: LearnedResponses, v: float, *, fs: float | None = None,
+                 bending: np.ndarray | None = None) -> Problem:
+    """The :class:`Problem` of a record's times ``t``, detector channels ``y`` (n_t, 2)
+    and ``gauges`` (n_t, n_gauges; None: high-pass) at the first speed estimate ``v``.
+    ``fs`` (the sampling rate from the median step) and ``bending`` (n_t, 2: the gauges
+    less their mean, combined with each response's weights) when already made."""
+    if fs is None:
+        fs = 1.0 / float(np.median(np.diff(t)))
     w = 1.0 / np.array([max(r.level, 1e-300) for r in learned.responses])
     spread = float(learned.amplitude_spread)
     bound = max(RATIO_SPREADS * spread, MIN_RATIO_BOUND)
@@ -173,11 +179,13 @@ def make_problem(t: np.ndarray, y: np.ndarray, gauges: np.ndarray | None,
     common = dict(t=t, w=w, ratio=float(learned.gain_ratio), bound=bound, spread=spread,
                   shift=(0.0, learned.distance), fs=fs, step=step)
     if learned.gauges and gauges is not None:
-        g = gauges - gauges.mean(axis=0)
+        if bending is None:
+            g = gauges - gauges.mean(axis=0)
+            bending = np.column_stack([g @ r.bending for r in learned.responses])
         tc = t - t.mean()
         tc = tc / max(float(np.ptp(tc)), 1e-300)
-        rest = tuple(np.column_stack([g @ r.bending, np.ones_like(tc), tc]) * w[c]
-                     for c, r in enumerate(learned.responses))
+        rest = tuple(np.column_stack([bending[:, c], np.ones_like(tc), tc]) * w[c]
+                     for c in range(2))
         grids = tuple(r.padded() for r in learned.responses)
         return Problem(y=(y - y.mean(axis=0)) * w, rest=rest,
                         q_rest=tuple(np.linalg.qr(r)[0] for r in rest), grids=grids,
