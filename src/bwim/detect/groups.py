@@ -31,7 +31,7 @@ import bisect
 import numpy as np
 from scipy.signal import find_peaks
 
-from .vehicle_fit import REACH, Problem
+from .vehicle_fit import REACH, Problem, Rows
 
 __all__ = ["GROUP_AXLES", "GROUP_DIP", "GROUP_EXTENT", "GROUP_SPACING", "LEVEL_GAIN",
            "PEAK_FLOOR", "RARE_GROUP", "SEGMENT_MARGIN", "choose_groups", "explained",
@@ -89,18 +89,21 @@ def choose_groups(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp:
     n = taus.size
     lo = int(np.searchsorted(pb.t, span[0] - REACH / v))
     hi = int(np.searchsorted(pb.t, span[1] + (pb.shift[1] + REACH) / v, side="right"))
-    rows = np.arange(lo, hi)
-    X = pb.atoms(taus, v, rows)
-    local, parts = [], []
-    for c in range(2):
-        M = np.hstack([X[c], pb.rest[c][rows]])
-        G = M.T @ M
-        G.flat[::G.shape[0] + 1] += 1e-12 * (np.trace(G) / G.shape[0] + 1e-300)
-        coef = np.linalg.solve(G, M.T @ pb.y[rows, c])
-        local.append(pb.y[rows, c] - pb.rest[c][rows] @ coef[n:])
-        parts.append(X[c] * coef[:n])
-    fitted = [p.sum(axis=1) for p in parts]
-    resid = [local[c] - fitted[c] for c in range(2)]
+    w = Rows(pb, np.arange(lo, hi))
+    rows = w.rows
+    # both detectors' least squares as one stack of two (the same numbers as two)
+    X = pb.both_atoms(v, w.t[:, None] - taus[None, :])[0]
+    M = np.concatenate([X, w.rest], axis=2)
+    Mt = M.transpose(0, 2, 1)
+    G = Mt @ M
+    p = G.shape[1]
+    diag = G.reshape(2, -1)[:, ::p + 1]  # a view
+    diag += 1e-12 * (diag.sum(axis=-1) / p + 1e-300)[:, None]
+    coef = np.linalg.solve(G, Mt @ w.y)
+    local = (w.y - w.rest @ coef[:, n:])[..., 0]  # (2, n_rows)
+    parts = X * coef[:, None, :n, 0]  # (2, n_rows, n)
+    fitted = parts.sum(axis=2)
+    resid = local - fitted
     r_total = sum(float(r @ r) for r in resid)
     n_samples = 2 * rows.size
     tpl = templates(pb, v)
@@ -113,6 +116,7 @@ def choose_groups(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp:
     # the responses' autocorrelation on the grid (zero beyond the response)
     auto = [np.concatenate([r[::st], np.zeros(max(0, s_max * GROUP_AXLES - r[::st].size + 1))])
             for _, _, r in tpl]
+    one = np.array([max(auto[0][0], 1e-300), max(auto[1][0], 1e-300)])  # one axle's
     out, changed = [], False
     parts_of = segments(pb, local, v, margin, st)
     bare = _bare_may_fit(pb, resid, tpl, auto, st, n_grid)
@@ -147,15 +151,25 @@ def choose_groups(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp:
         r_inside = sum(float(resid[c][a:b] @ resid[c][a:b]) for c, (_, a, b) in enumerate(bounds))
         best = None
         for k in range(1, GROUP_AXLES + 1):
-            hyp = hypotheses(0, last - first, k, s_min, s_max)  # grid points less first
-            if hyp.shape[0] == 0:
-                break
-            gained, amps = explained(hyp, corr, auto)
-            positive = np.all(amps > 0, axis=(1, 2))
-            with np.errstate(divide="ignore", invalid="ignore"):
-                lr = np.log(amps[..., 1] / (pb.ratio * amps[..., 0]))
-            valid = positive & np.all(np.abs(np.where(positive[:, None], lr, np.inf))
-                                      <= pb.bound, axis=1)
+            if k == 1:  # one axle at every grid point: explained() without the indexing
+                hyp = np.arange(last - first + 1)[:, None]
+                b = np.stack(corr, axis=-1)
+                amps = b / one
+                gained = np.sum(amps * b, axis=1)
+                positive = (amps[:, 0] > 0) & (amps[:, 1] > 0)
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    lr = np.log(amps[:, 1] / (pb.ratio * amps[:, 0]))
+                valid = positive & (np.abs(np.where(positive, lr, np.inf)) <= pb.bound)
+            else:
+                hyp = hypotheses(0, last - first, k, s_min, s_max)  # grid points less first
+                if hyp.shape[0] == 0:
+                    break
+                gained, amps = explained(hyp, corr, auto)
+                positive = np.all(amps > 0, axis=(1, 2))
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    lr = np.log(amps[..., 1] / (pb.ratio * amps[..., 0]))
+                valid = positive & np.all(np.abs(np.where(positive[:, None], lr, np.inf))
+                                          <= pb.bound, axis=1)
             if not valid.any():
                 break
             j = int(np.argmax(np.where(valid, gained, -np.inf)))
