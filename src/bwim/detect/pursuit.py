@@ -74,11 +74,12 @@ from .vehicle_fit import (
     MIN_RATIO_BOUND,
     RATIO_SPREADS,
     Problem,
+    Rows,
+    Solution,
     VehicleFit,
     make_problem,
     refine,
     relative,
-    solve,
     window,
 )
 
@@ -308,11 +309,14 @@ def _vehicle(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp: floa
     """A first refinement (the speed), the axle groups chosen again in ``span`` (record
     times at detector 1), the final refinement and backward check; the vehicle's
     estimate."""
-    fit = refine(pb, _prune(pb, taus, v, limit), v, FIRST_LM)
-    kept = _prune(pb, fit.taus, fit.v, limit, both=True)
+    pruned, sol = _prune(pb, taus, v, limit)
+    fit = refine(pb, pruned, v, FIRST_LM, start=sol)
+    kept, sol = _prune(pb, fit.taus, fit.v, limit, both=True)
     grouped = choose_groups(pb, kept, fit.v, limit, min_sp, span)
-    if grouped is not None or kept.size < fit.taus.size:
-        fit = refine(pb, kept if grouped is None else grouped, fit.v)
+    if grouped is not None:
+        fit = refine(pb, grouped, fit.v)
+    elif kept.size < fit.taus.size:
+        fit = refine(pb, kept, fit.v, start=sol)
     for _ in range(MAX_AXLES):
         close = _drop_close(fit, min_sp)
         if close is not None:
@@ -340,16 +344,18 @@ def _vehicle(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp: floa
 
 
 def _prune(pb: Problem, taus: np.ndarray, v: float, limit: float, both: bool = False
-           ) -> np.ndarray:
+           ) -> tuple[np.ndarray, Solution | None]:
     """``taus`` less, one by one, the weakest axle while it lowers the misfit by less
     than ``limit`` (or, with ``both``, one detector does not see it), at the given times
-    and speed: a cheap pass without refinement."""
+    and speed: a cheap pass without refinement.  Also the least squares of the times
+    kept, with slopes (a refinement's start), when it was made."""
+    sol = None
     while taus.size > 1:
-        _, _, amps, gains = solve(pb, taus, v, window(pb, taus, v), False)
-        weak = gains < limit
+        sol = Solution(pb, taus, v, Rows(pb, window(pb, taus, v)), True)
+        weak = sol.gains < limit
         if both:
-            weak |= ~pb.seen_by_both(amps)
+            weak |= ~pb.seen_by_both(sol.amps)
         if not weak.any():
-            break
-        taus = np.delete(taus, int(np.argmin(np.where(weak, gains, np.inf))))
-    return taus
+            return taus, sol
+        taus = np.delete(taus, int(np.argmin(np.where(weak, sol.gains, np.inf))))
+    return taus, None

@@ -43,7 +43,7 @@ import numpy as np
 from .response import HIGH_PASS, LearnedResponses, high_pass
 
 __all__ = ["CONVERGED", "MAX_LM", "MIN_RATIO_BOUND", "RATIO_SPREADS", "REACH",
-           "WINDOW_SAMPLES", "Problem", "Rows", "VehicleFit", "make_problem", "refine",
+           "WINDOW_SAMPLES", "Problem", "Rows", "Solution", "VehicleFit", "make_problem", "refine",
            "relative", "solve", "window"]
 
 #: A vehicle's fit looks this far beyond its first and last axle, m of travel.
@@ -222,14 +222,14 @@ class Rows:
         self.rest = np.stack([pb.rest[c][rows] for c in range(2)])
 
 
-class _Solution:
+class Solution:
     """Both detectors' least-squares amplitudes and rest of the axles ``taus`` at speed
     ``v`` on a window's rows (see :func:`solve`), as one stack of two problems; the
     Jacobian on request."""
 
     def __init__(self, pb: Problem, taus: np.ndarray, v: float, w: Rows, slopes: bool):
         n = taus.size
-        self.taus, self.v, self.w = taus, v, w
+        self.taus, self.v, self.w, self.slopes = taus, v, w, slopes
         self.dt = w.t[:, None] - taus[None, :]
         X, self.dX = pb.both_atoms(v, self.dt, slopes)
         M = np.concatenate([X, w.rest], axis=2)
@@ -272,17 +272,24 @@ def solve(pb: Problem, taus: np.ndarray, v: float, rows: np.ndarray, slopes: boo
     residual; with ``slopes`` the variable-projection Jacobian (Kaufman) of the residual
     with respect to (τ_1 … τ_n, v); each axle's removal cost.  Residual and costs are
     scaled by the window's sampling step (misfits of all samples)."""
-    sol = _Solution(pb, taus, v, rows if isinstance(rows, Rows) else Rows(pb, rows), slopes)
+    sol = Solution(pb, taus, v, rows if isinstance(rows, Rows) else Rows(pb, rows), slopes)
     return sol.res, (sol.jacobian() if slopes else None), sol.amps, sol.gains
 
 
-def refine(pb: Problem, taus: np.ndarray, v: float, iterations: int = MAX_LM) -> VehicleFit:
+def refine(pb: Problem, taus: np.ndarray, v: float, iterations: int = MAX_LM, *,
+           start: Solution | None = None) -> VehicleFit:
     """The vehicle's axle times and speed by Levenberg–Marquardt on the variable
-    projection (amplitudes and rest by least squares inside), on a fixed window."""
+    projection (amplitudes and rest by least squares inside), on a fixed window.
+    ``start``: the :class:`Solution` with slopes at these times and speed on their window
+    when already made (the same numbers, not made again)."""
     taus = np.sort(np.asarray(taus, dtype=float))
-    rows = Rows(pb, window(pb, taus, v))
     p = np.append(taus, v)
-    sol = _Solution(pb, taus, v, rows, True)
+    if (start is not None and start.v == v and np.array_equal(start.taus, taus)
+            and start.slopes and np.array_equal(start.w.rows, window(pb, taus, v))):
+        sol, rows = start, start.w
+    else:
+        rows = Rows(pb, window(pb, taus, v))
+        sol = Solution(pb, taus, v, rows, True)
     r, J, amps, gains = sol.res, sol.jacobian(), sol.amps, sol.gains
     cost = float(r @ r)
     lam = 1e-3
@@ -299,7 +306,7 @@ def refine(pb: Problem, taus: np.ndarray, v: float, iterations: int = MAX_LM) ->
             if vv <= 0:
                 lam *= 10.0
                 continue
-            sol = _Solution(pb, tt, vv, rows, True)
+            sol = Solution(pb, tt, vv, rows, True)
             c2 = float(sol.res @ sol.res)
             if c2 < cost:
                 rel = (cost - c2) / max(cost, 1e-300)
