@@ -107,6 +107,12 @@ class Problem:
         return (out, der) if slopes else out
 
     @cached_property
+    def stacked(self) -> tuple[np.ndarray, np.ndarray]:
+        """The readings (2, n_t, 1) and the rest's columns (2, n_t, k), one detector after
+        the other."""
+        return np.stack([self.y[:, c] for c in range(2)])[..., None], np.stack(self.rest)
+
+    @cached_property
     def _both(self):
         """Both detectors' grids as one (for :meth:`both_atoms`): offsets, scales and
         bounds of shape (2, 1, 1), K and its differences end to end, each's first index."""
@@ -216,10 +222,11 @@ class Rows:
     (2, n_rows, 1) and rest columns (2, n_rows, k), copied once per window."""
 
     def __init__(self, pb: Problem, rows: np.ndarray):
+        y, rest = pb.stacked
         self.rows = rows
         self.t = pb.t[rows]
-        self.y = np.stack([pb.y[rows, c] for c in range(2)])[..., None]
-        self.rest = np.stack([pb.rest[c][rows] for c in range(2)])
+        self.y = np.ascontiguousarray(y[:, rows])  # C order: numpy's products then give
+        self.rest = np.ascontiguousarray(rest[:, rows])  # the numbers of one detector's
 
 
 class Solution:
