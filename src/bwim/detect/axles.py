@@ -50,6 +50,7 @@ from bwim.errors import InputError, require_finite, require_instance, require_po
 from bwim.records import Record
 
 from .assemble import VehicleEstimate, assemble_detection
+from .faults import detector_faults
 from .lateral import section_gauges
 from .options import DetectOptions
 from .presence import resolve_span
@@ -389,10 +390,12 @@ def _detect_learned(record: Record, detectors: Sequence[str], distance: float,
                              snr_threshold=snr_threshold, min_height=max(min_height, 0.1),
                              gauges=g)
     if not estimates:
+        fault = detector_faults(y, responses)
         return Detection(flags=(FLAG_NO_AXLES,), method=method,
                          message=f"no axle found: nothing on {detectors[0]} and "
                          f"{detectors[1]} fits their learned responses above "
-                         f"{snr_threshold:g} noise standard deviations")
+                         f"{snr_threshold:g} noise standard deviations"
+                         + (f"; {fault}" if fault else ""))
     return assemble_detection(
         record, estimates, method=method, position=position, span=span, gauges=gauges,
         lateral_threshold=opts.lateral_threshold, unexplained_fraction=opts.unexplained_fraction)
