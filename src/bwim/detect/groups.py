@@ -19,7 +19,10 @@ Contract
   axle's amplitudes positive and seen by both detectors.  Fast: a hypothesis's misfit
   needs only the readings' correlation with one axle's response and that response's
   autocorrelation (:func:`explained`).  A group whose count stands keeps its refined
-  times unless they fit worse by the threshold.
+  times unless they fit worse by the threshold.  A segment that holds none of the
+  vehicle's axles and where no single axle could fit (:func:`one_axle_may_fit`: the
+  one-axle test made once over the window, widened by a bound on its rounding) is noise
+  and skipped without changing any choice.
 * Misfits in level variances (see :mod:`bwim.detect.vehicle_fit`); times in s, distances
   in m, speeds in m/s.
 """
@@ -35,7 +38,7 @@ from .vehicle_fit import REACH, Problem, Rows
 
 __all__ = ["GROUP_AXLES", "GROUP_DIP", "GROUP_EXTENT", "GROUP_SPACING", "LEVEL_GAIN",
            "PEAK_FLOOR", "RARE_GROUP", "SEGMENT_MARGIN", "choose_groups", "explained",
-           "hypotheses", "segments", "templates"]
+           "hypotheses", "one_axle_may_fit", "segments", "templates"]
 
 #: Largest spacing within an axle group (tandem, tridem) whose count is chosen again, m.
 GROUP_SPACING = 2.2
@@ -119,7 +122,7 @@ def choose_groups(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp:
     one = np.array([max(auto[0][0], 1e-300), max(auto[1][0], 1e-300)])  # one axle's
     out, changed = [], False
     parts_of = segments(pb, local, v, margin, st)
-    bare = _bare_may_fit(pb, resid, tpl, auto, st, n_grid)
+    bare = one_axle_may_fit(pb, resid, tpl, auto, st, n_grid)
     at_list = at.tolist()
     for first, last in parts_of:
         i0, i1 = bisect.bisect_left(at_list, first), bisect.bisect_right(at_list, last)
@@ -198,13 +201,15 @@ def choose_groups(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp:
     return np.sort(np.array(out)) if changed else None
 
 
-def _bare_may_fit(pb: Problem, resid, tpl, auto, st: int, n_grid: int) -> np.ndarray:
+def one_axle_may_fit(pb: Problem, resid, tpl, auto, st: int, n_grid: int) -> np.ndarray:
     """Cumulative count over the grid points (``n_grid + 1``, from 0) of those where one
-    axle might fit the vehicle's residual ``resid`` with amplitudes positive at both
-    detectors in their gain ratio, as :func:`choose_groups` tests it on a segment holding
-    none of the vehicle's axles.  A segment without such a point is skipped.  Computed
-    once over the window, so with rounding of its own: the test is widened by a bound on
-    that rounding and only ever lets more segments through to the exact test."""
+    axle might fit the vehicle's residual ``resid`` (per detector, on the window's rows)
+    with amplitudes positive at both detectors in their gain ratio, as
+    :func:`choose_groups` tests it on a segment holding none of the vehicle's axles
+    (``tpl``: the :func:`templates`; ``auto``: their autocorrelations every ``st``-th
+    sample).  A segment without such a point is skipped.  Computed once over the window,
+    so with rounding of its own: the test is widened by a bound on that rounding and only
+    ever lets more segments through to the exact test."""
     b, tol = [], []
     for c, (j0, h, _) in enumerate(tpl):
         z = resid[c]
