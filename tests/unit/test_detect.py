@@ -25,7 +25,13 @@ from bwim.detect import (
     section_gauges,
 )
 from bwim.detect.presence import overlapping, span_windows, unexplained_activity
-from bwim.detect.signals import parabolic_vertex, remove_baseline, robust_sigma, split_vehicles
+from bwim.detect.signals import (
+    channel_data,
+    parabolic_vertex,
+    remove_baseline,
+    robust_sigma,
+    split_vehicles,
+)
 from bwim.errors import InputError
 from bwim.sensors import Sensor
 from bwim.wim import Channel, InfluenceLine
@@ -69,6 +75,17 @@ def test_remove_baseline_leaves_the_pulses():
     assert np.abs(err[inner]).max() > 0.3 * bound.max()  # the bound is not vacuous
     for c in (400, 430, 1200):
         assert int(np.argmax(y[c - 5:c + 6])) == 5
+
+
+def test_channel_data_is_the_channels_readings():
+    """channel_data gives the columns Record.channels gives (by name or Sensor, in the
+    order asked), and the same one-line error for a channel the record lacks."""
+    rec = detector_record([(20.0, CAL_SPACINGS, CAL_LOADS, T0 + 0.2)])
+    names = [s.name for s in rec.sensors]
+    ask = [names[-1], rec.sensors[0]]
+    np.testing.assert_array_equal(channel_data(rec, ask), rec.channels(ask).data)
+    with pytest.raises(InputError, match="no channel 'nope'"):
+        channel_data(rec, ["nope"])
 
 
 def test_split_vehicles_at_long_gaps():

@@ -224,3 +224,103 @@ def test_gauge_names_checked():
         learn_responses(runs, ("ad1", "ad2"), DISTANCE, CAL_SPACINGS, gauges=["x1"])
     with pytest.raises(InputError, match="is an axle detector"):
         learn_responses(runs, ("ad1", "ad2"), DISTANCE, CAL_SPACINGS, gauges=["ad1"])
+
+
+def _segments_loop(pb, local, v, margin, st):
+    """The axle groups' definition of :func:`bwim.detect.groups.segments` as a plain loop
+    over neighbouring peaks and parts (its first, unvectorised form): the reference."""
+    import itertools
+
+    from scipy.signal import find_peaks
+
+    from bwim.detect.groups import GROUP_DIP, GROUP_EXTENT, PEAK_FLOOR
+
+    lag = round(pb.shift[1] / v * pb.fs)
+    e = np.zeros(local[0].size)
+    for c, r in enumerate(pb.grids):
+        z = np.maximum(local[c] * np.sign(r[1][int(np.argmax(np.abs(r[1])))]), 0.0)
+        top = float(z.max())
+        if top > 0:
+            shift = lag if c else 0
+            e[:e.size - shift] += z[shift:] / top
+    floor = PEAK_FLOOR * float(e.max())
+    peaks, _ = find_peaks(e, height=floor, prominence=floor)
+    cuts = [0]
+    for a, b in itertools.pairwise(peaks):
+        m = a + int(np.argmin(e[a:b + 1]))
+        if e[m] < GROUP_DIP * min(e[a], e[b]):
+            cuts.append(m)
+    cuts.append(e.size - 1)
+    out = []
+    for a, b in itertools.pairwise(cuts):
+        part = e[a:b + 1]
+        above = np.flatnonzero(part >= GROUP_EXTENT * float(part.max()))
+        out.append((max(a + int(above[0]) - margin, a) // st,
+                    min(a + int(above[-1]) + margin, b) // st))
+    return out
+
+
+def test_segments_equal_their_loop_definition():
+    """The vectorised axle groups (cuts at the dips between neighbouring peaks, extents
+    where each part exceeds its share of its highest) equal the plain loop of their
+    definition, on bumpy noise with plateaus and near-equal dips (exactly: same integers)."""
+    from bwim.detect.groups import segments
+    from bwim.detect.vehicle_fit import make_problem
+
+    v = 21.0
+    t, y, g, learned = _same_model(np.array([0.3]), v, np.array([[20.0, 5.0]]))
+    pb = make_problem(t, y, g, learned, v)
+    rng = np.random.default_rng(5)
+    for trial in range(30):
+        local = [np.convolve(rng.standard_normal(t.size), np.hanning(9), mode="same")
+                 for _ in range(2)]
+        if trial % 3 == 0:  # plateaus and repeated values
+            local = [np.round(x, 1) for x in local]
+        for st, margin in ((1, 0), (3, 5)):
+            assert segments(pb, local, v, margin, st) == _segments_loop(pb, local, v,
+                                                                        margin, st)
+
+
+def test_noise_segments_skipped_only_where_no_axle_fits():
+    """choose_groups skips a segment without axles when no grid point of it passes a
+    widened one-axle test made once over the window: every grid point where the exact
+    test on a segment (its own correlation, amplitudes positive at both detectors, log
+    gain ratio within the bound) passes is kept by the widened one; and it does skip."""
+    from types import SimpleNamespace
+
+    from bwim.detect.groups import GROUP_AXLES, GROUP_SPACING, one_axle_may_fit, templates
+    from bwim.detect.vehicle_fit import make_problem
+
+    v = 21.0
+    t, y, g, learned = _same_model(np.array([0.3]), v, np.array([[20.0, 5.0]]))
+    pb = make_problem(t, y, g, learned, v)
+    tpl = templates(pb, v)
+    st = 3
+    s_max = int(np.floor(GROUP_SPACING / v * pb.fs / st))
+    auto = [np.concatenate([r[::st], np.zeros(max(0, s_max * GROUP_AXLES - r[::st].size
+                                                  + 1))]) for _, _, r in tpl]
+    rng = np.random.default_rng(11)
+    n_rows = 400
+    n_grid = (n_rows - 1) // st + 1
+    kept = skipped = 0
+    for bound in (0.3, 1.1, 3.0):
+        ref = SimpleNamespace(ratio=0.25, bound=bound)
+        for _ in range(10):
+            resid = rng.standard_normal((2, n_rows)) * np.array([[1.0], [0.25]])
+            bare = one_axle_may_fit(ref, resid, tpl, auto, st, n_grid)
+            maybe = np.diff(bare).astype(bool)
+            # the exact test, on one segment per grid point
+            for m in range(n_grid):
+                b = []
+                for c, (j0, h, _) in enumerate(tpl):
+                    q = st * m + j0
+                    b.append(float(resid[c][q:q + h.size] @ h)
+                             if 0 <= q <= n_rows - h.size else 0.0)
+                a = np.array(b) / np.array([auto[0][0], auto[1][0]])
+                ok = bool(a[0] > 0 and a[1] > 0
+                          and abs(np.log(a[1] / (ref.ratio * a[0]))) <= ref.bound)
+                if ok:
+                    assert maybe[m], (bound, m)
+                    kept += 1
+                skipped += int(not maybe[m])
+    assert kept > 0 and skipped > 0

@@ -38,6 +38,7 @@ from .result import (
     Detection,
     VehicleDetection,
 )
+from .signals import channel_data
 
 __all__ = ["END_SHARE", "END_SPAN", "VehicleEstimate", "assemble_detection", "ends_loaded"]
 
@@ -144,7 +145,7 @@ def assemble_detection(
                                 float(t[0]), float(t[-1]))
     names = [s.name for s in gauges]
     if windows is not None and names and len(est):
-        total = record.channels(names).data.sum(axis=1)
+        total = channel_data(record, names).sum(axis=1)
         extra = unexplained_activity(t, total, windows, margin=QUIET_MARGIN,
                                      fraction=unexplained_fraction)
         if ends_loaded(t, total):

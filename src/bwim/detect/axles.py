@@ -50,6 +50,7 @@ from bwim.errors import InputError, require_finite, require_instance, require_po
 from bwim.records import Record
 
 from .assemble import VehicleEstimate, assemble_detection
+from .faults import detector_faults
 from .lateral import section_gauges
 from .options import DetectOptions
 from .presence import resolve_span
@@ -62,7 +63,7 @@ from .result import (
     FLAG_SPEED_VARIES,
     Detection,
 )
-from .signals import parabolic_vertex, remove_baseline, robust_sigma
+from .signals import channel_data, parabolic_vertex, remove_baseline, robust_sigma
 
 __all__ = ["detect_axles"]
 
@@ -374,7 +375,7 @@ def _detect_learned(record: Record, detectors: Sequence[str], distance: float,
         raise InputError(f"the responses were learned for detectors {responses.distance:g} m "
                          f"apart, not {distance:g} m")
     method = "learned responses"
-    y = record.channels(list(detectors)).data
+    y = channel_data(record, detectors)
     g = None
     if responses.gauges:
         names = {s.name for s in record.sensors}
@@ -382,17 +383,19 @@ def _detect_learned(record: Record, detectors: Sequence[str], distance: float,
         if missing:
             raise InputError(f"the responses were learned with gauges {missing} that this "
                              "record does not have")
-        g = record.channels(list(responses.gauges)).data
+        g = channel_data(record, responses.gauges)
     estimates = pursue_axles(record.time, y, responses, speed_range=opts.speed_range,
                              min_axle_spacing=opts.min_axle_spacing,
                              max_axle_spacing=opts.max_axle_spacing,
                              snr_threshold=snr_threshold, min_height=max(min_height, 0.1),
                              gauges=g)
     if not estimates:
+        fault = detector_faults(y, responses)
         return Detection(flags=(FLAG_NO_AXLES,), method=method,
                          message=f"no axle found: nothing on {detectors[0]} and "
                          f"{detectors[1]} fits their learned responses above "
-                         f"{snr_threshold:g} noise standard deviations")
+                         f"{snr_threshold:g} noise standard deviations"
+                         + (f"; {fault}" if fault else ""))
     return assemble_detection(
         record, estimates, method=method, position=position, span=span, gauges=gauges,
         lateral_threshold=opts.lateral_threshold, unexplained_fraction=opts.unexplained_fraction)

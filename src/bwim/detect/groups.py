@@ -19,23 +19,26 @@ Contract
   axle's amplitudes positive and seen by both detectors.  Fast: a hypothesis's misfit
   needs only the readings' correlation with one axle's response and that response's
   autocorrelation (:func:`explained`).  A group whose count stands keeps its refined
-  times unless they fit worse by the threshold.
+  times unless they fit worse by the threshold.  A segment that holds none of the
+  vehicle's axles and where no single axle could fit (:func:`one_axle_may_fit`: the
+  one-axle test made once over the window, widened by a bound on its rounding) is noise
+  and skipped without changing any choice.
 * Misfits in level variances (see :mod:`bwim.detect.vehicle_fit`); times in s, distances
   in m, speeds in m/s.
 """
 
 from __future__ import annotations
 
-import itertools
+import bisect
 
 import numpy as np
 from scipy.signal import find_peaks
 
-from .vehicle_fit import REACH, Problem
+from .vehicle_fit import REACH, Problem, Rows
 
 __all__ = ["GROUP_AXLES", "GROUP_DIP", "GROUP_EXTENT", "GROUP_SPACING", "LEVEL_GAIN",
            "PEAK_FLOOR", "RARE_GROUP", "SEGMENT_MARGIN", "choose_groups", "explained",
-           "hypotheses", "segments", "templates"]
+           "hypotheses", "one_axle_may_fit", "segments", "templates"]
 
 #: Largest spacing within an axle group (tandem, tridem) whose count is chosen again, m.
 GROUP_SPACING = 2.2
@@ -85,21 +88,25 @@ def choose_groups(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp:
     taken off, a group's misfit needs only the readings' correlation with one axle's
     response and that response's autocorrelation (on the window's sampling grid).  The new
     times, or None."""
+    taus = np.sort(taus)
     n = taus.size
     lo = int(np.searchsorted(pb.t, span[0] - REACH / v))
     hi = int(np.searchsorted(pb.t, span[1] + (pb.shift[1] + REACH) / v, side="right"))
-    rows = np.arange(lo, hi)
-    X = pb.atoms(taus, v, rows)
-    local, parts = [], []
-    for c in range(2):
-        M = np.hstack([X[c], pb.rest[c][rows]])
-        G = M.T @ M
-        G.flat[::G.shape[0] + 1] += 1e-12 * (np.trace(G) / G.shape[0] + 1e-300)
-        coef = np.linalg.solve(G, M.T @ pb.y[rows, c])
-        local.append(pb.y[rows, c] - pb.rest[c][rows] @ coef[n:])
-        parts.append(X[c] * coef[:n])
-    fitted = [p.sum(axis=1) for p in parts]
-    resid = [local[c] - fitted[c] for c in range(2)]
+    w = Rows(pb, np.arange(lo, hi))
+    rows = w.rows
+    # both detectors' least squares as one stack of two (the same numbers as two)
+    X = pb.both_atoms(v, w.t[:, None] - taus[None, :])[0]
+    M = np.concatenate([X, w.rest], axis=2)
+    Mt = M.transpose(0, 2, 1)
+    G = Mt @ M
+    p = G.shape[1]
+    diag = G.reshape(2, -1)[:, ::p + 1]  # a view
+    diag += 1e-12 * (diag.sum(axis=-1) / p + 1e-300)[:, None]
+    coef = np.linalg.solve(G, Mt @ w.y)
+    local = (w.y - w.rest @ coef[:, n:])[..., 0]  # (2, n_rows)
+    parts = X * coef[:, None, :n, 0]  # (2, n_rows, n)
+    fitted = parts.sum(axis=2)
+    resid = local - fitted
     r_total = sum(float(r @ r) for r in resid)
     n_samples = 2 * rows.size
     tpl = templates(pb, v)
@@ -109,43 +116,63 @@ def choose_groups(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp:
     s_min = max(1, int(np.ceil(min_sp / v * pb.fs / st)))
     s_max = int(np.floor(GROUP_SPACING / v * pb.fs / st))
     n_grid = (rows.size - 1) // st + 1
+    # the responses' autocorrelation on the grid (zero beyond the response)
+    auto = [np.concatenate([r[::st], np.zeros(max(0, s_max * GROUP_AXLES - r[::st].size + 1))])
+            for _, _, r in tpl]
+    one = np.array([max(auto[0][0], 1e-300), max(auto[1][0], 1e-300)])  # one axle's
     out, changed = [], False
     parts_of = segments(pb, local, v, margin, st)
+    bare = one_axle_may_fit(pb, resid, tpl, auto, st, n_grid)
+    at_list = at.tolist()
     for first, last in parts_of:
-        g = np.flatnonzero((at >= first) & (at <= last))
-        corr, auto = [], []
+        i0, i1 = bisect.bisect_left(at_list, first), bisect.bisect_right(at_list, last)
+        if i0 == i1 and bare[last + 1] == bare[first]:
+            continue  # no axle of the vehicle here and no one axle fits: noise
+        g = np.arange(i0, i1)
+        corr = []
         first, last = max(first, 0), min(last, n_grid - 1)
-        energy = r_inside = 0.0  # the group's readings and residual where it acts
-        for c, (j0, h, r) in enumerate(tpl):
-            z = local[c] - fitted[c] + parts[c][:, g].sum(axis=1)  # less the others
+        bounds = []
+        for c, (j0, h, _) in enumerate(tpl):
+            # the readings less the others' axles, where this group's act
             a, b = max(first * st + j0, 0), min(last * st + j0 + h.size, rows.size)
-            energy += float(z[a:b] @ z[a:b])
-            r_inside += float(resid[c][a:b] @ resid[c][a:b])
+            z = resid[c][a:b] + parts[c][a:b, g].sum(axis=1) if g.size else resid[c][a:b]
+            bounds.append((z, a, b))
             # correlation with an axle at grid point m (sample st m), on the segment:
             # Σ_j z[st m + j0 + j] h[j], zero where the response leaves the window
-            full = np.zeros(n_grid)
-            q0 = max(first * st + j0, 0)
+            part = np.zeros(last - first + 1)
             q1 = min(last * st + j0, rows.size - h.size)
-            if q1 >= q0:
-                cc = np.correlate(z[q0:q1 + h.size], h, mode="valid")  # q = q0 … q1
-                m = np.arange(first, last + 1)
-                q = st * m + j0
-                ok = (q >= q0) & (q <= q1)
-                full[m[ok]] = cc[q[ok] - q0]
-            corr.append(full)
-            r = r[::st]
-            auto.append(np.concatenate([r, np.zeros(max(0, s_max * GROUP_AXLES - r.size + 1))]))
+            if q1 >= a:  # grid points whose sample q = st m + j0 lies in a … q1
+                cc = np.correlate(z[:q1 - a + h.size], h, mode="valid")  # q = a … q1
+                m0 = max(first, -((j0 - a) // st))
+                m1 = min(last, (q1 - j0) // st)
+                if m1 >= m0:
+                    part[m0 - first:m1 - first + 1] = cc[st * m0 + j0 - a:
+                                                         st * m1 + j0 - a + 1:st]
+            corr.append(part)
+        # the group's readings and residual where it acts
+        energy = sum(float(z @ z) for z, _, _ in bounds)
+        r_inside = sum(float(resid[c][a:b] @ resid[c][a:b]) for c, (_, a, b) in enumerate(bounds))
         best = None
         for k in range(1, GROUP_AXLES + 1):
-            hyp = hypotheses(first, last, k, s_min, s_max)
-            if hyp.shape[0] == 0:
-                break
-            gained, amps = explained(hyp, corr, auto)
-            positive = np.all(amps > 0, axis=(1, 2))
-            with np.errstate(divide="ignore", invalid="ignore"):
-                lr = np.log(amps[..., 1] / (pb.ratio * amps[..., 0]))
-            valid = positive & np.all(np.abs(np.where(positive[:, None], lr, np.inf))
-                                      <= pb.bound, axis=1)
+            if k == 1:  # one axle at every grid point: explained() without the indexing
+                hyp = np.arange(last - first + 1)[:, None]
+                b = np.stack(corr, axis=-1)
+                amps = b / one
+                gained = np.sum(amps * b, axis=1)
+                positive = (amps[:, 0] > 0) & (amps[:, 1] > 0)
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    lr = np.log(amps[:, 1] / (pb.ratio * amps[:, 0]))
+                valid = positive & (np.abs(np.where(positive, lr, np.inf)) <= pb.bound)
+            else:
+                hyp = hypotheses(0, last - first, k, s_min, s_max)  # grid points less first
+                if hyp.shape[0] == 0:
+                    break
+                gained, amps = explained(hyp, corr, auto)
+                positive = np.all(amps > 0, axis=(1, 2))
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    lr = np.log(amps[..., 1] / (pb.ratio * amps[..., 0]))
+                valid = positive & np.all(np.abs(np.where(positive[:, None], lr, np.inf))
+                                          <= pb.bound, axis=1)
             if not valid.any():
                 break
             j = int(np.argmax(np.where(valid, gained, -np.inf)))
@@ -163,15 +190,48 @@ def choose_groups(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp:
         if best[1].size == g.size:
             # the count stands: the refined times stay unless they fit worse by more
             # than the threshold (two of a tridem's axles on one merged peak)
-            mine = np.clip(at[g], first, last)[None, :]
+            mine = np.clip(at[g], first, last)[None, :] - first
             if explained(mine, corr, auto)[0][0] > best[0] - limit:
                 out.extend(taus[g])
                 continue
-        out.extend(pb.t[lo + st * best[1]])
+        out.extend(pb.t[lo + st * (best[1] + first)])
         changed = True
     # axles outside every segment: noise the pursuit took
     changed |= not all(any(a <= m <= b for a, b in parts_of) for m in at)
     return np.sort(np.array(out)) if changed else None
+
+
+def one_axle_may_fit(pb: Problem, resid, tpl, auto, st: int, n_grid: int) -> np.ndarray:
+    """Cumulative count over the grid points (``n_grid + 1``, from 0) of those where one
+    axle might fit the vehicle's residual ``resid`` (per detector, on the window's rows)
+    with amplitudes positive at both detectors in their gain ratio, as
+    :func:`choose_groups` tests it on a segment holding none of the vehicle's axles
+    (``tpl``: the :func:`templates`; ``auto``: their autocorrelations every ``st``-th
+    sample).  A segment without such a point is skipped.  Computed once over the window,
+    so with rounding of its own: the test is widened by a bound on that rounding and only
+    ever lets more segments through to the exact test."""
+    b, tol = [], []
+    for c, (j0, h, _) in enumerate(tpl):
+        z = resid[c]
+        full = np.full(n_grid, -np.inf)  # no correlation: the response leaves the window
+        if z.size >= h.size:
+            cc = np.correlate(z, h, mode="valid")  # sample q = 0 … z.size - h.size
+            m = np.arange(n_grid)
+            q = st * m + j0
+            ok = (q >= 0) & (q < cc.size)
+            full[ok] = cc[q[ok]]
+        b.append(full)
+        # a dot product's rounding: far below this (n eps Σ|z h| at most)
+        tol.append(1e-9 * float(np.abs(h).sum()) * float(np.abs(z).max(initial=0.0)) + 1e-300)
+    pos = [b[c] > -tol[c] for c in range(2)]
+    sure = (b[0] > 1e3 * tol[0]) & (b[1] > 1e3 * tol[1])  # well away from zero
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a0 = np.where(sure, b[0], 1.0) / max(auto[0][0], 1e-300)
+        a1 = np.where(sure, b[1], 1.0) / max(auto[1][0], 1e-300)
+        lr = np.log(a1 / (pb.ratio * a0))
+        slack = 4.0 * (tol[0] / np.where(sure, b[0], 1.0) + tol[1] / np.where(sure, b[1], 1.0))
+    maybe = pos[0] & pos[1] & (~sure | (np.abs(lr) <= pb.bound + slack + 1e-12))
+    return np.concatenate([[0], np.cumsum(maybe)])
 
 
 def segments(pb: Problem, local, v: float, margin: int, st: int) -> list[tuple[int, int]]:
@@ -196,20 +256,26 @@ def segments(pb: Problem, local, v: float, margin: int, st: int) -> list[tuple[i
     peaks, _ = find_peaks(e, height=floor, prominence=floor)
     if peaks.size == 0:
         return []
-    cuts = [0]
-    for a, b in itertools.pairwise(peaks):
-        m = a + int(np.argmin(e[a:b + 1]))
-        if e[m] < GROUP_DIP * min(e[a], e[b]):
-            cuts.append(m)
-    cuts.append(e.size - 1)
-    out = []
-    for a, b in itertools.pairwise(cuts):
-        part = e[a:b + 1]
-        above = np.flatnonzero(part >= GROUP_EXTENT * float(part.max()))
-        lo = max(a + int(above[0]) - margin, a)
-        hi = min(a + int(above[-1]) + margin, b)
-        out.append((lo // st, hi // st))
-    return out
+    cuts = np.zeros(0, dtype=int)
+    if peaks.size > 1:
+        # between two neighbouring peaks a and b, the first lowest sample (b, a peak, is
+        # higher than a sample between: the lowest of a … b lies in a … b - 1)
+        lows = np.minimum.reduceat(e[:peaks[-1]], peaks[:-1])
+        equal = np.flatnonzero(e[peaks[0]:peaks[-1]] == np.repeat(lows, np.diff(peaks)))
+        where = peaks[0] + equal[np.searchsorted(equal, peaks[:-1] - peaks[0])]
+        cuts = where[lows < GROUP_DIP * np.minimum(e[peaks[:-1]], e[peaks[1:]])]
+    cuts = np.concatenate([[0], cuts, [e.size - 1]])
+    # each part a … b (both ends in it): where it exceeds GROUP_EXTENT of its highest
+    a, b = cuts[:-1], cuts[1:]
+    size = b - a + 1
+    starts = np.cumsum(size) - size
+    idx = np.arange(int(size.sum())) - np.repeat(starts - a, size)
+    vals = e[idx]
+    high = GROUP_EXTENT * np.maximum.reduceat(vals, starts)
+    above = np.flatnonzero(vals >= np.repeat(high, size))
+    lo = np.maximum(idx[above[np.searchsorted(above, starts)]] - margin, a)
+    hi = np.minimum(idx[above[np.searchsorted(above, starts + size) - 1]] + margin, b)
+    return list(zip((lo // st).tolist(), (hi // st).tolist(), strict=True))
 
 
 def hypotheses(first: int, last: int, k: int, s_min: int, s_max: int) -> np.ndarray:

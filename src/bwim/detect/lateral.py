@@ -30,6 +30,8 @@ from bwim.errors import InputError, require_range
 from bwim.records import Record
 from bwim.sensors import Sensor, SensorKind
 
+from .signals import channel_data
+
 __all__ = ["LateralPosition", "lateral_position", "section_gauges"]
 
 
@@ -128,7 +130,7 @@ def lateral_position(
     if not sens:
         return LateralPosition(value=float("nan"), unit=unit, weights=np.zeros(0), gauges=())
     t = record.time
-    data = record.channels(list(names)).data
+    data = channel_data(record, names)
     inside = np.ones(t.size, dtype=bool) if window is None else (
         (t >= window[0]) & (t <= window[1]))
     if not inside.any():

@@ -65,6 +65,7 @@ from __future__ import annotations
 import itertools
 
 import numpy as np
+from scipy.ndimage import maximum_filter1d
 
 from .assemble import VehicleEstimate
 from .groups import choose_groups
@@ -73,11 +74,12 @@ from .vehicle_fit import (
     MIN_RATIO_BOUND,
     RATIO_SPREADS,
     Problem,
+    Rows,
+    Solution,
     VehicleFit,
     make_problem,
     refine,
     relative,
-    solve,
     window,
 )
 
@@ -115,38 +117,54 @@ def _speed(y: np.ndarray, fs: float, distance: float, speed_range: tuple[float, 
     return None if lag is None else distance / (lag / fs)
 
 
-def _best_new(pb: Problem, res: np.ndarray, v: float, taken: np.ndarray, min_gap: float,
-              slack: int = 0) -> tuple[float, float]:
+class _Matcher:
     """The axle time whose atoms (both detectors, one amplitude in their gain ratio) best
-    match the residual ``res`` (all samples); the second detector's atom may be up to
-    ``slack`` samples off the speed ``v``.  Returns the time at detector 1 and the time
-    the second detector's atom says (both at detector 1 for the speed ``v``)."""
-    n = pb.t.size
-    corr = []
-    energy = 0.0
-    for c, (u, k, _) in enumerate(pb.grids):
-        d = pb.shift[c]
-        m_lo = int(np.floor((u[0] + d) / v * pb.fs)) - 1
-        m_hi = int(np.ceil((u[-1] + d) / v * pb.fs)) + 1
-        scale = pb.w[c] * (pb.ratio if c else 1.0)
-        atom = np.interp(v * np.arange(m_lo, m_hi + 1) / pb.fs - d, u, k, left=0.0,
-                         right=0.0) * scale
-        energy += float(atom @ atom)
-        lo, hi = max(0, -m_lo), max(0, m_hi)
-        r = np.concatenate([np.zeros(lo), res[:, c], np.zeros(hi)])
-        corr.append(np.correlate(r, atom, mode="valid")[m_lo + lo:m_lo + lo + n])
-    if slack:
-        padded = np.concatenate([np.full(slack, -np.inf), corr[1], np.full(slack, -np.inf)])
-        stack = np.lib.stride_tricks.sliding_window_view(padded, 2 * slack + 1)
-        off = np.argmax(stack, axis=1) - slack
-        c2 = corr[1][np.arange(n) + off]
-    else:
-        off, c2 = np.zeros(n, dtype=int), corr[1]
-    score = np.maximum(corr[0] + c2, 0.0) ** 2 / max(energy, 1e-300)
-    for tk in taken:  # not on an axle already found
-        score[np.abs(pb.t - tk) < min_gap / v] = 0.0
-    m = int(np.argmax(score))
-    return float(pb.t[m]), float(pb.t[m + off[m]])
+    match a residual (all samples) at the speed ``v``; the second detector's atom may be
+    up to ``slack`` samples off that speed.  The atoms are made once (the speed is fixed
+    while the pursuit runs)."""
+
+    def __init__(self, pb: Problem, v: float, slack: int = 0):
+        self.pb, self.v, self.slack = pb, v, slack
+        self.parts = []
+        energy = 0.0
+        for c, (u, k, _) in enumerate(pb.grids):
+            d = pb.shift[c]
+            m_lo = int(np.floor((u[0] + d) / v * pb.fs)) - 1
+            m_hi = int(np.ceil((u[-1] + d) / v * pb.fs)) + 1
+            scale = pb.w[c] * (pb.ratio if c else 1.0)
+            atom = np.interp(v * np.arange(m_lo, m_hi + 1) / pb.fs - d, u, k, left=0.0,
+                             right=0.0) * scale
+            energy += float(atom @ atom)
+            self.parts.append((m_lo, max(0, -m_lo), max(0, m_hi), atom))
+        self.energy = max(energy, 1e-300)
+
+    def best(self, res: np.ndarray, taken: np.ndarray, min_gap: float) -> tuple[float, float]:
+        """The best new axle for the residual ``res`` (n_t, 2), not within ``min_gap`` m
+        of travel of the times ``taken``: its time at detector 1 and the time the second
+        detector's atom says (both at detector 1 for the speed ``v``)."""
+        pb, v, slack = self.pb, self.v, self.slack
+        t = pb.t
+        n = t.size
+        corr = []
+        for c, (m_lo, lo, hi, atom) in enumerate(self.parts):
+            r = np.concatenate([np.zeros(lo), res[:, c], np.zeros(hi)])
+            corr.append(np.correlate(r, atom, mode="valid")[m_lo + lo:m_lo + lo + n])
+        # the second detector's best within ±slack samples (the largest value: exact)
+        c2 = (maximum_filter1d(corr[1], 2 * slack + 1, mode="constant", cval=-np.inf)
+              if slack else corr[1])
+        score = np.maximum(corr[0] + c2, 0.0) ** 2 / self.energy
+        gap = min_gap / v
+        for tk in taken:  # not on an axle already found (t ascending: a slice holds them)
+            a = max(int(np.searchsorted(t, tk - gap)) - 1, 0)
+            b = int(np.searchsorted(t, tk + gap, side="right")) + 1
+            near = t[a:b]
+            score[a:b][np.abs(near - tk) < gap] = 0.0
+        m = int(np.argmax(score))
+        off = 0
+        if slack:  # where that best was (the first of equals, as argmax)
+            a = max(m - slack, 0)
+            off = a + int(np.argmax(corr[1][a:m + slack + 1])) - m
+        return float(t[m]), float(t[m + off])
 
 
 def pursue_axles(record_time: np.ndarray, y: np.ndarray, learned: LearnedResponses, *,
@@ -174,7 +192,8 @@ def pursue_axles(record_time: np.ndarray, y: np.ndarray, learned: LearnedRespons
                 np.array([r.sign for r in learned.responses]))
     if v0 is None:
         return []
-    pb = make_problem(t, y, gauges, learned, v0)
+    pb = make_problem(t, y, gauges, learned, v0, fs=fs,
+                      bending=None if gauges is None else bend)
     thr2 = snr_threshold**2
     min_sp = max(min_axle_spacing, MIN_SPACING_WIDTH * float(np.mean(
         [r.fwhm for r in learned.responses])))
@@ -183,9 +202,9 @@ def pursue_axles(record_time: np.ndarray, y: np.ndarray, learned: LearnedRespons
     refused = np.zeros(0)  # candidates one detector does not see: not tried again
     lag = learned.distance / v0
     slack = int(np.ceil(SPEED_SLACK * lag * fs))
+    matcher = _Matcher(pb, v0, slack)
     for _ in range(2 * MAX_AXLES):
-        tk, tk2 = _best_new(pb, omp.res, v0, np.append(omp.taus, refused),
-                            EXCLUDE * min_sp, slack)
+        tk, tk2 = matcher.best(omp.res, np.append(omp.taus, refused), EXCLUDE * min_sp)
         amps, chi_new, state = omp.trial(tk, tk2)
         gain = omp.chi - chi_new
         first = max(first, gain)
@@ -230,38 +249,39 @@ def _acceptable(pb: Problem, amps: np.ndarray, min_height: float) -> bool:
 class _Pursuit:
     """Orthogonal matching pursuit over the whole record: the axles' responses with each
     detector's rest projected out, their Gram matrix and least-squares amplitudes kept up
-    to date as axles are added."""
+    to date as axles are added.  Both detectors' problems as one stack of two (numpy
+    gives the same numbers as two separate ones)."""
 
     def __init__(self, pb: Problem, v: float):
         self.pb, self.v = pb, v
         self.taus = np.zeros(0)  # at detector 1
         self.taus2 = np.zeros(0)  # the second detector's, less D / v
-        self.y = []
+        y = []
         for c in range(2):
             Q = pb.q_rest[c]
-            self.y.append(pb.y[:, c] - Q @ (Q.T @ pb.y[:, c]))
-        self.cols = [np.zeros((pb.t.size, 0)), np.zeros((pb.t.size, 0))]
-        self.res = np.column_stack(self.y)
+            y.append(pb.y[:, c] - Q @ (Q.T @ pb.y[:, c]))
+        self.Q = np.stack(pb.q_rest)  # (2, n_t, k)
+        self.Qt = self.Q.transpose(0, 2, 1)
+        self.y = np.stack(y)[..., None]  # (2, n_t, 1)
+        self.cols = np.zeros((2, pb.t.size, 0))
+        self.res = np.column_stack(y)
         self.chi = float(np.sum(self.res**2))
 
     def trial(self, tk: float, tk2: float):
         """Amplitudes (n + 1, 2; the new axle last), misfit and state with an axle at
         ``tk`` added (at ``tk2`` for the second detector)."""
-        new = [self.pb.atoms(np.array([tk]), self.v, only=0)[0],
-               self.pb.atoms(np.array([tk2]), self.v, only=1)[1]]
-        cols, amps, res = [], np.zeros((self.taus.size + 1, 2)), np.empty_like(self.res)
-        for c in range(2):
-            Q = self.pb.q_rest[c]
-            x = new[c][:, 0]
-            x = x - Q @ (Q.T @ x)
-            X = np.column_stack([self.cols[c], x])
-            G = X.T @ X
-            G.flat[::G.shape[0] + 1] += 1e-12 * (np.trace(G) / G.shape[0] + 1e-300)
-            a = np.linalg.solve(G, X.T @ self.y[c])
-            amps[:, c] = a
-            res[:, c] = self.y[c] - X @ a
-            cols.append(X)
-        return amps, float(np.sum(res**2)), (cols, res)
+        dt = self.pb.t[None, :, None] - np.array([tk, tk2])[:, None, None]
+        x = self.pb.both_atoms(self.v, dt)[0]  # (2, n_t, 1)
+        x = x - self.Q @ (self.Qt @ x)
+        X = np.concatenate([self.cols, x], axis=2)
+        Xt = X.transpose(0, 2, 1)
+        G = Xt @ X
+        p = G.shape[1]
+        diag = G.reshape(2, -1)[:, ::p + 1]  # a view
+        diag += 1e-12 * (diag.sum(axis=-1) / p + 1e-300)[:, None]
+        a = np.linalg.solve(G, Xt @ self.y)
+        res = (self.y - X @ a)[..., 0].T.copy()  # (n_t, 2)
+        return a[..., 0].T.copy(), float(np.sum(res**2)), (X, res)
 
     def accept(self, tk: float, tk2: float, chi: float, state) -> None:
         self.cols, self.res = state
@@ -289,11 +309,14 @@ def _vehicle(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp: floa
     """A first refinement (the speed), the axle groups chosen again in ``span`` (record
     times at detector 1), the final refinement and backward check; the vehicle's
     estimate."""
-    fit = refine(pb, _prune(pb, taus, v, limit), v, FIRST_LM)
-    kept = _prune(pb, fit.taus, fit.v, limit, both=True)
+    pruned, sol = _prune(pb, taus, v, limit)
+    fit = refine(pb, pruned, v, FIRST_LM, start=sol)
+    kept, sol = _prune(pb, fit.taus, fit.v, limit, both=True)
     grouped = choose_groups(pb, kept, fit.v, limit, min_sp, span)
-    if grouped is not None or kept.size < fit.taus.size:
-        fit = refine(pb, kept if grouped is None else grouped, fit.v)
+    if grouped is not None:
+        fit = refine(pb, grouped, fit.v)
+    elif kept.size < fit.taus.size:
+        fit = refine(pb, kept, fit.v, start=sol)
     for _ in range(MAX_AXLES):
         close = _drop_close(fit, min_sp)
         if close is not None:
@@ -321,16 +344,18 @@ def _vehicle(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp: floa
 
 
 def _prune(pb: Problem, taus: np.ndarray, v: float, limit: float, both: bool = False
-           ) -> np.ndarray:
+           ) -> tuple[np.ndarray, Solution | None]:
     """``taus`` less, one by one, the weakest axle while it lowers the misfit by less
     than ``limit`` (or, with ``both``, one detector does not see it), at the given times
-    and speed: a cheap pass without refinement."""
+    and speed: a cheap pass without refinement.  Also the least squares of the times
+    kept, with slopes (a refinement's start), when it was made."""
+    sol = None
     while taus.size > 1:
-        _, _, amps, gains = solve(pb, taus, v, window(pb, taus, v), False)
-        weak = gains < limit
+        sol = Solution(pb, taus, v, Rows(pb, window(pb, taus, v)), True)
+        weak = sol.gains < limit
         if both:
-            weak |= ~pb.seen_by_both(amps)
+            weak |= ~pb.seen_by_both(sol.amps)
         if not weak.any():
-            break
-        taus = np.delete(taus, int(np.argmin(np.where(weak, gains, np.inf))))
-    return taus
+            return taus, sol
+        taus = np.delete(taus, int(np.argmin(np.where(weak, sol.gains, np.inf))))
+    return taus, None

@@ -67,6 +67,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 import scipy.linalg
@@ -114,6 +115,12 @@ def band_pass(y: np.ndarray, fs: float, *, short: float = 0.01, long: float = 0.
             - gaussian_filter1d(y, long * fs, axis=0, mode="nearest"))
 
 
+def _read_only(*arrays: np.ndarray) -> tuple[np.ndarray, ...]:
+    for a in arrays:
+        a.setflags(write=False)
+    return arrays
+
+
 @dataclass(frozen=True, kw_only=True, eq=False)
 class DetectorResponse:
     """One detector's local response to one axle (see the module docstring).
@@ -157,30 +164,40 @@ class DetectorResponse:
         return np.interp(u, self.u, self.k, left=0.0, right=0.0)
 
     def padded(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(u, K, dK/du)`` on the grid widened by one spacing each side (zeros)."""
+        """``(u, K, dK/du)`` on the grid widened by one spacing each side (zeros); computed
+        once per response, read-only."""
+        return self._padded
+
+    @cached_property
+    def _padded(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         du = float(self.u[1] - self.u[0])
         u = self.u[0] + du * np.arange(-1, self.u.size + 1)
         k = self(u)
-        return u, k, np.gradient(k, du)
+        return _read_only(u, k, np.gradient(k, du))
 
     def high_passed(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The response high-passed in space (:data:`HIGH_PASS` m), on a grid widened by
         the filter's reach: ``(u, K_hp, dK_hp/du)``.  For a vehicle at speed ``v`` the
         high-pass in time over ``HIGH_PASS / v`` s of a reading is this in space, so
-        detection compares high-passed readings with ``K_hp`` directly."""
+        detection compares high-passed readings with ``K_hp`` directly.  Computed once per
+        response, read-only."""
+        return self._high_passed
+
+    @cached_property
+    def _high_passed(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         du = float(self.u[1] - self.u[0])
         pad = int(np.ceil(5 * HIGH_PASS / du))
         u = self.u[0] + du * np.arange(-pad, self.u.size + pad)
         k = self(u)
         k_hp = k - gaussian_filter1d(k, HIGH_PASS / du, mode="constant")
-        return u, k_hp, np.gradient(k_hp, du)
+        return _read_only(u, k_hp, np.gradient(k_hp, du))
 
-    @property
+    @cached_property
     def sign(self) -> float:
         """+1 for pulses that rise, −1 for pulses that fall."""
         return float(np.sign(self.k[int(np.argmax(np.abs(self.k)))]) or 1.0)
 
-    @property
+    @cached_property
     def fwhm(self) -> float:
         """Full width of the axle's local peak at half its height, m."""
         k = self.sign * self.k

@@ -11,16 +11,25 @@ Contract
   the parabola through the three samples around each (fractional sample index).
 * :func:`split_vehicles` cuts a sequence of axles into vehicles at gaps longer than a
   plausible axle spacing.
+* :func:`channel_data` is a record's readings of some channels, (n_t, k): those of
+  :meth:`bwim.Record.channels` without making a new record.
 
 Arrays are 1-D in samples unless stated; times in s, distances in m.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 from scipy.ndimage import median_filter
 
-__all__ = ["parabolic_vertex", "remove_baseline", "robust_sigma", "split_vehicles"]
+from bwim.errors import InputError
+from bwim.records import Record
+from bwim.sensors import Sensor
+
+__all__ = ["channel_data", "parabolic_vertex", "remove_baseline", "robust_sigma",
+           "split_vehicles"]
 
 #: Normalised MAD: 1 / Φ⁻¹(3/4), so that robust_sigma of Gaussian noise is its σ.
 MAD_TO_SIGMA = 1.482602218505602
@@ -71,3 +80,17 @@ def split_vehicles(positions: np.ndarray, max_axle_spacing: float) -> list[np.nd
         return []
     cuts = np.flatnonzero(np.diff(p) > max_axle_spacing) + 1
     return np.split(np.arange(p.size), cuts)
+
+
+def channel_data(record: Record, sensors: Sequence[str | Sensor]) -> np.ndarray:
+    """The readings (n_t, k) of the channels ``sensors`` (names or Sensors), in that
+    order: ``record.channels(sensors).data`` without making a record; InputError for a
+    channel the record does not have."""
+    names = [s.name for s in record.sensors]
+    idx = []
+    for s in sensors:
+        key = s.name if isinstance(s, Sensor) else s
+        if key not in names:
+            raise InputError(f"no channel {key!r} in this record; channels: {names}")
+        idx.append(names.index(key))
+    return record.data[:, idx]

@@ -34,15 +34,17 @@ Contract
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
 from .response import HIGH_PASS, LearnedResponses, high_pass
 
 __all__ = ["CONVERGED", "MAX_LM", "MIN_RATIO_BOUND", "RATIO_SPREADS", "REACH",
-           "WINDOW_SAMPLES", "Problem", "VehicleFit", "make_problem", "refine", "relative",
-           "solve", "window"]
+           "WINDOW_SAMPLES", "Problem", "Rows", "Solution", "VehicleFit", "make_problem", "refine",
+           "relative", "solve", "window"]
 
 #: A vehicle's fit looks this far beyond its first and last axle, m of travel.
 REACH = 2.0
@@ -79,11 +81,14 @@ class Problem:
     step: int  # every step-th sample in a vehicle's window
 
     def atoms(self, taus: np.ndarray, v: float, rows: slice | np.ndarray = slice(None),
-              slopes: bool = False, only: int | None = None):
+              slopes: bool = False, only: int | None = None,
+              dt: np.ndarray | None = None):
         """Per detector the weighted columns K(v (t − τ_i) − D_d), (n_rows, n), K linear
         between its ordinates; with ``slopes`` also their slopes dK/du (of the linear
-        pieces) at the same points; with ``only`` that detector's (None for the other)."""
-        t = self.t[rows]
+        pieces) at the same points; with ``only`` that detector's (None for the other).
+        ``dt``: the rows' times less ``taus`` (n_rows, n), when already made."""
+        if dt is None:
+            dt = self.t[rows][:, None] - taus[None, :]
         out, der = [], []
         for c, (u, k, _) in enumerate(self.grids):
             if only is not None and c != only:
@@ -91,7 +96,7 @@ class Problem:
                 der.append(None)
                 continue
             du = u[1] - u[0]
-            x = (v * (t[:, None] - taus[None, :]) - (self.shift[c] + u[0])) * (1.0 / du)
+            x = (v * dt - (self.shift[c] + u[0])) * (1.0 / du)
             np.clip(x, 0.0, u.size - 1.000001, out=x)  # the grids end in zeros
             j = x.astype(np.intp)
             x -= j
@@ -100,6 +105,42 @@ class Problem:
             if slopes:
                 der.append(step * (self.w[c] / du))
         return (out, der) if slopes else out
+
+    @cached_property
+    def stacked(self) -> tuple[np.ndarray, np.ndarray]:
+        """The readings (2, n_t, 1) and the rest's columns (2, n_t, k), one detector after
+        the other."""
+        return np.stack([self.y[:, c] for c in range(2)])[..., None], np.stack(self.rest)
+
+    @cached_property
+    def _both(self):
+        """Both detectors' grids as one (for :meth:`both_atoms`): offsets, scales and
+        bounds of shape (2, 1, 1), K and its differences end to end, each's first index."""
+        def col(values, dtype=float):
+            return np.array(values, dtype=dtype)[:, None, None]
+
+        u = [g[0] for g in self.grids]
+        du = [ui[1] - ui[0] for ui in u]
+        return (col([self.shift[c] + u[c][0] for c in range(2)]),
+                col([1.0 / d for d in du]), col([ui.size - 1.000001 for ui in u]),
+                np.concatenate([g[1] for g in self.grids]), np.concatenate(self.steps),
+                col([0, u[0].size], np.intp), col(self.w),
+                col([self.w[c] / du[c] for c in range(2)]))
+
+    def both_atoms(self, v: float, dt: np.ndarray, slopes: bool = False):
+        """:meth:`atoms` of both detectors as one array (2, n_rows, n), the same numbers,
+        from the rows' times less the axles' ``dt`` (n_rows, n); with ``slopes`` also the
+        slopes (2, n_rows, n)."""
+        off, inv_du, top, k, steps, first, w, w_du = self._both
+        x = (v * dt - off) * inv_du
+        np.maximum(x, 0.0, out=x)  # the grids end in zeros (np.clip: the same numbers)
+        np.minimum(x, top, out=x)
+        j = x.astype(np.intp)
+        x -= j
+        j += first
+        step = steps[j]
+        out = (k[j] + x * step) * w
+        return (out, step * w_du) if slopes else (out, None)
 
     def log_ratio(self, amps: np.ndarray) -> np.ndarray:
         """``ln(A_2 / (ratio A_1))`` per axle (±inf where one detector sees nothing)."""
@@ -126,8 +167,14 @@ class VehicleFit:
 
 
 def make_problem(t: np.ndarray, y: np.ndarray, gauges: np.ndarray | None,
-             learned: LearnedResponses, v: float) -> Problem:
-    fs = 1.0 / float(np.median(np.diff(t)))
+                 learned: LearnedResponses, v: float, *, fs: float | None = None,
+                 bending: np.ndarray | None = None) -> Problem:
+    """The :class:`Problem` of a record's times ``t``, detector channels ``y`` (n_t, 2)
+    and ``gauges`` (n_t, n_gauges; None: high-pass) at the first speed estimate ``v``.
+    ``fs`` (the sampling rate from the median step) and ``bending`` (n_t, 2: the gauges
+    less their mean, combined with each response's weights) when already made."""
+    if fs is None:
+        fs = 1.0 / float(np.median(np.diff(t)))
     w = 1.0 / np.array([max(r.level, 1e-300) for r in learned.responses])
     spread = float(learned.amplitude_spread)
     bound = max(RATIO_SPREADS * spread, MIN_RATIO_BOUND)
@@ -138,11 +185,13 @@ def make_problem(t: np.ndarray, y: np.ndarray, gauges: np.ndarray | None,
     common = dict(t=t, w=w, ratio=float(learned.gain_ratio), bound=bound, spread=spread,
                   shift=(0.0, learned.distance), fs=fs, step=step)
     if learned.gauges and gauges is not None:
-        g = gauges - gauges.mean(axis=0)
+        if bending is None:
+            g = gauges - gauges.mean(axis=0)
+            bending = np.column_stack([g @ r.bending for r in learned.responses])
         tc = t - t.mean()
         tc = tc / max(float(np.ptp(tc)), 1e-300)
-        rest = tuple(np.column_stack([g @ r.bending, np.ones_like(tc), tc]) * w[c]
-                     for c, r in enumerate(learned.responses))
+        rest = tuple(np.column_stack([bending[:, c], np.ones_like(tc), tc]) * w[c]
+                     for c in range(2))
         grids = tuple(r.padded() for r in learned.responses)
         return Problem(y=(y - y.mean(axis=0)) * w, rest=rest,
                         q_rest=tuple(np.linalg.qr(r)[0] for r in rest), grids=grids,
@@ -168,54 +217,90 @@ def window(pb: Problem, taus: np.ndarray, v: float) -> np.ndarray:
     return np.arange(lo, hi, pb.step)
 
 
+class Rows:
+    """What every fit on one vehicle's window reads: the sampled rows' times, readings
+    (2, n_rows, 1) and rest columns (2, n_rows, k), copied once per window."""
+
+    def __init__(self, pb: Problem, rows: np.ndarray):
+        y, rest = pb.stacked
+        self.rows = rows
+        self.t = pb.t[rows]
+        self.y = np.ascontiguousarray(y[:, rows])  # C order: numpy's products then give
+        self.rest = np.ascontiguousarray(rest[:, rows])  # the numbers of one detector's
+
+
+class Solution:
+    """Both detectors' least-squares amplitudes and rest of the axles ``taus`` at speed
+    ``v`` on a window's rows (see :func:`solve`), as one stack of two problems; the
+    Jacobian on request."""
+
+    def __init__(self, pb: Problem, taus: np.ndarray, v: float, w: Rows, slopes: bool):
+        n = taus.size
+        self.taus, self.v, self.w, self.slopes = taus, v, w, slopes
+        self.dt = w.t[:, None] - taus[None, :]
+        X, self.dX = pb.both_atoms(v, self.dt, slopes)
+        M = np.concatenate([X, w.rest], axis=2)
+        Mt = M.transpose(0, 2, 1)
+        G = Mt @ M
+        p = G.shape[1]
+        diag = G.reshape(2, -1)[:, ::p + 1]  # a view
+        diag += 1e-12 * (diag.sum(axis=-1) / p + 1e-300)[:, None]
+        try:
+            Ginv = np.linalg.inv(G)
+        except np.linalg.LinAlgError:
+            Ginv = np.empty_like(G)
+            for c in range(2):
+                try:
+                    Ginv[c] = np.linalg.inv(G[c])
+                except np.linalg.LinAlgError:
+                    Ginv[c] = np.linalg.pinv(G[c])
+        coef = Ginv @ (Mt @ w.y)
+        a = coef[:, :n, 0]
+        # removing regressor i raises the misfit by coef_i² / [(MᵀM)⁻¹]_ii
+        gains = a**2 / np.maximum(Ginv.diagonal(axis1=1, axis2=2)[:, :n], 1e-300)
+        # every step-th sample: scaled to the misfit of all samples
+        self.k = math.sqrt(pb.step)
+        self.res = (w.y - M @ coef).reshape(-1) * self.k
+        self.amps, self.gains = a.T.copy(), (gains[0] + gains[1]) * pb.step
+        self.M, self.Mt, self.Ginv, self.a = M, Mt, Ginv, a
+
+    def jacobian(self) -> np.ndarray:
+        """The variable-projection Jacobian (Kaufman) of the residual in (τ_1 … τ_n, v)."""
+        n, v, dX = self.taus.size, self.v, self.dX
+        D = np.empty((2, self.w.t.size, n + 1))
+        D[:, :, :n] = -v * dX * self.a[:, None, :]  # ∂(X a)/∂τ_i
+        D[:, :, n] = ((dX * self.dt) @ self.a[..., None])[..., 0]  # ∂(X a)/∂v
+        J = self.M @ (self.Ginv @ (self.Mt @ D)) - D
+        return J.reshape(-1, n + 1) * self.k
+
+
 def solve(pb: Problem, taus: np.ndarray, v: float, rows: np.ndarray, slopes: bool):
     """Per detector the least-squares amplitudes and rest on ``rows`` (free in sign), the
     residual; with ``slopes`` the variable-projection Jacobian (Kaufman) of the residual
     with respect to (τ_1 … τ_n, v); each axle's removal cost.  Residual and costs are
     scaled by the window's sampling step (misfits of all samples)."""
-    n = taus.size
-    if slopes:
-        X, dX = pb.atoms(taus, v, rows, slopes=True)
-    else:
-        X = pb.atoms(taus, v, rows)
-    res, jac, amps, gains = [], [], np.zeros((n, 2)), np.zeros(n)
-    for c in range(2):
-        M = np.hstack([X[c], pb.rest[c][rows]])
-        yc = pb.y[rows, c]
-        G = M.T @ M
-        G.flat[::G.shape[0] + 1] += 1e-12 * (np.trace(G) / G.shape[0] + 1e-300)
-        try:
-            Ginv = np.linalg.inv(G)
-        except np.linalg.LinAlgError:
-            Ginv = np.linalg.pinv(G)
-        coef = Ginv @ (M.T @ yc)
-        r = yc - M @ coef
-        res.append(r)
-        a = coef[:n]
-        amps[:, c] = a
-        # removing regressor i raises the misfit by coef_i² / [(MᵀM)⁻¹]_ii
-        gains += a**2 / np.maximum(np.diag(Ginv)[:n], 1e-300)
-        if slopes:
-            D = np.empty((rows.size, n + 1))
-            D[:, :n] = -v * dX[c] * a  # ∂(X a)/∂τ_i
-            D[:, n] = (dX[c] * (pb.t[rows][:, None] - taus[None, :])) @ a  # ∂(X a)/∂v
-            jac.append(M @ (Ginv @ (M.T @ D)) - D)
-    # every step-th sample: scaled to the misfit of all samples
-    k = np.sqrt(pb.step)
-    return (np.concatenate(res) * k, (np.vstack(jac) * k if slopes else None), amps,
-            gains * pb.step)
+    sol = Solution(pb, taus, v, rows if isinstance(rows, Rows) else Rows(pb, rows), slopes)
+    return sol.res, (sol.jacobian() if slopes else None), sol.amps, sol.gains
 
 
-def refine(pb: Problem, taus: np.ndarray, v: float, iterations: int = MAX_LM) -> VehicleFit:
+def refine(pb: Problem, taus: np.ndarray, v: float, iterations: int = MAX_LM, *,
+           start: Solution | None = None) -> VehicleFit:
     """The vehicle's axle times and speed by Levenberg–Marquardt on the variable
-    projection (amplitudes and rest by least squares inside), on a fixed window."""
+    projection (amplitudes and rest by least squares inside), on a fixed window.
+    ``start``: the :class:`Solution` with slopes at these times and speed on their window
+    when already made (the same numbers, not made again)."""
     taus = np.sort(np.asarray(taus, dtype=float))
-    rows = window(pb, taus, v)
     p = np.append(taus, v)
-    r, J, amps, gains = solve(pb, taus, v, rows, True)
+    if (start is not None and start.v == v and np.array_equal(start.taus, taus)
+            and start.slopes and np.array_equal(start.w.rows, window(pb, taus, v))):
+        sol, rows = start, start.w
+    else:
+        rows = Rows(pb, window(pb, taus, v))
+        sol = Solution(pb, taus, v, rows, True)
+    r, J, amps, gains = sol.res, sol.jacobian(), sol.amps, sol.gains
     cost = float(r @ r)
     lam = 1e-3
-    scale = np.append(np.full(taus.size, 1.0 / v), 1.0 / v)  # τ in s, v in m/s: metres
+    scale = np.full(taus.size + 1, 1.0 / v)  # τ in s, v in m/s: metres
     for _ in range(iterations):
         Js = J * scale
         A = Js.T @ Js
@@ -228,11 +313,12 @@ def refine(pb: Problem, taus: np.ndarray, v: float, iterations: int = MAX_LM) ->
             if vv <= 0:
                 lam *= 10.0
                 continue
-            r2, J2, amps2, gains2 = solve(pb, tt, vv, rows, True)
-            c2 = float(r2 @ r2)
+            sol = Solution(pb, tt, vv, rows, True)
+            c2 = float(sol.res @ sol.res)
             if c2 < cost:
                 rel = (cost - c2) / max(cost, 1e-300)
-                p, r, J, amps, gains, cost = np.append(tt, vv), r2, J2, amps2, gains2, c2
+                p, r, J, amps, gains, cost = (np.append(tt, vv), sol.res, sol.jacobian(),
+                                              sol.amps, sol.gains, c2)
                 lam = max(lam / 3.0, 1e-7)
                 improved = True
                 break

@@ -53,6 +53,7 @@ from bwim.classify import DEFAULT_GROUP_SPACING
 from bwim.detect import Detection, LearnedResponses, VehicleDetection, detect_axles
 from bwim.detect.presence import unexplained_activity
 from bwim.detect.result import FLAG_MULTIPLE_PRESENCE
+from bwim.detect.signals import channel_data
 from bwim.errors import BwimError
 from bwim.records import Passage, Record
 from bwim.site.setup import DetectorLane, SiteSetup
@@ -304,7 +305,7 @@ def _unseen_neighbours(record: Record, vehicles: list[LaneVehicle], gauges: Sequ
     windows = [v.window for v in vehicles if v.window is not None]
     if not gauges or not windows:
         return vehicles
-    total = record.channels(list(gauges)).data.sum(axis=1)
+    total = channel_data(record, gauges).sum(axis=1)
     extra = unexplained_activity(record.time, total, np.asarray(windows, dtype=float))
     if not extra.size:
         return vehicles

@@ -1,0 +1,73 @@
+"""Which axle detector of a pair is faulty, from one record where the pair found no axle.
+
+Contract
+--------
+* Input: the pair's two channels ``y`` (n_t, 2, reading units, in the responses' order)
+  and their :class:`~bwim.detect.response.LearnedResponses`.  Each channel is taken
+  from its level at rest (the median of the record's first :data:`REST_SHARE`) and
+  turned by its learned response's sign, so that an axle reads positive; its largest
+  excursions up (``p``, the axles' peaks) and down (``q``: the span's bending, or a
+  reversed detector's peaks) are compared between the detectors in the learned gain
+  ratio (the second's over ``gain_ratio``).
+* A detector **sees a vehicle** when its peak stands :data:`SEEN` levels
+  (:attr:`~bwim.detect.response.DetectorResponse.level`) above rest and above its dip.
+  When exactly one does, the other is named: **reversed** when its dip is the size of
+  the first's peak (within :data:`GAIN_FACTOR`) and larger than its own peak; **reads
+  nothing** (dead, disconnected or only noise) when neither excursion reaches
+  :data:`NOTHING` of the first's peak.  When both see it and their peaks differ by more
+  than :data:`GAIN_FACTOR` from the learned ratio, both are named (one of them changed
+  gain: one record cannot tell which).  Otherwise nothing is said ("").
+* The result is one line for a detection's message.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .response import LearnedResponses
+
+__all__ = ["GAIN_FACTOR", "NOTHING", "REST_SHARE", "SEEN", "detector_faults"]
+
+#: Share of the record (from its start) whose median is a channel's level at rest.
+REST_SHARE = 0.1
+#: A vehicle's peak stands this many levels above rest on a detector that sees it.
+SEEN = 10.0
+#: A detector whose excursions stay below this share of the other's peak (in the gain
+#: ratio) reads nothing of the vehicle.
+NOTHING = 0.25
+#: Two detectors' peaks (in the gain ratio) further apart than this factor disagree.
+GAIN_FACTOR = 2.0
+
+
+def detector_faults(y: np.ndarray, learned: LearnedResponses) -> str:
+    """What the readings say of a faulty detector of the pair (see the module contract):
+    a sentence naming it by its channel, or "" when they do not say."""
+    y = np.asarray(y, dtype=float)
+    if y.ndim != 2 or y.shape[1] != 2 or y.shape[0] < 2:
+        return ""
+    rest = np.median(y[:max(1, int(REST_SHARE * y.shape[0]))], axis=0)
+    names = learned.channels
+    scale = np.array([1.0, learned.gain_ratio])
+    z = (y - rest) * np.array([r.sign for r in learned.responses])
+    up, down = z.max(axis=0), -z.min(axis=0)
+    level = np.array([max(r.level, 1e-300) for r in learned.responses])
+    peak = up / scale  # in the first detector's units
+    sees = (up >= SEEN * level) & (up > down)
+    if sees.all():
+        ratio = peak[1] / peak[0]
+        if ratio > GAIN_FACTOR or ratio < 1.0 / GAIN_FACTOR:
+            return (f"{names[1]} reads the vehicle {ratio:.2g} × {names[0]} in their learned "
+                    f"gain ratio: {names[0]} or {names[1]} has changed gain")
+        return ""
+    if not sees.any():
+        return ""
+    d = int(np.flatnonzero(sees)[0])  # the detector that sees it
+    o = 1 - d
+    dip = down[o] / scale[o]
+    if down[o] > up[o] and peak[d] / GAIN_FACTOR <= dip <= peak[d] * GAIN_FACTOR:
+        return (f"{names[o]} reads the vehicle {names[d]} sees reversed (its peaks have "
+                "the opposite sign of its learned response)")
+    if max(up[o], down[o]) / scale[o] < NOTHING * peak[d]:
+        return (f"{names[o]} reads nothing of the vehicle {names[d]} sees (dead, "
+                "disconnected or only noise)")
+    return ""
