@@ -60,7 +60,8 @@ FAULTS = {
 }
 
 
-def _day() -> Path:
+def site_day() -> Path:
+    """The day of :data:`SEED`, generated once into the cache (also bench_declarations')."""
     cache = Path(os.environ.get("BWIM_BENCH_CACHE", tempfile.gettempdir()))
     folder = cache / f"bwim-faults-{SEED}-{N_TRAFFIC}"
     if not (folder / "scenario.toml").exists():  # written last: the day is complete
@@ -78,7 +79,7 @@ def _faulty(record, name: str, fault, noise: float) -> object:
 
 
 def main() -> None:
-    day = _day()
+    day = site_day()
     scenario = load_scenario(day / "scenario.toml")
     cal = calibrate_site([load_record(p, scenario)
                           for p in sorted((day / "calibration").glob("*.txt"))],
