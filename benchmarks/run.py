@@ -13,6 +13,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 from benchmarks import (  # noqa: E402
     bench_batch,
     bench_calibration,
+    bench_declarations,
     bench_detect_site,
     bench_drift,
     bench_faults,
@@ -53,6 +54,7 @@ def main() -> None:
     bench_realsite.main()
     bench_drift.main()
     bench_faults.main()
+    bench_declarations.main()
     bench_site_model.main([])
 
 
