@@ -416,7 +416,7 @@ def test_unknown_key_names_key_section_and_allowed_keys(tmp_path):
     with raises(
         f"{p}: unknown key 'lenght' in [bridge]; allowed keys: kind, length, width, "
         "thickness, nx, ny, x_lines, y_lines, x_through, y_through, E, E_x, E_y, mu, "
-        "poisson, damping_ratio, supports, zones, zone_map, n_zones, girders"
+        "poisson, damping_ratio, supports, zones, zone_map, n_zones, joints, girders"
     ):
         scn.load_scenario(p)
     p = write(tmp_path, """
