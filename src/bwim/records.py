@@ -310,8 +310,9 @@ class Record:
             )
         return self.truths[0]
 
-    def channels(self, sensors: Sequence[str | Sensor]) -> Record:
-        """A record with a subset of the channels (by name or Sensor), in that order."""
+    def channel_indices(self, sensors: Sequence[str | Sensor]) -> list[int]:
+        """The columns of the channels ``sensors`` (by name or Sensor), in that order;
+        InputError for a channel the record does not have."""
         names = [s.name for s in self.sensors]
         idx = []
         for s in sensors:
@@ -319,6 +320,11 @@ class Record:
             if key not in names:
                 raise InputError(f"no channel {key!r} in this record; channels: {names}")
             idx.append(names.index(key))
+        return idx
+
+    def channels(self, sensors: Sequence[str | Sensor]) -> Record:
+        """A record with a subset of the channels (by name or Sensor), in that order."""
+        idx = self.channel_indices(sensors)
         return dataclasses.replace(
             self, data=self.data[:, idx], sensors=tuple(self.sensors[i] for i in idx)
         )

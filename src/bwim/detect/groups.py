@@ -34,7 +34,7 @@ import bisect
 import numpy as np
 from scipy.signal import find_peaks
 
-from .vehicle_fit import REACH, Problem, Rows
+from .vehicle_fit import REACH, Problem, Rows, ridged_normal
 
 __all__ = ["GROUP_AXLES", "GROUP_DIP", "GROUP_EXTENT", "GROUP_SPACING", "LEVEL_GAIN",
            "PEAK_FLOOR", "RARE_GROUP", "SEGMENT_MARGIN", "choose_groups", "explained",
@@ -96,12 +96,7 @@ def choose_groups(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp:
     rows = w.rows
     # both detectors' least squares as one stack of two (the same numbers as two)
     X = pb.both_atoms(v, w.t[:, None] - taus[None, :])[0]
-    M = np.concatenate([X, w.rest], axis=2)
-    Mt = M.transpose(0, 2, 1)
-    G = Mt @ M
-    p = G.shape[1]
-    diag = G.reshape(2, -1)[:, ::p + 1]  # a view
-    diag += 1e-12 * (diag.sum(axis=-1) / p + 1e-300)[:, None]
+    Mt, G = ridged_normal(np.concatenate([X, w.rest], axis=2))
     coef = np.linalg.solve(G, Mt @ w.y)
     local = (w.y - w.rest @ coef[:, n:])[..., 0]  # (2, n_rows)
     parts = X * coef[:, None, :n, 0]  # (2, n_rows, n)

@@ -80,6 +80,7 @@ from .vehicle_fit import (
     make_problem,
     refine,
     relative,
+    ridged_normal,
     window,
 )
 
@@ -274,11 +275,7 @@ class _Pursuit:
         x = self.pb.both_atoms(self.v, dt)[0]  # (2, n_t, 1)
         x = x - self.Q @ (self.Qt @ x)
         X = np.concatenate([self.cols, x], axis=2)
-        Xt = X.transpose(0, 2, 1)
-        G = Xt @ X
-        p = G.shape[1]
-        diag = G.reshape(2, -1)[:, ::p + 1]  # a view
-        diag += 1e-12 * (diag.sum(axis=-1) / p + 1e-300)[:, None]
+        Xt, G = ridged_normal(X)
         a = np.linalg.solve(G, Xt @ self.y)
         res = (self.y - X @ a)[..., 0].T.copy()  # (n_t, 2)
         return a[..., 0].T.copy(), float(np.sum(res**2)), (X, res)

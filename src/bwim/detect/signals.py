@@ -24,7 +24,6 @@ from collections.abc import Sequence
 import numpy as np
 from scipy.ndimage import median_filter
 
-from bwim.errors import InputError
 from bwim.records import Record
 from bwim.sensors import Sensor
 
@@ -86,11 +85,4 @@ def channel_data(record: Record, sensors: Sequence[str | Sensor]) -> np.ndarray:
     """The readings (n_t, k) of the channels ``sensors`` (names or Sensors), in that
     order: ``record.channels(sensors).data`` without making a record; InputError for a
     channel the record does not have."""
-    names = [s.name for s in record.sensors]
-    idx = []
-    for s in sensors:
-        key = s.name if isinstance(s, Sensor) else s
-        if key not in names:
-            raise InputError(f"no channel {key!r} in this record; channels: {names}")
-        idx.append(names.index(key))
-    return record.data[:, idx]
+    return record.data[:, record.channel_indices(sensors)]

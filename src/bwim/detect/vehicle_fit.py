@@ -44,7 +44,7 @@ from .response import HIGH_PASS, LearnedResponses, high_pass
 
 __all__ = ["CONVERGED", "MAX_LM", "MIN_RATIO_BOUND", "RATIO_SPREADS", "REACH",
            "WINDOW_SAMPLES", "Problem", "Rows", "Solution", "VehicleFit", "make_problem", "refine",
-           "relative", "solve", "window"]
+           "relative", "ridged_normal", "solve", "window"]
 
 #: A vehicle's fit looks this far beyond its first and last axle, m of travel.
 REACH = 2.0
@@ -59,6 +59,18 @@ MAX_LM = 15
 #: ... which stops when the misfit falls by less than this share (or the times move by
 #: less than 5 mm of travel).
 CONVERGED = 3e-3
+
+
+def ridged_normal(M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(Mᵀ, G)`` for both detectors' design matrices stacked, ``M`` (2, n, p): ``G =
+    Mᵀ M`` with its diagonal raised by 1e-12 of its mean (a ridge far below the data's
+    scale that keeps a rank-deficient fit solvable)."""
+    Mt = M.transpose(0, 2, 1)
+    G = Mt @ M
+    p = G.shape[1]
+    diag = G.reshape(2, -1)[:, ::p + 1]  # a view
+    diag += 1e-12 * (diag.sum(axis=-1) / p + 1e-300)[:, None]
+    return Mt, G
 
 
 @dataclass(frozen=True, eq=False)
@@ -240,11 +252,7 @@ class Solution:
         self.dt = w.t[:, None] - taus[None, :]
         X, self.dX = pb.both_atoms(v, self.dt, slopes)
         M = np.concatenate([X, w.rest], axis=2)
-        Mt = M.transpose(0, 2, 1)
-        G = Mt @ M
-        p = G.shape[1]
-        diag = G.reshape(2, -1)[:, ::p + 1]  # a view
-        diag += 1e-12 * (diag.sum(axis=-1) / p + 1e-300)[:, None]
+        Mt, G = ridged_normal(M)
         try:
             Ginv = np.linalg.inv(G)
         except np.linalg.LinAlgError:
