@@ -10,6 +10,11 @@ Contract
   - a vehicle that shares the span with another vehicle travelling its way (side by side
     or following) is refused (``multiple_presence``): one record cannot tell their weights
     apart with lines of one vehicle;
+  - a vehicle weighed by the lines whose lateral position (in metres, from the gauges'
+    y) lies more than :data:`LATERAL_REACH` beyond the calibration runs' range is
+    refused: it is in another lane than the runs (a lane without detectors, seen by
+    this lane's pair) or another vehicle beside it pulls the strain's centre away, and
+    the lines are not calibrated there;
   - any other vehicle's gauges are judged first (:func:`bwim.site.health.check_gauges`,
     also for a vehicle weighed by MFI, below): a dead, stuck, reversed or gain-changed
     gauge is left out and named (``gauge_fault:NAME``, quality ``warning``); too few
@@ -82,6 +87,11 @@ __all__ = ["EventWeighing", "VehicleWeighing", "weigh_event"]
 #: What one event's detection or weighing may raise without ending a batch: bwim's own
 #: errors and the numerical failures of a degenerate record (a singular fit).
 _EVENT_ERRORS = (BwimError, ArithmeticError, ValueError, np.linalg.LinAlgError)
+#: m: how far beyond the calibration runs' lateral range a vehicle weighed by the lines
+#: may lie: the wander a lane leaves a truck (a 2.5 m wide truck in a 3.5 m lane moves
+#: ± 0.5 m).  Beyond it the vehicle is in another lane than the runs, or the strain's
+#: centre is pulled by a vehicle no detector saw.
+LATERAL_REACH = 0.5
 
 
 def _why(exc: BaseException) -> str:
@@ -377,6 +387,15 @@ def _vehicle(record: Record, ev: EventDetection, k: int, calibration: SiteCalibr
     mfi = model is not None and lv.lane == setup.calibration_lane
     if mfi and not model.accepted:
         return refused(f"the bridge model is not accepted: {model.reason}")
+    if not mfi:
+        lo, hi = calibration.lines.lateral_range
+        y = float(v.passage.lane)
+        beyond = max(lo - y, y - hi)
+        if v.lateral_unit == "m" and beyond > LATERAL_REACH:
+            return refused(f"its lateral position {y:.2f} m lies {beyond:.2f} m beyond the "
+                           f"calibration runs' {lo:.2f}-{hi:.2f} m: another lane than the "
+                           "runs', or a vehicle beside it no detector saw; the lines are "
+                           "not calibrated there")
     try:
         health = check_gauges(record, v.passage, calibration.lines, combine=setup.combine,
                               alone=FLAG_MULTIPLE_PRESENCE not in flags)
