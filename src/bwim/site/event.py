@@ -10,16 +10,16 @@ Contract
   - a vehicle that shares the span with another vehicle travelling its way (side by side
     or following) is refused (``multiple_presence``): one record cannot tell their weights
     apart with lines of one vehicle;
-  - a vehicle weighed by the lines whose lateral position (in metres, from the gauges'
-    y) lies more than :data:`LATERAL_REACH` beyond the calibration runs' range is
-    refused: it is in another lane than the runs (a lane without detectors, seen by
-    this lane's pair) or another vehicle beside it pulls the strain's centre away, and
-    the lines are not calibrated there;
   - any other vehicle's gauges are judged first (:func:`bwim.site.health.check_gauges`,
     also for a vehicle weighed by MFI, below): a dead, stuck, reversed or gain-changed
     gauge is left out and named (``gauge_fault:NAME``, quality ``warning``); too few
     healthy gauges refuse it, and so does a gauge that disagrees while a vehicle of the
     other direction is on the span;
+  - a vehicle the lines would weigh whose lateral position (in metres, from the gauges'
+    y) lies more than :data:`LATERAL_REACH` from the calibration runs' mean is refused
+    (unless one faulty gauge, left out, moved it): it is in another lane than the runs
+    (a lane without detectors, seen by this lane's pair) or another vehicle beside it
+    pulls the strain's centre away, and the lines are not calibrated there;
   - it is then weighed (:func:`bwim.wim.weigh`: gauges combined by generalised
     least squares, axle groups as groups); one with a vehicle of the other direction on
     the span at the same time is weighed and flagged ``multiple_presence`` (the fit's
@@ -87,11 +87,12 @@ __all__ = ["EventWeighing", "VehicleWeighing", "weigh_event"]
 #: What one event's detection or weighing may raise without ending a batch: bwim's own
 #: errors and the numerical failures of a degenerate record (a singular fit).
 _EVENT_ERRORS = (BwimError, ArithmeticError, ValueError, np.linalg.LinAlgError)
-#: m: how far beyond the calibration runs' lateral range a vehicle weighed by the lines
-#: may lie: the wander a lane leaves a truck (a 2.5 m wide truck in a 3.5 m lane moves
-#: ± 0.5 m).  Beyond it the vehicle is in another lane than the runs, or the strain's
-#: centre is pulled by a vehicle no detector saw.
-LATERAL_REACH = 0.5
+#: m: how far from the calibration runs' mean lateral position a vehicle weighed by the
+#: lines may lie: the wander a lane leaves a truck (a 2.5 m wide truck in a 3.5 m lane
+#: moves ± 0.5 m) and the detected position's own error (about as much).  Beyond it the
+#: vehicle is in another lane than the runs, or the strain's centre is pulled by a
+#: vehicle no detector saw.
+LATERAL_REACH = 1.0
 
 
 def _why(exc: BaseException) -> str:
@@ -387,15 +388,6 @@ def _vehicle(record: Record, ev: EventDetection, k: int, calibration: SiteCalibr
     mfi = model is not None and lv.lane == setup.calibration_lane
     if mfi and not model.accepted:
         return refused(f"the bridge model is not accepted: {model.reason}")
-    if not mfi:
-        lo, hi = calibration.lines.lateral_range
-        y = float(v.passage.lane)
-        beyond = max(lo - y, y - hi)
-        if v.lateral_unit == "m" and beyond > LATERAL_REACH:
-            return refused(f"its lateral position {y:.2f} m lies {beyond:.2f} m beyond the "
-                           f"calibration runs' {lo:.2f}-{hi:.2f} m: another lane than the "
-                           "runs', or a vehicle beside it no detector saw; the lines are "
-                           "not calibrated there")
     try:
         health = check_gauges(record, v.passage, calibration.lines, combine=setup.combine,
                               alone=FLAG_MULTIPLE_PRESENCE not in flags)
@@ -403,6 +395,16 @@ def _vehicle(record: Record, ev: EventDetection, k: int, calibration: SiteCalibr
         return refused(f"weighing failed: {_why(exc)}")
     if not health.usable:
         return refused(health.reason, flags=(*flags, *health.flags))
+    # one faulty gauge moves the detected lateral position; its weighing leaves it out
+    one_fault = len({f.gauge for f in health.faults}) == 1
+    if not mfi and not one_fault and v.lateral_unit == "m":
+        centre = calibration.lines.lateral_center
+        y = float(v.passage.lane)
+        if abs(y - centre) > LATERAL_REACH:
+            return refused(f"its lateral position {y:.2f} m lies {abs(y - centre):.2f} m from "
+                           f"the calibration runs' {centre:.2f} m: another lane than the "
+                           "runs', or a vehicle beside it no detector saw; the lines are "
+                           "not calibrated there", flags=(*flags, *health.flags))
     if mfi:  # the gauges the lines found faulty are left out of the MFI too
         faulty = {f.gauge for f in health.faults}
         return _weigh_mfi(record, lv, (*flags, *health.flags), model, options, factor,
