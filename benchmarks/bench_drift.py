@@ -32,7 +32,7 @@ from functools import partial
 from pathlib import Path
 
 from benchmarks._timing import print_table
-from benchmarks.bench_realsite import CRITERIA, MESH, N_TRAFFIC
+from benchmarks.bench_realsite import CRITERIA, MESH, N_TRAFFIC, cell
 from bwim.accuracy import assess
 from bwim.batch import executor_for, weigh_events
 from bwim.io import read_reference
@@ -56,11 +56,6 @@ def drift_day(seed: int = SEED, n_traffic: int = N_TRAFFIC) -> Path:
         make_test_day(folder, site="short-span-4-lane", seed=seed, n_traffic=n_traffic,
                       mesh=MESH, temperature_channel=True)
     return folder
-
-
-def _cell(res, name: str) -> str:
-    c = next((c for c in res.criteria if c.name == name), None)
-    return "-" if c is None else f"{c.mean:+.1f} ± {c.std:.1f} {c.class_name}"
 
 
 def run(day: Path, jobs: int = 2) -> dict:
@@ -109,14 +104,14 @@ def main() -> None:
                 "on the traffic date's lane-1 reference trucks, error % mean ± sd and class)",
                 ["method", "weighed", "gross weight", "group of axles", "single axle",
                  "axle of group", "overall", "time (s)"],
-                [[m, f"{r.n_vehicles}/{r.n_reference}", *[_cell(r, c) for c in CRITERIA],
+                [[m, f"{r.n_vehicles}/{r.n_reference}", *[cell(r, c) for c in CRITERIA],
                   r.overall_class or "-", f"{dt:.0f}"] for m, (r, dt) in res["methods"].items()])
     print_table("The traffic method on thinner traffic (its trend from one event in k of "
                 "both dates; reference vehicles per date; weights left to the next source "
                 "as drift_traffic_thin)",
                 ["k", "events kept", "reference vehicles", "thin", "gross weight",
                  "overall"],
-                [[k, n, refs, n_thin, _cell(r, "gross_weight"), r.overall_class or "-"]
+                [[k, n, refs, n_thin, cell(r, "gross_weight"), r.overall_class or "-"]
                  for k, n, refs, n_thin, r in res["thin"]])
 
 

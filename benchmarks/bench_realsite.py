@@ -195,7 +195,8 @@ def run_day(seed: int) -> dict:
             "duration": duration, "day": t_day}
 
 
-def _cell(res, name: str) -> str:
+def cell(res, name: str) -> str:
+    """One COST 323 criterion of ``res`` as "mean ± sd class" (%), or "-"."""
     c = next((c for c in res.criteria if c.name == name), None)
     return "-" if c is None else f"{c.mean:+.1f} ± {c.std:.1f} {c.class_name}"
 
@@ -204,7 +205,7 @@ def main() -> None:
     days = [run_day(seed) for seed in SEEDS]
     for d in days:
         rows = [[label, f"{res.n_vehicles}/{res.n_reference}",
-                 *[_cell(res, c) for c in CRITERIA], res.overall_class or "-"]
+                 *[cell(res, c) for c in CRITERIA], res.overall_class or "-"]
                 for label, res in d["results"].items()]
         fit = d["fit"]
         source = ("traffic drift not applied (too few reference vehicles)" if fit is None

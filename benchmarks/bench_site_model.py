@@ -34,8 +34,8 @@ from functools import partial
 
 import numpy as np
 
-from benchmarks._timing import print_table
-from benchmarks.bench_realsite import CRITERIA, SEEDS, site_day
+from benchmarks._timing import median_time, print_table
+from benchmarks.bench_realsite import CRITERIA, SEEDS, cell, site_day
 from bwim.accuracy import assess
 from bwim.batch import executor_for, weigh_events
 from bwim.io import read_reference
@@ -62,11 +62,6 @@ def site_scenario(day):
     return scenario_from_dict(doc, source=day / "scenario.toml", folder=day)
 
 
-def _cell(res, name: str) -> str:
-    c = next((c for c in res.criteria if c.name == name), None)
-    return "-" if c is None else f"{c.mean:+.1f} ± {c.std:.1f} {c.class_name}"
-
-
 def run_day(seed: int, jobs: int = 2, gains: str = "common",
             mesh_correction: int | str = "auto") -> dict:
     return run_folder(site_day(seed), seed, jobs, gains, mesh_correction)
@@ -86,8 +81,7 @@ def mesh_cost(seed: int) -> list[list]:
                                      mesh_correction=mc)
         dt = time.perf_counter() - t0
         base = dt if base is None else base
-        weigh = min(_timed(lambda m=model: weigh_event(event, site, bridge=m))
-                    for _ in range(3))
+        weigh = median_time(lambda m=model: weigh_event(event, site, bridge=m), repeat=3)
         corr = model.fit.mesh_correction
         g = model.bridge.model.grid
         rows.append([seed, str(mc), corr.levels if corr else 0, f"{g.nx}x{g.ny}",
@@ -96,12 +90,6 @@ def mesh_cost(seed: int) -> list[list]:
                      " ".join(f"{100 * e:+.1f}" for e in model.gvw_errors),
                      f"{dt:.0f} s ({dt / base:.2f}×)", f"{weigh:.2f} s"])
     return rows
-
-
-def _timed(fn) -> float:
-    t0 = time.perf_counter()
-    fn()
-    return time.perf_counter() - t0
 
 
 def run_folder(day, seed: int, jobs: int = 2, gains: str = "common",
@@ -167,13 +155,13 @@ def main(argv: list[str] | None = None) -> None:
                     ["weighing", "weighed", "gross weight", "group of axles", "single axle",
                      "axle of group", "overall"],
                     [[label, f"{res.n_vehicles}/{res.n_reference}",
-                      *[_cell(res, c) for c in CRITERIA], res.overall_class or "-"]
+                      *[cell(res, c) for c in CRITERIA], res.overall_class or "-"]
                      for label, res in d["results"].items()])
         print("events/s (2 processes): " + ", ".join(f"{k} {v:.1f}"
                                                       for k, v in d["rates"].items()))
     print_table("The mesh correction's cost: the model calibrated with none, auto (the "
                 "default) and one bisection (time: calibration with its self-check, and "
-                "its ratio to none; weighing: one traffic event with the model, best of 3)",
+                "its ratio to none; weighing: one traffic event with the model, median of 3)",
                 ["seed", "mesh correction", "bisections", "model mesh", "E_y/E_x",
                  "weighing scale", "leave-one-out GVW errors %", "calibration time",
                  "weighing"], [r for seed in SEEDS for r in mesh_cost(seed)])

@@ -283,9 +283,7 @@ def calibrate_logger(
         levels = _auto_levels(problem, state, opt.x, bridge)
     correction = None
     if levels:
-        base = bridge.with_params(**{n: bridge.params[n] for n in _MASS
-                                     if n in bridge.params})
-        fixer = _LoggerCorrection(levels, problem=problem, base=base)
+        fixer = _LoggerCorrection(levels, problem=problem, base=bridge)
         correction = fixer.solve(_Pass(opt=opt, state=state))
         opt, state = fixer.state.opt, fixer.state.state
         nfev += sum(p.opt.nfev for p in fixer.states)
