@@ -36,6 +36,7 @@ HARD_FLAGS = (
     "truncated_start",       # an axle is already on the lines' support at the first sample
     "truncated_end",         # an axle is still on the lines' support at the last sample
     "no_baseline",           # too few samples without an axle on the support for the offsets
+    "lateral_outlier",       # lateral position an outlier of its lane's day (bwim.site.wander)
 )
 #: Flags that call for a look but keep the weights (quality "warning").
 SOFT_FLAGS = (

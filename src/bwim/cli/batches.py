@@ -224,6 +224,18 @@ def _print_drift(site, fit) -> None:
         print(f"note: {note}")
 
 
+def _print_wander(check) -> None:
+    """One line per lane whose lateral spread was measured, and how many it refused."""
+    for w in check.lanes:
+        unit = " m" if w.unit == "m" else " (gauge index)"
+        n = sum(1 for r in check.rows if "lateral_outlier" in r.flags and r.lane == w.lane
+                and r.direction == w.direction)
+        print(f"lane {w.lane if w.lane is not None else '?'} {w.direction or ''}".rstrip()
+              + f": lateral position {w.median:.2f}{unit} ± {w.sigma:.2f} over {w.n} "
+              f"vehicle(s); {n} refused beyond {check.limit:g} σ (a vehicle beside it no "
+              "detector saw)")
+
+
 def _print_weighed(report, title: str) -> None:
     rows = report.rows
     shown = [(r.record, r.vehicle, r.n_axles or "",
@@ -259,14 +271,14 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path, batch) -> int:
         options = scenario.identify.kwargs() if scenario.identify is not None else {}
     site = _calibrate_site(record_paths(args.calibration_records, any_suffix=True),
                            scenario, folder)
-    drift_fits: list = []
+    days: list = []
 
-    def finalize(rows):  # the traffic's own drift correction needs the whole day
-        from bwim.site import correct_drift
+    def finalize(rows):  # the lanes' spread and the traffic's drift need the whole day
+        from bwim.site import finish_day
 
-        out, fit = correct_drift(rows, site)
-        drift_fits[:] = [fit]
-        return out
+        day = finish_day(rows, site)
+        days[:] = [day]
+        return list(day.rows)
 
     batch.finalize = finalize
     batch.gauge_table = folder / GAUGE_HEALTH_NAME
@@ -279,7 +291,9 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path, batch) -> int:
     print(f"{len(items)} event(s){_done_before(report)} in {report.elapsed:.1f} s: "
           f"{report.count('weighed')} vehicle(s) weighed, {report.count('refused')} not "
           f"weighed (flagged), {report.count('failed')} record(s) failed")
-    _print_drift(site, drift_fits[0] if drift_fits else None)
+    _print_drift(site, days[0].drift if days else None)
+    if days:
+        _print_wander(days[0].wander)
     _print_weighed(report, "Static weights (moving force identification with the FE "
                    "model):" if bridge else "Static weights (multi-run influence lines, "
                    "gauges combined):")

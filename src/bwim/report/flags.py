@@ -53,6 +53,12 @@ FLAG_TABLE: tuple[tuple[str, tuple[str, ...], str, str], ...] = (
     ("hard", ("no_baseline",),
      "too few samples without an axle on the bridge to find the gauges' offsets",
      "the logger's pre-trigger"),
+    ("hard", ("lateral_outlier",),
+     "the vehicle's lateral position lies more than 3.5 robust standard deviations from "
+     "its lane's traffic of the day (bwim.site.wander): its strain's centre is pulled by "
+     "a vehicle beside it that no axle detector saw, or it drove out of its lane; the "
+     "lines would weigh both as one",
+     "the lane's spread printed by bwim weigh; another vehicle in the record"),
     ("hard", ("negative_force",),
      "moving force identification: an identified axle force is tensile where it is "
      "weighed", "the model, the regularisation"),

@@ -5,7 +5,7 @@ weight before it leaves.
     setup = bwim.scenario.build_site_setup(scenario)       # lanes, detectors, truck
     site = bwim.site.calibrate_site(runs, setup)           # responses, lines, drift
     event = bwim.site.weigh_event(record, site)            # every vehicle of one event
-    rows = bwim.site.correct_drift(rows, site)             # the traffic's own reference
+    day = bwim.site.finish_day(rows, site)                 # lanes' spread, traffic drift
 
 Contract
 --------
@@ -20,9 +20,11 @@ Contract
 * :mod:`bwim.site.drift`: the drift of the strain-to-load ratio from one day to the next
   (temperature, the traffic itself, the time of day); :func:`correct_drift` applies the
   traffic method to a batch's summary rows.
+* :mod:`bwim.site.wander`: a vehicle's lateral position against its lane's traffic (a
+  vehicle beside it no detector saw).
+* :mod:`bwim.site.day`: :func:`finish_day`, the day-level steps (the lanes' lateral check,
+  then the traffic's drift) on a batch's rows (:class:`DayResult`).
 """
-
-from collections.abc import Sequence
 
 from bwim.site.calibrate import (
     SPACING_TOLERANCE,
@@ -30,57 +32,39 @@ from bwim.site.calibrate import (
     SiteCalibration,
     calibrate_site,
 )
-from bwim.site.drift import (
-    DRIFT_METHODS,
-    DriftSetup,
-    TrafficDrift,
-    apply_traffic_drift,
-    traffic_drift,
-)
+from bwim.site.day import DayResult, correct_drift, finish_day
+from bwim.site.drift import DRIFT_METHODS, DriftSetup, TrafficDrift
 from bwim.site.event import EventWeighing, VehicleWeighing, weigh_event
 from bwim.site.health import GaugeFault, GaugeHealth, check_gauges
 from bwim.site.model import ModelRun, SiteModel, calibrate_site_model
 from bwim.site.setup import DETECTION_METHODS, DetectorLane, Lane, SiteSetup
-from bwim.summary import SummaryRow
+from bwim.site.wander import LaneWander, WanderCheck, refuse_lateral_outliers
 
 __all__ = [
     "DETECTION_METHODS",
     "DRIFT_METHODS",
     "SPACING_TOLERANCE",
     "STRAIN_ONLY_PASSES",
+    "DayResult",
     "DetectorLane",
     "DriftSetup",
     "EventWeighing",
     "GaugeFault",
     "GaugeHealth",
     "Lane",
+    "LaneWander",
     "ModelRun",
     "SiteCalibration",
     "SiteModel",
     "SiteSetup",
     "TrafficDrift",
     "VehicleWeighing",
+    "WanderCheck",
     "calibrate_site",
     "calibrate_site_model",
     "check_gauges",
     "correct_drift",
+    "finish_day",
+    "refuse_lateral_outliers",
     "weigh_event",
 ]
-
-
-def correct_drift(rows: Sequence[SummaryRow], calibration: SiteCalibration
-                  ) -> tuple[list[SummaryRow], TrafficDrift | None]:
-    """A batch's rows with the traffic method's drift correction where the setup asks for
-    it (``"traffic"``, or ``"auto"`` without a temperature model) and the traffic allows
-    it (:func:`bwim.site.drift.traffic_drift`); the rows as they are otherwise.  Returns
-    the rows and the fit (None when not applied)."""
-    setup = calibration.setup.drift
-    if setup.method not in ("traffic", "auto") or (
-            setup.method == "auto" and calibration.temperature is not None):
-        return list(rows), None
-    tod = calibration.time_of_day
-    fit = traffic_drift(rows, setup, calibration=tod,
-                        calibration_span=None if tod is None else tod.trend.span)
-    if fit is None:
-        return list(rows), None
-    return apply_traffic_drift(rows, fit), fit

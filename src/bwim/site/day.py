@@ -1,0 +1,77 @@
+"""The day-level steps of a batch of events: what one event cannot decide alone.
+
+Contract
+--------
+* :func:`finish_day` takes every summary row of a batch (as :func:`bwim.site.weigh_event`
+  made them) and applies, in this order:
+
+  1. the lanes' lateral check (:func:`bwim.site.wander.refuse_lateral_outliers`): a
+     weighed vehicle whose lateral position is an outlier of its lane's traffic is
+     refused (``lateral_outlier``);
+  2. the traffic's own drift correction where the setup asks for it
+     (:func:`correct_drift`), on the rows the first step kept weighed.
+
+  It returns a :class:`DayResult` (the rows, in order, and what each step measured).
+  ``bwim weigh`` runs it on the final summary; the benchmarks run it the same way.
+* :func:`correct_drift` alone is the second step.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from bwim.site.calibrate import SiteCalibration
+from bwim.site.drift import TrafficDrift, apply_traffic_drift, traffic_drift
+from bwim.site.wander import WanderCheck, refuse_lateral_outliers
+from bwim.summary import SummaryRow
+
+__all__ = ["DayResult", "correct_drift", "finish_day"]
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class DayResult:
+    """A batch's rows after the day-level steps.
+
+    Attributes
+    ----------
+    rows : tuple of SummaryRow
+        Every row, in the input's order.
+    wander : WanderCheck
+        The lanes' lateral spreads and the rows refused as outliers of them.
+    drift : TrafficDrift or None
+        The traffic's drift fit; None when the traffic method was not applied.
+    """
+
+    rows: tuple[SummaryRow, ...]
+    wander: WanderCheck
+    drift: TrafficDrift | None
+
+    def __repr__(self) -> str:
+        drift = "none" if self.drift is None else f"traffic ({self.drift.reference_class})"
+        return f"DayResult({len(self.rows)} rows, {self.wander!r}, drift {drift})"
+
+
+def correct_drift(rows: Sequence[SummaryRow], calibration: SiteCalibration
+                  ) -> tuple[list[SummaryRow], TrafficDrift | None]:
+    """A batch's rows with the traffic method's drift correction where the setup asks for
+    it (``"traffic"``, or ``"auto"`` without a temperature model) and the traffic allows
+    it (:func:`bwim.site.drift.traffic_drift`); the rows as they are otherwise.  Returns
+    the rows and the fit (None when not applied)."""
+    setup = calibration.setup.drift
+    if setup.method not in ("traffic", "auto") or (
+            setup.method == "auto" and calibration.temperature is not None):
+        return list(rows), None
+    tod = calibration.time_of_day
+    fit = traffic_drift(rows, setup, calibration=tod,
+                        calibration_span=None if tod is None else tod.trend.span)
+    if fit is None:
+        return list(rows), None
+    return apply_traffic_drift(rows, fit), fit
+
+
+def finish_day(rows: Sequence[SummaryRow], calibration: SiteCalibration) -> DayResult:
+    """The day-level steps on a batch's rows (see the module docstring)."""
+    wander = refuse_lateral_outliers(rows)
+    out, fit = correct_drift(wander.rows, calibration)
+    return DayResult(rows=tuple(out), wander=wander, drift=fit)
