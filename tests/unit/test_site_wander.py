@@ -4,7 +4,7 @@ an outlier of its lane's traffic is refused.
 References: the median and the normal-scaled median absolute deviation are scipy's
 (``scipy.stats.median_abs_deviation(scale="normal")``); the 3.5 limit on the modified
 z-score is Iglewicz & Hoaglin (1993).  The rows are built here (the statistic is algebra:
-the realistic site's use of it is measured in tests/validation/test_lane_wander_site.py and
+the realistic site's use of it is measured in tests/validation/test_realistic_lanes.py and
 benchmarks/bench_realsite.py).
 """
 

@@ -102,6 +102,7 @@ from bwim.detect.result import FLAG_MULTIPLE_PRESENCE
 from bwim.detect.signals import robust_sigma
 from bwim.errors import BwimError, InputError
 from bwim.records import Passage, Record
+from bwim.site.bending import DetectorBending, learn_bending
 from bwim.site.drift import TemperatureDrift, TimeOfDayDrift, seconds_of_day
 from bwim.site.health import FLAT_NOISE, GAIN_TOLERANCE, check_gauges
 from bwim.site.lanes import EventDetection, detect_lanes
@@ -176,6 +177,9 @@ class SiteCalibration:
     setup : SiteSetup
     responses : mapping of int to LearnedResponses
         The detector lanes' responses (empty: detection by separate peaks).
+    bending : mapping of int to DetectorBending
+        What each detector pair other than the calibration lane's reads of the span's
+        bending, from the runs used (:mod:`bwim.site.bending`; empty without gauges).
     time_of_day : TimeOfDayDrift or None
         The runs' factors over the time of day.
     temperature : TemperatureDrift or None
@@ -190,6 +194,7 @@ class SiteCalibration:
     fits: tuple[RunFit | None, ...]
     setup: SiteSetup
     responses: Mapping[int, LearnedResponses] = field(default_factory=dict)
+    bending: Mapping[int, DetectorBending] = field(default_factory=dict)
     time_of_day: TimeOfDayDrift | None = None
     temperature: TemperatureDrift | None = None
     notes: tuple[str, ...] = ()
@@ -286,6 +291,7 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
     return SiteCalibration(
         lines=cal.lines, detections=cal.detections, reasons=cal.reasons, fits=cal.fits,
         setup=setup, responses=MappingProxyType(dict(responses)),
+        bending=MappingProxyType(_bending(records, setup, kept)),
         time_of_day=_time_of_day(records, cal),
         temperature=_temperature(records, cal, setup),
         notes=tuple(notes))
@@ -586,6 +592,19 @@ def _transferred(learned: LearnedResponses, channels: tuple[str, str], distance:
                             gain_ratio=float(gain[1]),
                             amplitude_spread=max(learned.amplitude_spread,
                                                  TRANSFERRED_SPREAD))
+
+
+def _bending(records: Sequence[Record], setup: SiteSetup, kept: Sequence[int]
+             ) -> dict[int, DetectorBending]:
+    """Each other detector pair's reading of the span's bending, from the runs used (the
+    truck alone: nothing crossed those pairs; all runs when fewer than two were used);
+    none without gauges (:mod:`bwim.site.bending`)."""
+    teach = [records[k] for k in kept] if len(kept) >= 2 else list(records)
+    gauges = gauge_names(teach[0])
+    if not gauges:
+        return {}
+    return {pair.lane: learn_bending(teach, pair.channels, gauges)
+            for pair in setup.lanes if pair.lane != setup.calibration_lane}
 
 
 # --- 3. runs -------------------------------------------------------------------------------

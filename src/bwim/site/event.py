@@ -307,7 +307,8 @@ def weigh_event(record: Record, calibration: SiteCalibration, *,
     try:
         if setup.lanes:
             ev = detect_lanes(record, setup, responses=calibration.responses,
-                              span=lines.support, gauges=gauge_names(record))
+                              span=lines.support, gauges=gauge_names(record),
+                              bending=calibration.bending)
         else:
             det = detect_from_strain(record, lines.line_at(), span=lines.support,
                                      gauges=gauge_names(record))

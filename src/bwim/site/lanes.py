@@ -24,6 +24,14 @@ Contract
   one whose ``y`` is nearer the vehicle's lateral position in metres, else the one that
   saw it with the higher confidence).  A vehicle whose lateral position (m) lies nearer
   another lane of its direction (``SiteSetup.lane_of``) is given that lane's number.
+* **The span's bending read as a vehicle**: with ``bending`` (what each pair other than
+  the calibration lane's reads of the span's bending, learned from the calibration runs:
+  :mod:`bwim.site.bending`), a vehicle whose pair's largest reading over its time on the
+  span is mostly that bending (:meth:`~bwim.site.bending.DetectorBending.is_trace`) is a
+  trace of a vehicle in another lane (its humps paired across the two detectors in the
+  wrong order read as a slow vehicle) and is left out, with a note.  A light vehicle
+  that crosses the pair while a heavy one bends the span more than its own axles read
+  is left out with it.
 * **Following vehicles**: a detected vehicle whose axles spread over more than
   :data:`MAX_WHEELBASE` (the longest vehicle allowed on European roads) is vehicles
   following each other: it is cut between axle groups where two plausible vehicles
@@ -56,6 +64,7 @@ from bwim.detect.result import FLAG_MULTIPLE_PRESENCE
 from bwim.detect.signals import channel_data
 from bwim.errors import BwimError
 from bwim.records import Passage, Record
+from bwim.site.bending import DetectorBending
 from bwim.site.setup import DetectorLane, SiteSetup
 
 __all__ = ["MAX_WHEELBASE", "EventDetection", "LaneVehicle", "detect_lanes", "split_long"]
@@ -128,12 +137,16 @@ def _frame(pair: DetectorLane, span: tuple[float, float] | None
 def detect_lanes(record: Record, setup: SiteSetup, *,
                  responses: Mapping[int, LearnedResponses] | None = None,
                  span: tuple[float, float] | None = None, gauges: Sequence[str] = (),
-                 lanes: Sequence[int] | None = None) -> EventDetection:
+                 lanes: Sequence[int] | None = None,
+                 bending: Mapping[int, DetectorBending] | None = None) -> EventDetection:
     """Every vehicle of ``record`` in every detector lane (see the module docstring).
 
     ``responses`` by lane number (learned detection where given, peaks elsewhere);
     ``span`` the lines' support in their frame; ``gauges`` the strain channels that give
-    the lateral position; ``lanes`` limits the detection to these detector lanes."""
+    the lateral position; ``lanes`` limits the detection to these detector lanes;
+    ``bending`` by lane number, what those pairs read of the span's bending
+    (:mod:`bwim.site.bending`)."""
+    bending = bending or {}
     responses = responses or {}
     by_lane: dict[int, Detection] = {}
     seen: list[tuple[DetectorLane, VehicleDetection]] = []
@@ -165,6 +178,10 @@ def detect_lanes(record: Record, setup: SiteSetup, *,
             seen.extend((pair, w) for w in parts)
     for pair, v in seen:
         lane = pair.lane
+        if pair.lane in bending and bending[pair.lane].is_trace(record, v.window):
+            notes.append(f"lane {pair.lane}: a {v.n_axles}-axle trace of the span's bending "
+                         "(a vehicle in another lane), not a vehicle of its own")
+            continue
         if _echo(v, pair, setup, seen):
             notes.append(f"lane {pair.lane}: a {v.n_axles}-axle trace of a vehicle in a "
                          "lane the other way, left to that lane's detectors")
