@@ -36,9 +36,9 @@ not: what must not happen), the vehicles refused
 as outliers of their lane's lateral spread (``lateral_outlier``, :mod:`bwim.site.wander`:
 those of two-vehicle events, and those alone, which it should not refuse), the vehicles
 of the other direction counted (matching a true one, the true ones, and those counted
-beyond their event's true number: the lane-3 detectors read a lane-1 truck's bending as
-a slow vehicle of their own), the calibration runs with another vehicle rejected, and
-the weighing rate.  Targets (issue
+beyond their event's true number: the span's bending under a truck in another lane
+read as a slow vehicle, of which :mod:`bwim.site.bending` leaves out most), the
+calibration runs with another vehicle rejected, and the weighing rate.  Targets (issue
 20): every axle count right, spacings within 0.1 m, speed within 0.5 %, GVW A(5) and every
 criterion B+(7), multiple presence flagged in at least 95 % of the events that have it.
 
