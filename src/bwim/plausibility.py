@@ -37,6 +37,7 @@ HARD_FLAGS = (
     "truncated_end",         # an axle is still on the lines' support at the last sample
     "no_baseline",           # too few samples without an axle on the support for the offsets
     "lateral_outlier",       # lateral position an outlier of its lane's day (bwim.site.wander)
+    "unconfirmed_gauge_fault",  # a gauge the day finds healthy disagreed (another vehicle)
 )
 #: Flags that call for a look but keep the weights (quality "warning").
 SOFT_FLAGS = (

@@ -224,6 +224,17 @@ def _print_drift(site, fit) -> None:
         print(f"note: {note}")
 
 
+def _print_unconfirmed(check) -> None:
+    """One line per gauge left out of some vehicles but healthy in most of the day's."""
+    if not check.n_weighed:
+        return
+    for gauge, n in sorted(check.counts.items()):
+        if gauge not in check.confirmed:
+            print(f"gauge {gauge}: disagreed in {n} of {check.n_weighed} vehicle(s) weighed, "
+                  "healthy in the others: those vehicles refused (another vehicle loaded "
+                  "it; unconfirmed_gauge_fault)")
+
+
 def _print_wander(check) -> None:
     """One line per lane whose lateral spread was measured, and how many it refused."""
     for w in check.lanes:
@@ -293,6 +304,7 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path, batch) -> int:
           f"weighed (flagged), {report.count('failed')} record(s) failed")
     _print_drift(site, days[0].drift if days else None)
     if days:
+        _print_unconfirmed(days[0].faults)
         _print_wander(days[0].wander)
     _print_weighed(report, "Static weights (moving force identification with the FE "
                    "model):" if bridge else "Static weights (multi-run influence lines, "

@@ -59,6 +59,12 @@ FLAG_TABLE: tuple[tuple[str, tuple[str, ...], str, str], ...] = (
      "a vehicle beside it that no axle detector saw, or it drove out of its lane; the "
      "lines would weigh both as one",
      "the lane's spread printed by bwim weigh; another vehicle in the record"),
+    ("hard", ("unconfirmed_gauge_fault",),
+     "a gauge disagreed with the others in this vehicle (it was left out) but agrees "
+     "in most of the day's vehicles (bwim.site.unconfirmed): the gauge is healthy and "
+     "another vehicle that no detector saw loaded it, whose strain the other gauges "
+     "carry into the weights",
+     "another vehicle in the record; gauge_health.csv for the gauge"),
     ("hard", ("negative_force",),
      "moving force identification: an identified axle force is tensile where it is "
      "weighed", "the model, the regularisation"),

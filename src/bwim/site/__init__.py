@@ -5,7 +5,7 @@ weight before it leaves.
     setup = bwim.scenario.build_site_setup(scenario)       # lanes, detectors, truck
     site = bwim.site.calibrate_site(runs, setup)           # responses, lines, drift
     event = bwim.site.weigh_event(record, site)            # every vehicle of one event
-    day = bwim.site.finish_day(rows, site)                 # lanes' spread, traffic drift
+    day = bwim.site.finish_day(rows, site)                 # the day's checks and drift
 
 Contract
 --------
@@ -20,10 +20,12 @@ Contract
 * :mod:`bwim.site.drift`: the drift of the strain-to-load ratio from one day to the next
   (temperature, the traffic itself, the time of day); :func:`correct_drift` applies the
   traffic method to a batch's summary rows.
+* :mod:`bwim.site.unconfirmed`: a gauge fault the day does not confirm (another vehicle).
 * :mod:`bwim.site.wander`: a vehicle's lateral position against its lane's traffic (a
   vehicle beside it no detector saw).
-* :mod:`bwim.site.day`: :func:`finish_day`, the day-level steps (the lanes' lateral check,
-  then the traffic's drift) on a batch's rows (:class:`DayResult`).
+* :mod:`bwim.site.day`: :func:`finish_day`, the day-level steps (unconfirmed gauge faults,
+  the lanes' lateral check, then the traffic's drift) on a batch's rows
+  (:class:`DayResult`).
 """
 
 from bwim.site.calibrate import (
@@ -38,6 +40,7 @@ from bwim.site.event import EventWeighing, VehicleWeighing, weigh_event
 from bwim.site.health import GaugeFault, GaugeHealth, check_gauges
 from bwim.site.model import ModelRun, SiteModel, calibrate_site_model
 from bwim.site.setup import DETECTION_METHODS, DetectorLane, Lane, SiteSetup
+from bwim.site.unconfirmed import FaultCheck, refuse_unconfirmed_faults
 from bwim.site.wander import LaneWander, WanderCheck, refuse_lateral_outliers
 
 __all__ = [
@@ -49,6 +52,7 @@ __all__ = [
     "DetectorLane",
     "DriftSetup",
     "EventWeighing",
+    "FaultCheck",
     "GaugeFault",
     "GaugeHealth",
     "Lane",
@@ -66,5 +70,6 @@ __all__ = [
     "correct_drift",
     "finish_day",
     "refuse_lateral_outliers",
+    "refuse_unconfirmed_faults",
     "weigh_event",
 ]

@@ -5,11 +5,15 @@ Contract
 * :func:`finish_day` takes every summary row of a batch (as :func:`bwim.site.weigh_event`
   made them) and applies, in this order:
 
-  1. the lanes' lateral check (:func:`bwim.site.wander.refuse_lateral_outliers`): a
+  1. the gauges' faults the day does not confirm
+     (:func:`bwim.site.unconfirmed.refuse_unconfirmed_faults`): a weighed vehicle with a
+     gauge left out that is healthy in most of the day's vehicles is refused
+     (``unconfirmed_gauge_fault``: another vehicle loaded it);
+  2. the lanes' lateral check (:func:`bwim.site.wander.refuse_lateral_outliers`): a
      weighed vehicle whose lateral position is an outlier of its lane's traffic is
      refused (``lateral_outlier``);
-  2. the traffic's own drift correction where the setup asks for it
-     (:func:`correct_drift`), on the rows the first step kept weighed.
+  3. the traffic's own drift correction where the setup asks for it
+     (:func:`correct_drift`), on the rows the steps before kept weighed.
 
   It returns a :class:`DayResult` (the rows, in order, and what each step measured).
   ``bwim weigh`` runs it on the final summary; the benchmarks run it the same way.
@@ -23,6 +27,7 @@ from dataclasses import dataclass
 
 from bwim.site.calibrate import SiteCalibration
 from bwim.site.drift import TrafficDrift, apply_traffic_drift, traffic_drift
+from bwim.site.unconfirmed import FaultCheck, refuse_unconfirmed_faults
 from bwim.site.wander import WanderCheck, refuse_lateral_outliers
 from bwim.summary import SummaryRow
 
@@ -37,6 +42,9 @@ class DayResult:
     ----------
     rows : tuple of SummaryRow
         Every row, in the input's order.
+    faults : FaultCheck
+        The day's count of each gauge's faults and the rows refused for faults it does
+        not confirm.
     wander : WanderCheck
         The lanes' lateral spreads and the rows refused as outliers of them.
     drift : TrafficDrift or None
@@ -44,12 +52,14 @@ class DayResult:
     """
 
     rows: tuple[SummaryRow, ...]
+    faults: FaultCheck
     wander: WanderCheck
     drift: TrafficDrift | None
 
     def __repr__(self) -> str:
         drift = "none" if self.drift is None else f"traffic ({self.drift.reference_class})"
-        return f"DayResult({len(self.rows)} rows, {self.wander!r}, drift {drift})"
+        return (f"DayResult({len(self.rows)} rows, {self.faults!r}, {self.wander!r}, "
+                f"drift {drift})")
 
 
 def correct_drift(rows: Sequence[SummaryRow], calibration: SiteCalibration
@@ -72,6 +82,7 @@ def correct_drift(rows: Sequence[SummaryRow], calibration: SiteCalibration
 
 def finish_day(rows: Sequence[SummaryRow], calibration: SiteCalibration) -> DayResult:
     """The day-level steps on a batch's rows (see the module docstring)."""
-    wander = refuse_lateral_outliers(rows)
+    faults = refuse_unconfirmed_faults(rows)
+    wander = refuse_lateral_outliers(faults.rows)
     out, fit = correct_drift(wander.rows, calibration)
-    return DayResult(rows=tuple(out), wander=wander, drift=fit)
+    return DayResult(rows=tuple(out), faults=faults, wander=wander, drift=fit)
