@@ -367,10 +367,12 @@ def _unit_readings(pos: np.ndarray, ords: np.ndarray, x0: float, h: float, n: in
     f = np.where(inside, u - j, 0.0)
     padded = np.zeros((n + 1, ords.shape[1]))  # nodes 0 … n: the ends' terms zero
     padded[1:n] = ords
+    j, f = j[inside], f[inside]
+    on = np.zeros((j.size, ords.shape[1]))  # the sparse product's sums start at 0
+    on += (1.0 - f)[:, None] * padded[j]
+    on += f[:, None] * padded[j + 1]
     out = np.zeros((*pos.shape, ords.shape[1]))
-    out += (1.0 - f)[..., None] * padded[j]
-    out += f[..., None] * padded[j + 1]
-    out[~inside] = 0.0
+    out[inside] = on
     return out
 
 
