@@ -324,3 +324,33 @@ def test_noise_segments_skipped_only_where_no_axle_fits():
                     kept += 1
                 skipped += int(not maybe[m])
     assert kept > 0 and skipped > 0
+
+
+def test_refinement_keeps_its_last_least_squares():
+    """Same-model readings (algebra): the least squares a refinement keeps
+    (``VehicleFit.solution``) is the one at its result, byte for byte what a fresh
+    solve there gives (amplitudes, removal costs, residual, Jacobian); ``solution``
+    reuses a start only at the same times, speed and window (a start on other rows is
+    made again), and a refinement from a reused start gives the numbers of one without."""
+    from bwim.detect.vehicle_fit import Rows, Solution, make_problem, refine, solution, window
+
+    v = 21.0
+    taus = 0.3 + np.array([0.0, 3.6, 9.6, 10.9]) / v
+    amps = np.array([[20.0, 5.5], [40.0, 9.0], [25.0, 7.0], [24.0, 5.0]])
+    t, y, g, learned = _same_model(taus, v, amps)
+    pb = make_problem(t, y, g, learned, v)
+    start = taus + 0.004
+    fit = refine(pb, start, 1.02 * v)
+    kept = fit.solution
+    assert np.array_equal(kept.taus, fit.taus) and kept.v == fit.v
+    fresh = Solution(pb, fit.taus, fit.v, kept.w, True)
+    for a, b in ((kept.res, fresh.res), (kept.amps, fresh.amps), (kept.gains, fresh.gains),
+                 (kept.jacobian(), fresh.jacobian()), (fit.amps, fresh.amps)):
+        assert a.tobytes() == b.tobytes()
+    first = solution(pb, start, 1.02 * v)
+    assert solution(pb, start, 1.02 * v, first) is first
+    other = Solution(pb, start, 1.02 * v, Rows(pb, window(pb, start, v)), True)  # other rows
+    assert not np.array_equal(other.w.rows, first.w.rows)
+    assert solution(pb, start, 1.02 * v, other) is not other
+    again = refine(pb, start, 1.02 * v, start=first)
+    assert again.taus.tobytes() == fit.taus.tobytes() and again.chi == fit.chi

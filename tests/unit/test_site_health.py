@@ -459,3 +459,50 @@ def test_a_large_drift_is_told_from_a_gain_error(site, truck, gauge):
     health = check_gauges(record, clean.vehicle.passage, calibration.lines,
                           combine=calibration.setup.combine)
     assert [(f.gauge, f.kind) for f in health.faults] == [(gauge, "drift")]
+
+
+def test_predicted_lines_are_each_channels_line_through_the_others():
+    """The prediction of every channel at once (health._predicted) is, byte for byte, the
+    weighted least-squares line through the other channels alone (each's own 1-D sums,
+    written out here), and within 1e-9 the weighted fit of numpy.polyfit (the
+    reference line); nan for a channel whose others have no weight."""
+    from bwim.site.health import _predicted
+
+    rng = np.random.default_rng(5)
+    for n in (4, 7, 12, 13, 20):
+        y = np.sort(rng.uniform(0.0, 12.0, n))
+        values, snr = rng.normal(1.0, 0.2, n), rng.uniform(0.5, 30.0, n)
+        got = _predicted(y, values, snr)
+        for g in range(n):
+            x, v, w = np.delete(y, g), np.delete(values, g), np.delete(snr, g) ** 2
+            xm, vm = (w * x).sum() / w.sum(), (w * v).sum() / w.sum()
+            slope = (w * (x - xm) * (v - vm)).sum() / (w * (x - xm) ** 2).sum()
+            assert got[g].tobytes() == (vm + slope * (y[g] - xm)).tobytes()
+            fit = np.polyval(np.polyfit(x, v, 1, w=np.sqrt(w)), y[g])
+            assert got[g] == pytest.approx(fit, rel=1e-9)
+    assert np.isnan(_predicted(np.arange(4.0), np.ones(4), np.array([1.0, 0, 0, 0]))[0])
+
+
+def test_held_extremes_are_runs_of_the_clipping_length():
+    """A channel is a clipping candidate (health._held) exactly when its maximum or its
+    minimum repeats over at least CLIP_RUN consecutive samples (a plain scan of the
+    runs, the reference), anywhere in the record, the ends included."""
+    from bwim.site.health import CLIP_RUN, _held
+
+    def longest(mask):
+        best = run = 0
+        for m in mask:
+            run = run + 1 if m else 0
+            best = max(best, run)
+        return best
+
+    rng = np.random.default_rng(11)
+    for _ in range(200):
+        n = int(rng.integers(CLIP_RUN, 60))
+        r = rng.integers(-3, 4, size=(n, 6)).astype(float)  # coarse: many repeats
+        for k in range(6):  # plant runs of random length at the rails
+            a, length = int(rng.integers(0, n)), int(rng.integers(1, 8))
+            r[a:a + length, k] = r[:, k].max() if k % 2 else r[:, k].min()
+        expect = [max(longest(r[:, k] == r[:, k].max()), longest(r[:, k] == r[:, k].min()))
+                  >= CLIP_RUN for k in range(6)]
+        assert _held(r).tolist() == expect

@@ -292,3 +292,26 @@ def test_weighing_rejects_bad_input(cal, line):
         weigh_static(cal, influence=line, groups=[[0]])
     with pytest.raises(InputError, match="groups must be sequences"):
         weigh_static(cal, influence=line, groups=[["front"]])
+
+
+def test_unit_readings_are_the_matrix_methods_design_times_the_ordinates():
+    """The lines' readings under each axle (weigh._unit_readings) are, byte for byte
+    (signed zeros too), the matrix method's sparse design times the interior ordinates
+    (bwim.wim.influence_line.hat_design, the reference): positions between nodes, on
+    nodes, in the end cells and off the support, on random meshes and ordinates."""
+    from bwim.wim.influence_line import hat_design
+    from bwim.wim.weigh import _unit_readings
+
+    rng = np.random.default_rng(7)
+    for trial in range(300):
+        n, h, x0 = int(rng.integers(2, 40)), rng.uniform(0.05, 1.0), rng.uniform(-5, 5)
+        n_t, n_ax, n_c = int(rng.integers(1, 200)), int(rng.integers(1, 6)), int(
+            rng.integers(1, 13))
+        pos = x0 + rng.uniform(-2.0, n * h + 2.0, size=(n_t, n_ax))
+        if trial % 3 == 0:  # exactly on the nodes, the ends and beyond
+            pos[:, 0] = x0 + h * rng.integers(-1, n + 2, size=n_t)
+        ords = rng.normal(size=(n - 1, n_c)) * 10.0 ** rng.uniform(-9, 3)
+        ords[rng.random(ords.shape) < 0.2] = -0.0
+        H = hat_design(pos.reshape(-1, 1), np.ones(1), x0, h, n)
+        expect = np.asarray(H @ ords).reshape(n_t, n_ax, n_c)
+        assert _unit_readings(pos, ords, x0, h, n).tobytes() == expect.tobytes()

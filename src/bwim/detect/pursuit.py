@@ -74,14 +74,13 @@ from .vehicle_fit import (
     MIN_RATIO_BOUND,
     RATIO_SPREADS,
     Problem,
-    Rows,
     Solution,
     VehicleFit,
     make_problem,
     refine,
     relative,
     ridged_normal,
-    window,
+    solution,
 )
 
 __all__ = ["EXCLUDE", "FIRST_LM", "GAIN_SHARE", "MAX_AXLES", "MIN_SPACING_WIDTH",
@@ -308,7 +307,7 @@ def _vehicle(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp: floa
     estimate."""
     pruned, sol = _prune(pb, taus, v, limit)
     fit = refine(pb, pruned, v, FIRST_LM, start=sol)
-    kept, sol = _prune(pb, fit.taus, fit.v, limit, both=True)
+    kept, sol = _prune(pb, fit.taus, fit.v, limit, both=True, start=fit.solution)
     grouped = choose_groups(pb, kept, fit.v, limit, min_sp, span)
     if grouped is not None:
         fit = refine(pb, grouped, fit.v)
@@ -340,15 +339,16 @@ def _vehicle(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp: floa
                            detector_times=det_times)
 
 
-def _prune(pb: Problem, taus: np.ndarray, v: float, limit: float, both: bool = False
-           ) -> tuple[np.ndarray, Solution | None]:
+def _prune(pb: Problem, taus: np.ndarray, v: float, limit: float, both: bool = False,
+           start: Solution | None = None) -> tuple[np.ndarray, Solution | None]:
     """``taus`` less, one by one, the weakest axle while it lowers the misfit by less
     than ``limit`` (or, with ``both``, one detector does not see it), at the given times
     and speed: a cheap pass without refinement.  Also the least squares of the times
-    kept, with slopes (a refinement's start), when it was made."""
+    kept, with slopes (a refinement's start), when it was made; ``start``: that of
+    ``taus`` when already made."""
     sol = None
     while taus.size > 1:
-        sol = Solution(pb, taus, v, Rows(pb, window(pb, taus, v)), True)
+        sol = solution(pb, taus, v, start)
         weak = sol.gains < limit
         if both:
             weak |= ~pb.seen_by_both(sol.amps)

@@ -44,7 +44,7 @@ from .response import HIGH_PASS, LearnedResponses, high_pass
 
 __all__ = ["CONVERGED", "MAX_LM", "MIN_RATIO_BOUND", "RATIO_SPREADS", "REACH",
            "WINDOW_SAMPLES", "Problem", "Rows", "Solution", "VehicleFit", "make_problem", "refine",
-           "relative", "ridged_normal", "solve", "window"]
+           "relative", "ridged_normal", "solution", "solve", "window"]
 
 #: A vehicle's fit looks this far beyond its first and last axle, m of travel.
 REACH = 2.0
@@ -176,6 +176,9 @@ class VehicleFit:
     amps: np.ndarray
     chi: float
     gains: np.ndarray
+    #: the least squares (with slopes) at these times and speed on the refinement's
+    #: window (a later fit on the same window starts from it)
+    solution: Solution | None = None
 
 
 def make_problem(t: np.ndarray, y: np.ndarray, gauges: np.ndarray | None,
@@ -291,6 +294,17 @@ def solve(pb: Problem, taus: np.ndarray, v: float, rows: np.ndarray, slopes: boo
     return sol.res, (sol.jacobian() if slopes else None), sol.amps, sol.gains
 
 
+def solution(pb: Problem, taus: np.ndarray, v: float, start: Solution | None = None
+             ) -> Solution:
+    """The least squares with slopes of the axles ``taus`` (ascending) at speed ``v`` on
+    their window: ``start`` when it is that one (the same numbers, not made again)."""
+    rows = window(pb, taus, v)
+    if (start is not None and start.v == v and np.array_equal(start.taus, taus)
+            and start.slopes and np.array_equal(start.w.rows, rows)):
+        return start
+    return Solution(pb, taus, v, Rows(pb, rows), True)
+
+
 def refine(pb: Problem, taus: np.ndarray, v: float, iterations: int = MAX_LM, *,
            start: Solution | None = None) -> VehicleFit:
     """The vehicle's axle times and speed by Levenberg–Marquardt on the variable
@@ -299,18 +313,14 @@ def refine(pb: Problem, taus: np.ndarray, v: float, iterations: int = MAX_LM, *,
     when already made (the same numbers, not made again)."""
     taus = np.sort(np.asarray(taus, dtype=float))
     p = np.append(taus, v)
-    if (start is not None and start.v == v and np.array_equal(start.taus, taus)
-            and start.slopes and np.array_equal(start.w.rows, window(pb, taus, v))):
-        sol, rows = start, start.w
-    else:
-        rows = Rows(pb, window(pb, taus, v))
-        sol = Solution(pb, taus, v, rows, True)
-    r, J, amps, gains = sol.res, sol.jacobian(), sol.amps, sol.gains
+    sol = solution(pb, taus, v, start)
+    rows = sol.w
+    r, amps, gains = sol.res, sol.amps, sol.gains
     cost = float(r @ r)
     lam = 1e-3
     scale = np.full(taus.size + 1, 1.0 / v)  # τ in s, v in m/s: metres
     for _ in range(iterations):
-        Js = J * scale
+        Js = sol.jacobian() * scale  # sol: the last accepted (only it is read)
         A = Js.T @ Js
         g = Js.T @ r
         improved = False
@@ -321,16 +331,18 @@ def refine(pb: Problem, taus: np.ndarray, v: float, iterations: int = MAX_LM, *,
             if vv <= 0:
                 lam *= 10.0
                 continue
-            sol = Solution(pb, tt, vv, rows, True)
-            c2 = float(sol.res @ sol.res)
+            trial_sol = Solution(pb, tt, vv, rows, True)
+            c2 = float(trial_sol.res @ trial_sol.res)
             if c2 < cost:
                 rel = (cost - c2) / max(cost, 1e-300)
-                p, r, J, amps, gains, cost = (np.append(tt, vv), sol.res, sol.jacobian(),
-                                              sol.amps, sol.gains, c2)
+                sol = trial_sol
+                p, r, amps, gains, cost = (np.append(tt, vv), sol.res, sol.amps, sol.gains,
+                                           c2)
                 lam = max(lam / 3.0, 1e-7)
                 improved = True
                 break
             lam *= 10.0
         if not improved or rel < CONVERGED or np.max(np.abs(step[:-1])) * p[-1] < 5e-3:
             break
-    return VehicleFit(taus=p[:-1], v=float(p[-1]), amps=amps, chi=cost, gains=gains)
+    return VehicleFit(taus=p[:-1], v=float(p[-1]), amps=amps, chi=cost, gains=gains,
+                      solution=sol)

@@ -239,8 +239,7 @@ def check_gauges(record: Record, passage: Passage, lines: MultiRunCalibration, *
     names = [c.name for c in lines.channels]
     readings = read_channels(record, lines.channels)
     faults = list(_flat(readings, lines))
-    faults += _clipped(readings, lines, _at_rest(record, passage, lines),
-                       skip={f.gauge for f in faults})
+    faults += _clipped(readings, lines, record, passage, skip={f.gauge for f in faults})
     bad = {f.gauge for f in faults}
     ratios: dict[str, float] = {}
     while len(names) - len(bad) >= MIN_COMPARED and 2 * len(bad) < len(names):
@@ -271,14 +270,16 @@ def check_gauges(record: Record, passage: Passage, lines: MultiRunCalibration, *
 
 def _flat(readings: np.ndarray, lines: MultiRunCalibration) -> list[GaugeFault]:
     """Step 1: channels without their noise."""
+    if readings.shape[0] < 3:
+        return []
+    # each channel's row contiguous: numpy's sums then run as over that channel alone
+    steps = np.diff(np.ascontiguousarray(readings.T), axis=1)
+    noises = np.std(steps, axis=1) / np.sqrt(2.0)
     out = []
     for k, c in enumerate(lines.channels):
-        y = readings[:, k]
         ref = float(lines.channel_noise[k])
-        if ref <= 0 or y.size < 3:
-            continue
-        noise = float(np.std(np.diff(y))) / np.sqrt(2.0)
-        if noise < FLAT_NOISE * ref:
+        noise = float(noises[k])
+        if ref > 0 and noise < FLAT_NOISE * ref:
             out.append(GaugeFault(
                 gauge=c.name, kind="flat", ratio=float("nan"),
                 detail=f"noise {noise:.3g} against {ref:.3g} in the calibration runs "
@@ -309,17 +310,32 @@ def _runs(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return starts, np.flatnonzero(edges == -1) - starts
 
 
-def _clipped(readings: np.ndarray, lines: MultiRunCalibration, rest: np.ndarray, *,
-             skip: set[str]) -> list[GaugeFault]:
+def _held(readings: np.ndarray) -> np.ndarray:
+    """Per channel whether it holds its maximum or its minimum over the record for at
+    least :data:`CLIP_RUN` consecutive samples (only those can be clipped)."""
+    out = np.zeros(readings.shape[1], dtype=bool)
+    for extreme in (readings.max(axis=0), readings.min(axis=0)):
+        count = np.zeros((readings.shape[0] + 1, readings.shape[1]), dtype=np.int64)
+        np.cumsum(readings == extreme, axis=0, out=count[1:])
+        out |= np.any(count[CLIP_RUN:] - count[:-CLIP_RUN] == CLIP_RUN, axis=0)
+    return out
+
+
+def _clipped(readings: np.ndarray, lines: MultiRunCalibration, record: Record,
+             passage: Passage, *, skip: set[str]) -> list[GaugeFault]:
     """Step 2: channels held at their extreme for longer than chance explains."""
     out = []
     n = readings.shape[0]
     if n < CLIP_RUN + 1:
         return out
-    rest_step = rest[1:] & rest[:-1]
+    held = _held(readings)
+    rest_step = None
     for k, c in enumerate(lines.channels):
-        if c.name in skip:
+        if c.name in skip or not held[k]:
             continue
+        if rest_step is None:
+            rest = _at_rest(record, passage, lines)
+            rest_step = rest[1:] & rest[:-1]
         y = readings[:, k]
         still = np.diff(y) == 0.0
         for label, extreme in (("maximum", y.max()), ("minimum", y.min())):
@@ -400,8 +416,16 @@ def _residuals(record: Record, w: Weighing, sub: MultiRunCalibration) -> np.ndar
     """Each channel's residual over the whole record: reading − offset − fitted static
     reading (0 with no axle on the support), logger units, shape (n_t, n_channels)."""
     r = read_channels(record, sub.channels) - w.offsets
-    r[np.isin(record.time, w.time)] -= w.fitted
+    r[_samples(record, w)] -= w.fitted
     return r
+
+
+def _samples(record: Record, w: Weighing) -> np.ndarray:
+    """The record's samples that ``w`` fitted (its times: some of the record's, whose time
+    axis is strictly increasing), as a boolean mask."""
+    on = np.zeros(record.time.size, dtype=bool)
+    on[np.searchsorted(record.time, w.time)] = True
+    return on
 
 
 def _trends(record: Record, w: Weighing, sub: MultiRunCalibration) -> np.ndarray:
@@ -417,7 +441,7 @@ def _explains_drift(record: Record, w: Weighing, sub: MultiRunCalibration, g: in
     larger sum of squares explained by the one regressor."""
     r = _residuals(record, w, sub)[:, g]
     f = np.zeros_like(r)
-    f[np.isin(record.time, w.time)] = w.fitted[:, g]
+    f[_samples(record, w)] = w.fitted[:, g]
     t = record.time - record.time.mean()
     return bool((r @ t) ** 2 / (t @ t) > (r @ f) ** 2 / max(f @ f, 1e-300))
 
@@ -450,11 +474,13 @@ def _compare(w: Weighing, sub: MultiRunCalibration) -> _Comparison | None:
 def _predicted(y: np.ndarray, values: np.ndarray, snr: np.ndarray) -> np.ndarray:
     """For each channel, the weighted straight line through the other channels' values
     against their positions ``y`` (weights ``snr²``), at its own position."""
-    out = np.empty(len(values))
-    for g in range(len(values)):
-        others = np.arange(len(values)) != g
-        out[g] = _line_at(y[others], values[others], snr[others] ** 2, y[g])
-    return out
+    n = len(values)
+    others = ~np.eye(n, dtype=bool)  # row g: every channel but g, in order
+
+    def rows(a: np.ndarray) -> np.ndarray:
+        return np.broadcast_to(a, (n, n))[others].reshape(n, n - 1)
+
+    return _lines_at(rows(y), rows(values), rows(snr ** 2), y)
 
 
 def gain_ratios(weighing: Weighing, lines: MultiRunCalibration) -> dict[str, float]:
@@ -477,13 +503,16 @@ def gain_ratios(weighing: Weighing, lines: MultiRunCalibration) -> dict[str, flo
             if expected[g] > 0}
 
 
-def _line_at(x: np.ndarray, y: np.ndarray, weight: np.ndarray, at: float) -> float:
-    """The weighted least-squares straight line through (x, y), at ``at``."""
-    wsum = weight.sum()
-    if wsum <= 0:
-        return float("nan")
-    xm = (weight * x).sum() / wsum
-    ym = (weight * y).sum() / wsum
-    sxx = (weight * (x - xm) ** 2).sum()
-    slope = (weight * (x - xm) * (y - ym)).sum() / sxx if sxx > 0 else 0.0
-    return float(ym + slope * (at - xm))
+def _lines_at(x: np.ndarray, y: np.ndarray, weight: np.ndarray, at: np.ndarray
+              ) -> np.ndarray:
+    """Per row of ``x``, ``y`` and ``weight`` (n, m) the weighted least-squares straight
+    line through (x, y), at ``at`` (n,); nan for a row without weight.  (Each row is
+    summed as one vector: the numbers of the line through that row alone.)"""
+    wsum = weight.sum(axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        xm = (weight * x).sum(axis=1) / wsum
+        ym = (weight * y).sum(axis=1) / wsum
+        dx = x - xm[:, None]
+        sxx = (weight * dx ** 2).sum(axis=1)
+        slope = np.where(sxx > 0, (weight * dx * (y - ym[:, None])).sum(axis=1) / sxx, 0.0)
+        return np.where(wsum > 0, ym + slope * (at - xm), np.nan)

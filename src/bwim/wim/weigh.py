@@ -76,7 +76,7 @@ from bwim.plausibility import (
     weight_flags,
 )
 from bwim.records import Passage, Record
-from bwim.wim.influence_line import Channel, hat_design, read_channels
+from bwim.wim.influence_line import Channel, read_channels
 from bwim.wim.moses import AxleGroups, group_axles, group_share
 from bwim.wim.multirun import MultiRunCalibration
 
@@ -336,12 +336,9 @@ def _design(record: Record, event: _Inputs, calibration: MultiRunCalibration,
     axle, summed by group, and the day's scale factor."""
     line = calibration.line
     E = read_channels(record, line.channels)  # (n_t, n_c)
-    n_t, n_c = E.shape
     ords = calibration.ordinates_at(event.lateral)[1:-1]  # interior ordinates (m, n_c)
     pos = event.passage.axle_x(record.time)  # (n_t, n_axles)
-    n_ax = pos.shape[1]
-    H = hat_design(pos.reshape(-1, 1), np.ones(1), line.x[0], line.spacing, line.x.size - 1)
-    M = np.asarray(H @ ords).reshape(n_t, n_ax, n_c)
+    M = _unit_readings(pos, ords, line.x[0], line.spacing, line.x.size - 1)
     Mg = np.einsum("kic,ig->kgc", M, event.groups.share)  # (n_t, n_groups, n_c)
     t0 = record.clock_seconds()
     trend = calibration.scale_trend
@@ -354,6 +351,29 @@ def _design(record: Record, event: _Inputs, calibration: MultiRunCalibration,
     return _Design(readings=E, positions=pos, groups=Mg, on=on, support=(lo, hi),
                    clock_time=t0, scale=s,
                    trend_used=scale is None and scale_correction and trend is not None)
+
+
+def _unit_readings(pos: np.ndarray, ords: np.ndarray, x0: float, h: float, n: int
+                   ) -> np.ndarray:
+    """The lines' readings of a unit load at each position of ``pos`` (n_t, n_axles),
+    shape (n_t, n_axles, n_c): linear between the nodes ``x0 + j h``, j = 0 … n, with
+    the interior ordinates ``ords`` (n − 1, n_c) and zero at both ends.  The numbers of
+    ``hat_design(pos.reshape(-1, 1), [1], x0, h, n) @ ords`` (the matrix method's
+    design, :func:`bwim.wim.influence_line.hat_design`), without the sparse matrix: its
+    row of two weights times the ordinates, summed in the same order."""
+    u = (pos - x0) / h
+    inside = (u > 0.0) & (u < n)
+    j = np.floor(np.where(inside, u, 0.0)).astype(np.int64)
+    f = np.where(inside, u - j, 0.0)
+    padded = np.zeros((n + 1, ords.shape[1]))  # nodes 0 … n: the ends' terms zero
+    padded[1:n] = ords
+    j, f = j[inside], f[inside]
+    on = np.zeros((j.size, ords.shape[1]))  # the sparse product's sums start at 0
+    on += (1.0 - f)[:, None] * padded[j]
+    on += f[:, None] * padded[j + 1]
+    out = np.zeros((*pos.shape, ords.shape[1]))
+    out[inside] = on
+    return out
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
