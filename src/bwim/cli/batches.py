@@ -225,14 +225,11 @@ def _print_drift(site, fit) -> None:
 
 
 def _print_unconfirmed(check) -> None:
-    """One line per gauge left out of some vehicles but healthy in most of the day's."""
-    if not check.n_weighed:
-        return
-    for gauge, n in sorted(check.counts.items()):
-        if gauge not in check.confirmed:
-            print(f"gauge {gauge}: disagreed in {n} of {check.n_weighed} vehicle(s) weighed, "
-                  "healthy in the others: those vehicles refused (another vehicle loaded "
-                  "it; unconfirmed_gauge_fault)")
+    """One line per gauge left out of vehicles whose neighbours in time find it healthy."""
+    for gauge, n in sorted(check.unconfirmed.items()):
+        print(f"gauge {gauge}: disagreed in {n} vehicle(s) but agreed in most of those "
+              "weighed around them: those vehicles refused (another vehicle loaded it; "
+              "unconfirmed_gauge_fault)")
 
 
 def _print_wander(check) -> None:

@@ -61,9 +61,9 @@ FLAG_TABLE: tuple[tuple[str, tuple[str, ...], str, str], ...] = (
      "the lane's spread printed by bwim weigh; another vehicle in the record"),
     ("hard", ("unconfirmed_gauge_fault",),
      "a gauge disagreed with the others in this vehicle (it was left out) but agrees "
-     "in most of the day's vehicles (bwim.site.unconfirmed): the gauge is healthy and "
-     "another vehicle that no detector saw loaded it, whose strain the other gauges "
-     "carry into the weights",
+     "in most of the vehicles weighed nearest it in time (bwim.site.unconfirmed): the "
+     "gauge is healthy and another vehicle that no detector saw loaded it, whose strain "
+     "the other gauges carry into the weights",
      "another vehicle in the record; gauge_health.csv for the gauge"),
     ("hard", ("negative_force",),
      "moving force identification: an identified axle force is tensile where it is "

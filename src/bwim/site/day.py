@@ -7,8 +7,8 @@ Contract
 
   1. the gauges' faults the day does not confirm
      (:func:`bwim.site.unconfirmed.refuse_unconfirmed_faults`): a weighed vehicle with a
-     gauge left out that is healthy in most of the day's vehicles is refused
-     (``unconfirmed_gauge_fault``: another vehicle loaded it);
+     gauge left out that is healthy in most of the vehicles weighed around it is
+     refused (``unconfirmed_gauge_fault``: another vehicle loaded it);
   2. the lanes' lateral check (:func:`bwim.site.wander.refuse_lateral_outliers`): a
      weighed vehicle whose lateral position is an outlier of its lane's traffic is
      refused (``lateral_outlier``);

@@ -2,24 +2,28 @@
 
 The gauge check of one event (:mod:`bwim.site.health`) leaves out a gauge that disagrees
 with what the others predict and weighs the vehicle without it (``gauge_fault:NAME``).
-A faulty gauge disagrees in most of the day's vehicles.  A healthy gauge disagrees only
-when something the lines do not model loads it: most often a vehicle that no detector
-saw in the lane next to it (the far gauges read it, the lines of the weighed vehicle do
-not), whose strain the other gauges near it still carry into the weights.
+A faulty gauge stays faulty: it disagrees in the vehicles before and after too.  A
+healthy gauge disagrees only when something the lines do not model loads it: most often
+a vehicle that no detector saw in the lane next to it (the far gauges read it, the lines
+of the weighed vehicle do not), whose strain the other gauges near it still carry into
+the weights.
 
 Contract
 --------
-* :func:`refuse_unconfirmed_faults` counts, over a batch's rows weighed
-  (``status == "weighed"``), how many carry ``gauge_fault:NAME`` for each gauge.  A
-  gauge flagged in at least ``confirm`` (:data:`CONFIRM`) of them is **confirmed**
-  faulty: its rows keep their weights.  A gauge flagged in fewer is not: each weighed
-  row that carries its flag is refused (weights dropped, ``unconfirmed_gauge_fault``
-  added to its flags, quality ``"reject"``, a reason naming the gauge and the day's
-  count).  With fewer than ``min_vehicles`` (:data:`MIN_VEHICLES`) weighed rows the day
-  cannot judge: every row is kept.
-* A gauge that is faulty only now and then (clipping under the heaviest trucks, a loose
+* :func:`refuse_unconfirmed_faults` orders a batch's rows weighed (``status ==
+  "weighed"``) by clock time (rows without one keep their place in the batch, after
+  those with one).  A weighed row flagged ``gauge_fault:NAME`` is **confirmed** when that
+  gauge is flagged in at least ``confirm`` (:data:`CONFIRM`, most) of the
+  ``neighbours`` (:data:`NEIGHBOURS`) weighed rows nearest it in that order, itself
+  included (the first or last ``neighbours`` rows at the ends of the day): a gauge that
+  died at noon is confirmed in every vehicle after noon.  A row with a fault not
+  confirmed is refused (weights dropped, ``unconfirmed_gauge_fault`` added to its
+  flags, quality ``"reject"``, a reason naming the gauge and its count among those
+  rows).  With fewer than ``neighbours`` weighed rows the day cannot judge: every row is
+  kept.
+* A gauge faulty only now and then (clipping under the heaviest trucks, a loose
   connector) is not confirmed either: its vehicles are refused rather than weighed with
-  a fault no day confirms (a refused weight is never a wrong one).
+  a fault no neighbour confirms (a refused weight is never a wrong one).
 * Rows other than weighed ones are returned unchanged, in order.
 """
 
@@ -29,20 +33,23 @@ import dataclasses
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass
+from datetime import datetime
+from datetime import time as dtime
 
 import numpy as np
 
 from bwim.errors import InputError
 from bwim.summary import SummaryRow
 
-__all__ = ["CONFIRM", "FLAG_UNCONFIRMED", "MIN_VEHICLES", "FaultCheck",
+__all__ = ["CONFIRM", "FLAG_UNCONFIRMED", "NEIGHBOURS", "FaultCheck",
            "refuse_unconfirmed_faults"]
 
-#: The share of a day's weighed vehicles in which a gauge must be found faulty for its
-#: fault to be the gauge's own: most of them.
+#: The share of its neighbours in which a gauge must be found faulty for a fault to be
+#: the gauge's own: most of them.
 CONFIRM = 0.5
-#: Weighed rows a day needs before it judges a gauge's faults.
-MIN_VEHICLES = 30
+#: The weighed vehicles nearest in time that judge a fault (about 20 minutes of heavy
+#: traffic on a busy road); a day with fewer is not judged.
+NEIGHBOURS = 30
 #: The flag of a row refused here.
 FLAG_UNCONFIRMED = "unconfirmed_gauge_fault"
 _PREFIX = "gauge_fault:"
@@ -57,60 +64,80 @@ class FaultCheck:
     rows : tuple of SummaryRow
         Every input row, in order; the rows of unconfirmed faults refused.
     counts : dict of str to int
-        Weighed rows flagged faulty per gauge.
+        Weighed rows flagged faulty per gauge over the day.
     n_weighed : int
-        Weighed rows judged (0 when fewer than ``min_vehicles``: not judged).
-    confirmed : tuple of str
-        Gauges whose faults the day confirms.
+        Weighed rows judged (0 when fewer than ``neighbours``: not judged).
     refused : tuple of (str, int)
         ``(record, vehicle)`` of the rows refused here.
+    unconfirmed : dict of str to int
+        Per gauge, the rows refused for it.
     """
 
     rows: tuple[SummaryRow, ...]
     counts: dict[str, int]
     n_weighed: int
-    confirmed: tuple[str, ...]
     refused: tuple[tuple[str, int], ...]
+    unconfirmed: dict[str, int]
 
     def __repr__(self) -> str:
         return (f"FaultCheck({len(self.rows)} rows, {self.n_weighed} weighed judged, "
-                f"confirmed {list(self.confirmed)}, {len(self.refused)} refused)")
+                f"{len(self.refused)} refused)")
 
 
 def _faults(row: SummaryRow) -> list[str]:
-    return [f[len(_PREFIX):] for f in row.flags if f.startswith(_PREFIX)]
+    return list(dict.fromkeys(f[len(_PREFIX):] for f in row.flags if f.startswith(_PREFIX)))
+
+
+def _order_key(item: tuple[int, SummaryRow]) -> tuple:
+    k, row = item
+    t = row.time
+    if isinstance(t, datetime):
+        return (0, t.timestamp(), k)
+    if isinstance(t, dtime):
+        return (0, t.hour * 3600 + t.minute * 60 + t.second + t.microsecond * 1e-6, k)
+    return (1, 0.0, k)
 
 
 def refuse_unconfirmed_faults(rows: Sequence[SummaryRow], *, confirm: float = CONFIRM,
-                              min_vehicles: int = MIN_VEHICLES) -> FaultCheck:
-    """Refuse the weighed rows of gauge faults the day does not confirm (see the module
-    docstring)."""
+                              neighbours: int = NEIGHBOURS) -> FaultCheck:
+    """Refuse the weighed rows of gauge faults their neighbours do not confirm (see the
+    module docstring)."""
     confirm = float(confirm)
     if not np.isfinite(confirm) or not 0.0 < confirm <= 1.0:
         raise InputError(f"confirm must be a share in (0, 1], got {confirm!r}")
-    if isinstance(min_vehicles, bool) or not isinstance(min_vehicles, int) \
-            or min_vehicles < 1:
-        raise InputError(f"min_vehicles must be a positive integer, got {min_vehicles!r}")
-    weighed = [r for r in rows if r.status == "weighed"]
-    counts = Counter(g for r in weighed for g in dict.fromkeys(_faults(r)))
-    if len(weighed) < min_vehicles:
-        return FaultCheck(rows=tuple(rows), counts=dict(counts), n_weighed=0,
-                          confirmed=tuple(sorted(counts)), refused=())
+    if isinstance(neighbours, bool) or not isinstance(neighbours, int) or neighbours < 1:
+        raise InputError(f"neighbours must be a positive integer, got {neighbours!r}")
+    weighed = sorted(((k, r) for k, r in enumerate(rows) if r.status == "weighed"),
+                     key=_order_key)
+    counts = Counter(g for _, r in weighed for g in _faults(r))
     n = len(weighed)
-    confirmed = tuple(sorted(g for g, k in counts.items() if k >= confirm * n))
-    out, refused = [], []
-    for r in rows:
-        doubtful = [g for g in _faults(r) if g not in confirmed] if r.status == "weighed" \
-            else []
-        if not doubtful:
+    if n < neighbours:
+        return FaultCheck(rows=tuple(rows), counts=dict(counts), n_weighed=0, refused=(),
+                          unconfirmed={})
+    faults = [set(_faults(r)) for _, r in weighed]
+    doubtful: dict[int, list[tuple[str, int]]] = {}
+    for i, (k, _) in enumerate(weighed):
+        if not faults[i]:
+            continue
+        lo = min(max(0, i - neighbours // 2), n - neighbours)
+        around = faults[lo:lo + neighbours]
+        for g in sorted(faults[i]):
+            seen = sum(g in f for f in around)
+            if seen < confirm * neighbours:
+                doubtful.setdefault(k, []).append((g, seen))
+    out, refused, unconfirmed = [], [], Counter()
+    for k, r in enumerate(rows):
+        if k not in doubtful:
             out.append(r)
             continue
-        said = ", ".join(f"{g} in {counts[g]} of {n}" for g in doubtful)
+        said = ", ".join(f"{g} in {seen} of the {neighbours} vehicles weighed nearest it"
+                         for g, seen in doubtful[k])
         out.append(dataclasses.replace(
             r, status="refused", axle_weights=(), group_weights=(), gvw=None,
             flags=tuple(dict.fromkeys([*r.flags, FLAG_UNCONFIRMED])), quality="reject",
-            reason=f"a gauge disagreed that the day finds healthy ({said} vehicles "
-                   "weighed): another vehicle no detector saw loads the gauges"))
+            reason=f"a gauge disagreed that the day finds healthy ({said}): another "
+                   "vehicle no detector saw loads the gauges"))
         refused.append((r.record, r.vehicle))
+        unconfirmed.update(g for g, _ in doubtful[k])
     return FaultCheck(rows=tuple(out), counts=dict(counts), n_weighed=n,
-                      confirmed=confirmed, refused=tuple(refused))
+                      refused=tuple(refused), unconfirmed=dict(unconfirmed))
