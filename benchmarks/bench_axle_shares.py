@@ -25,14 +25,21 @@ date's statically weighed lane-1 vehicles, for:
 
 ``single − group`` is the difference of the two means (the real site's: about −7 %).
 ``--quick``: seed 31 only, a smaller day (250 traffic events, generated once into the
-cache) and fewer variants; the smoke version of this study.
+cache) and fewer variants.  ``--side-spans M``: the same seeds on the slab continuous
+over its supports into side spans of M m (:class:`bwim.synthetic.layout.Continuity`,
+a property of real short slabs that the default site lacks: the influence lines have a
+lobe of the opposite sign beyond the supports).  ``--day FOLDER``: any day made by
+:func:`bwim.synthetic.make_site_days`.  The row "support with lobes beyond the zero" is
+``calibrate_lines(..., support_lobes=True)``.
 """
 
 from __future__ import annotations
 
 import argparse
 import csv
+import dataclasses
 import os
+import shutil
 import tempfile
 import time
 from dataclasses import dataclass
@@ -42,14 +49,14 @@ from pathlib import Path
 import numpy as np
 
 from benchmarks._timing import print_table
-from benchmarks.bench_realsite import site_day
+from benchmarks.bench_realsite import N_TRAFFIC, site_day
 from bwim.batch import Item, weigh_events
 from bwim.io import read_reference
 from bwim.records import Passage
 from bwim.scenario import build_site_setup, load_record, load_scenario
 from bwim.site import calibrate_site, correct_drift
 from bwim.synthetic import make_test_day
-from bwim.synthetic.layout import SHORT_SPAN_4_LANE
+from bwim.synthetic.layout import SHORT_SPAN_4_LANE, Continuity
 from bwim.wim import calibrate_lines, group_axles, weigh
 
 SEEDS = (31, 32)
@@ -62,16 +69,20 @@ def _floats(text: str) -> np.ndarray:
     return np.array([float(v) for v in text.split(";")]) if text else np.zeros(0)
 
 
-def quick_day(seed: int) -> Path:
-    """A small realistic day of ``seed``, generated once into the cache."""
+def cached_day(seed: int, n_traffic: int, side_spans: float | None) -> Path:
+    """The realistic day of ``seed`` with ``n_traffic`` events, on the slab continuous into
+    side spans of ``side_spans`` m (None: the default, simply supported), generated once
+    into the cache."""
+    if side_spans is None and n_traffic == N_TRAFFIC:
+        return site_day(seed)  # bench_realsite's day
     cache = Path(os.environ.get("BWIM_BENCH_CACHE", tempfile.gettempdir()))
-    folder = cache / f"bwim-realsite-{seed}-{QUICK_TRAFFIC}-{MESH}"
+    tag = "" if side_spans is None else f"-c{side_spans:g}"
+    folder = cache / f"bwim-realsite-{seed}-{n_traffic}-{MESH}{tag}"
     if not (folder / "scenario.toml").exists():
-        import shutil
-
         shutil.rmtree(folder, ignore_errors=True)
-        make_test_day(folder, site="short-span-4-lane", seed=seed, n_traffic=QUICK_TRAFFIC,
-                      mesh=MESH)
+        layout = SHORT_SPAN_4_LANE if side_spans is None else dataclasses.replace(
+            SHORT_SPAN_4_LANE, continuity=Continuity(side_span=side_spans))
+        make_test_day(folder, site=layout, seed=seed, n_traffic=n_traffic, mesh=MESH)
     return folder
 
 
@@ -226,7 +237,8 @@ def variants(quick: bool) -> list[tuple[str, dict]]:
         out += [("smoothing 0.05 m", {"smoothing": 0.05}),
                 ("smoothing 0.2 m", {"smoothing": 0.2}),
                 ("smoothing 0.5 m", {"smoothing": 0.5})]
-    out += [("support = true span", {"support": true_support})]
+    out += [("support = true span", {"support": true_support}),
+            ("support with lobes beyond the zero", {"support_lobes": True})]
     if not quick:
         out += [("support = span + 0.5 m each side",
                  {"support": (true_support[0] - 0.5, true_support[1] + 0.5)}),
@@ -273,14 +285,23 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true",
                         help="seed 31 only, a small day, fewer variants")
+    parser.add_argument("--side-spans", type=float, default=None, metavar="M",
+                        help="the slab continuous over its supports into side spans of M m "
+                        "(bwim.synthetic.layout.Continuity; days generated once)")
+    parser.add_argument("--day", type=Path, action="append", default=[],
+                        help="a folder made by make_site_days instead of the seeds' days; "
+                        "may be repeated")
     args = parser.parse_args(argv)
-    seeds = SEEDS[:1] if args.quick else SEEDS
-    for seed in seeds:
+    n_traffic = QUICK_TRAFFIC if args.quick else N_TRAFFIC
+    days = args.day or [cached_day(s, n_traffic, args.side_spans)
+                        for s in (SEEDS[:1] if args.quick else SEEDS)]
+    for folder in days:
         t0 = time.perf_counter()
-        day = load_day(quick_day(seed) if args.quick else site_day(seed))
+        day = load_day(folder)
+        name = folder.name
         rows = study(day, args.quick)
         print_table(
-            f"Axle shares on the realistic site, seed {seed}: error % (mean ± sd) of the "
+            f"Axle shares on the realistic site, {name}: error % (mean ± sd) of the "
             f"traffic date's lane-1 reference vehicles ({len(day.refs)}); rows after the "
             f"first weigh with each truck's true drift factor ({time.perf_counter() - t0:.0f} s)",
             ["lines", "passages", "weighed", "gross weight", "single axle", "group of axles",
