@@ -11,6 +11,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from benchmarks import (  # noqa: E402
+    bench_axle_shares,
     bench_batch,
     bench_calibration,
     bench_declarations,
@@ -53,6 +54,7 @@ def main() -> None:
     bench_stream.main([])
     bench_realsite.main()
     bench_drift.main()
+    bench_axle_shares.main([])
     bench_faults.main()
     bench_declarations.main()
     bench_site_model.main([])

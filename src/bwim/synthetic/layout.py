@@ -20,6 +20,16 @@ Contract
 * :class:`Joint`: a longitudinal joint along ``y`` (m): a strip ``width`` m wide over the
   whole span whose transverse modulus is the slab's × ``stiffness`` (a construction joint
   that passes less bending across it; :mod:`bwim.fe.joints`).  None by default.
+* :class:`Continuity`: the slab continuous over both supports into side spans (e.g. a
+  multi-span slab, or approach slabs and abutments that carry moment), None by default.
+  A load beyond a support then bends the span the other way (the influence lines have
+  a lobe of the opposite sign outside the span).  :class:`ContinuousSpan` gives its
+  static influence surfaces by the flexibility method: the slab with its side spans,
+  simply supported at the far ends, with the deflection of every node on the two inner
+  support lines released to zero by point reactions (``I = E − wᵀ F⁻¹ E_s``: ``E`` the
+  sensors' and ``w`` the support nodes' influence on the long slab, ``F`` the support
+  nodes' flexibility, ``E_s`` the sensors' readings under a unit load on each support
+  node).
 * ``columns``: the logger file's columns in order (``"time"``, channel names, ``"-"`` for
   a column the weighing skips, e.g. a digital status).
 * **Mirror frame.**  The slab and its supports are symmetric under x → span − x, so a
@@ -44,7 +54,8 @@ from bwim.fe.mesh import grid_lines
 from bwim.sensors import Sensor
 from bwim.synthetic.detector import DetectorResponse
 
-__all__ = ["SHORT_SPAN_4_LANE", "AxleDetector", "Gauge", "GaugePoints", "Lane", "SiteLayout"]
+__all__ = ["SHORT_SPAN_4_LANE", "AxleDetector", "Continuity", "ContinuousSpan", "Gauge",
+           "GaugePoints", "Lane", "SiteLayout"]
 
 SPREAD_POINTS = 4  #: Gauss points per direction of a gauge's load-spread mean
 
@@ -93,6 +104,56 @@ class Joint:
     width: float = 0.3
 
 
+@dataclass(frozen=True, kw_only=True)
+class Continuity:
+    """The slab continuous over both supports into side spans of ``side_span`` m (the same
+    slab, simply supported at their far ends)."""
+
+    side_span: float
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class ContinuousSpan:
+    """Static influence surfaces of sensors on a span continuous over its two supports
+    (see the module docstring): the span's frame, x from its first support."""
+
+    surfaces: object  #: InfluenceSurfaces of the sensors then the support nodes' deflection
+    offset: float  #: x of the span's first support on the long slab, m
+    n_sensors: int
+    release: np.ndarray  #: F⁻¹ E_s, shape (n_support_nodes, n_sensors)
+
+    @classmethod
+    def build(cls, long_slab: Bridge, sensors, *, offset: float, span: float
+              ) -> ContinuousSpan:
+        """The surfaces of ``sensors`` (placed on ``long_slab``, m) with the nodes of the
+        lines x = ``offset`` and ``offset + span`` held at zero deflection."""
+        grid = long_slab.model.grid
+        xs = [x for x in (offset, offset + span)
+              if np.min(np.abs(grid.x_lines - x)) > 1e-9]
+        if xs:
+            raise InputError(f"the support line x = {xs[0]:g} m is not a node line of the "
+                             "long slab")
+        ys = grid.y_lines if long_slab.is_plate else np.array([0.0])
+        sx = np.repeat([offset, offset + span], ys.size)
+        sy = np.tile(ys, 2)
+        support = [Sensor(x=float(x), y=float(y) if long_slab.is_plate else None,
+                          kind="deflection", name=f"support{k}")
+                   for k, (x, y) in enumerate(zip(sx, sy, strict=True))]
+        sensors = tuple(sensors)
+        surfaces = long_slab.influence([*sensors, *support])
+        at = surfaces.at(sx, sy if long_slab.is_plate else None)
+        n = len(sensors)
+        release = np.linalg.solve(at[:, n:], at[:, :n])  # F is symmetric (reciprocity)
+        return cls(surfaces=surfaces, offset=float(offset), n_sensors=n, release=release)
+
+    def at(self, x: np.ndarray, y: np.ndarray | None = None) -> np.ndarray:
+        """Ordinates (reading per newton) at points ``x`` (the span's frame, m) and ``y``,
+        shape (n_points, n_sensors); zero beyond the side spans."""
+        x = np.atleast_1d(np.asarray(x, dtype=float))
+        o = self.surfaces.at(x + self.offset, y)
+        return o[:, :self.n_sensors] - o[:, self.n_sensors:] @ self.release
+
+
 @dataclass(frozen=True, kw_only=True, eq=False)
 class GaugePoints:
     """Soffit points that gauges average, and the averaging matrix.
@@ -125,6 +186,7 @@ class SiteLayout:
     sampling_rate: float = 512.0
     load_spread: tuple[float, float] = (0.75, 0.85)
     joints: tuple[Joint, ...] = ()
+    continuity: Continuity | None = None
     note: str = ""
 
     def __post_init__(self) -> None:
@@ -158,6 +220,13 @@ class SiteLayout:
                     - j.width / 2):
                 raise InputError(f"layout {self.name}: a joint needs a positive width and "
                                  f"stiffness and its strip on the deck, got {j}")
+        if self.continuity is not None:
+            if not self.continuity.side_span > 0:
+                raise InputError(f"layout {self.name}: continuity needs side spans > 0 m, "
+                                 f"got {self.continuity.side_span!r}")
+            if self.joints:
+                raise InputError(f"layout {self.name}: continuity with joints is not "
+                                 "modelled")
         names = [*(g.name for g in self.gauges), *(d.name for d in self.detectors)]
         if len(set(names)) != len(names):
             raise InputError(f"layout {self.name}: channel names must be unique")
@@ -203,6 +272,29 @@ class SiteLayout:
             return plate
         return with_joints(plate, [j.y for j in self.joints],
                            [j.stiffness for j in self.joints])
+
+    def continuous_span(self, mesh: float, sensors) -> ContinuousSpan:
+        """The static influence surfaces of ``sensors`` (real frame) with the slab
+        continuous into its side spans (:attr:`continuity`), on elements of at most
+        ``mesh`` m (node lines on both supports)."""
+        if self.continuity is None:
+            raise InputError(f"layout {self.name} has no continuity")
+        mesh = require_positive("mesh", mesh)
+        a = float(self.continuity.side_span)
+
+        def piece(x0: float, length: float, first: bool) -> np.ndarray:
+            n = max(int(np.ceil(length / mesh - 1e-9)), 1)
+            return x0 + np.linspace(0.0, length, n + 1)[0 if first else 1:]
+
+        x_lines = np.concatenate([piece(0.0, a, True), piece(a, self.span, False),
+                                  piece(a + self.span, a, False)])
+        ny = max(int(np.ceil(self.width / mesh - 1e-9)), 2)
+        slab = Bridge.plate(length=self.span + 2 * a, width=self.width, ny=ny,
+                            x_lines=x_lines, thickness=self.thickness,
+                            mu=self.density * self.thickness, E=self.modulus,
+                            poisson=self.poisson, damping_ratio=self.damping_ratio)
+        moved = [Sensor(x=s.x + a, y=s.y, kind=s.kind, name=s.name) for s in sensors]
+        return ContinuousSpan.build(slab, moved, offset=a, span=self.span)
 
     def spread_points(self, locations, *, mirrored: bool = False,
                       prefix: str = "p") -> GaugePoints:

@@ -244,6 +244,7 @@ class _Model:
     weights: np.ndarray  # (n_points, n_gauges + n_lines)
     lines: tuple[float, ...]  # y of the detector lines (global part)
     fs: float
+    continuous: object = None  # ContinuousSpan of the real-frame points (layout.continuity)
 
 
 def make_site_days(
@@ -423,8 +424,36 @@ def _site_model(layout: SiteLayout, mesh: float, fs: float) -> _Model:
         points[direction] = spread.points
         influence[direction] = bridge.influence(list(spread.points))
         weights = spread.weights
+    continuous = (None if layout.continuity is None
+                  else layout.continuous_span(mesh, points[1]))
     return _Model(layout=layout, bridge=bridge, points=points, influence=influence,
-                  weights=weights, lines=lines, fs=fs)
+                  weights=weights, lines=lines, fs=fs, continuous=continuous)
+
+
+def _continuity_strain(model: _Model, passage, truth, direction: int,
+                       tau: np.ndarray) -> np.ndarray:
+    """What the slab's continuity (:attr:`SiteLayout.continuity`) adds to the simply
+    supported span's readings of a vehicle at its record times ``tau`` (s; before 0 its
+    wheels carry their static loads, the crossing's record starting as its first axle
+    enters): ``Σ_w F_w(t) (I_cont − I_ss)(x_w, y_w)`` quasi-statically, shape
+    (n_t, n_gauges + n_lines)."""
+    layout = model.layout
+    x = passage.wheel_x(tau)
+    if direction < 0:
+        x = layout.span - x
+    a = layout.continuity.side_span
+    rows = np.clip(np.round(tau * OVERSAMPLE * model.fs).astype(int), 0,
+                   truth.wheel_forces.shape[0] - 1)
+    forces = np.where((tau >= 0)[:, None], truth.wheel_forces[rows],
+                      truth.static_wheel_loads[None, :])
+    on = (x > -a) & (x < layout.span + a)
+    k, w = np.nonzero(on)
+    out = np.zeros((tau.size, model.weights.shape[0]))
+    if k.size:
+        xs, ys = x[k, w], passage.wheel_y[w]
+        delta = model.continuous.at(xs, ys) - model.influence[1].at(xs, ys)
+        np.add.at(out, k, forces[k, w][:, None] * delta)
+    return out @ model.weights
 
 
 def _peak_static_strain(model: _Model, truck, loads) -> float:
@@ -637,6 +666,9 @@ def _simulate(plan: _Plan, model: _Model, approach: float):
         fine[k0:k0 + n] += rec.data[:n] @ model.weights
         for i, passage, truth in zip(idx, rec.passages, rec.truths, strict=True):
             runs[i] = (passage, truth, k0, rec.time)
+            if model.continuous is not None:
+                fine += _continuity_strain(model, passage, truth, direction,
+                                           np.arange(n_fine) * step - g0)
     coarse = resample_poly(fine, 1, OVERSAMPLE, axis=0)
     n = int(np.floor(end * fs + 1e-9)) + 1
     return coarse[:n], entry, runs
@@ -878,7 +910,9 @@ def _write_site_truth(path: Path, *, seed, mesh, model: _Model, noise, sigma, re
                    "poisson": layout.poisson, "mu": layout.density * layout.thickness,
                    "damping_ratio": layout.damping_ratio, "supports": "ss-free",
                    "nx": grid.nx, "ny": grid.ny, "mesh": mesh,
-                   "load_spread": list(layout.load_spread)},
+                   "load_spread": list(layout.load_spread),
+                   **({} if layout.continuity is None else
+                      {"continuous_side_spans": layout.continuity.side_span})},
         "lanes": [{"number": ln.number, "y": ln.y, "direction": ln.direction_name,
                    "heavy_share": ln.heavy_share} for ln in layout.lanes],
         "wander": {"sigma": WANDER[0], "cut": WANDER[1]},

@@ -308,6 +308,7 @@ def calibrate_lines(
     outlier: OutlierRule | None = DEFAULT_OUTLIER_RULE,
     run_flags: Sequence[Sequence[str] | str] | None = None,
     signal_threshold: float = 0.05,
+    support_lobes: bool = False,
     trend_bandwidth: float | None = None,
     tol: float = 1e-7,
     max_iter: int = 200,
@@ -361,6 +362,12 @@ def calibrate_lines(
         ``outlier=None``, the default rule's) are rejected.
     signal_threshold : float
         See ``support`` (default 5 %).
+    support_lobes : bool
+        Keep a lobe of the first-pass lines beyond the zero where the line returns to
+        zero, when it rises above ``signal_threshold`` × the peak again (a slab continuous
+        over its supports: :func:`~bwim.wim.support.trimmed_support` with
+        ``keep_lobes``).  Off by default: the lines then reach further than the span, and
+        records that end sooner after the last axle leaves are truncated for them.
     trend_bandwidth : float, optional
         Bandwidth of the :class:`ScaleTrend`, s (default chosen by cross-validation, see
         :meth:`ScaleTrend.fit`).
@@ -374,8 +381,8 @@ def calibrate_lines(
     runs = _read_runs(records, passages, axle_loads, channels=channels, lateral=lateral,
                       per_run_scale=per_run_scale, smoothing=smoothing, spacing=spacing,
                       support=support, outlier=outlier, run_flags=run_flags,
-                      signal_threshold=signal_threshold, trend_bandwidth=trend_bandwidth,
-                      tol=tol, max_iter=max_iter)
+                      signal_threshold=signal_threshold, support_lobes=support_lobes,
+                      trend_bandwidth=trend_bandwidth, tol=tol, max_iter=max_iter)
     reasons = upstream_rejections(runs.flags, runs.outlier or DEFAULT_OUTLIER_RULE)
     final = _reject_outliers(runs, reasons)
     evaluation = _evaluate_runs(runs, final)
@@ -403,6 +410,7 @@ class _Runs:
     per_run_scale: bool
     smoothing: float
     threshold: float
+    lobes: bool  # keep lobes beyond the line's zero (trimmed_support's keep_lobes)
     trend_bandwidth: float | None
     outlier: OutlierRule | None
     tol: float
@@ -425,7 +433,7 @@ class _Runs:
 
 def _read_runs(records, passages, axle_loads, *, channels, lateral, per_run_scale,
                smoothing, spacing, support, outlier, run_flags, signal_threshold,
-               trend_bandwidth, tol, max_iter) -> _Runs:
+               support_lobes, trend_bandwidth, tol, max_iter) -> _Runs:
     """The inputs checked (one-line InputErrors), the channels resolved and read."""
     recs, pas = _records_and_passages(records, passages)
     loads = static_axle_loads(axle_loads)
@@ -465,7 +473,8 @@ def _read_runs(records, passages, axle_loads, *, channels, lateral, per_run_scal
         times=np.array([r.clock_seconds() for r in recs]), flags=flags, h_req=h_req,
         fixed_grid=None if support is None else _given_grid(support, h_req),
         lateral=lateral is not None, per_run_scale=per_run_scale, smoothing=ell,
-        threshold=thr, trend_bandwidth=trend_bandwidth, outlier=outlier, tol=tol,
+        threshold=thr, lobes=bool(support_lobes), trend_bandwidth=trend_bandwidth,
+        outlier=outlier, tol=tol,
         max_iter=int(max_iter))
 
 
@@ -572,7 +581,8 @@ def _support_passes(runs: _Runs, kept: list[int], ybar: float) -> list[_GridFit]
     cover = (min(float(runs.positions[k][0, 0]) for k in kept),
              max(float(runs.positions[k][-1, -1]) for k in kept))
     first = _fit_on(runs, kept, generous_grid(windows, cover, runs.h_req), ybar)
-    x0, x1 = trimmed_support(first.fit.theta0, first.grid, runs.threshold)
+    x0, x1 = trimmed_support(first.fit.theta0, first.grid, runs.threshold,
+                             keep_lobes=runs.lobes)
     return [first, _fit_on(runs, kept, uniform_grid(x0, x1, runs.h_req), ybar)]
 
 

@@ -96,7 +96,8 @@ def generous_grid(windows: Sequence[tuple[float, float]], cover: tuple[float, fl
     return uniform_grid(max(lo - pad, cover[0]), min(hi + pad, cover[1]), h_req)
 
 
-def trimmed_support(theta0: np.ndarray, grid: Grid, threshold: float) -> tuple[float, float]:
+def trimmed_support(theta0: np.ndarray, grid: Grid, threshold: float, *,
+                    keep_lobes: bool = False) -> tuple[float, float]:
     """The support of first-pass lines, m.
 
     ``theta0`` (n − 1, n_c) are the lines' interior ordinates on ``grid``.  From the peak
@@ -104,7 +105,12 @@ def trimmed_support(theta0: np.ndarray, grid: Grid, threshold: float) -> tuple[f
     ``threshold`` × the peak, then on to the next local minimum (where the line returns to
     zero; beyond it a first-pass line carries the bridge's free vibration, phase-locked to
     the axles) or to where it is negligible (0.1 % of the peak), plus 2 spacings (within
-    the grid).
+    the grid).  With ``keep_lobes``, where the magnitude rises above ``threshold`` × the
+    peak again further out, that lobe is part of the line too and the walk goes on from
+    it: a slab continuous over its supports (or an abutment that carries moment) reads a
+    load beyond the span with the opposite sign, and cutting that lobe off puts its
+    reading on the axles on the span (issue 20 item 5; lobes below the threshold still
+    end the line at the zero before them).
     """
     mag = np.concatenate([[0.0], np.sqrt((theta0**2).sum(axis=1)), [0.0]])  # on grid.x
     peak = int(np.argmax(mag))
@@ -113,11 +119,17 @@ def trimmed_support(theta0: np.ndarray, grid: Grid, threshold: float) -> tuple[f
 
     def walk(step: int) -> int:
         j = peak
-        while 0 < j < mag.size - 1 and not small[j]:
-            j += step
-        while 0 < j < mag.size - 1 and mag[j + step] < mag[j] and mag[j] > negligible:
-            j += step
-        return j
+        while True:
+            while 0 < j < mag.size - 1 and not small[j]:
+                j += step
+            while 0 < j < mag.size - 1 and mag[j + step] < mag[j] and mag[j] > negligible:
+                j += step
+            if not 0 < j < mag.size - 1:
+                return j
+            ahead = ~small[j + step::step] if step > 0 else ~small[j - 1::-1]
+            if not keep_lobes or not ahead.any():  # nothing significant beyond: it ends
+                return j
+            j += step * (int(np.argmax(ahead)) + 1)  # a lobe beyond the zero: keep it
 
     x = grid.x
     return (max(x[walk(-1)] - 2 * grid.h, x[0]), min(x[walk(+1)] + 2 * grid.h, x[-1]))
