@@ -77,3 +77,17 @@ def test_drift_benchmark_smoke(tmp_path):
     assert set(out["methods"]) == set(bench_drift.METHODS)
     assert all(res.n_reference >= 1 for res, _ in out["methods"].values())
     assert len(out["thin"]) == len(bench_drift.THINNING)
+
+
+def test_axle_shares_benchmark_smoke(small_site):
+    """The axle-shares study runs on the session's small site (its quick variants: the
+    lines refitted with the true calibration passages)."""
+    from benchmarks import bench_axle_shares
+
+    rows = bench_axle_shares.study(bench_axle_shares.load_day(small_site.out_dir),
+                                   quick=True)
+    assert rows[0][0] == "chain (drift corrected)" and len(rows) >= 4
+    weighed = {r[0]: int(r[2]) for r in rows}
+    # the chain and the summed-gauge line weigh the day's one lane-1 truck (a lateral
+    # model from the small site's 3 used runs may not)
+    assert weighed["chain (drift corrected)"] == weighed["summed gauges (Moses)"] == 1
