@@ -17,7 +17,7 @@ Contract
 
   It returns a :class:`DayResult` (the rows, in order, and what each step measured).
   ``bwim weigh`` runs it on the final summary; the benchmarks run it the same way.
-* :func:`correct_drift` alone is the second step.
+* :func:`correct_drift` alone is the third step.
 """
 
 from __future__ import annotations
