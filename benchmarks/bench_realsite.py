@@ -55,6 +55,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import dataclasses
 import os
 import shutil
 import tempfile
@@ -136,13 +137,23 @@ def _oracle(day: Path, scenario, site, reference) -> list[SummaryRow]:
     return rows
 
 
-def run_day(seed: int) -> dict:
+def run_day(seed: int, side_spans: float | None = None, support_lobes: bool = False) -> dict:
+    """One day weighed as ``bwim weigh`` does (module docstring); ``side_spans`` (m): the
+    day of the slab continuous into side spans (``bench_axle_shares``' days),
+    ``support_lobes``: the lines keep a lobe beyond their zeros
+    (:class:`bwim.site.SiteSetup`)."""
     t0 = time.perf_counter()
-    day = site_day(seed)
+    if side_spans is None:
+        day = site_day(seed)
+    else:
+        from benchmarks.bench_axle_shares import cached_day
+
+        day = cached_day(seed, N_TRAFFIC, side_spans)
     t_day = time.perf_counter() - t0
     scenario = load_scenario(day / "scenario.toml")
     runs = sorted((day / "calibration").glob("*.txt"))
-    site = calibrate_site([load_record(p, scenario) for p in runs], build_site_setup(scenario))
+    setup = dataclasses.replace(build_site_setup(scenario), support_lobes=support_lobes)
+    site = calibrate_site([load_record(p, scenario) for p in runs], setup)
     paths = (sorted((day / "calibration_day_traffic").glob("*.txt"))
              + sorted((day / "traffic").glob("*.txt")))
     t0 = time.process_time()
@@ -260,7 +271,12 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--seeds", type=int, nargs="+", default=list(SEEDS),
                         help=f"the days' seeds (default {' '.join(map(str, SEEDS))})")
-    days = [run_day(seed) for seed in parser.parse_args(argv).seeds]
+    parser.add_argument("--side-spans", type=float, default=None, metavar="M",
+                        help="the days of the slab continuous into side spans of M m")
+    parser.add_argument("--support-lobes", action="store_true",
+                        help="lines that keep a lobe beyond their zeros")
+    args = parser.parse_args(argv)
+    days = [run_day(seed, args.side_spans, args.support_lobes) for seed in args.seeds]
     for d in days:
         rows = [[label, f"{res.n_vehicles}/{res.n_reference}",
                  *[cell(res, c) for c in CRITERIA], res.overall_class or "-"]
@@ -270,7 +286,10 @@ def main(argv: list[str] | None = None) -> None:
                   else f"traffic drift: class {fit.reference_class}, nominal "
                   f"{fit.nominal / 1e3:.1f} kN from the {fit.nominal_source}, "
                   f"{sum(fit.counts.values())} reference vehicles")
-        print_table(f"Realistic site, seed {d['seed']}: COST 323 (RR2, I) on the traffic "
+        what = ("" if args.side_spans is None
+                else f", slab continuous into {args.side_spans:g} m side spans") + (
+            ", lines with lobes" if args.support_lobes else "")
+        print_table(f"Realistic site{what}, seed {d['seed']}: COST 323 (RR2, I) on the traffic "
                     f"date's lane-1 trucks, error % mean ± sd and class ({source}; "
                     f"{d['n_lane3']} lane-3 trucks counted, not weighed)",
                     ["weighing", "weighed", "gross weight", "group of axles", "single axle",

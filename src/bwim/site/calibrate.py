@@ -468,7 +468,8 @@ def _check_load_order(records: Sequence[Record], passages: Sequence[Passage],
         return  # a truck of (nearly) symmetric loads: either order is the same truck
     try:
         other = calibrate_lines([records[k] for k in kept], passages, loads[::-1],
-                                lateral=setup.lateral)
+                                lateral=setup.lateral,
+                                support_lobes=setup.support_lobes)
     except _FIT_ERRORS:
         return  # the reverse order cannot even be fitted: the declared one stands
     _refuse_reversed(float(lines.line.residual), float(other.line.residual))
@@ -490,7 +491,8 @@ def _check_load_order_strain(records: Sequence[Record], setup: SiteSetup,
                                   gauges=gauge_names(records[0]))
         _, passages, kept = _truck_runs([_as_event(d, setup) for d in dets], setup)
         other = calibrate_lines([records[k] for k in kept], passages, reverse,
-                                lateral=setup.lateral)
+                                lateral=setup.lateral,
+                                support_lobes=setup.support_lobes)
     except _FIT_ERRORS:
         return
     _refuse_reversed(float(lines.line.residual), float(other.line.residual))
@@ -674,7 +676,8 @@ def _site_calibration(records, setup, detections, reasons, passages, kept) -> _L
         raise InputError(f"only {len(kept)} usable calibration run(s) of {len(records)}: "
                          f"{shown}")
     lines = calibrate_lines([records[k] for k in kept], passages, setup.calibration_loads,
-                            lateral=setup.lateral)
+                            lateral=setup.lateral,
+                            support_lobes=setup.support_lobes)
     reasons = list(reasons)
     fits: list[RunFit | None] = [None] * len(records)
     for run in lines.runs:
@@ -750,14 +753,16 @@ def _strain_only(records: Sequence[Record], setup: SiteSetup, passes: int) -> Si
     lines = None
     if len(kept) >= 2:  # the order of the loads, on the truck found with each order
         lines = calibrate_lines([records[k] for k in kept], passages,
-                                setup.calibration_loads, lateral=setup.lateral)
+                                setup.calibration_loads, lateral=setup.lateral,
+                                support_lobes=setup.support_lobes)
         _check_load_order_strain(records, setup, lines)
     for _ in range(passes):
         if len(kept) < 2:
             break
         if lines is None:
             lines = calibrate_lines([records[k] for k in kept], passages,
-                                    setup.calibration_loads, lateral=setup.lateral)
+                                    setup.calibration_loads, lateral=setup.lateral,
+                                    support_lobes=setup.support_lobes)
         line = lines.line_at()
         lines = None
         dets = []

@@ -304,13 +304,14 @@ def weigh_event(record: Record, calibration: SiteCalibration, *,
     base = {"clock": record.clock, "clock_of_day": record.clock is None and 0.0 < t0 < 86400.0}
     setup = calibration.setup
     lines = calibration.lines
+    span = lines.core_support or lines.support  # a lobe beyond the zeros may be cut
     try:
         if setup.lanes:
             ev = detect_lanes(record, setup, responses=calibration.responses,
-                              span=lines.support, gauges=gauge_names(record),
+                              span=span, gauges=gauge_names(record),
                               bending=calibration.bending)
         else:
-            det = detect_from_strain(record, lines.line_at(), span=lines.support,
+            det = detect_from_strain(record, lines.line_at(), span=span,
                                      gauges=gauge_names(record))
             ev = _single_lane(det, calibration)
     except _EVENT_ERRORS as exc:

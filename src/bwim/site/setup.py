@@ -130,6 +130,10 @@ class SiteSetup:
         ``"blue"`` or ``"sum"``.
     lateral : str or None
         ``"linear"``: lines linear in the lateral position; None: one line per gauge.
+    support_lobes : bool
+        The lines keep a lobe beyond their first zeros (a slab continuous over its
+        supports: :func:`bwim.wim.calibrate_lines`' ``support_lobes``); a record may end
+        on that lobe without being truncated.  Off by default.
     detection : str
         :data:`DETECTION_METHODS`.
     drift : DriftSetup or str
@@ -147,6 +151,7 @@ class SiteSetup:
     max_spacing: float | None = None
     combine: str = "auto"
     lateral: str | None = None
+    support_lobes: bool = False
     detection: str = "auto"
     drift: DriftSetup = field(default_factory=DriftSetup)
 

@@ -189,6 +189,10 @@ class MultiRunCalibration(OptimizeResult):
         The factors over clock time (None with ``per_run_scale=False``).
     time_span : (float, float)
         First and last clock time of the kept runs, s.
+    core_support : (float, float) or None
+        With ``support_lobes``, the support without the lobes beyond the line's first
+        zeros (m): a record may end (or start) while an axle is still on a lobe, not on
+        this part, without being truncated (:func:`bwim.wim.weigh`).  None: the support.
     x : ndarray, shape (n_kept,)
         The kept runs' scale factors, in the order given (mean 1; all 1 without per-run
         factors; as :attr:`scale_factors`): the unknowns of the bilinear problem's
@@ -219,6 +223,7 @@ class MultiRunCalibration(OptimizeResult):
     sum_misfit_median: float
     scale_trend: ScaleTrend | None
     time_span: tuple[float, float]
+    core_support: tuple[float, float] | None = None
 
     @property
     def channels(self) -> tuple[Channel, ...]:
@@ -531,6 +536,7 @@ class _KeptFit:
     var: np.ndarray  # its diagonal, clipped to > 0
     reasons: dict[int, str]  # every rejected run's reason so far
     nfev: int  # line solves so far
+    core: tuple[float, float] | None = None  # the support without its lobes (lobes kept)
 
 
 def _reject_outliers(runs: _Runs, reasons: dict[int, str]) -> _KeptFit:
@@ -557,6 +563,11 @@ def _fit_kept(runs: _Runs, kept: list[int], reasons: dict[int, str], *,
     ybar = float(runs.lanes[kept].mean())
     passes = _support_passes(runs, kept, ybar)
     final = passes[-1]
+    core = None
+    if runs.lobes and len(passes) == 2:  # the support without the lobes it kept
+        x0, x1 = trimmed_support(passes[0].fit.theta0, passes[0].grid, runs.threshold)
+        if x0 > final.grid.x0 or x1 < final.grid.x[-1]:
+            core = (float(x0), float(x1))
     grid, data, fit = final.grid, final.data, final.fit
     n_par = (grid.n - 1) * (2 if runs.lateral else 1) + len(kept) * (
         2 if runs.per_run_scale else 1)
@@ -565,7 +576,7 @@ def _fit_kept(runs: _Runs, kept: list[int], reasons: dict[int, str], *,
     cov = sum(residuals) / max(sum(d.n_t for d in data) - n_par, 1)
     var = np.clip(np.diag(cov), np.finfo(float).tiny, None)
     return _KeptFit(kept=kept, ybar=ybar, final=final, residuals=residuals, cov=cov, var=var,
-                    reasons=reasons, nfev=nfev + sum(p.fit.nfev for p in passes))
+                    reasons=reasons, nfev=nfev + sum(p.fit.nfev for p in passes), core=core)
 
 
 def _support_passes(runs: _Runs, kept: list[int], ybar: float) -> list[_GridFit]:
@@ -698,6 +709,7 @@ def _result(runs: _Runs, current: _KeptFit, evaluation: _Evaluation) -> MultiRun
         sum_misfit_median=evaluation.sum_misfit_median,
         scale_trend=trend,
         time_span=(float(runs.times[kept].min()), float(runs.times[kept].max())),
+        core_support=current.core,
         x=fit.scales, fun=evaluation.rss, nfev=current.nfev, nit=fit.nit,
         success=fit.success, message=fit.message,
     )

@@ -464,7 +464,8 @@ def _flags(event: _Inputs, design: _Design, centred: _Centred, fit: _Fit,
            calibration: MultiRunCalibration) -> tuple[str, ...]:
     """The plausibility flags of the weighing, in the canonical order."""
     limits, pos = event.limits, design.positions
-    lo, hi = design.support
+    # a lobe beyond the line's zeros (support_lobes) may be cut by the record's ends
+    lo, hi = calibration.core_support or design.support
     flags: list[str] = []
     if pos[0, 0] > lo:
         flags.append("truncated_start")
