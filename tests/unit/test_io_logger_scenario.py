@@ -119,3 +119,21 @@ def test_named_gauges_with_transverse_positions(tmp_path):
     sensors = build_sensors(scn.load_scenario(_write(tmp_path, text)))
     assert [x.y for x in sensors] == pytest.approx([0.5 + 0.7 * i for i in range(14)])
     assert all(x.x is None for x in sensors)
+
+
+def test_lines_section_keeps_the_lobes(tmp_path):
+    """``[lines] support_lobes`` reaches the site setup, survives a round trip, and is off
+    without the section; anything but a boolean is refused in one line."""
+    from bwim.scenario import build_site_setup
+
+    assert build_site_setup(scn.load_scenario(_write(tmp_path, SITE))).support_lobes is False
+    s = scn.load_scenario(_write(tmp_path, SITE + "[lines]\nsupport_lobes = true\n"))
+    assert s.lines.support_lobes is True and build_site_setup(s).support_lobes is True
+    out = tmp_path / "again.toml"
+    scn.dump_scenario(s, out)
+    assert scn.load_scenario(out) == s
+    for bad, message in (('support_lobes = "yes"', "support_lobes"),
+                         ("lobes = true", "lobes")):
+        with pytest.raises(InputError, match=message) as info:
+            scn.load_scenario(_write(tmp_path, SITE + f"[lines]\n{bad}\n", name="bad.toml"))
+        assert "\n" not in str(info.value)

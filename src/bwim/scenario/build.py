@@ -354,7 +354,9 @@ def build_site_setup(scenario: Scenario) -> SiteSetup:
     with _context(f"{scenario.source}: [axle_detectors]"):
         return SiteSetup(calibration_loads=truck.static_axle_loads,
                          calibration_spacings=truck.axle_spacings, lanes=tuple(lanes),
-                         traffic_lanes=tuple(traffic), calibration_lane=cal, drift=drift)
+                         traffic_lanes=tuple(traffic), calibration_lane=cal, drift=drift,
+                         support_lobes=scenario.lines is not None
+                         and scenario.lines.support_lobes)
 
 
 def build_vehicle(scenario: Scenario) -> Vehicle:

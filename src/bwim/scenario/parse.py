@@ -43,6 +43,7 @@ from bwim.scenario.specs import (
     DriftSpec,
     IdentifySpec,
     LaneSpec,
+    LinesSpec,
     LoggerSpec,
     RoadSpec,
     RunSpec,
@@ -57,7 +58,7 @@ __all__ = ["dump_scenario", "load_scenario", "read_toml", "scenario_from_dict",
            "scenario_to_dict"]
 
 _SECTIONS = ("title", "bridge", "sensors", "logger", "axle_detectors", "lanes", "drift",
-             "vehicle", "road", "run",
+             "lines", "vehicle", "road", "run",
              "identify", "calibrate")
 
 
@@ -249,7 +250,8 @@ def scenario_from_dict(
     if "lanes" in doc:
         kw["lanes"] = _parse_lanes(doc["lanes"], src)
     for name, cls in (("run", RunSpec), ("identify", IdentifySpec),
-                      ("calibrate", CalibrateSpec), ("drift", DriftSpec)):
+                      ("calibrate", CalibrateSpec), ("drift", DriftSpec),
+                      ("lines", LinesSpec)):
         if name in doc:
             kw[name] = parse_table(cls, doc[name], At(src, f"[{name}]"))
     return Scenario(**kw, source=src, folder=None if folder is None else Path(folder))
@@ -363,7 +365,7 @@ def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
         v = scenario.vehicle
         doc["vehicle"] = {"name": v.name} if v.name is not None else {
             "type": v.type, **_plain(v.params)}
-    for name in ("road", "run", "identify", "calibrate", "drift"):
+    for name in ("road", "run", "identify", "calibrate", "drift", "lines"):
         spec = getattr(scenario, name)
         if spec is not None:
             doc[name] = _spec_dict(spec)

@@ -59,7 +59,8 @@ from bwim.vehicles import NAMED_VEHICLES
 from bwim.vehicles.types import HalfCar, MovingForces, SprungMass, TractorSemitrailer, Truck3D
 
 __all__ = ["DIRECTIONS", "VEHICLE_TYPES", "AxleDetectorSpec", "BridgeSpec", "CalibrateSpec",
-           "ClockTable", "DriftSpec", "GirderSpec", "IdentifySpec", "LaneSpec", "LoggerSpec",
+           "ClockTable", "DriftSpec", "GirderSpec", "IdentifySpec", "LaneSpec", "LinesSpec",
+           "LoggerSpec",
            "RoadSpec", "RunSpec", "Scenario", "SectionSpec", "SensorSpec", "VehicleSpec"]
 
 #: Vehicle classes by their scenario ``type``.
@@ -318,6 +319,16 @@ class DriftSpec:
 
 
 @dataclass(frozen=True, kw_only=True)
+class LinesSpec:
+    """The ``[lines]`` section: how the site's influence lines are found from the
+    calibration runs (:class:`bwim.site.SiteSetup`): ``support_lobes`` keeps a lobe of the
+    lines beyond their first zeros (a slab continuous over its supports, or abutments
+    that carry moment; a record may end on the lobe), off by default."""
+
+    support_lobes: bool = opt(boolean, False)
+
+
+@dataclass(frozen=True, kw_only=True)
 class VehicleSpec:
     """The ``[vehicle]`` section: a named vehicle, or a ``type`` and its parameters
     (numbers, or lists of numbers per axle, in the class's SI units)."""
@@ -457,6 +468,7 @@ class Scenario:
     axle_detectors: tuple[AxleDetectorSpec, ...] = ()
     lanes: tuple[LaneSpec, ...] = ()
     drift: DriftSpec | None = None
+    lines: LinesSpec | None = None
     vehicle: VehicleSpec | None = None
     road: RoadSpec | None = None
     run: RunSpec | None = None
