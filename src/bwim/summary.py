@@ -29,6 +29,7 @@ Contract
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from datetime import datetime
@@ -228,6 +229,15 @@ class SummaryRow:
     def key(self) -> tuple[str, int]:
         """``(record, vehicle)``: a row's identity in a summary."""
         return self.record, self.vehicle
+
+    def refused(self, reason: str, *flags: str) -> SummaryRow:
+        """The row not weighed: its weights dropped, ``flags`` added (after its own, once
+        each), quality ``"reject"`` and ``reason``; everything else kept (a day-level
+        check's refusal of a row one event weighed)."""
+        return dataclasses.replace(
+            self, status="refused", axle_weights=(), group_weights=(), gvw=None,
+            flags=tuple(dict.fromkeys([*self.flags, *flags])), quality="reject",
+            reason=reason)
 
 
 def failed_row(record: str, reason: str) -> SummaryRow:

@@ -151,3 +151,23 @@ def test_assess_takes_rows_without_a_file_and_matches_vehicles():
     assert by_vehicle.missing == ("e0#2",)
     with pytest.raises(InputError, match="twice"):
         assess([*rows, rows[0]], ref)
+
+
+def test_a_weighed_row_refused_keeps_all_but_its_weights():
+    """SummaryRow.refused: no weight left, the flags added once after the row's own,
+    quality reject, the reason given; the rest (record, time, lane, speed...) kept."""
+    from datetime import datetime
+
+    from bwim.summary import SummaryRow
+
+    row = SummaryRow(record="e.txt", vehicle=2, time=datetime(2026, 7, 20, 9, 0), lane=1,
+                     direction="+x", n_axles=2, speed=22.0, axle_weights=(60e3, 90e3),
+                     group_weights=(60e3, 90e3), gvw=150e3, flags=("gauge_fault:s12",),
+                     quality="warning", method="moses", lateral=5.9, lateral_unit="m")
+    out = row.refused("another vehicle", "unconfirmed_gauge_fault", "gauge_fault:s12")
+    assert out.status == "refused" and not out.weighed and out.gvw is None
+    assert out.axle_weights == () and out.group_weights == ()
+    assert out.flags == ("gauge_fault:s12", "unconfirmed_gauge_fault")
+    assert out.quality == "reject" and out.reason == "another vehicle"
+    assert (out.key, out.time, out.lane, out.speed, out.lateral) == (
+        row.key, row.time, row.lane, row.speed, row.lateral)

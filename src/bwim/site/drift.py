@@ -299,10 +299,9 @@ def corrected(row: SummaryRow, factor: float, method: str, flags: Sequence[str] 
     quality = quality_of(new_flags)
     if quality == "reject":
         hard = ", ".join(f for f in new_flags if f in _WEIGHT_FLAGS)
-        return dataclasses.replace(row, status="refused", axle_weights=(), group_weights=(),
-                                   gvw=None, flags=tuple(new_flags), quality=quality,
-                                   drift_factor=factor, drift_method=method,
-                                   reason=f"implausible weighing ({hard})")
+        return dataclasses.replace(row, drift_factor=factor, drift_method=method,
+                                   flags=tuple(new_flags)).refused(
+            f"implausible weighing ({hard})")
     return dataclasses.replace(row, axle_weights=axles, group_weights=groups,
                                gvw=row.gvw * scale, flags=tuple(new_flags), quality=quality,
                                drift_factor=factor, drift_method=method)

@@ -29,7 +29,6 @@ Contract
 
 from __future__ import annotations
 
-import dataclasses
 from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -132,11 +131,9 @@ def refuse_unconfirmed_faults(rows: Sequence[SummaryRow], *, confirm: float = CO
             continue
         said = ", ".join(f"{g} in {seen} of the {neighbours} vehicles weighed nearest it"
                          for g, seen in doubtful[k])
-        out.append(dataclasses.replace(
-            r, status="refused", axle_weights=(), group_weights=(), gvw=None,
-            flags=tuple(dict.fromkeys([*r.flags, FLAG_UNCONFIRMED])), quality="reject",
-            reason=f"a gauge disagreed that the day finds healthy ({said}): another "
-                   "vehicle no detector saw loads the gauges"))
+        out.append(r.refused(f"a gauge disagreed that the day finds healthy ({said}): "
+                             "another vehicle no detector saw loads the gauges",
+                             FLAG_UNCONFIRMED))
         refused.append((r.record, r.vehicle))
         unconfirmed.update(g for g, _ in doubtful[k])
     return FaultCheck(rows=tuple(out), counts=dict(counts), n_weighed=n,

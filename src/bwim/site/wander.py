@@ -32,7 +32,6 @@ Contract
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -157,10 +156,7 @@ def _refused(row: SummaryRow, lane: LaneWander, z: float) -> SummaryRow:
     reason = (f"its lateral position {row.lateral:.2f}{unit} lies {abs(z):.1f} robust σ "
               f"from its lane's traffic (median {lane.median:.2f}, σ {lane.sigma:.2f} over "
               f"{lane.n} vehicles): a vehicle beside it no detector saw, or out of its lane")
-    return dataclasses.replace(
-        row, status="refused", axle_weights=(), group_weights=(), gvw=None,
-        flags=tuple(dict.fromkeys([*row.flags, FLAG_LATERAL_OUTLIER])), quality="reject",
-        reason=reason)
+    return row.refused(reason, FLAG_LATERAL_OUTLIER)
 
 
 def refuse_lateral_outliers(rows: Sequence[SummaryRow], *, limit: float = OUTLIER_Z,
