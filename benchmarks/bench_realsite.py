@@ -137,11 +137,12 @@ def _oracle(day: Path, scenario, site, reference) -> list[SummaryRow]:
     return rows
 
 
-def run_day(seed: int, side_spans: float | None = None, support_lobes: bool = False) -> dict:
+def run_day(seed: int, side_spans: float | None = None,
+            support_lobes: bool | None = None) -> dict:
     """One day weighed as ``bwim weigh`` does (module docstring); ``side_spans`` (m): the
     day of the slab continuous into side spans (``bench_axle_shares``' days),
-    ``support_lobes``: the lines keep a lobe beyond their zeros
-    (:class:`bwim.site.SiteSetup`)."""
+    ``support_lobes``: whether the lines keep a lobe beyond their zeros (None: the
+    scenario's, :class:`bwim.site.SiteSetup`)."""
     t0 = time.perf_counter()
     if side_spans is None:
         day = site_day(seed)
@@ -152,7 +153,9 @@ def run_day(seed: int, side_spans: float | None = None, support_lobes: bool = Fa
     t_day = time.perf_counter() - t0
     scenario = load_scenario(day / "scenario.toml")
     runs = sorted((day / "calibration").glob("*.txt"))
-    setup = dataclasses.replace(build_site_setup(scenario), support_lobes=support_lobes)
+    setup = build_site_setup(scenario)
+    if support_lobes is not None:
+        setup = dataclasses.replace(setup, support_lobes=support_lobes)
     site = calibrate_site([load_record(p, scenario) for p in runs], setup)
     paths = (sorted((day / "calibration_day_traffic").glob("*.txt"))
              + sorted((day / "traffic").glob("*.txt")))
@@ -273,10 +276,12 @@ def main(argv: list[str] | None = None) -> None:
                         help=f"the days' seeds (default {' '.join(map(str, SEEDS))})")
     parser.add_argument("--side-spans", type=float, default=None, metavar="M",
                         help="the days of the slab continuous into side spans of M m")
-    parser.add_argument("--support-lobes", action="store_true",
-                        help="lines that keep a lobe beyond their zeros")
+    parser.add_argument("--support-lobes", choices=("on", "off"), default=None,
+                        help="lines that keep a lobe beyond their zeros, or not (default: "
+                        "the scenario's)")
     args = parser.parse_args(argv)
-    days = [run_day(seed, args.side_spans, args.support_lobes) for seed in args.seeds]
+    lobes = None if args.support_lobes is None else args.support_lobes == "on"
+    days = [run_day(seed, args.side_spans, lobes) for seed in args.seeds]
     for d in days:
         rows = [[label, f"{res.n_vehicles}/{res.n_reference}",
                  *[cell(res, c) for c in CRITERIA], res.overall_class or "-"]
@@ -288,7 +293,7 @@ def main(argv: list[str] | None = None) -> None:
                   f"{sum(fit.counts.values())} reference vehicles")
         what = ("" if args.side_spans is None
                 else f", slab continuous into {args.side_spans:g} m side spans") + (
-            ", lines with lobes" if args.support_lobes else "")
+            "" if lobes is None else f", lines with lobes {args.support_lobes}")
         print_table(f"Realistic site{what}, seed {d['seed']}: COST 323 (RR2, I) on the traffic "
                     f"date's lane-1 trucks, error % mean ± sd and class ({source}; "
                     f"{d['n_lane3']} lane-3 trucks counted, not weighed)",

@@ -91,3 +91,19 @@ def test_bwim_weigh_refuses_them(small_site, tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert code == 2 and len(err.splitlines()) == 1 and "reverse order" in err, err
     assert not (tmp_path / "out" / "summary.csv").exists()
+
+
+def test_reversed_loads_are_refused_with_lobes_kept_too(runs):
+    """With ``support_lobes`` (a continuous slab's lines) the reversed declaration is
+    refused by the same check: a first pass whose signal spreads under the wrong loads
+    keeps at most one lobe each side, of the opposite sign, so its lines stay within the
+    record (before that rule they covered it all and the run checks divided by an empty
+    baseline)."""
+    setup, records = runs
+    wrong = dataclasses.replace(setup, calibration_loads=setup.calibration_loads[::-1],
+                                support_lobes=True)
+    with pytest.raises(InputError, match="fit markedly better with the declared axle loads "
+                       "in reverse order"):
+        calibrate_site(records, wrong)
+    right = calibrate_site(records, dataclasses.replace(setup, support_lobes=True))
+    assert right.lines.core_support is None  # this slab is simply supported: no lobe

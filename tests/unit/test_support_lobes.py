@@ -126,3 +126,19 @@ def test_a_record_may_end_on_the_lobe_but_not_on_the_span():
             assert np.all(np.abs(w.axle_weights / loads - 1) < 0.001)
     # the lines without lobes have no core of their own
     assert calibrate_lines(runs, None, cal_loads, per_run_scale=False).core_support is None
+
+
+def test_a_lobe_of_the_same_sign_is_not_kept():
+    """Only a lobe of the opposite sign is a continuous slab's adjacent span: the same
+    lobe with its sign flipped (as a first pass whose signal spreads under wrong loads
+    can show) ends the line at the zero before it; so does a second lobe beyond."""
+    grid = Grid(x0=-8.0, h=0.05, n=440)
+    interior = grid.x[1:-1]
+    line = centre_moment(interior, 6.0, 6.0)
+    same = np.where((interior < 0) | (interior > 6.0), np.abs(line), line)
+    lo, hi = trimmed_support(same[:, None], grid, 0.05, keep_lobes=True)
+    assert -0.3 <= lo <= 0.0 and 6.0 <= hi <= 6.3
+    # two channels: the sign is judged on the channels together (their scalar product)
+    both = np.column_stack([line, 0.5 * line])
+    lo, hi = trimmed_support(both, grid, 0.05, keep_lobes=True)
+    assert lo < -4.0 and hi > 10.0

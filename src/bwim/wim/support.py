@@ -110,15 +110,27 @@ def trimmed_support(theta0: np.ndarray, grid: Grid, threshold: float, *,
     it: a slab continuous over its supports (or an abutment that carries moment) reads a
     load beyond the span with the opposite sign, and cutting that lobe off puts its
     reading on the axles on the span (issue 20 item 5; lobes below the threshold still
-    end the line at the zero before them).
+    end the line at the zero before them).  Only one lobe each side, and only of the
+    opposite sign (its largest ordinates against the peak's: a negative scalar product),
+    as the adjacent span of a continuous slab reads: a first pass whose signal spreads
+    (wrong declared loads) keeps no lobe of the same sign.
     """
-    mag = np.concatenate([[0.0], np.sqrt((theta0**2).sum(axis=1)), [0.0]])  # on grid.x
+    zero = np.zeros((1, theta0.shape[1]))
+    full = np.vstack([zero, theta0, zero])  # on grid.x
+    mag = np.sqrt((full**2).sum(axis=1))
     peak = int(np.argmax(mag))
     small = mag < threshold * mag[peak]
     negligible = 1e-3 * mag[peak]
 
+    def lobe_peak(k: int, step: int) -> int:
+        """The largest node of the significant run that starts at ``k``."""
+        run = [k]
+        while 0 < run[-1] + step < mag.size - 1 and not small[run[-1] + step]:
+            run.append(run[-1] + step)
+        return max(run, key=lambda i: mag[i])
+
     def walk(step: int) -> int:
-        j = peak
+        j, lobes = peak, 0
         while True:
             while 0 < j < mag.size - 1 and not small[j]:
                 j += step
@@ -127,9 +139,13 @@ def trimmed_support(theta0: np.ndarray, grid: Grid, threshold: float, *,
             if not 0 < j < mag.size - 1:
                 return j
             ahead = ~small[j + step::step] if step > 0 else ~small[j - 1::-1]
-            if not keep_lobes or not ahead.any():  # nothing significant beyond: it ends
+            if not keep_lobes or lobes or not ahead.any():  # nothing beyond: it ends
                 return j
-            j += step * (int(np.argmax(ahead)) + 1)  # a lobe beyond the zero: keep it
+            k = j + step * (int(np.argmax(ahead)) + 1)
+            # a continuous slab's lobe: the adjacent span, read with the opposite sign
+            if float(full[lobe_peak(k, step)] @ full[peak]) >= 0:
+                return j
+            j, lobes = k, 1  # keep it
 
     x = grid.x
     return (max(x[walk(-1)] - 2 * grid.h, x[0]), min(x[walk(+1)] + 2 * grid.h, x[-1]))
