@@ -99,7 +99,9 @@ def test_a_record_may_end_on_the_lobe_but_not_on_the_span():
     """With the lobes kept the lines know the support without them (``core_support``):
     a record that ends while the last axle is on the far lobe is weighed (the lobe's
     reading beyond the record is simply not observed), one that ends while it is still
-    on the span is truncated, as before.  Same continuous beam as above."""
+    on the span is truncated, as before.  Same continuous beam as above: the data are
+    the closed form's and the lines are fitted to it, so this checks the support rule's
+    algebra, not the dynamics (the continuous site's bench_realsite does that)."""
     span, side = 6.0, 6.0
     xs = np.linspace(-side, span + side, 2401)
     line = centre_moment(xs, span, side)

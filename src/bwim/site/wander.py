@@ -37,6 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bwim.detect.signals import robust_sigma
 from bwim.errors import InputError
 from bwim.summary import SummaryRow
 
@@ -62,8 +63,6 @@ MIN_VEHICLES = 30
 SIGMA_FLOOR = 0.02
 #: The flag of a row refused here.
 FLAG_LATERAL_OUTLIER = "lateral_outlier"
-#: 1 / Φ⁻¹(3/4): the MAD of a normal sample times this is its σ.
-_MAD_TO_SIGMA = 1.482602218505602
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -143,10 +142,9 @@ def lane_wander(rows: Sequence[SummaryRow], *, min_vehicles: int = MIN_VEHICLES
         if len(values) < min_vehicles:
             continue
         y = np.asarray(values)
-        median = float(np.median(y))
-        mad = float(np.median(np.abs(y - median)))
-        out.append(LaneWander(lane=lane, direction=direction, unit=unit, median=median,
-                              sigma=max(_MAD_TO_SIGMA * mad, SIGMA_FLOOR), n=y.size))
+        out.append(LaneWander(lane=lane, direction=direction, unit=unit,
+                              median=float(np.median(y)),
+                              sigma=max(robust_sigma(y), SIGMA_FLOOR), n=y.size))
     return tuple(sorted(out, key=lambda w: (w.lane is None, w.lane or 0, w.direction,
                                             w.unit)))
 
