@@ -30,17 +30,18 @@ not weighed, and listed):
   weighing from one crossing.
 
 Also printed: the detection on the reference trucks (axle count, speed, spacings) and on
-the two-vehicle events (flagged or refused, never weighed as one; and those with a
-weight written more than 15 % off its truck's, or two trucks weighed as one, flagged or
-not: what must not happen), the vehicles refused
-as outliers of their lane's lateral spread (``lateral_outlier``, :mod:`bwim.site.wander`:
-those of two-vehicle events, and those alone, which it should not refuse), the vehicles
-of the other direction counted (matching a true one, the true ones, and those counted
-beyond their event's true number: the span's bending under a truck in another lane
-read as a slow vehicle, of which :mod:`bwim.site.bending` leaves out most), the
-calibration runs with another vehicle rejected, and the weighing rate.  Targets (issue
-20): every axle count right, spacings within 0.1 m, speed within 0.5 %, GVW A(5) and every
-criterion B+(7), multiple presence flagged in at least 95 % of the events that have it.
+the two-vehicle events (flagged or refused, never weighed as one; and those with a weight
+written more than 15 % off its truck's, or two trucks weighed as one, flagged or not: what
+must not happen), the vehicles refused as outliers of their lane's lateral spread
+(``lateral_outlier``, :mod:`bwim.site.wander`: those of two-vehicle events, and those
+alone, which it should not refuse), those refused for an axle group off their wheel path
+(``group_off_path``, :mod:`bwim.site.wheelpath`, counted the same way), the vehicles of
+the other direction counted (matching a true one, the true ones, and those counted beyond
+their event's true number: the span's bending under a truck in another lane read as a slow
+vehicle, of which :mod:`bwim.site.bending` leaves out most), the calibration runs with
+another vehicle rejected, and the weighing rate. Targets (issue 20): every axle count
+right, spacings within 0.1 m, speed within 0.5 %, GVW A(5) and every criterion B+(7),
+multiple presence flagged in at least 95 % of the events that have it.
 
 Speed (issue 21 item 6: ``bwim weigh`` from files at 150 events/s or more on one core):
 every event of both dates is read (:func:`bwim.scenario.load_record`) and then detected
@@ -169,7 +170,7 @@ def run_day(seed: int, side_spans: float | None = None,
     del events
     day_result = finish_day([r for o in outcomes for r in o.rows], site)
     default, fit = list(day_result.rows), day_result.drift
-    as_weighed = list(day_result.wander.rows)  # the lateral check, no traffic drift
+    as_weighed = list(day_result.paths.rows)  # the lateral checks, no traffic drift
     no_drift = [corrected(r, 1.0, "none") for r in as_weighed]
 
     reference = read_reference(day / "reference.csv")
@@ -214,12 +215,15 @@ def run_day(seed: int, side_spans: float | None = None,
                                            for r in by_record.get(name, [])))
     outliers = [r for r in default if "lateral_outlier" in r.flags]
     outliers_alone = sum(1 for r in outliers if len(truth[r.record]) == 1)
+    off_path = [r for r in default if "group_off_path" in r.flags]
+    off_path_alone = sum(1 for r in off_path if len(truth[r.record]) == 1)
     with_other = [k for k, p in enumerate(runs) if len(truth[p.name]) > 1]
     return {"seed": seed, "results": results, "fit": fit, "n_ref": len(lane1),
             "n_lane3": len(reference) - len(lane1), "count": count, "speed": speed,
             "spacing": spacing, "refused_disagree": n_refused,
             "multi": (flagged, len(multi)), "wrong": wrong, "counted": counted,
             "outliers": (len(outliers) - outliers_alone, outliers_alone),
+            "off_path": (len(off_path) - off_path_alone, off_path_alone),
             "runs": (sum(1 for k in with_other if site.reasons[k]), len(with_other),
                      sum(1 for k in range(len(runs)) if k not in with_other
                          and not site.reasons[k]), len(runs) - len(with_other)),
@@ -304,12 +308,14 @@ def main(argv: list[str] | None = None) -> None:
                  "speed error p95", "spacing error p95", "two-vehicle events flagged",
                  "two-vehicle events weighed > 15 % off",
                  "lateral outliers: two vehicles / one alone",
+                 "axle group off path: two vehicles / one alone",
                  "other way: counted / true / phantom",
                  "runs with another vehicle rejected", "clean runs used", "day ready in"],
                 [[d["seed"], f"{d['count']}/{d['n_ref']} (all)", f"{d['refused_disagree']} (0)",
                   f"{d['speed']:.2f} % (< 0.5)", f"{d['spacing']:.3f} m (< 0.1)",
                   f"{d['multi'][0]}/{d['multi'][1]} (≥ 95 %)",
                   f"{d['wrong']} (0)", f"{d['outliers'][0]} / {d['outliers'][1]}",
+                  f"{d['off_path'][0]} / {d['off_path'][1]}",
                   "{} / {} / {}".format(*d["counted"]),
                   f"{d['runs'][0]}/{d['runs'][1]}", f"{d['runs'][2]}/{d['runs'][3]}",
                   f"{d['day']:.0f} s"] for d in days])

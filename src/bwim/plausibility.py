@@ -38,6 +38,7 @@ HARD_FLAGS = (
     "no_baseline",           # too few samples without an axle on the support for the offsets
     "lateral_outlier",       # lateral position an outlier of its lane's day (bwim.site.wander)
     "unconfirmed_gauge_fault",  # a gauge the day finds healthy disagreed (another vehicle)
+    "group_off_path",        # an axle group off the vehicle's wheel path (bwim.site.wheelpath)
 )
 #: Flags that call for a look but keep the weights (quality "warning").
 SOFT_FLAGS = (

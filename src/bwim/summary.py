@@ -120,6 +120,9 @@ class SummaryRow:
         Lateral position (see ``lateral_unit``).
     lateral_unit : str
         ``"m"``, ``"gauge index"`` or ``""``.
+    group_laterals : tuple of float
+        Lateral position of each axle group, in ``lateral_unit``
+        (:func:`bwim.site.wheelpath.group_laterals`); empty when not measured.
     confidence : float or None
         Detection confidence in [0, 1].
     residual : float or None
@@ -155,6 +158,7 @@ class SummaryRow:
     flags: tuple[str, ...] = ()
     lateral: float | None = None
     lateral_unit: str = ""
+    group_laterals: tuple[float, ...] = ()
     confidence: float | None = None
     residual: float | None = None
     quality: str = ""
@@ -189,7 +193,7 @@ class SummaryRow:
         if self.n_axles is not None and (isinstance(self.n_axles, bool) or not isinstance(
                 self.n_axles, int) or self.n_axles < 1):
             raise InputError(f"n_axles must be a positive integer, got {self.n_axles!r}")
-        for name in ("axle_spacings", "axle_weights", "group_weights"):
+        for name in ("axle_spacings", "axle_weights", "group_weights", "group_laterals"):
             set_(self, name, _floats(name, getattr(self, name)))
         for name in ("speed", "lateral", "confidence", "residual", "drift_factor", "lam"):
             set_(self, name, _optional_float(name, getattr(self, name)))

@@ -1,21 +1,24 @@
 """``bwim weigh``'s lines on the day-level steps (bwim.cli.batches): one per lane whose
-spread was measured and one per gauge whose faults the vehicles around them did not
-share, with the numbers of the checks' results (made here from rows: the checks
-themselves are tested in test_site_wander.py and test_site_unconfirmed.py)."""
+spread (of lateral positions, of axle groups' positions) was measured and one per gauge
+whose faults the vehicles around them did not share, with the numbers of the checks'
+results (made here from rows: the checks themselves are tested in test_site_wander.py,
+test_site_wheelpath.py and test_site_unconfirmed.py)."""
 
 from __future__ import annotations
 
 from datetime import datetime, timedelta
 
-from bwim.cli.batches import _print_unconfirmed, _print_wander
-from bwim.site import refuse_lateral_outliers, refuse_unconfirmed_faults
+from bwim.cli.batches import _print_paths, _print_unconfirmed, _print_wander
+from bwim.site import refuse_lateral_outliers, refuse_off_path, refuse_unconfirmed_faults
 from bwim.summary import SummaryRow
 
 T0 = datetime(2026, 7, 20, 6, 0)
 
 
-def _row(k: int, lateral: float, *faults: str) -> SummaryRow:
+def _row(k: int, lateral: float, *faults: str, paths: tuple[float, ...] = ()
+         ) -> SummaryRow:
     return SummaryRow(record=f"e{k:04d}.txt", lane=1, direction="+x", n_axles=2,
+                      group_laterals=paths,
                       time=T0 + timedelta(minutes=k), axle_weights=(60e3, 90e3),
                       group_weights=(60e3, 90e3), gvw=150e3, lateral=lateral,
                       lateral_unit="m", flags=tuple(f"gauge_fault:{g}" for g in faults),
@@ -37,8 +40,19 @@ def test_the_day_lines(capsys):
     assert len(out) == 2
 
 
+def test_the_axle_groups_line(capsys):
+    rows = [_row(k, 5.9, paths=(5.8 + 0.01 * (k % 7 - 3), 5.9)) for k in range(60)]
+    rows[30] = _row(30, 6.5, paths=(7.1, 5.9))  # an axle of the next lane's vehicle
+    _print_paths(refuse_off_path(rows))
+    out = capsys.readouterr().out.splitlines()
+    assert out == ["lane 1 +x: axle groups against their vehicle's others (m): first -0.10 ± "
+                   "0.03, last +0.10 ± 0.03; 1 refused beyond 6 σ (an axle of a vehicle beside "
+                   "it)"]
+
+
 def test_nothing_to_say_on_a_small_day(capsys):
-    rows = [_row(k, 5.9, *(("s12",) if k == 3 else ())) for k in range(10)]
+    rows = [_row(k, 5.9, *(("s12",) if k == 3 else ()), paths=(5.9, 5.9)) for k in range(10)]
     _print_unconfirmed(refuse_unconfirmed_faults(rows))
     _print_wander(refuse_lateral_outliers(rows))
+    _print_paths(refuse_off_path(rows))
     assert capsys.readouterr().out == ""

@@ -24,7 +24,8 @@ def _rows(time=datetime(2015, 10, 1, 9, 45, 52, 576123)):
                    axle_weights=(55123.4, 101234.5, 80111.1, 80111.1, 80111.1),
                    gvw=396691.2, group_weights=(55123.4, 101234.5, 240333.3),
                    flags=("outside_calibration_time",), lateral=5.93, lateral_unit="m",
-                   confidence=0.97, residual=0.143, quality="warning", method="moses",
+                   group_laterals=(5.812, 6.034, 5.95), confidence=0.97,
+                   residual=0.143, quality="warning", method="moses",
                    drift_factor=1.0713, drift_method="traffic"),
         SummaryRow(record="PL1_a.txt", vehicle=2, time=None, lane=3, direction="-x",
                    n_axles=4, speed=21.0, axle_spacings=(3.2, 5.9, 1.3),
@@ -65,6 +66,19 @@ def test_columns_are_the_csv_ones_typed(tmp_path):
     assert schema.field("n_axles").type == pa.int32()
     assert table.column("gvw_kN").to_pylist()[0] == pytest.approx(396.6912)
     assert table.column("gvw_kN").to_pylist()[1] is None  # refused: no weight
+
+
+def test_a_version_1_file_reads_without_the_group_positions(tmp_path):
+    """Version 1 (before ``group_laterals``): the same rows, that column not measured."""
+    path = tmp_path / "v1.parquet"
+    write_summary_parquet(path, _rows())
+    table = pa.parquet.read_table(path)
+    table = table.drop_columns(["group_laterals"]).replace_schema_metadata(
+        {"bwim.columns_version": "1"})
+    pa.parquet.write_table(table, path)
+    back = read_summary_parquet(path)
+    assert [r.group_laterals for r in back] == [(), (), ()]
+    assert [r.gvw for r in back] == [r.gvw for r in _rows()]
 
 
 def test_a_file_that_is_not_a_summary_is_one_line(tmp_path):

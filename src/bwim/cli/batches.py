@@ -244,6 +244,22 @@ def _print_wander(check) -> None:
               "detector saw)")
 
 
+def _print_paths(check) -> None:
+    """One line per lane whose axle groups' positions were measured, and how many it
+    refused."""
+    lanes = {}
+    for sp in check.spreads:
+        lanes.setdefault((sp.lane, sp.direction, sp.unit), []).append(sp)
+    for (lane, direction, unit), spreads in lanes.items():
+        u = "m" if unit == "m" else "gauge index"
+        n = sum(1 for r in check.rows if "group_off_path" in r.flags and r.lane == lane
+                and r.direction == direction)
+        roles = ", ".join(f"{sp.role} {sp.median:+.2f} ± {sp.sigma:.2f}" for sp in spreads)
+        print(f"lane {lane if lane is not None else '?'} {direction or ''}".rstrip()
+              + f": axle groups against their vehicle's others ({u}): {roles}; {n} refused beyond "
+              f"{check.limit:g} σ (an axle of a vehicle beside it)")
+
+
 def _print_weighed(report, title: str) -> None:
     rows = report.rows
     shown = [(r.record, r.vehicle, r.n_axles or "",
@@ -303,6 +319,7 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path, batch) -> int:
     if days:
         _print_unconfirmed(days[0].faults)
         _print_wander(days[0].wander)
+        _print_paths(days[0].paths)
     _print_weighed(report, "Static weights (moving force identification with the FE "
                    "model):" if bridge else "Static weights (multi-run influence lines, "
                    "gauges combined):")

@@ -5,9 +5,10 @@ Contract
 * :data:`COLUMNS` is the file's header, in order: the seven columns of the contract
   (``record, n_axles, speed_m_s, axle_spacings_m, axle_weights_kN, gvw_kN, flags``), then
   ``vehicle, time, lane, direction, class, group_weights_kN, lateral, lateral_unit,
-  confidence, residual, quality, method, drift_factor, drift_method, lambda, status,
+  group_laterals, confidence, residual, quality, method, drift_factor, drift_method, lambda, status,
   reason``.  One :class:`~bwim.summary.SummaryRow` per line; units in the column names
-  (weights kN, spacings m, speed m/s), ``lateral`` in ``lateral_unit``; lists
+  (weights kN, spacings m, speed m/s), ``lateral`` and ``group_laterals`` (one per axle
+  group) in ``lateral_unit``; lists
   ``;``-separated; ``time`` ISO 8601 (``2015-10-01T09:45:52.576``, or ``09:45:52.576``
   when only the clock time of day is known); empty cells are unknown.
 * :func:`write_summary` writes rows atomically (:mod:`bwim.io.atomic`), in the order
@@ -53,8 +54,9 @@ CONTRACT_COLUMNS = ("record", "n_axles", "speed_m_s", "axle_spacings_m", "axle_w
                     "gvw_kN", "flags")
 #: The header of ``summary.csv``.
 COLUMNS = (*CONTRACT_COLUMNS, "vehicle", "time", "lane", "direction", "class",
-           "group_weights_kN", "lateral", "lateral_unit", "confidence", "residual",
-           "quality", "method", "drift_factor", "drift_method", "lambda", "status", "reason")
+           "group_weights_kN", "lateral", "lateral_unit", "group_laterals", "confidence",
+           "residual", "quality", "method", "drift_factor", "drift_method", "lambda", "status",
+           "reason")
 _REQUIRED = ("record", "n_axles", "axle_spacings_m", "axle_weights_kN", "gvw_kN")
 _KN = 1000.0
 
@@ -91,6 +93,7 @@ def to_cells(row: SummaryRow) -> dict[str, str]:
         "group_weights_kN": _joined(row.group_weights, ".2f", _KN),
         "lateral": _num(row.lateral, ".3f"),
         "lateral_unit": row.lateral_unit,
+        "group_laterals": _joined(row.group_laterals, ".3f"),
         "confidence": _num(row.confidence, ".3f"),
         "residual": _num(row.residual, ".4g"),
         "quality": row.quality,
@@ -123,6 +126,7 @@ def from_cells(cells: Mapping[str, str], *, table: CsvTable | None = None,
     n_axles, weights, spacings = axles_cells(t, line, row, optional=True)
     gvw = number_cell(t, line, "gvw_kN", row["gvw_kN"], optional=True)
     groups = numbers_cell(t, line, "group_weights_kN", row["group_weights_kN"], optional=True)
+    paths = numbers_cell(t, line, "group_laterals", row["group_laterals"], optional=True)
     vehicle = integer_cell(t, line, "vehicle", row["vehicle"], optional=True)
     lane = integer_cell(t, line, "lane", row["lane"], optional=True)
 
@@ -140,6 +144,7 @@ def from_cells(cells: Mapping[str, str], *, table: CsvTable | None = None,
             group_weights=tuple(w * _KN for w in groups or ()),
             flags=tuple(f.strip() for f in row["flags"].split(";") if f.strip()),
             lateral=opt("lateral"), lateral_unit=row["lateral_unit"],
+            group_laterals=paths or (),
             confidence=opt("confidence"), residual=opt("residual"), quality=row["quality"],
             method=row["method"], drift_factor=opt("drift_factor"),
             drift_method=row["drift_method"], lam=opt("lambda"), reason=row["reason"])

@@ -8,7 +8,8 @@ Contract
   ``list<float64>``, ``flags`` ``list<string>``, ``time`` a ``timestamp[us]`` when every
   known time has a date (else ``time64[us]`` when every one is a time of day only, else
   ISO 8601 text), an unknown value null.  The file's metadata carries
-  ``bwim.columns_version`` = :data:`VERSION`.  Times keep their microseconds.
+  ``bwim.columns_version`` = :data:`VERSION` (version 2 added ``group_laterals``; a
+  version-1 file reads with it empty).  Times keep their microseconds.
 * :func:`write_summary_parquet` writes atomically (a temporary file in the same folder,
   then renamed): no half-written file.  :func:`read_summary_parquet` reads such a file
   back into :class:`~bwim.summary.SummaryRow` (weights in N; to round-off: they are
@@ -34,12 +35,14 @@ from bwim.summary import SummaryRow
 __all__ = ["VERSION", "read_summary_parquet", "require_pyarrow", "write_summary_parquet"]
 
 #: The column list's version stored in the file's metadata.
-VERSION = "1"
+VERSION = "2"
 _KN = 1000.0
 _FLOAT = ("speed_m_s", "gvw_kN", "lateral", "confidence", "residual", "drift_factor",
           "lambda")
 _INT = ("n_axles", "vehicle", "lane")
-_LISTS = ("axle_spacings_m", "axle_weights_kN", "group_weights_kN")
+_LISTS = ("axle_spacings_m", "axle_weights_kN", "group_weights_kN", "group_laterals")
+#: Columns a version-1 file lacks (read as not measured).
+_SINCE_V2 = ("group_laterals",)
 _TEXT = ("record", "direction", "class", "lateral_unit", "quality", "method",
          "drift_method", "status", "reason")
 
@@ -71,6 +74,7 @@ def _columns(rows: list[SummaryRow]) -> dict[str, list]:
         "group_weights_kN": [[float(v) / _KN for v in r.group_weights] for r in rows],
         "lateral": [r.lateral for r in rows],
         "lateral_unit": [r.lateral_unit for r in rows],
+        "group_laterals": [[float(v) for v in r.group_laterals] for r in rows],
         "confidence": [r.confidence for r in rows],
         "residual": [r.residual for r in rows],
         "quality": [r.quality for r in rows],
@@ -130,10 +134,12 @@ def read_summary_parquet(path: str | os.PathLike) -> tuple[SummaryRow, ...]:
         table = pa.parquet.read_table(path)
     except (OSError, pa.ArrowInvalid) as exc:
         raise InputError(f"{path}: not a readable Parquet file ({exc})") from None
-    missing = [c for c in COLUMNS if c not in table.column_names]
+    missing = [c for c in COLUMNS if c not in table.column_names and c not in _SINCE_V2]
     if missing:
         raise InputError(f"{path}: not a bwim summary (no column {missing[0]!r})")
     cols = table.to_pydict()
+    for c in _SINCE_V2:  # a version-1 file: not measured
+        cols.setdefault(c, [[] for _ in range(table.num_rows)])
     rows = []
     for k in range(table.num_rows):
         time = cols["time"][k]
@@ -150,7 +156,8 @@ def read_summary_parquet(path: str | os.PathLike) -> tuple[SummaryRow, ...]:
             gvw=None if gvw is None else gvw * _KN,
             group_weights=tuple(v * _KN for v in cols["group_weights_kN"][k]),
             flags=tuple(cols["flags"][k]), lateral=cols["lateral"][k],
-            lateral_unit=cols["lateral_unit"][k] or "", confidence=cols["confidence"][k],
+            lateral_unit=cols["lateral_unit"][k] or "",
+            group_laterals=tuple(cols["group_laterals"][k] or ()), confidence=cols["confidence"][k],
             residual=cols["residual"][k], quality=cols["quality"][k] or "",
             method=cols["method"][k] or "", drift_factor=cols["drift_factor"][k],
             drift_method=cols["drift_method"][k] or "", lam=cols["lambda"][k],

@@ -65,6 +65,14 @@ FLAG_TABLE: tuple[tuple[str, tuple[str, ...], str, str], ...] = (
      "gauge is healthy and another vehicle that no detector saw loaded it, whose strain "
      "the other gauges carry into the weights",
      "another vehicle in the record; gauge_health.csv for the gauge"),
+    ("hard", ("group_off_path",),
+     "one of the vehicle's axle groups lies off the wheel path of its other groups, "
+     "further than 6 robust standard deviations of its lane's traffic of the day "
+     "(bwim.site.wheelpath): an axle of a vehicle in the next lane was counted as this "
+     "vehicle's, or a vehicle no detector saw drove beside some of its axles; the lines "
+     "would weigh both as one",
+     "the spread printed by bwim weigh; the group_laterals column; another vehicle in "
+     "the record"),
     ("hard", ("negative_force",),
      "moving force identification: an identified axle force is tensile where it is "
      "weighed", "the model, the regularisation"),

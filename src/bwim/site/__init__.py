@@ -23,8 +23,11 @@ Contract
 * :mod:`bwim.site.unconfirmed`: a gauge fault the day does not confirm (another vehicle).
 * :mod:`bwim.site.wander`: a vehicle's lateral position against its lane's traffic (a
   vehicle beside it no detector saw).
+* :mod:`bwim.site.wheelpath`: each axle group's lateral position against its vehicle's
+  other groups (an axle of a vehicle beside it weighed as this one's).
 * :mod:`bwim.site.day`: :func:`finish_day`, the day-level steps (unconfirmed gauge faults,
-  the lanes' lateral check, then the traffic's drift) on a batch's rows
+  the lanes' lateral check, the axle groups' check, then the traffic's drift) on a batch's
+  rows
   (:class:`DayResult`).
 """
 
@@ -42,6 +45,7 @@ from bwim.site.model import ModelRun, SiteModel, calibrate_site_model
 from bwim.site.setup import DETECTION_METHODS, DetectorLane, Lane, SiteSetup
 from bwim.site.unconfirmed import FaultCheck, refuse_unconfirmed_faults
 from bwim.site.wander import LaneWander, WanderCheck, refuse_lateral_outliers
+from bwim.site.wheelpath import PathCheck, refuse_off_path
 
 __all__ = [
     "DETECTION_METHODS",
@@ -58,6 +62,7 @@ __all__ = [
     "Lane",
     "LaneWander",
     "ModelRun",
+    "PathCheck",
     "SiteCalibration",
     "SiteModel",
     "SiteSetup",
@@ -70,6 +75,7 @@ __all__ = [
     "correct_drift",
     "finish_day",
     "refuse_lateral_outliers",
+    "refuse_off_path",
     "refuse_unconfirmed_faults",
     "weigh_event",
 ]

@@ -12,12 +12,15 @@ Contract
   2. the lanes' lateral check (:func:`bwim.site.wander.refuse_lateral_outliers`): a
      weighed vehicle whose lateral position is an outlier of its lane's traffic is
      refused (``lateral_outlier``);
-  3. the traffic's own drift correction where the setup asks for it
+  3. the axle groups' check (:func:`bwim.site.wheelpath.refuse_off_path`): a weighed
+     vehicle one of whose axle groups lies off its wheel path, against the lane's
+     traffic, is refused (``group_off_path``: an axle of a vehicle beside it);
+  4. the traffic's own drift correction where the setup asks for it
      (:func:`correct_drift`), on the rows the steps before kept weighed.
 
   It returns a :class:`DayResult` (the rows, in order, and what each step measured).
   ``bwim weigh`` runs it on the final summary; the benchmarks run it the same way.
-* :func:`correct_drift` alone is the third step.
+* :func:`correct_drift` alone is the fourth step.
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ from bwim.site.calibrate import SiteCalibration
 from bwim.site.drift import TrafficDrift, apply_traffic_drift, traffic_drift
 from bwim.site.unconfirmed import FaultCheck, refuse_unconfirmed_faults
 from bwim.site.wander import WanderCheck, refuse_lateral_outliers
+from bwim.site.wheelpath import PathCheck, refuse_off_path
 from bwim.summary import SummaryRow
 
 __all__ = ["DayResult", "correct_drift", "finish_day"]
@@ -47,6 +51,9 @@ class DayResult:
         not confirm.
     wander : WanderCheck
         The lanes' lateral spreads and the rows refused as outliers of them.
+    paths : PathCheck
+        The spreads of the axle groups' positions and the rows refused for a group off
+        its vehicle's path.
     drift : TrafficDrift or None
         The traffic's drift fit; None when the traffic method was not applied.
     """
@@ -54,12 +61,13 @@ class DayResult:
     rows: tuple[SummaryRow, ...]
     faults: FaultCheck
     wander: WanderCheck
+    paths: PathCheck
     drift: TrafficDrift | None
 
     def __repr__(self) -> str:
         drift = "none" if self.drift is None else f"traffic ({self.drift.reference_class})"
         return (f"DayResult({len(self.rows)} rows, {self.faults!r}, {self.wander!r}, "
-                f"drift {drift})")
+                f"{self.paths!r}, drift {drift})")
 
 
 def correct_drift(rows: Sequence[SummaryRow], calibration: SiteCalibration
@@ -84,5 +92,6 @@ def finish_day(rows: Sequence[SummaryRow], calibration: SiteCalibration) -> DayR
     """The day-level steps on a batch's rows (see the module docstring)."""
     faults = refuse_unconfirmed_faults(rows)
     wander = refuse_lateral_outliers(faults.rows)
-    out, fit = correct_drift(wander.rows, calibration)
-    return DayResult(rows=tuple(out), faults=faults, wander=wander, drift=fit)
+    paths = refuse_off_path(wander.rows)
+    out, fit = correct_drift(paths.rows, calibration)
+    return DayResult(rows=tuple(out), faults=faults, wander=wander, paths=paths, drift=fit)

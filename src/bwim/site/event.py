@@ -79,6 +79,7 @@ from bwim.site.calibrate import (
 from bwim.site.health import check_gauges
 from bwim.site.lanes import EventDetection, LaneVehicle, detect_lanes
 from bwim.site.model import SiteModel
+from bwim.site.wheelpath import gauge_line, group_laterals
 from bwim.summary import SummaryRow
 from bwim.wim import Weighing, weigh
 
@@ -138,6 +139,10 @@ class VehicleWeighing:
     flags : tuple of str
     drift_factor : float or None
     drift_method : str
+    group_laterals : tuple of float
+        Each axle group's lateral position, in the vehicle's lateral unit
+        (:func:`bwim.site.wheelpath.group_laterals`); measured for a vehicle the lines
+        weighed, empty otherwise.
     """
 
     vehicle: VehicleDetection
@@ -150,6 +155,7 @@ class VehicleWeighing:
     flags: tuple[str, ...] = ()
     drift_factor: float | None = None
     drift_method: str = ""
+    group_laterals: tuple[float, ...] = ()
 
     @property
     def axle_weights(self) -> np.ndarray | None:
@@ -275,6 +281,7 @@ class EventWeighing:
             group_weights=tuple(w.group_weights) if vw.weighed and w is not None else (),
             flags=vw.flags, lateral=lateral,
             lateral_unit=v.lateral_unit if lateral is not None else "",
+            group_laterals=vw.group_laterals if lateral is not None else (),
             confidence=v.confidence, residual=residual, quality=quality,
             method=("mfi" if ident is not None else "moses") if (w or ident) else "",
             drift_factor=vw.drift_factor, drift_method=vw.drift_method, lam=lam,
@@ -426,7 +433,20 @@ def _vehicle(record: Record, ev: EventDetection, k: int, calibration: SiteCalibr
         hard = ", ".join(f for f in w.flags if f in HARD_FLAGS)
         return VehicleWeighing(weighed=False, reason=f"implausible weighing ({hard})",
                                **common)
-    return VehicleWeighing(weighed=True, **common)
+    return VehicleWeighing(weighed=True, group_laterals=_group_laterals(
+        record, lv, calibration, {f.gauge for f in health.faults}), **common)
+
+
+def _group_laterals(record: Record, lv: LaneVehicle, calibration: SiteCalibration,
+                    faulty: set[str]) -> tuple[float, ...]:
+    """A weighed vehicle's axle groups' lateral positions (empty when they cannot be
+    measured: :func:`bwim.site.wheelpath.group_laterals`), without the faulty gauges."""
+    try:
+        return group_laterals(record, lv.vehicle.passage,
+                              gauge_line=gauge_line(calibration.lines), window=lv.window,
+                              gauges=[g for g in gauge_names(record) if g not in faulty])
+    except _EVENT_ERRORS:
+        return ()
 
 
 def _drift_factor(record: Record, passage: Passage, calibration: SiteCalibration
