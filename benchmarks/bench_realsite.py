@@ -38,7 +38,11 @@ alone, which it should not refuse), those refused for an axle group off their wh
 (``group_off_path``, :mod:`bwim.site.wheelpath`, counted the same way), the vehicles of
 the other direction counted (matching a true one, the true ones, and those counted beyond
 their event's true number: the span's bending under a truck in another lane read as a slow
-vehicle, of which :mod:`bwim.site.bending` leaves out most), the calibration runs with
+vehicle, of which :mod:`bwim.site.bending` leaves out most, and the day's speed check,
+:mod:`bwim.site.speeds`, most of the rest: those it left out where no vehicle of their
+direction was, those in an event with a vehicle of their direction in another lane (a lane
+without detectors: the row's lane, speed and axles were not that vehicle's, but it was
+counted), and those that match a true vehicle of their event), the calibration runs with
 another vehicle rejected, and the weighing rate. Targets (issue 20): every axle count
 right, spacings within 0.1 m, speed within 0.5 %, GVW A(5) and every criterion B+(7),
 multiple presence flagged in at least 95 % of the events that have it.
@@ -217,6 +221,15 @@ def run_day(seed: int, side_spans: float | None = None,
     outliers_alone = sum(1 for r in outliers if len(truth[r.record]) == 1)
     off_path = [r for r in default if "group_off_path" in r.flags]
     off_path_alone = sum(1 for r in off_path if len(truth[r.record]) == 1)
+    traces = [0, 0, 0]  # no vehicle there / a vehicle of another lane / the vehicle itself
+    for r in day_result.speeds.dropped:
+        if _true_vehicle(r, truth[r.record]):
+            traces[2] += 1
+        elif any(v["direction"] == r.direction and v["lane"] != str(r.lane)
+                 for v in truth[r.record]):
+            traces[1] += 1
+        else:
+            traces[0] += 1
     with_other = [k for k, p in enumerate(runs) if len(truth[p.name]) > 1]
     return {"seed": seed, "results": results, "fit": fit, "n_ref": len(lane1),
             "n_lane3": len(reference) - len(lane1), "count": count, "speed": speed,
@@ -224,6 +237,7 @@ def run_day(seed: int, side_spans: float | None = None,
             "multi": (flagged, len(multi)), "wrong": wrong, "counted": counted,
             "outliers": (len(outliers) - outliers_alone, outliers_alone),
             "off_path": (len(off_path) - off_path_alone, off_path_alone),
+            "traces": traces,
             "runs": (sum(1 for k in with_other if site.reasons[k]), len(with_other),
                      sum(1 for k in range(len(runs)) if k not in with_other
                          and not site.reasons[k]), len(runs) - len(with_other)),
@@ -245,6 +259,13 @@ def _wrong(row: SummaryRow, truth: list[dict]) -> bool:
     if len(same) != 1:
         return True
     return abs(row.gvw / (float(same[0]["gvw_kN"]) * 1e3) - 1.0) > WRONG
+
+
+def _true_vehicle(row: SummaryRow, truth: list[dict]) -> bool:
+    """Whether a row matches a true vehicle of its event: its direction, its axle count
+    and its speed within 10 %."""
+    return any(v["direction"] == row.direction and int(v["n_axles"]) == row.n_axles
+               and abs(float(v["speed_m_s"]) / row.speed - 1.0) < 0.1 for v in truth)
 
 
 def _other_direction(rows: list[SummaryRow], truth: dict[str, list[dict]]
@@ -310,6 +331,7 @@ def main(argv: list[str] | None = None) -> None:
                  "lateral outliers: two vehicles / one alone",
                  "axle group off path: two vehicles / one alone",
                  "other way: counted / true / phantom",
+                 "left out by speed: no vehicle / another lane's / a vehicle",
                  "runs with another vehicle rejected", "clean runs used", "day ready in"],
                 [[d["seed"], f"{d['count']}/{d['n_ref']} (all)", f"{d['refused_disagree']} (0)",
                   f"{d['speed']:.2f} % (< 0.5)", f"{d['spacing']:.3f} m (< 0.1)",
@@ -317,6 +339,7 @@ def main(argv: list[str] | None = None) -> None:
                   f"{d['wrong']} (0)", f"{d['outliers'][0]} / {d['outliers'][1]}",
                   f"{d['off_path'][0]} / {d['off_path'][1]}",
                   "{} / {} / {}".format(*d["counted"]),
+                  "{} / {} / {}".format(*d["traces"]),
                   f"{d['runs'][0]}/{d['runs'][1]}", f"{d['runs'][2]}/{d['runs'][3]}",
                   f"{d['day']:.0f} s"] for d in days])
     print_table("Speed of bwim weigh on one core (CPU time; target: 150 events/s from files)",

@@ -8,8 +8,13 @@ from __future__ import annotations
 
 from datetime import datetime, timedelta
 
-from bwim.cli.batches import _print_paths, _print_unconfirmed, _print_wander
-from bwim.site import refuse_lateral_outliers, refuse_off_path, refuse_unconfirmed_faults
+from bwim.cli.batches import _print_paths, _print_speeds, _print_unconfirmed, _print_wander
+from bwim.site import (
+    drop_speed_outliers,
+    refuse_lateral_outliers,
+    refuse_off_path,
+    refuse_unconfirmed_faults,
+)
 from bwim.summary import SummaryRow
 
 T0 = datetime(2026, 7, 20, 6, 0)
@@ -50,9 +55,23 @@ def test_the_axle_groups_line(capsys):
                    "it)"]
 
 
+def test_the_speeds_line(capsys):
+    rows = [SummaryRow(record=f"c{k:04d}.txt", lane=3, direction="-x", n_axles=2,
+                       speed=22.0 + 0.1 * (k % 9 - 4), time=T0 + timedelta(minutes=k),
+                       status="refused", reason="counted, not weighed") for k in range(60)]
+    rows[30] = SummaryRow(record="c0030.txt", lane=3, direction="-x", n_axles=2, speed=7.0,
+                          time=T0 + timedelta(minutes=30), status="refused",
+                          reason="counted, not weighed")
+    _print_speeds(drop_speed_outliers(rows))
+    out = capsys.readouterr().out.splitlines()
+    assert out == ["lane 3 -x: 1 vehicle(s) left out, at speeds far from the lane's traffic "
+                   "around them (beyond 5 σ: traces of another vehicle)"]
+
+
 def test_nothing_to_say_on_a_small_day(capsys):
     rows = [_row(k, 5.9, *(("s12",) if k == 3 else ()), paths=(5.9, 5.9)) for k in range(10)]
     _print_unconfirmed(refuse_unconfirmed_faults(rows))
     _print_wander(refuse_lateral_outliers(rows))
     _print_paths(refuse_off_path(rows))
+    _print_speeds(drop_speed_outliers(rows))
     assert capsys.readouterr().out == ""

@@ -8,6 +8,8 @@
    is lost.
 3. Each weighed truck's axle groups are measured on its own wheel path
    (bwim.site.wheelpath), and the day's check of them refuses no truck alone.
+4. The day's speed check (bwim.site.speeds) leaves out the trace the bending left and
+   no vehicle.
 
 Data: the realistic site (:mod:`bwim.synthetic`, ``short-span-4-lane``, data mesh 0.5 m,
 gauge noise, drift, WIM-grade roads, docs/realistic_site.md), seed 5, 60 traffic events
@@ -31,7 +33,7 @@ import pytest
 
 from bwim.batch import weigh_events
 from bwim.scenario import build_site_setup, load_record, load_scenario
-from bwim.site import calibrate_site, refuse_lateral_outliers
+from bwim.site import calibrate_site, drop_speed_outliers, refuse_lateral_outliers
 from bwim.site.wheelpath import deviations, gauge_line, refuse_off_path
 from bwim.synthetic import make_test_day
 
@@ -132,3 +134,26 @@ def test_each_axle_group_is_measured_on_its_wheel_path(day, day_rows):
     check = refuse_off_path(rows, min_vehicles=15)
     assert {s.role for s in check.spreads} == {"first", "middle", "last"}
     assert all(len(truth[record]) > 1 for record, _ in check.refused), check.refused
+
+
+def test_the_days_speed_check_leaves_out_the_trace_and_no_vehicle(day, day_rows):
+    """bwim.site.speeds on the same day, with its defaults (the lane-3 pair counts 35
+    vehicles): the one vehicle counted beyond its event's true number (2 axles at
+    12.6 m/s, the day's trucks drive at 18-27 m/s, in an event with a lane-1 truck only)
+    is left out, and what it leaves out matches no true vehicle of its event (its
+    direction, axle count and speed within 10 %)."""
+    _, _, _, truth = day
+    rows, _ = day_rows
+    check = drop_speed_outliers(rows)
+    for r in check.dropped:
+        assert not any(v["direction"] == r.direction and int(v["n_axles"]) == r.n_axles
+                       and abs(float(v["speed_m_s"]) / r.speed - 1) < 0.1
+                       for v in truth[r.record]), (r.record, r.speed)
+
+    def phantoms(rows):
+        counted = _other_way(rows)
+        return sum(max(0, len(counted.get(n, ())) - sum(v["direction"] == "-x" for v in t))
+                   for n, t in truth.items() if t[0]["kind"] != "calibration")
+
+    assert phantoms(rows) >= 1
+    assert phantoms(check.rows) == 0

@@ -260,6 +260,17 @@ def _print_paths(check) -> None:
               f"{check.limit:g} σ (an axle of a vehicle beside it)")
 
 
+def _print_speeds(check) -> None:
+    """One line per lane whose counted vehicles lost some as traces (speed outliers)."""
+    lanes: dict = {}
+    for r in check.dropped:
+        lanes.setdefault((r.lane, r.direction), []).append(r)
+    for (lane, direction), rows in lanes.items():
+        print(f"lane {lane if lane is not None else '?'} {direction or ''}".rstrip()
+              + f": {len(rows)} vehicle(s) left out, at speeds far from the lane's traffic "
+              f"around them (beyond {check.limit:g} σ: traces of another vehicle)")
+
+
 def _print_weighed(report, title: str) -> None:
     rows = report.rows
     shown = [(r.record, r.vehicle, r.n_axles or "",
@@ -320,6 +331,7 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path, batch) -> int:
         _print_unconfirmed(days[0].faults)
         _print_wander(days[0].wander)
         _print_paths(days[0].paths)
+        _print_speeds(days[0].speeds)
     _print_weighed(report, "Static weights (moving force identification with the FE "
                    "model):" if bridge else "Static weights (multi-run influence lines, "
                    "gauges combined):")

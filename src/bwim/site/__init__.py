@@ -25,9 +25,11 @@ Contract
   vehicle beside it no detector saw).
 * :mod:`bwim.site.wheelpath`: each axle group's lateral position against its vehicle's
   other groups (an axle of a vehicle beside it weighed as this one's).
+* :mod:`bwim.site.speeds`: a counted vehicle whose speed its lane's traffic around it
+  does not drive (a trace of another vehicle), left out.
 * :mod:`bwim.site.day`: :func:`finish_day`, the day-level steps (unconfirmed gauge faults,
-  the lanes' lateral check, the axle groups' check, then the traffic's drift) on a batch's
-  rows
+  the lanes' lateral check, the axle groups' check, the counted vehicles' speeds, then
+  the traffic's drift) on a batch's rows
   (:class:`DayResult`).
 """
 
@@ -43,6 +45,7 @@ from bwim.site.event import EventWeighing, VehicleWeighing, weigh_event
 from bwim.site.health import GaugeFault, GaugeHealth, check_gauges
 from bwim.site.model import ModelRun, SiteModel, calibrate_site_model
 from bwim.site.setup import DETECTION_METHODS, DetectorLane, Lane, SiteSetup
+from bwim.site.speeds import SpeedCheck, drop_speed_outliers
 from bwim.site.unconfirmed import FaultCheck, refuse_unconfirmed_faults
 from bwim.site.wander import LaneWander, WanderCheck, refuse_lateral_outliers
 from bwim.site.wheelpath import PathCheck, refuse_off_path
@@ -66,6 +69,7 @@ __all__ = [
     "SiteCalibration",
     "SiteModel",
     "SiteSetup",
+    "SpeedCheck",
     "TrafficDrift",
     "VehicleWeighing",
     "WanderCheck",
@@ -73,6 +77,7 @@ __all__ = [
     "calibrate_site_model",
     "check_gauges",
     "correct_drift",
+    "drop_speed_outliers",
     "finish_day",
     "refuse_lateral_outliers",
     "refuse_off_path",

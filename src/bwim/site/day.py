@@ -15,12 +15,17 @@ Contract
   3. the axle groups' check (:func:`bwim.site.wheelpath.refuse_off_path`): a weighed
      vehicle one of whose axle groups lies off its wheel path, against the lane's
      traffic, is refused (``group_off_path``: an axle of a vehicle beside it);
-  4. the traffic's own drift correction where the setup asks for it
+  4. the counted vehicles' speeds (:func:`bwim.site.speeds.drop_speed_outliers`): a
+     vehicle not weighed whose speed is far from its lane's traffic around it in time
+     is a trace of another vehicle (the span's bending, another truck's axles), and is
+     left out of the rows;
+  5. the traffic's own drift correction where the setup asks for it
      (:func:`correct_drift`), on the rows the steps before kept weighed.
 
-  It returns a :class:`DayResult` (the rows, in order, and what each step measured).
+  It returns a :class:`DayResult` (the rows, in order, less those step 4 left out, and
+  what each step measured).
   ``bwim weigh`` runs it on the final summary; the benchmarks run it the same way.
-* :func:`correct_drift` alone is the fourth step.
+* :func:`correct_drift` alone is the fifth step.
 """
 
 from __future__ import annotations
@@ -30,6 +35,7 @@ from dataclasses import dataclass
 
 from bwim.site.calibrate import SiteCalibration
 from bwim.site.drift import TrafficDrift, apply_traffic_drift, traffic_drift
+from bwim.site.speeds import SpeedCheck, drop_speed_outliers
 from bwim.site.unconfirmed import FaultCheck, refuse_unconfirmed_faults
 from bwim.site.wander import WanderCheck, refuse_lateral_outliers
 from bwim.site.wheelpath import PathCheck, refuse_off_path
@@ -45,7 +51,7 @@ class DayResult:
     Attributes
     ----------
     rows : tuple of SummaryRow
-        Every row, in the input's order.
+        Every row, in the input's order, less the traces ``speeds`` left out.
     faults : FaultCheck
         The day's count of each gauge's faults and the rows refused for faults it does
         not confirm.
@@ -54,6 +60,8 @@ class DayResult:
     paths : PathCheck
         The spreads of the axle groups' positions and the rows refused for a group off
         its vehicle's path.
+    speeds : SpeedCheck
+        The counted vehicles left out as traces (speed outliers of their lane).
     drift : TrafficDrift or None
         The traffic's drift fit; None when the traffic method was not applied.
     """
@@ -62,12 +70,13 @@ class DayResult:
     faults: FaultCheck
     wander: WanderCheck
     paths: PathCheck
+    speeds: SpeedCheck
     drift: TrafficDrift | None
 
     def __repr__(self) -> str:
         drift = "none" if self.drift is None else f"traffic ({self.drift.reference_class})"
         return (f"DayResult({len(self.rows)} rows, {self.faults!r}, {self.wander!r}, "
-                f"{self.paths!r}, drift {drift})")
+                f"{self.paths!r}, {self.speeds!r}, drift {drift})")
 
 
 def correct_drift(rows: Sequence[SummaryRow], calibration: SiteCalibration
@@ -93,5 +102,7 @@ def finish_day(rows: Sequence[SummaryRow], calibration: SiteCalibration) -> DayR
     faults = refuse_unconfirmed_faults(rows)
     wander = refuse_lateral_outliers(faults.rows)
     paths = refuse_off_path(wander.rows)
-    out, fit = correct_drift(paths.rows, calibration)
-    return DayResult(rows=tuple(out), faults=faults, wander=wander, paths=paths, drift=fit)
+    speeds = drop_speed_outliers(paths.rows)
+    out, fit = correct_drift(speeds.rows, calibration)
+    return DayResult(rows=tuple(out), faults=faults, wander=wander, paths=paths,
+                     speeds=speeds, drift=fit)

@@ -1,0 +1,119 @@
+"""A counted vehicle at a speed its lane's traffic around it does not drive is left out
+(bwim.site.speeds).
+
+References: the median and the normal-scaled median absolute deviation are scipy's
+(``scipy.stats.median_abs_deviation(scale="normal")``) over the neighbours chosen here
+by hand (the ``NEIGHBOURS`` rows nearest in time).  The rows are built here (the rule is
+algebra); its effect on the realistic site is measured by benchmarks/bench_realsite.py.
+"""
+
+from __future__ import annotations
+
+from datetime import datetime, time, timedelta
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from bwim.errors import InputError
+from bwim.site import drop_speed_outliers, finish_day
+from bwim.site.speeds import NEIGHBOURS, SPEED_Z
+from bwim.summary import SummaryRow
+
+T0 = datetime(2026, 7, 20, 6, 0)
+
+
+def _row(k: int, speed: float, *, minutes: float | None = None, lane: int = 3,
+         direction: str = "-x", weighed: bool = False, when=None) -> SummaryRow:
+    t = when if when is not None else T0 + timedelta(minutes=k if minutes is None else minutes)
+    common = {"record": f"e{k:04d}.txt", "lane": lane, "direction": direction, "n_axles": 2,
+              "speed": speed, "time": t}
+    if weighed:
+        return SummaryRow(axle_weights=(60e3, 90e3), group_weights=(60e3, 90e3),
+                          gvw=150e3, quality="ok", method="moses", **common)
+    return SummaryRow(status="refused", reason="counted, not weighed", **common)
+
+
+@pytest.fixture
+def lane3(rng):
+    """120 counted vehicles a minute apart at 22 m/s ± 1 (normal quantiles, none beyond
+    2.7 σ), shuffled in time."""
+    v = 22.0 + stats.norm.ppf((np.arange(120) + 0.5) / 120)
+    return [_row(k, s) for k, s in enumerate(rng.permutation(v))]
+
+
+def test_a_trace_is_left_out_and_the_traffic_kept(lane3):
+    trace = _row(500, 7.0, minutes=60.5)  # the span's bending read as a walking-pace vehicle
+    fast = _row(501, 36.0, minutes=80.5)  # another truck's axles paired a group apart
+    rows = [*lane3, trace, fast]
+    check = drop_speed_outliers(rows)
+    assert check.dropped == (trace, fast)
+    assert check.rows == tuple(lane3)
+    assert all(a is b for a, b in zip(check.rows, lane3, strict=True))
+
+
+def test_the_statistic_is_the_neighbours_median_and_normal_scaled_mad(lane3):
+    # a row just inside and one just outside the limit, judged on the 30 rows nearest
+    # in time (computed here by hand)
+    at = 60.5
+    near = sorted(lane3, key=lambda r: abs((r.time - T0).total_seconds() / 60 - at))
+    v = np.array([r.speed for r in near[:NEIGHBOURS]])
+    m, s = np.median(v), stats.median_abs_deviation(v, scale="normal")
+    inside = _row(600, m - (SPEED_Z - 0.1) * s, minutes=at)
+    outside = _row(601, m - (SPEED_Z + 0.1) * s, minutes=at)
+    assert drop_speed_outliers([*lane3, inside]).dropped == ()
+    assert drop_speed_outliers([*lane3, outside]).dropped == (outside,)
+
+
+def test_a_queue_slows_every_vehicle_and_none_is_left_out(lane3):
+    # 40 vehicles at 6 m/s ± 0.3 for 40 minutes in the middle of the day: their
+    # neighbours in time are slow too
+    queue = [_row(700 + k, 6.0 + 0.3 * np.sin(k), minutes=200.25 + k) for k in range(40)]
+    after = [_row(800 + k, 22.0 + np.cos(k), minutes=240.5 + k) for k in range(40)]
+    rows = [*lane3, *queue, *after]
+    assert drop_speed_outliers(rows).dropped == ()
+
+
+def test_weighed_rows_thin_lanes_and_other_lanes_are_not_judged(lane3):
+    weighed = _row(900, 7.0, minutes=30.5, weighed=True)
+    other_dir = [_row(1000 + k, 22.0 + 0.1 * k, lane=3, direction="+x") for k in range(10)]
+    slow_other = _row(1100, 5.0, lane=3, direction="+x", minutes=5.5)
+    rows = [*lane3, weighed, *other_dir, slow_other]
+    check = drop_speed_outliers(rows)
+    assert check.dropped == ()
+    # with a lower minimum the thin group is judged
+    assert drop_speed_outliers(rows, min_vehicles=10).dropped == (slow_other,)
+
+
+def test_clock_times_of_day_are_judged_apart_from_dates(lane3):
+    # 20 rows with clock times of day only: too few to judge, whatever the dated rows
+    of_day = [_row(1200 + k, 22.0 + 0.1 * (k % 5), when=time(8, k)) for k in range(20)]
+    slow = _row(1300, 7.0, when=time(8, 10, 30))
+    rows = [*lane3, *of_day, slow]
+    assert drop_speed_outliers(rows).dropped == ()
+    assert drop_speed_outliers(rows, min_vehicles=15).dropped == (slow,)
+
+
+def test_failed_rows_and_rows_without_time_stay(lane3):
+    no_time = SummaryRow(record="x.txt", lane=3, direction="-x", speed=7.0, status="refused",
+                         reason="counted")
+    failed = SummaryRow(record="y.txt", status="failed", reason="unreadable")
+    rows = [*lane3, no_time, failed]
+    assert drop_speed_outliers(rows).rows == tuple(rows)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"limit": 0.0}, "limit"), ({"limit": float("inf")}, "limit"),
+    ({"neighbours": 2}, "neighbours"), ({"min_vehicles": 2.5}, "min_vehicles"),
+])
+def test_bad_arguments(lane3, kwargs, match):
+    with pytest.raises(InputError, match=match):
+        drop_speed_outliers(lane3, **kwargs)
+
+
+def test_finish_day_leaves_the_trace_out(lane3, small_site_calibrated):
+    trace = _row(500, 7.0, minutes=60.5)
+    day = finish_day([*lane3, trace], small_site_calibrated[-1])
+    assert day.speeds.dropped == (trace,)
+    assert len(day.rows) == len(lane3) and trace not in day.rows
+    assert "SpeedCheck(" in repr(day)
