@@ -256,8 +256,8 @@ def _print_paths(check) -> None:
                 and r.direction == direction)
         roles = ", ".join(f"{sp.role} {sp.median:+.2f} ± {sp.sigma:.2f}" for sp in spreads)
         print(f"lane {lane if lane is not None else '?'} {direction or ''}".rstrip()
-              + f": axle groups against their vehicle's others ({u}): {roles}; {n} refused beyond "
-              f"{check.limit:g} σ (an axle of a vehicle beside it)")
+              + f": axle groups against their vehicle's others ({u}): {roles}; {n} refused "
+              f"beyond {check.limit:g} σ (an axle of a vehicle beside it)")
 
 
 def _print_speeds(check) -> None:

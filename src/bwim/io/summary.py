@@ -5,12 +5,12 @@ Contract
 * :data:`COLUMNS` is the file's header, in order: the seven columns of the contract
   (``record, n_axles, speed_m_s, axle_spacings_m, axle_weights_kN, gvw_kN, flags``), then
   ``vehicle, time, lane, direction, class, group_weights_kN, lateral, lateral_unit,
-  group_laterals, confidence, residual, quality, method, drift_factor, drift_method, lambda, status,
-  reason``.  One :class:`~bwim.summary.SummaryRow` per line; units in the column names
-  (weights kN, spacings m, speed m/s), ``lateral`` and ``group_laterals`` (one per axle
-  group) in ``lateral_unit``; lists
-  ``;``-separated; ``time`` ISO 8601 (``2015-10-01T09:45:52.576``, or ``09:45:52.576``
-  when only the clock time of day is known); empty cells are unknown.
+  group_laterals, confidence, residual, quality, method, drift_factor, drift_method,
+  lambda, status, reason``.  One :class:`~bwim.summary.SummaryRow` per line; units in the
+  column names (weights kN, spacings m, speed m/s), ``lateral`` and ``group_laterals``
+  (one per axle group) in ``lateral_unit``; lists ``;``-separated; ``time`` ISO 8601
+  (``2015-10-01T09:45:52.576``, or ``09:45:52.576`` when only the clock time of day is
+  known); empty cells are unknown.
 * :func:`write_summary` writes rows atomically (:mod:`bwim.io.atomic`), in the order
   given.  :func:`read_summary` reads such a file back into rows (weights in N); it also
   reads summaries of earlier versions, which had only some of the columns (the five
