@@ -91,3 +91,16 @@ def test_axle_shares_benchmark_smoke(small_site):
     # the chain and the summed-gauge line weigh the day's one lane-1 truck (a lateral
     # model from the small site's 3 used runs may not)
     assert weighed["chain (drift corrected)"] == weighed["summed gauges (Moses)"] == 1
+
+
+def test_stream_benchmark_smoke():
+    """The continuous-recording benchmark runs on a short file: it checks that the streamed
+    and the whole cut find the same events (raising otherwise) before timing, and both
+    find the file's crossings (one every 10 s)."""
+    from benchmarks import bench_stream
+
+    rows = bench_stream.rows(0.5)
+    assert [r[1] for r in rows[:3]] == ["streamed (cut_file)",
+                                        "whole (read_logger + cut_events)",
+                                        "trigger alone (in memory)"]
+    assert rows[0][-1] == rows[1][-1] == "3"
