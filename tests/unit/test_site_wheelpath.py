@@ -38,12 +38,12 @@ HALF_SPAN = 3.0
 
 
 def _record(passage: Passage, ys: list[float], loads: list[float], *, fs: float = 512.0,
-            duration: float = 3.0) -> bwim.Record:
+            duration: float = 3.0, half_span: float = HALF_SPAN) -> bwim.Record:
     """Each axle i at lateral ys[i] with load loads[i]; gauges at x = 0 (the frame's
     gauge line), readings = triangle(x_i) × Gaussian(y_gauge − y_i)."""
     t = np.arange(0.0, duration, 1.0 / fs)
     x = passage.speed * (t[:, None] - passage.delay) - passage.axle_offsets[None, :]
-    tri = np.clip(1.0 - np.abs(x) / HALF_SPAN, 0.0, None)  # (n_t, n_axles)
+    tri = np.clip(1.0 - np.abs(x) / half_span, 0.0, None)  # (n_t, n_axles)
     spread = np.exp(-0.5 * ((GAUGES_Y[None, :] - np.asarray(ys)[:, None]) / 0.7) ** 2)
     data = (tri * np.asarray(loads)[None, :]) @ spread  # (n_t, n_gauges)
     sensors = tuple(bwim.Sensor(x=0.0, y=float(y), name=f"g{k}")
@@ -71,6 +71,25 @@ def test_the_gauge_line_places_the_windows():
     assert right == pytest.approx([5.0, 6.0, 7.0], abs=1e-9)
     wrong = group_laterals(rec, p, gauge_line=3.0)
     assert wrong[1] > 6.0 + 0.1
+
+
+def test_on_a_long_span_a_group_off_the_path_is_pulled_back_never_further():
+    """A 30 m span: every group is on the gauges while each crosses, so the positions
+    measured are pulled towards each other: a vehicle on one path measures one path, and
+    a group 1 m aside measures less than 1 m aside (the check loses power, it does not
+    refuse more)."""
+    p = Passage(speed=20.0, axle_spacings=[3.5, 6.0, 1.3, 1.3], delay=1.5)
+    loads = [60e3, 100e3, 80e3, 80e3, 80e3]
+    kw = {"duration": 5.0, "half_span": 15.0}
+    aligned = group_laterals(_record(p, [5.5] * 5, loads, **kw), p, gauge_line=0.0)
+    assert aligned == pytest.approx([5.5, 5.5, 5.5], abs=1e-9)
+    ys = [5.5, 6.5, 5.5, 5.5, 5.5]
+    true = [d for _, d in deviations([5.5, 6.5, 5.5])]  # -0.5, +1.0, -0.5: the 6 m span's
+    short = group_laterals(_record(p, ys, loads, duration=5.0), p, gauge_line=0.0)
+    assert [d for _, d in deviations(short)] == pytest.approx(true, abs=1e-9)
+    long = group_laterals(_record(p, ys, loads, **kw), p, gauge_line=0.0)
+    measured = [d for _, d in deviations(long)]
+    assert all(abs(m) < abs(t) for m, t in zip(measured, true, strict=True))
 
 
 def test_a_group_outside_the_record_is_not_measured():
