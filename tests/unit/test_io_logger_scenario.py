@@ -137,3 +137,25 @@ def test_lines_section_keeps_the_lobes(tmp_path):
         with pytest.raises(InputError, match=message) as info:
             scn.load_scenario(_write(tmp_path, SITE + f"[lines]\n{bad}\n", name="bad.toml"))
         assert "\n" not in str(info.value)
+
+
+def test_drift_section_reaches_the_site_setup(tmp_path):
+    """``[drift]``'s keys reach :class:`bwim.site.DriftSetup` (kN to N), survive a round
+    trip, and keep the setup's defaults when absent; a minimum below 3 is one line."""
+    from bwim.scenario import build_site_setup
+    from bwim.site import DriftSetup
+
+    assert build_site_setup(scn.load_scenario(_write(tmp_path, SITE))).drift == DriftSetup()
+    s = scn.load_scenario(_write(tmp_path, SITE + '[drift]\nmethod = "traffic"\n'
+                                 'reference_class = "113"\nreference_kN = 60.0\n'
+                                 "min_reference = 10\n"))
+    d = build_site_setup(s).drift
+    assert (d.method, d.reference_class, d.reference_load, d.min_reference) == \
+        ("traffic", "113", 60e3, 10)
+    out = tmp_path / "again.toml"
+    scn.dump_scenario(s, out)
+    assert scn.load_scenario(out) == s
+    with pytest.raises(InputError, match="min_reference") as info:
+        scn.load_scenario(_write(tmp_path, SITE + "[drift]\nmin_reference = 2\n",
+                                 name="bad.toml"))
+    assert "\n" not in str(info.value)

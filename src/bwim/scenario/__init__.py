@@ -96,6 +96,18 @@ Contract
       gauge noise, a fraction of the peak strain], [``seed`` = 0: the noise seed].
   ``[identify]``, ``[calibrate]``
       options of :func:`bwim.identify_forces` and ``bwim.calibrate`` (see the classes).
+  ``[drift]``
+      how the strain-to-load ratio's drift is corrected (:mod:`bwim.site.drift`):
+      [``method`` = "auto": "traffic", "temperature", "time_of_day", "trend", "none"],
+      [``temperature``: a temperature channel of ``[[sensors]]``], for the traffic method
+      [``reference_class``: an axle-group code, default the commonest articulated
+      class], [``reference_kN``: its steering axle's nominal load, where no traffic is
+      weighed while the calibration holds], [``min_reference`` = 20: the fewest
+      reference vehicles a date needs, else the time of day, flagged
+      ``drift_traffic_thin``].
+  ``[lines]``
+      [``support_lobes`` = false]: the lines keep a lobe beyond their first zeros (a
+      slab continuous over its supports).
 """
 
 

@@ -344,7 +344,9 @@ def build_site_setup(scenario: Scenario) -> SiteSetup:
             drift = DriftSetup(method=d.method, temperature=d.temperature,
                                reference_class=d.reference_class,
                                reference_load=None if d.reference_kN is None
-                               else d.reference_kN * 1e3)
+                               else d.reference_kN * 1e3,
+                               **({} if d.min_reference is None
+                                  else {"min_reference": d.min_reference}))
         if d.temperature is not None:
             names = {s.name: s.kind for s in build_sensors(scenario)}
             if names.get(d.temperature) is not SensorKind.TEMPERATURE:

@@ -309,13 +309,15 @@ class DriftSpec:
     temperature (°C) when the logger has one; for the traffic method the reference
     ``reference_class`` (an axle-group code such as ``"113"``, default: the commonest
     articulated class) and, where no traffic was weighed while the calibration holds, its
-    steering axle's nominal load ``reference_kN``."""
+    steering axle's nominal load ``reference_kN``; ``min_reference``, the fewest reference
+    vehicles a date needs for the traffic method (default 20)."""
 
     method: str = opt(choice("auto", "traffic", "temperature", "time_of_day", "trend",
                              "none"), "auto")
     temperature: str | None = opt(string)
     reference_class: str | None = opt(string)
     reference_kN: float | None = opt(at_least(1.0, strict=True))
+    min_reference: int | None = opt(int_from(3))
 
 
 @dataclass(frozen=True, kw_only=True)
