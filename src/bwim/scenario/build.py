@@ -287,9 +287,14 @@ def build_logger_format(scenario: Scenario) -> LoggerFormat:
     axle detectors; the ``clock`` columns are the clock's.  Every named column must be one
     of them.
     """
+    return _logger_format(scenario, build_sensors(scenario))
+
+
+def _logger_format(scenario: Scenario, sensors: list[Sensor]) -> LoggerFormat:
+    """:func:`build_logger_format` with the scenario's sensors already built."""
     spec = scenario.require("logger")
     src = f"{scenario.source}: [logger]"
-    kinds: dict[str, SensorKind] = {s.name: s.kind for s in build_sensors(scenario)}
+    kinds: dict[str, SensorKind] = {s.name: s.kind for s in sensors}
     for det in scenario.axle_detectors:
         for name in det.channels:
             if name in kinds:
@@ -520,7 +525,8 @@ def load_record(
         # a logger's export, any extension: the [logger] section says how it is laid out
         sensors = build_sensors(scenario)  # their y (and x) travel with the readings
         return _with_run_settings(
-            read_logger(p, build_logger_format(scenario), sensors=sensors or None), scenario)
+            read_logger(p, _logger_format(scenario, sensors), sensors=sensors or None),
+            scenario)
     if suffix not in _CSV_SUFFIXES:
         raise InputError(f"{p}: unknown record format {p.suffix!r}; use .csv or .h5")
     if scenario is None:
