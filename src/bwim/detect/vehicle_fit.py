@@ -208,8 +208,8 @@ def make_problem(t: np.ndarray, y: np.ndarray, gauges: np.ndarray | None,
         rest = tuple(np.column_stack([bending[:, c], np.ones_like(tc), tc]) * w[c]
                      for c in range(2))
         grids = tuple(r.padded() for r in learned.responses)
-        return Problem(y=(y - y.mean(axis=0)) * w, rest=rest,
-                        q_rest=tuple(np.linalg.qr(r)[0] for r in rest), grids=grids,
+        q = np.linalg.qr(np.stack(rest))[0]  # both at once (each on its own: the same)
+        return Problem(y=(y - y.mean(axis=0)) * w, rest=rest, q_rest=(q[0], q[1]), grids=grids,
                         steps=tuple(np.append(np.diff(g[1]), 0.0) for g in grids), **common)
     y_hp = high_pass(y, HIGH_PASS / v * fs) * w
     empty = np.zeros((t.size, 0))
