@@ -354,7 +354,7 @@ def _design(record: Record, event: _Inputs, calibration: MultiRunCalibration,
     ords = calibration.ordinates_at(event.lateral)[1:-1]  # interior ordinates (m, n_c)
     pos = event.passage.axle_x(record.time)  # (n_t, n_axles)
     M = _unit_readings(pos, ords, line.x[0], line.spacing, line.x.size - 1)
-    Mg = np.einsum("kic,ig->kgc", M, event.groups.share)  # (n_t, n_groups, n_c)
+    Mg = np.matmul(event.groups.share.T, M)  # (n_t, n_groups, n_c): Σ_i share_ig M_kic
     t0 = record.clock_seconds()
     trend = calibration.scale_trend
     if scale is not None:
