@@ -80,7 +80,7 @@ from bwim.wim.influence_line import Channel, read_channels
 from bwim.wim.moses import AxleGroups, group_axles, group_share
 from bwim.wim.multirun import MultiRunCalibration
 
-__all__ = ["HARD_FLAGS", "SOFT_FLAGS", "Limits", "Weighing", "weigh"]
+__all__ = ["HARD_FLAGS", "NORMAL_CONDITION", "SOFT_FLAGS", "Limits", "Weighing", "weigh"]
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class Weighing:
