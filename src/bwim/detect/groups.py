@@ -291,12 +291,10 @@ def explained(hyp: np.ndarray, corr, auto) -> tuple[np.ndarray, np.ndarray]:
         a = b / np.array([max(auto[0][0], 1e-300), max(auto[1][0], 1e-300)])
         return np.sum(a * b, axis=1), a[:, None, :]
     lag = np.abs(hyp[:, :, None] - hyp[:, None, :])
-    total = np.zeros(hyp.shape[0])
-    amps = np.zeros((*hyp.shape, 2))
-    for c in range(2):
-        b = corr[c][hyp]
-        G = auto[c][lag] + 1e-12 * auto[c][0] * np.eye(k)
-        a = np.linalg.solve(G, b[..., None])[..., 0]
-        total += np.sum(a * b, axis=1)
-        amps[..., c] = a
-    return total, amps
+    eye = np.eye(k)
+    # both detectors' systems as one stack (each solved on its own: the same numbers)
+    b = np.stack([corr[0][hyp], corr[1][hyp]])  # (2, n_hyp, k)
+    G = np.stack([auto[c][lag] + 1e-12 * auto[c][0] * eye for c in range(2)])
+    a = np.linalg.solve(G, b[..., None])[..., 0]
+    gained = np.sum(a * b, axis=2)
+    return gained[0] + gained[1], np.moveaxis(a, 0, -1)

@@ -70,6 +70,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
+import scipy.fft
 import scipy.linalg
 from scipy.ndimage import gaussian_filter1d
 from scipy.optimize import least_squares
@@ -79,7 +80,7 @@ from bwim.records import Record, axle_offsets, record_list
 from bwim.wim.influence_line import hat_design
 
 from .options import check_speed_range
-from .signals import robust_sigma
+from .signals import gaussian_average, robust_sigma
 
 __all__ = ["DISTANCE_TOLERANCE", "HIGH_PASS", "NEAR", "RUN_OUTLIER", "DetectorResponse",
            "LearnedResponses", "band_pass", "high_pass", "learn_responses", "xcorr_lag"]
@@ -101,8 +102,9 @@ GAUGE_RIDGE = 1e-3
 
 
 def high_pass(y: np.ndarray, sigma: float) -> np.ndarray:
-    """``y`` (along axis 0) less its Gaussian average of ``sigma`` samples."""
-    return y - gaussian_filter1d(y, sigma, axis=0, mode="nearest")
+    """``y`` (along axis 0) less its Gaussian average of ``sigma`` samples (ends extended
+    by their edge values: :func:`~bwim.detect.signals.gaussian_average`)."""
+    return y - gaussian_average(y, [(sigma, 1.0)])
 
 
 def band_pass(y: np.ndarray, fs: float, *, short: float = 0.01, long: float = 0.06
@@ -110,9 +112,9 @@ def band_pass(y: np.ndarray, fs: float, *, short: float = 0.01, long: float = 0.
     """``y`` (n_t,) or (n_t, k) smoothed over ``short`` s less smoothed over ``long`` s
     (Gaussian σ): the axles' peaks (tens of ms wide at road speeds) stay, offsets and the
     slab's global bending (hundreds of ms) go.  Used where only timing matters (the
-    detectors' lag, aligning a layout, timing two peaks)."""
-    return (gaussian_filter1d(y, short * fs, axis=0, mode="nearest")
-            - gaussian_filter1d(y, long * fs, axis=0, mode="nearest"))
+    detectors' lag, aligning a layout, timing two peaks).  Ends extended by their edge
+    values; both averages as one filter (:func:`~bwim.detect.signals.gaussian_average`)."""
+    return gaussian_average(y, [(short * fs, 1.0), (long * fs, -1.0)])
 
 
 def _read_only(*arrays: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -276,8 +278,9 @@ def xcorr_lag(y1: np.ndarray, y2: np.ndarray, lo: int, hi: int) -> float | None:
     lo, hi = max(int(lo), 1), min(int(hi), n - 2)
     if hi - lo < 2:
         return None
-    spec = np.fft.rfft(y1[::-1], 2 * n) * np.fft.rfft(y2, 2 * n)
-    full = np.fft.irfft(spec, 2 * n)  # index n-1+L  <->  lag L
+    size = scipy.fft.next_fast_len(2 * n, real=True)  # ≥ 2n − 1: linear, not circular
+    spec = np.fft.rfft(y1[::-1], size) * np.fft.rfft(y2, size)
+    full = np.fft.irfft(spec, size)  # index n-1+L  <->  lag L
     r = full[n - 1 + lo:n - 1 + hi + 1]
     k = int(np.argmax(r))
     if k == 0 or k == r.size - 1 or r[k] <= 0:

@@ -39,6 +39,7 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
+from scipy.linalg.lapack import dgesv as _gesv
 
 from .response import HIGH_PASS, LearnedResponses, high_pass
 
@@ -139,10 +140,11 @@ class Problem:
                 col([0, u[0].size], np.intp), col(self.w),
                 col([self.w[c] / du[c] for c in range(2)]))
 
-    def both_atoms(self, v: float, dt: np.ndarray, slopes: bool = False):
+    def both_atoms(self, v: float, dt: np.ndarray, slopes: bool = False,
+                   out: np.ndarray | None = None):
         """:meth:`atoms` of both detectors as one array (2, n_rows, n), the same numbers,
         from the rows' times less the axles' ``dt`` (n_rows, n); with ``slopes`` also the
-        slopes (2, n_rows, n)."""
+        slopes (2, n_rows, n).  ``out``: where to write the atoms (2, n_rows, n)."""
         off, inv_du, top, k, steps, first, w, w_du = self._both
         x = (v * dt - off) * inv_du
         np.maximum(x, 0.0, out=x)  # the grids end in zeros (np.clip: the same numbers)
@@ -151,7 +153,9 @@ class Problem:
         x -= j
         j += first
         step = steps[j]
-        out = (k[j] + x * step) * w
+        x *= step
+        x += k[j]
+        out = np.multiply(x, w, out=out)
         return (out, step * w_du) if slopes else (out, None)
 
     def log_ratio(self, amps: np.ndarray) -> np.ndarray:
@@ -208,8 +212,8 @@ def make_problem(t: np.ndarray, y: np.ndarray, gauges: np.ndarray | None,
         rest = tuple(np.column_stack([bending[:, c], np.ones_like(tc), tc]) * w[c]
                      for c in range(2))
         grids = tuple(r.padded() for r in learned.responses)
-        return Problem(y=(y - y.mean(axis=0)) * w, rest=rest,
-                        q_rest=tuple(np.linalg.qr(r)[0] for r in rest), grids=grids,
+        q = np.linalg.qr(np.stack(rest))[0]  # both at once (each on its own: the same)
+        return Problem(y=(y - y.mean(axis=0)) * w, rest=rest, q_rest=(q[0], q[1]), grids=grids,
                         steps=tuple(np.append(np.diff(g[1]), 0.0) for g in grids), **common)
     y_hp = high_pass(y, HIGH_PASS / v * fs) * w
     empty = np.zeros((t.size, 0))
@@ -253,8 +257,9 @@ class Solution:
         n = taus.size
         self.taus, self.v, self.w, self.slopes = taus, v, w, slopes
         self.dt = w.t[:, None] - taus[None, :]
-        X, self.dX = pb.both_atoms(v, self.dt, slopes)
-        M = np.concatenate([X, w.rest], axis=2)
+        M = np.empty((2, w.t.size, n + w.rest.shape[2]))  # the atoms, then the rest
+        M[:, :, n:] = w.rest
+        self.dX = pb.both_atoms(v, self.dt, slopes, out=M[:, :, :n])[1]
         Mt, G = ridged_normal(M)
         try:
             Ginv = np.linalg.inv(G)
@@ -325,7 +330,13 @@ def refine(pb: Problem, taus: np.ndarray, v: float, iterations: int = MAX_LM, *,
         g = Js.T @ r
         improved = False
         for _ in range(8):
-            step = -np.linalg.solve(A + lam * np.diag(np.diag(A) + 1e-12), g) * scale
+            damped = A.copy()  # A + λ diag(diag(A) + 1e-12), by LAPACK's gesv directly
+            diag = damped.reshape(-1)[::taus.size + 2]  # (numpy's solve: the same numbers)
+            diag += lam * (diag + 1e-12)
+            x, info = _gesv(damped, g)[2:]
+            if info:
+                raise np.linalg.LinAlgError("singular matrix")
+            step = -x * scale
             trial = p + step
             tt, vv = np.sort(trial[:-1]), trial[-1]
             if vv <= 0:

@@ -16,7 +16,8 @@ Contract
   ``[[sensors]]`` entry they come from.
 * :func:`load_record` reads a record by its extension: a logger's CSV with the
   scenario's sensors (and passage, when the scenario has ``[run]`` and ``[vehicle]``), or
-  bwim's HDF5.
+  bwim's HDF5; :func:`record_reader` gives a reader of many files of one scenario (its
+  sensors and logger format built once), the same records.
 * A missing section that a builder needs is an :class:`~bwim.errors.InputError`
   (``"scenario.toml: no [vehicle] section"``); a missing ``[road]`` means a flat road.
 """
@@ -287,9 +288,14 @@ def build_logger_format(scenario: Scenario) -> LoggerFormat:
     axle detectors; the ``clock`` columns are the clock's.  Every named column must be one
     of them.
     """
+    return _logger_format(scenario, build_sensors(scenario))
+
+
+def _logger_format(scenario: Scenario, sensors: list[Sensor]) -> LoggerFormat:
+    """:func:`build_logger_format` with the scenario's sensors already built."""
     spec = scenario.require("logger")
     src = f"{scenario.source}: [logger]"
-    kinds: dict[str, SensorKind] = {s.name: s.kind for s in build_sensors(scenario)}
+    kinds: dict[str, SensorKind] = {s.name: s.kind for s in sensors}
     for det in scenario.axle_detectors:
         for name in det.channels:
             if name in kinds:
@@ -520,9 +526,7 @@ def load_record(
         return _with_run_settings(read_record(p), scenario)
     if scenario is not None and scenario.logger is not None:
         # a logger's export, any extension: the [logger] section says how it is laid out
-        sensors = build_sensors(scenario)  # their y (and x) travel with the readings
-        return _with_run_settings(
-            read_logger(p, build_logger_format(scenario), sensors=sensors or None), scenario)
+        return record_reader(scenario)(p)
     if suffix not in _CSV_SUFFIXES:
         raise InputError(f"{p}: unknown record format {p.suffix!r}; use .csv or .h5")
     if scenario is None:
@@ -534,6 +538,40 @@ def load_record(
     record = read_csv_record(p, sensors, passage, time_column=time_column,
                              allow_extra=allow_extra, scale=scale)
     return _with_run_settings(record, scenario)
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class RecordReader:
+    """:func:`load_record` for many files of one scenario, its sensors and logger format
+    built once (:func:`record_reader`): ``reader(path)`` is ``load_record(path,
+    scenario)``, the same record.  Picklable (a batch's ``read``, sent to worker
+    processes: it is built again there from the scenario)."""
+
+    scenario: Scenario
+    sensors: tuple[Sensor, ...]
+    fmt: LoggerFormat | None  # None: the scenario has no [logger] section
+
+    def __reduce__(self):  # built again where it is unpickled (a format holds mappings)
+        return record_reader, (self.scenario,)
+
+    def __call__(self, path: str | os.PathLike) -> Record:
+        p = Path(path)
+        if self.fmt is None or p.suffix.lower() in _HDF5_SUFFIXES:
+            return load_record(p, self.scenario)
+        # their y (and x) travel with the readings
+        return _with_run_settings(
+            read_logger(p, self.fmt, sensors=self.sensors or None), self.scenario)
+
+
+def record_reader(scenario: Scenario) -> RecordReader:
+    """A :class:`RecordReader` of ``scenario``: its logger files read without building
+    its sensors and format again for each (InputError for a bad ``[logger]`` section or
+    bad sensors, at once)."""
+    if scenario.logger is None:
+        return RecordReader(scenario=scenario, sensors=(), fmt=None)
+    sensors = build_sensors(scenario)
+    return RecordReader(scenario=scenario, sensors=tuple(sensors),
+                        fmt=_logger_format(scenario, sensors))
 
 
 def _with_run_settings(record: Record, scenario: Scenario | None) -> Record:

@@ -80,7 +80,7 @@ from bwim.wim.influence_line import Channel, read_channels
 from bwim.wim.moses import AxleGroups, group_axles, group_share
 from bwim.wim.multirun import MultiRunCalibration
 
-__all__ = ["HARD_FLAGS", "SOFT_FLAGS", "Limits", "Weighing", "weigh"]
+__all__ = ["HARD_FLAGS", "NORMAL_CONDITION", "SOFT_FLAGS", "Limits", "Weighing", "weigh"]
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class Weighing:
@@ -190,9 +190,17 @@ def _whitener(C: np.ndarray, combine: str) -> np.ndarray | None:
     return scipy.linalg.solve_triangular(L, np.eye(L.shape[0]), lower=True)
 
 
+#: Fits whose design is conditioned better than this (ratio of its largest to its smallest
+#: singular value, ten times ``Limits.condition``'s default) are solved by their normal
+#: equations; others by ``numpy.linalg.lstsq`` (its rank and minimum-norm solution).
+NORMAL_CONDITION = 1e3
+
+
 def _solve(Ec: np.ndarray, Mc: np.ndarray, s: float, T: np.ndarray | None
            ) -> tuple[np.ndarray, int, np.ndarray]:
-    """Least squares of the (whitened) channels: group weights, rank, singular values."""
+    """Least squares of the (whitened) channels: group weights, rank, singular values
+    (descending).  By the normal equations when the design's condition number is below
+    :data:`NORMAL_CONDITION` (then of full rank), else by ``numpy.linalg.lstsq``."""
     if T is None:
         Ew, Mw = Ec.sum(axis=1, keepdims=True), Mc.sum(axis=2, keepdims=True)
     elif np.count_nonzero(T - np.diag(np.diag(T))) == 0:  # diagonal: scale the channels
@@ -201,7 +209,14 @@ def _solve(Ec: np.ndarray, Mc: np.ndarray, s: float, T: np.ndarray | None
         Ew, Mw = Ec @ T.T, Mc @ T.T
     n_g = Mc.shape[1]
     A = s * Mw.transpose(2, 0, 1).reshape(-1, n_g)
-    sol, _, rank, sv = np.linalg.lstsq(A, Ew.T.ravel(), rcond=None)
+    b = Ew.T.ravel()
+    # the normal equations where they are well conditioned (the lstsq numbers to rounding:
+    # relative error about eps × cond², far below the weights' own), lstsq otherwise
+    G = A.T @ A
+    lam = np.linalg.eigvalsh(G)[::-1]  # σ² of A, descending
+    if lam.size and lam[-1] > 0 and lam[0] <= NORMAL_CONDITION**2 * lam[-1]:
+        return np.linalg.solve(G, A.T @ b), n_g, np.sqrt(lam)
+    sol, _, rank, sv = np.linalg.lstsq(A, b, rcond=None)
     return sol, int(rank), sv
 
 
@@ -339,7 +354,7 @@ def _design(record: Record, event: _Inputs, calibration: MultiRunCalibration,
     ords = calibration.ordinates_at(event.lateral)[1:-1]  # interior ordinates (m, n_c)
     pos = event.passage.axle_x(record.time)  # (n_t, n_axles)
     M = _unit_readings(pos, ords, line.x[0], line.spacing, line.x.size - 1)
-    Mg = np.einsum("kic,ig->kgc", M, event.groups.share)  # (n_t, n_groups, n_c)
+    Mg = np.matmul(event.groups.share.T, M)  # (n_t, n_groups, n_c): Σ_i share_ig M_kic
     t0 = record.clock_seconds()
     trend = calibration.scale_trend
     if scale is not None:
