@@ -47,12 +47,19 @@ another vehicle rejected, and the weighing rate. Targets (issue 20): every axle 
 right, spacings within 0.1 m, speed within 0.5 %, GVW A(5) and every criterion B+(7),
 multiple presence flagged in at least 95 % of the events that have it.
 
+A thin traffic date (the real installation's: its traffic date holds the 15 statically
+weighed trucks and no other traffic): 15 lane-1 trucks of 5 or 6 axles drawn 40 times
+from each traffic date, corrected by the calibration day's time of day, or by the traffic
+method from those trucks alone with the steering axle's nominal load given
+(``[drift] reference_kN``) right, or 5 % high: which correction to use when the traffic
+is thin.
+
 Speed (issue 21 item 6: ``bwim weigh`` from files at 150 events/s or more on one core):
-every event of both dates is read (:func:`bwim.scenario.load_record`) and then detected
-and weighed (:func:`bwim.batch.weigh_events`) in this process, each timed on the CPU
-clock (``OMP_NUM_THREADS=1``); printed as events/s of each and of both (as ``bwim
-weigh`` does from files), as detection and weighing's cost over reading's (both
-measured in this run) and as times real time (the events' recorded duration over the
+every event of both dates is read (:func:`bwim.scenario.record_reader`, as ``bwim weigh``
+reads) and then detected and weighed (:func:`bwim.batch.weigh_events`) in this process,
+each timed on the CPU clock (``OMP_NUM_THREADS=1``); printed as events/s of each and of
+both (as ``bwim weigh`` does from files), as detection and weighing's cost over reading's
+(both measured in this run) and as times real time (the events' recorded duration over the
 CPU time of both).
 """
 
@@ -76,9 +83,9 @@ from bwim.accuracy import assess
 from bwim.batch import Item, weigh_events
 from bwim.io import read_reference
 from bwim.records import Passage
-from bwim.scenario import build_site_setup, load_record, load_scenario
+from bwim.scenario import build_site_setup, load_record, load_scenario, record_reader
 from bwim.site import calibrate_site, finish_day
-from bwim.site.drift import corrected
+from bwim.site.drift import DriftSetup, apply_traffic_drift, corrected, traffic_drift
 from bwim.summary import SummaryRow
 from bwim.synthetic import make_test_day
 from bwim.synthetic.layout import SHORT_SPAN_4_LANE
@@ -165,7 +172,8 @@ def run_day(seed: int, side_spans: float | None = None,
     paths = (sorted((day / "calibration_day_traffic").glob("*.txt"))
              + sorted((day / "traffic").glob("*.txt")))
     t0 = time.process_time()
-    events = [Item(p.name, load_record(p, scenario), None) for p in paths]
+    reader = record_reader(scenario)  # as bwim weigh reads: sensors and format built once
+    events = [Item(p.name, reader(p), None) for p in paths]
     t_read = time.process_time() - t0
     t0 = time.process_time()
     outcomes = sorted(weigh_events(events, site), key=lambda o: o.index)
@@ -242,7 +250,51 @@ def run_day(seed: int, side_spans: float | None = None,
                      sum(1 for k in range(len(runs)) if k not in with_other
                          and not site.reasons[k]), len(runs) - len(with_other)),
             "n_events": len(paths), "t_read": t_read, "t_weigh": t_weigh,
-            "duration": duration, "day": t_day}
+            "duration": duration, "day": t_day,
+            "thin": thin_traffic(as_weighed, lane1, truth, seed)}
+
+
+#: The thin traffic date of the real installation: 15 statically weighed 5- and 6-axle
+#: trucks and no other traffic (issue 20), drawn ``THIN_DRAWS`` times from a day.
+THIN_TRUCKS, THIN_DRAWS = 15, 40
+
+
+def thin_traffic(rows: list[SummaryRow], reference: list, truth: dict, seed: int) -> dict:
+    """GVW error of ``THIN_TRUCKS`` lane-1 trucks of 5 or 6 axles drawn at random
+    from the traffic date, alone in their batch as on the real installation, corrected by
+    the calibration day's time of day, or by the traffic method from those trucks alone
+    (``min_reference`` = 8) with the steering axle's nominal load given: the fleet's true
+    mean (the class's commonest vehicle type's, from ``truth.csv``), or 5 % above it.
+    Returns per correction the RMS over the draws of the draw's mean error and its
+    standard deviation, %."""
+    ref = {r.record: r for r in reference}
+    pool = [r for r in rows if r.weighed and r.record in ref and r.n_axles in (5, 6)]
+    steer = [float(t[0]["steer_kN"]) * 1e3 for t in truth.values()
+             if len(t) == 1 and t[0]["kind"] != "calibration"
+             and t[0]["vehicle_type"] == "artic_2+3"]
+    nominal = float(np.mean(steer))
+    rng = np.random.default_rng(seed)
+    out: dict[str, list] = {"time of day": [], "traffic, nominal right": [],
+                            "traffic, nominal +5 %": []}
+    for _ in range(THIN_DRAWS):
+        draw = [pool[k] for k in rng.choice(len(pool), THIN_TRUCKS, replace=False)]
+        for label, rows_out in (("time of day", draw),
+                                *((lab, _traffic(draw, nom))
+                                  for lab, nom in (("traffic, nominal right", nominal),
+                                                   ("traffic, nominal +5 %",
+                                                    1.05 * nominal)))):
+            e = np.array([r.gvw / ref[r.record].gvw - 1.0 for r in rows_out]) * 100
+            out[label].append((e.mean(), e.std()))
+    return {k: (float(np.sqrt(np.mean([m * m for m, _ in v]))),
+                float(np.sqrt(np.mean([sd * sd for _, sd in v])))) for k, v in out.items()}
+
+
+def _traffic(draw: list[SummaryRow], nominal: float) -> list[SummaryRow]:
+    """``draw`` corrected by the traffic method from its own trucks (unchanged when it
+    cannot be fitted)."""
+    fit = traffic_drift(draw, DriftSetup(method="traffic", reference_load=nominal,
+                                         min_reference=8))
+    return draw if fit is None else apply_traffic_drift(draw, fit)
 
 
 #: A two-vehicle event's weight this far from its truck's is weighed wrong (COST 323's
@@ -342,6 +394,12 @@ def main(argv: list[str] | None = None) -> None:
                   "{} / {} / {}".format(*d["traces"]),
                   f"{d['runs'][0]}/{d['runs'][1]}", f"{d['runs'][2]}/{d['runs'][3]}",
                   f"{d['day']:.0f} s"] for d in days])
+    print_table(f"A thin traffic date, as on the real installation: {THIN_TRUCKS} lane-1 "
+                f"trucks of 5-6 axles alone, {THIN_DRAWS} draws a day; GVW error %, RMS "
+                "over the draws of each draw's mean and of its standard deviation",
+                ["seed", *days[0]["thin"].keys()],
+                [[d["seed"], *(f"mean {m:.1f}, sd {sd:.1f}" for m, sd in d["thin"].values())]
+                 for d in days])
     print_table("Speed of bwim weigh on one core (CPU time; target: 150 events/s from files)",
                 ["seed", "events", "reading", "detection + weighing", "from files",
                  "detection + weighing / reading", "× real time"],

@@ -48,12 +48,11 @@ def _meta(command: str, **inputs) -> dict:
 
 
 def _read(scenario):
-    """The batch's reader of one record (picklable: it goes to worker processes)."""
-    from functools import partial
+    """The batch's reader of one record (picklable: it goes to worker processes): the
+    scenario's sensors and logger format built once."""
+    from bwim.scenario import record_reader
 
-    from bwim.scenario import load_record
-
-    return partial(load_record, scenario=scenario)
+    return record_reader(scenario)
 
 
 def _run_batch(folder, items, run, desc: str):

@@ -113,6 +113,7 @@ Contract
 
 from bwim.scenario.bridgefile import bridge_spec, load_bridge, save_bridge
 from bwim.scenario.build import (
+    RecordReader,
     build_bridge,
     build_logger_format,
     build_passage,
@@ -121,6 +122,7 @@ from bwim.scenario.build import (
     build_site_setup,
     build_vehicle,
     load_record,
+    record_reader,
     simulate_scenario,
 )
 from bwim.scenario.parse import (
@@ -155,6 +157,7 @@ __all__ = [
     "GirderSpec",
     "IdentifySpec",
     "LoggerSpec",
+    "RecordReader",
     "RoadSpec",
     "RunSpec",
     "Scenario",
@@ -176,6 +179,7 @@ __all__ = [
     "load_scenario",
     "load_site_model",
     "read_toml",
+    "record_reader",
     "save_bridge",
     "save_site_model",
     "scenario_from_dict",
