@@ -23,7 +23,8 @@ Contract
 * Half grid first (with a coarse problem and ``weigh``, the static weights per λ): every
   other λ of the fine grid is solved first, in one stacked pass, and searched the same
   way (extensions at twice the spacing).  When the static weights of all its admissible
-  λ agree within :data:`FLAT_TOL` of the largest, where the corner falls among them
+  λ (at least three) agree within :data:`FLAT_TOL` of the largest, where the corner falls
+  among them
   cannot move the weights by more than that, and its answer stands.  Otherwise the
   other half is solved and the search runs on the full fine grid, reusing every λ
   solved: the answer is the full grid's (an L-curve with two corners within the window,
@@ -299,9 +300,9 @@ class _Solved:
 
     def flat(self, ts: np.ndarray, lo: float | None, tol: float) -> bool:
         """Whether the static weights of the λ ``ts`` at or above ``lo`` agree within
-        ``tol`` of the largest."""
+        ``tol`` of the largest (False with fewer than three of them: no evidence)."""
         use = ts >= (lo if lo is not None else -np.inf) - 1e-12
-        if not use.any():
+        if np.count_nonzero(use) < 3:
             return False
         w = np.array([self.rows[self.find(t)][3] for t in ts[use]])
         scale = np.abs(w).max()
