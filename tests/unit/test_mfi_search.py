@@ -149,9 +149,10 @@ def test_kept_trajectories_and_the_searchs_copy(crossing):
     np.testing.assert_array_equal(sol.X, sw.X[2])
 
 
-def _six_mode_search(crossing, **kw):
+def _six_mode_search(crossing, admissible=None, **kw):
     """lcurve_search on the crossing's 6-mode model (more than SMALL_MODEL_MODES: one fine
-    window of 8 λ) bracketed on every 4th sample with 2 modes, 5 % noise."""
+    window of 8 λ) bracketed on every 4th sample with 2 modes, 5 % noise; ``admissible``
+    restricts the corner on the model only."""
     beam, rec = crossing
     rec = rec.with_noise(0.05, seed=3)
     scale = float(np.abs(rec.data).max())
@@ -161,7 +162,8 @@ def _six_mode_search(crossing, **kw):
     coarse = CoarseProblem(model=build_model(beam, beam.modes(2), sub, scale, **opts),
                            d=sub.data / scale, weights=np.ones(model.n_s))
     d, w = rec.data / scale, np.ones(model.n_s)
-    return lcurve_search(model, d, w, LAM_RANGE, coarse=coarse, **kw), model, d, rec
+    return (lcurve_search(model, d, w, LAM_RANGE, coarse=coarse, admissible=admissible, **kw),
+            model, d, rec)
 
 
 def _mean_forces(forces):
@@ -229,3 +231,4 @@ def test_clean_record_weights_do_not_hang_on_the_half_grid(monkeypatch):
     assert half.lcurve.lam.size < full.lcurve.lam.size
     np.testing.assert_allclose(half.axle_weights, full.axle_weights, rtol=0,
                                atol=1e-4 * np.abs(full.axle_weights).max())
+
