@@ -10,17 +10,31 @@ linear in the record length (time per sample flat); peak memory (numpy allocatio
 
 Second table (the floor of the first): one stacked pass of the recursion with L λ
 (:func:`bwim.mfi.dp.sweep`, trajectories kept) against one sweep of one λ, on the same
-models.  The L-curve search solves its fine grid (at least 8 λ with the default ``n_lam``,
-more when it is extended) in such a pass on the record's model, so "L-curve / sweep"
-cannot fall below the 8-λ ratio of this table while the search solves those λ.  Fewer
-fine λ (8 coarse + 4 fine: 2.3–3.6× one sweep, measured in stop 27) leave the clean
-records' axle weights within 0.01 % and the paper crossings' (``mfi_accuracy.py``'s eight,
-0–5 % noise) within 0.6 points, but on a record whose model is not the data's (the small
-site of ``tests/validation/test_site.py``, seed 3, a 0.75 m model of 0.5 m data) the
-L-curve has two corners 1.6 decades apart, and which one a grid finds moved a truck's
-GVW from +5.3 to +13.2 %.  The grid stays: the search's answer must not hang on it.
+models.  The L-curve search on a model of more than ``SMALL_MODEL_MODES`` modes solves
+every other λ of its fine grid first (4 with the default ``n_lam``) in such a pass and
+stops there when the static weights of all of them agree within
+:data:`bwim.mfi.lcurve.FLAT_TOL` (the clean rows); otherwise it solves the other 4 in a
+second pass and returns the full grid's answer (two-corner L-curves, mismatched models).
+A fixed sparser grid (8 coarse + 4 fine, stop 27) met the target but on the small site of
+``tests/validation/test_site.py`` (seed 3, a 0.75 m model of 0.5 m data) found the lower
+of two corners 1.6 decades apart (GVW +12.6 % instead of +5.9 %); with the weights' test
+that record, whose weights differ across the window, is searched on the full grid and
+keeps the upper corner (checked there).
 
-Third table: the growth with record length at 20 given modes and the DP solve against
+Third table: where the search's time goes (:func:`run_breakdown`), each stacked pass
+(samples × λ) and the rest of ``identify_forces`` in units of one sweep at the chosen λ,
+measured in the same run.  On the clean 1 s record the bracket misses: the coarse problem
+(5 modes at 250 Hz) puts the corner 1.2 decades from the record's model (14 modes), the
+corner lands at an end of the half grid and an extension pass follows, which costs about
+one sweep however few λ it holds.  Tried and not kept (issue 23 item 2): one GEMM over
+all λ (another memory layout) and the per-mode 2 × 2 block products, both slower than
+the batched products at 1 and 8 λ (the per-λ work already runs at the BLAS rate); and
+refining around every local curvature maximum of the coarse L-curve, which does not
+separate the two-corner record above (its corners fall within one coarse spacing and
+the coarse curve has one maximum) while the clean records' coarse curves have further
+maxima 10–10⁵ times flatter than the corner, each of which would cost a window.
+
+Fourth table: the growth with record length at 20 given modes and the DP solve against
 the dense stacked Tikhonov solve of the same problem (they must agree), both measured in
 this run.
 """
@@ -169,8 +183,60 @@ def run_stacked(durations=(1.0, 4.0, 16.0), n_lams=(1, 2, 4, 8, 16), repeat: int
     return rows
 
 
+def run_breakdown(durations=(1.0, 2.0, 4.0, 8.0, 16.0), noise: float = 0.0,
+                  data_mesh: tuple[int, int] | None = None, repeat: int = 3):
+    """Rows of the fourth table (module docstring): where one L-curve search spends its
+    time, in units of one sweep at the chosen λ measured in the same run: each stacked
+    pass of :func:`bwim.mfi.lcurve.lcurve_search` (samples × λ) and the rest of
+    ``identify_forces`` (model builds, the record's band, the answer): the fastest of
+    ``repeat`` searches against the fastest of ``repeat`` sweeps, interleaved."""
+    import bwim.mfi.lcurve as lcurve
+
+    inner = lcurve.sweep
+    calls: list[tuple[int, int, float]] = []
+
+    def timed(model, d, lams, *args, **kw):
+        t0 = time.perf_counter()
+        out = inner(model, d, lams, *args, **kw)
+        calls.append((model.n_steps, np.atleast_1d(lams).size, time.perf_counter() - t0))
+        return out
+
+    rows = []
+    for dur in durations:
+        bridge, rec = _record(dur, data_mesh=data_mesh)
+        if noise:
+            rec = rec.with_noise(noise, seed=1)
+        ident = identify_forces(bridge, rec)
+        scale = float(np.abs(rec.data).max())
+        model = build_model(bridge, bridge.modes(ident.n_modes), rec, scale,
+                            unknowns=ident.unknowns, order=ident.order)
+        d = rec.data / scale
+        best, one = None, np.inf
+        for _ in range(repeat):
+            calls.clear()
+            lcurve.sweep = timed
+            try:
+                t0 = time.perf_counter()
+                identify_forces(bridge, rec)
+                total = time.perf_counter() - t0
+            finally:
+                lcurve.sweep = inner
+            if best is None or total < best[0]:
+                best = (total, list(calls))
+            t0 = time.perf_counter()
+            sweep(model, d, [ident.lam_scaled], keep=True)
+            one = min(one, time.perf_counter() - t0)
+        total, parts = best
+        ratio = total / one
+        passes = " + ".join(f"{n}×{L} λ: {t / one:.2f}" for n, L, t in parts)
+        rest = (total - sum(t for _, _, t in parts)) / one
+        rows.append([f"{dur:g}", f"{noise:.0%}", ident.n_modes, passes, f"{rest:.2f}",
+                     f"{ratio:.2f}"])
+    return rows
+
+
 def main(argv: list[str] | None = None) -> None:
-    """All three tables; ``argv == ["search"]`` prints the first two only (the λ search)."""
+    """All four tables; ``argv == ["search"]`` prints the λ search's three only."""
     header = ["record (s)", "data mesh", "noise", "samples", "modes", "λ solved", "L-curve",
               "fixed λ",
               "one sweep", "L-curve / sweep", "L-curve / fixed", "µs per sample",
@@ -187,6 +253,14 @@ def main(argv: list[str] | None = None) -> None:
         "record; wall time, s, and ratio to one λ)",
         ["record (s)", "samples", "modes", "1 λ", "2 λ", "4 λ", "8 λ", "16 λ"],
         run_stacked(),
+    )
+    print_table(
+        "MFI: where the L-curve search's time goes, in one sweep at the chosen λ (each "
+        "stacked pass as samples × λ, then the rest of identify_forces; same records)",
+        ["record (s)", "noise", "modes", "stacked passes (coarse, fine, extensions)", "rest",
+         "L-curve / sweep"],
+        run_breakdown() + run_breakdown(durations=(1.0, 16.0), noise=0.02,
+                                        data_mesh=(24, 16)),
     )
     if argv and argv[0] == "search":
         return

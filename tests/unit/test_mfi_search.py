@@ -5,6 +5,8 @@ must find that corner within its fine spacing), and a fresh sweep at the chosen 
 search's answer is the trajectory of a λ it solved).
 """
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -145,3 +147,88 @@ def test_kept_trajectories_and_the_searchs_copy(crossing):
     assert sol.X.flags.c_contiguous and not np.shares_memory(sol.X, sw.X)
     assert not np.shares_memory(sol.r, sw.r)
     np.testing.assert_array_equal(sol.X, sw.X[2])
+
+
+def _six_mode_search(crossing, admissible=None, **kw):
+    """lcurve_search on the crossing's 6-mode model (more than SMALL_MODEL_MODES: one fine
+    window of 8 λ) bracketed on every 4th sample with 2 modes, 5 % noise; ``admissible``
+    restricts the corner on the model only."""
+    beam, rec = crossing
+    rec = rec.with_noise(0.05, seed=3)
+    scale = float(np.abs(rec.data).max())
+    opts = {"unknowns": ForceUnknowns.AXLE, "order": Order.FIRST}
+    model = build_model(beam, beam.modes(6), rec, scale, **opts)
+    sub = dataclasses.replace(rec, time=rec.time[::4], data=rec.data[::4], truths=())
+    coarse = CoarseProblem(model=build_model(beam, beam.modes(2), sub, scale, **opts),
+                           d=sub.data / scale, weights=np.ones(model.n_s))
+    d, w = rec.data / scale, np.ones(model.n_s)
+    return (lcurve_search(model, d, w, LAM_RANGE, coarse=coarse, admissible=admissible, **kw),
+            model, d, rec)
+
+
+def _mean_forces(forces):
+    """A stand-in for the static weights: each force's mean over the record."""
+    return forces.mean(axis=1)
+
+
+def test_search_without_flat_weights_is_the_full_fine_grid(crossing):
+    """When the half grid's static weights disagree (``flat_tol=0``), the search solves the
+    rest of the fine grid and gives the full grid's answer: the same λ (to round-off) and
+    trajectory as the search without ``weigh`` (reference; round-off only, measured
+    0 and 4e-16 of the peak state)."""
+    full, _, _, _ = _six_mode_search(crossing)
+    both, _, _, _ = _six_mode_search(crossing, weigh=_mean_forces, flat_tol=0.0)
+    assert both.curve.corner_scaled == pytest.approx(full.curve.corner_scaled, rel=1e-12)
+    np.testing.assert_allclose(both.curve.lam_scaled, full.curve.lam_scaled, rtol=1e-12)
+    np.testing.assert_allclose(both.solution.X, full.solution.X, rtol=0,
+                               atol=1e-12 * np.abs(full.solution.X).max())
+
+
+def test_search_with_flat_weights_solves_every_other_fine_lambda(crossing):
+    """When they agree (``flat_tol=inf``), only every other λ of the full fine grid is
+    solved (the reference: the full search's grid, minus its extensions), plus
+    extensions at twice its spacing; the answer is a solved λ within half that spacing of
+    the corner located on them, and a fresh sweep there gives its trajectory."""
+    full, model, d, _ = _six_mode_search(crossing)
+    half, _, _, _ = _six_mode_search(crossing, weigh=_mean_forces, flat_tol=np.inf)
+    t_full = np.log(full.curve.lam_scaled)
+    t_half = np.log(half.curve.lam_scaled)
+    h = np.diff(t_full).min()
+    assert t_half.size < t_full.size
+    # every half-grid λ is a full-grid node or an extension at twice the spacing
+    steps = (t_half - t_full[1]) / (2 * h)
+    np.testing.assert_allclose(steps, np.round(steps), atol=1e-6)
+    chosen = np.log(half.curve.corner_scaled)
+    assert np.min(np.abs(t_half - chosen)) < 1e-9
+    fresh = sweep(model, d, [half.curve.corner_scaled], keep=True)
+    np.testing.assert_allclose(half.solution.X, fresh.X[0], rtol=0,
+                               atol=1e-9 * np.abs(fresh.X).max())
+
+
+def test_clean_record_weights_do_not_hang_on_the_half_grid(monkeypatch):
+    """identify_forces on a clean 2 s crossing of the paper slab (its own 12 × 8 model, 18
+    modes): the static weights agree within 0.01 % over the half fine grid, so only it is
+    solved; the weights are those of the full fine grid's answer (reference: the same
+    search without ``weigh``) within 0.01 % of the largest (measured 1.5e-4 %), though
+    the chosen λ differs (measured 0.86 decade)."""
+    from bwim import paper
+    from bwim.mfi import identify as ident_mod
+
+    bridge = paper.slab_bridge()
+    truck = paper.truck()
+    rec = bwim.simulate(bridge, truck, speed=(bridge.length + truck.length) / 2.0,
+                        lane=paper.LANE, sensors=paper.sensors(), road=paper.road(1),
+                        sampling_rate=1000.0, approach=20.0)
+    half = identify_forces(bridge, rec)
+    inner = ident_mod.lcurve_search
+
+    def full_grid(*args, **kw):
+        return inner(*args, **{**kw, "weigh": None})
+
+    monkeypatch.setattr(ident_mod, "lcurve_search", full_grid)
+    full = identify_forces(bridge, rec)
+    assert half.n_modes == full.n_modes > 4
+    assert half.lcurve.lam.size < full.lcurve.lam.size
+    np.testing.assert_allclose(half.axle_weights, full.axle_weights, rtol=0,
+                               atol=1e-4 * np.abs(full.axle_weights).max())
+

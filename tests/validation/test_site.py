@@ -265,3 +265,65 @@ def test_weighing_by_mfi_with_an_fe_model(day, site):
     assert n == 9
     ev = weigh_event(load_record(day.traffic[0], scenario), cal, bridge=bridge)
     assert not ev.weighed and "position" in ev.reason
+
+
+def test_mfi_lcurve_keeps_the_upper_of_two_corners(day, site, monkeypatch):
+    """The day's third truck (evt_0003, the 0.75 m model of 0.5 m data, as in the test
+    above): its L-curve has two corners (reference: the corner rule on a dense grid of 73
+    λ over the search's range, eight per decade, on the same model: a local curvature
+    maximum at log10 λ ≈ 1.1 and the largest curvature at ≈ 2.9, clipped to the top of
+    the fine grid, 2.43, by the search).  The search must keep the upper one: a sparser
+    fine grid (8 coarse + 4 fine λ) found the lower one and weighed the truck at +12.6 %
+    instead of +5.9 % (issue 23 item 2).  Measured: log10 λ 2.43, 1.3 decades above the
+    lower corner, 0.4 below the upper one; GVW +5.9 %."""
+    import bwim.site.event as event
+    from bwim.mfi import build_model
+    from bwim.mfi.dp import sweep
+    from bwim.mfi.lcurve import _corner, _lowest_admissible
+    from bwim.mfi.statespace import force_layout
+    from bwim.scenario import read_toml, scenario_from_dict
+    from bwim.synthetic import site as layout
+
+    _, cal = site
+    doc = read_toml(day.scenario)
+    doc["sensors"][0]["x"] = layout.GAUGE_X
+    doc["sensors"][0]["y"] = list(layout.GAUGE_Y)
+    doc["logger"]["scale"] = 1e-6
+    placed = scenario_from_dict(doc, source="site.toml")
+    placed_cal = calibrate_site([load_record(p, placed) for p in day.calibration], cal.setup)
+    bridge = layout.site_bridge(0.75)
+    seen = []
+    inner = event.identify_forces
+
+    def spy(bridge, rec, **options):
+        seen.append((rec, inner(bridge, rec, **options)))
+        return seen[-1][1]
+
+    monkeypatch.setattr(event, "identify_forces", spy)
+    path = day.traffic[2]
+    ev = weigh_event(load_record(path, placed), placed_cal, bridge=bridge,
+                     identify_options={"n_modes": 12})
+    assert ev.weighed and len(seen) == 1
+    rec, ident = seen[0]
+    # the reference: the corner rule on a dense grid of the same model, among the λ whose
+    # forces stay compressive where they are weighed (as the search's rule)
+    scale = float(np.abs(rec.data).max())
+    model = build_model(bridge, bridge.modes(ident.n_modes), rec, scale,
+                        unknowns=ident.unknowns, order=ident.order)
+    t = np.linspace(np.log(1e-6), np.log(1e3), 73)
+    sw = sweep(model, rec.data / scale, np.exp(t), keep_forces=True)
+    passage_of, axle_of, _ = force_layout(rec.passages, ident.unknowns)
+    assert np.all(passage_of == 0)
+    lo_hi = ident.axle_windows[axle_of]
+    weighed = (rec.time[:, None] >= lo_hi[:, 0]) & (rec.time[:, None] <= lo_hi[:, 1])
+    ok = np.all((sw.forces > 0) | ~weighed[None], axis=(1, 2))
+    lo = _lowest_admissible(t, ok)
+    kappa, upper = _corner(t, sw.residual_norm, sw.seminorm, lo)
+    inside = (kappa[1:-1] > kappa[:-2]) & (kappa[1:-1] > kappa[2:]) & (t[1:-1] >= lo)
+    lower = t[1:-1][inside].min() / np.log(10)
+    upper /= np.log(10)
+    assert upper - lower > 1.0  # two corners, more than a decade apart
+    chosen = np.log10(ident.lam_scaled)
+    assert abs(chosen - upper) < abs(chosen - lower)
+    truth = float({r["record"]: r for r in _rows(day.truth)}[path.name]["gvw_kN"])
+    assert abs(ident.gvw[0] / 1e3 / truth - 1) < 0.09  # the lower corner: +12.6 %

@@ -233,7 +233,9 @@ def identify_forces(
         the record is sampled at least twice as fast), half within one coarse spacing of
         its corner on the record's model (more when the corner sits at an end of that
         grid, and twice as many over twice the width for models of at most
-        :data:`SMALL_MODEL_MODES` modes).
+        :data:`SMALL_MODEL_MODES` modes).  Larger first-order models solve every other
+        fine λ first and keep that answer when the static weights of all of them agree
+        within :data:`bwim.mfi.lcurve.FLAT_TOL` (:func:`bwim.mfi.lcurve.lcurve_search`).
     central : float
         Fraction of each axle's time on the deck used for its static weight.
     max_residual : float
@@ -301,7 +303,9 @@ def identify_forces(
             search = lcurve_search(model, d_scaled, W, lam_range, n_coarse=n_coarse,
                                    n_fine=window * n_fine + window - 1,
                                    admissible=_compressive(weighed),
-                                   coarse=coarse if n_fine >= 4 else None, window=window)
+                                   coarse=coarse if n_fine >= 4 else None, window=window,
+                                   weigh=(_static(weighed, axles, windows.shape[0])
+                                          if window == 1 and weighed is not None else None))
             curve, sol = search.curve, search.solution
             lam_s = curve.corner_scaled
         elif lam == "gcv":
@@ -337,6 +341,20 @@ def _compressive(weighed: np.ndarray | None):
         return np.all((forces > 0) | ~weighed[None], axis=(1, 2))
 
     return admissible
+
+
+def _static(weighed: np.ndarray, axles: np.ndarray, n_axles: int):
+    """Static axle weights per λ from scaled forces (n_λ, n_t, n_f): each axle's forces
+    summed, averaged where it is weighed (``weighed``, (n_t, n_f), as :func:`_weighed`)."""
+    count = weighed.sum(axis=0)
+
+    def weigh(forces: np.ndarray) -> np.ndarray:
+        mean = np.einsum("ltf,tf->lf", forces, weighed) / np.maximum(count, 1)
+        out = np.zeros((forces.shape[0], n_axles))
+        np.add.at(out, (slice(None), axles), mean)
+        return out
+
+    return weigh
 
 
 def _coarse_problem(bridge: Bridge, record: Record, modes, d_scale: float, W: np.ndarray,

@@ -20,6 +20,16 @@ Contract
   is above the interior's, the grid is extended there (at most :data:`MAX_EXTENSIONS`
   times).  Without a coarse problem the corner is located on the union of both grids.
   The chosen λ lies within half a fine spacing of the located corner.
+* Half grid first (with a coarse problem and ``weigh``, the static weights per λ): every
+  other λ of the fine grid is solved first, in one stacked pass, and searched the same
+  way (extensions at twice the spacing).  When the static weights of all its admissible
+  λ (at least three) agree within :data:`FLAT_TOL` of the largest, where the corner falls
+  among them
+  cannot move the weights by more than that, and its answer stands.  Otherwise the
+  other half is solved and the search runs on the full fine grid, reusing every λ
+  solved: the answer is the full grid's (an L-curve with two corners within the window,
+  whose weights differ, is searched at the full resolution).  The force histories are
+  not held to that tolerance: another λ changes them more than the weights.
 * Admissible λ (``admissible=``, given by :func:`~bwim.mfi.identify_forces` for first
   order, whose λ → ∞ limit is constant forces: the static weights): tyre forces are
   compressive, so a λ whose identified forces turn tensile where the forces are weighed
@@ -142,6 +152,11 @@ def lcurve(model: MFIModel, d, weights, lam_grid_scaled: np.ndarray) -> LCurve:
 MAX_EXTENSIONS = 4
 
 
+#: With ``weigh`` (:func:`lcurve_search`), the half fine grid is the answer when the static
+#: weights of all its admissible λ agree within this fraction of the largest weight.
+FLAT_TOL = 1e-4
+
+
 @dataclass(frozen=True, kw_only=True, eq=False)
 class CoarseProblem:
     """A cheaper model of the same record on which :func:`lcurve_search` brackets the
@@ -194,7 +209,8 @@ def _fine_grid(t0: float, half: float, t_min: float, t_max: float, n: int) -> np
 
 def lcurve_search(model: MFIModel, d, weights, lam_range: tuple[float, float], *,
                   n_coarse: int = 8, n_fine: int = 8, admissible=None,
-                  coarse: CoarseProblem | None = None, window: int = 1) -> CornerSearch:
+                  coarse: CoarseProblem | None = None, window: int = 1, weigh=None,
+                  flat_tol: float = FLAT_TOL) -> CornerSearch:
     """Coarse-to-fine L-curve in two stacked passes (module docstring).
 
     ``n_coarse`` log-spaced λ over ``lam_range`` (scaled) bracket the corner, on
@@ -203,7 +219,10 @@ def lcurve_search(model: MFIModel, d, weights, lam_range: tuple[float, float], *
     solved on ``model`` with their trajectories kept.  The corner is located on the fine grid
     (with ``coarse``) or on the union of both grids, and the chosen λ is the fine λ
     nearest to it: its trajectory is the answer, no further solve.  ``admissible(forces)
-    -> bool per λ`` (scaled forces, (n_λ, N, n_f)) restricts the corner."""
+    -> bool per λ`` (scaled forces, (n_λ, N, n_f)) restricts the corner.  With
+    ``coarse``, ``weigh(forces) -> (n_λ, n_axles)`` static weights (scaled) makes the
+    search solve every other fine λ first and stop there when their weights agree within
+    ``flat_tol`` of the largest (module docstring)."""
     keep_f = admissible is not None
     t_min, t_max = np.log(lam_range[0]), np.log(lam_range[1])
     t_c = np.linspace(t_min, t_max, n_coarse)
@@ -222,64 +241,162 @@ def lcurve_search(model: MFIModel, d, weights, lam_range: tuple[float, float], *
     h = t_f[1] - t_f[0] if t_f.size > 1 else step
     if coarse is None and np.min(np.abs(t_f[:, None] - t_c[None, :])) < 1e-3 * h:
         t_f = t_f + 0.25 * h  # keep clear of the coarse nodes (the spline needs distinct points)
-    fine = [sweep(model, d, np.exp(t_f), weights, keep=True)]
+    solved = _Solved(model, d, weights, admissible, weigh)
+    base = None if coarse is not None else (t_c, first.residual_norm, first.seminorm, ok_c)
+    n_ext = max(2, n_fine // 2)
+    if coarse is not None and weigh is not None and t_f.size >= 4:
+        # every other λ of the fine grid first: when the static weights of all its
+        # admissible λ agree within flat_tol, the corner's place within it cannot move them
+        half = _fine_search(solved, t_f[1::2], 2 * h, max(2, n_ext // 2), (t_min, t_max),
+                            extend=True)
+        if solved.flat(half.grid, half.lo, flat_tol):
+            return half.result(model, d, weights, solved)
+    found = _fine_search(solved, t_f, h, n_ext, (t_min, t_max), extend=coarse is not None,
+                         base=base)
+    return found.result(model, d, weights, solved)
+
+
+class _Solved:
+    """The λ solved on the record's model, by log λ: one stacked pass per call of
+    :meth:`solve` for the λ not solved yet; their norms, admissibility, static weights
+    and trajectories."""
+
+    def __init__(self, model, d, weights, admissible, weigh):
+        self.model, self.d, self.weights = model, d, weights
+        self.admissible, self.weigh = admissible, weigh
+        self.t: list[float] = []
+        self.rows: list[tuple] = []  # (ρ, η, admissible, static weights, sweep, index)
+
+    def find(self, t: float) -> int:
+        for i, v in enumerate(self.t):
+            if abs(v - t) <= 1e-9 * max(1.0, abs(t)):
+                return i
+        return -1
+
+    def solve(self, ts: np.ndarray) -> None:
+        new = []
+        for t in ts:
+            if self.find(t) < 0 and all(abs(t - v) > 1e-9 * max(1.0, abs(t)) for v in new):
+                new.append(float(t))
+        if not new:
+            return
+        sw = sweep(self.model, self.d, np.exp(new), self.weights, keep=True)
+        ok = self.admissible(sw.forces) if self.admissible is not None else None
+        w = self.weigh(sw.forces) if self.weigh is not None else None
+        for i, t in enumerate(new):
+            self.t.append(t)
+            self.rows.append((sw.residual_norm[i], sw.seminorm[i],
+                              None if ok is None else bool(ok[i]),
+                              None if w is None else w[i], sw, i))
+
+    def arrays(self, ts: np.ndarray):
+        rows = [self.rows[self.find(t)] for t in ts]
+        ok = (np.array([r[2] for r in rows]) if self.admissible is not None else None)
+        return (np.array([r[0] for r in rows]), np.array([r[1] for r in rows]), ok)
+
+    def solution(self, t: float) -> Solution:
+        row = self.rows[self.find(t)]
+        return _solution(row[4], row[5])
+
+    def flat(self, ts: np.ndarray, lo: float | None, tol: float) -> bool:
+        """Whether the static weights of the λ ``ts`` at or above ``lo`` agree within
+        ``tol`` of the largest (False with fewer than three of them: no evidence)."""
+        use = ts >= (lo if lo is not None else -np.inf) - 1e-12
+        if np.count_nonzero(use) < 3:
+            return False
+        w = np.array([self.rows[self.find(t)][3] for t in ts[use]])
+        scale = np.abs(w).max()
+        return bool(scale > 0 and np.all(w.max(axis=0) - w.min(axis=0) <= tol * scale))
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class _Found:
+    """A fine search's grid (sorted, with the coarse nodes when they are on the model),
+    its norms, admissibility, curvature, corner and spacing; ``grid``: its solved λ."""
+
+    t: np.ndarray
+    rho: np.ndarray
+    eta: np.ndarray
+    ok: np.ndarray | None
+    lo: float | None
+    kappa: np.ndarray
+    t_best: float
+    h: float
+    grid: np.ndarray
+
+    def result(self, model, d, weights, solved: _Solved) -> CornerSearch:
+        """The answer: the solved fine λ nearest to the corner (among the admissible
+        ones), or a solve at the corner when none is within half a spacing."""
+        nodes = self.grid
+        cand = nodes >= (self.lo if self.lo is not None else -np.inf) - 1e-12
+        if not cand.any():
+            cand[:] = True
+        dist = np.where(cand, np.abs(nodes - self.t_best), np.inf)
+        j = int(np.argmin(dist))
+        t_best = self.t_best
+        if dist[j] <= 0.5 * self.h * (1 + 1e-9):
+            t_best = float(nodes[j])
+            sol = solved.solution(t_best)
+        else:  # the corner lies outside the fine grid: solve at it
+            sol = _solution(sweep(model, d, [np.exp(t_best)], weights, keep=True), 0)
+        curve = _curve(model, np.exp(self.t), self.rho, self.eta, self.kappa, t_best, self.ok)
+        return CornerSearch(curve=curve, solution=sol)
+
+
+def _fine_search(solved: _Solved, t_f: np.ndarray, h: float, n_ext: int, t_range, *,
+                 extend: bool, base=None) -> _Found:
+    """Solve ``t_f`` (spacing ``h``) and locate the corner on it, with the coarse nodes
+    ``base`` = (t, ρ, η, admissible) when they were solved on the model; with ``extend``,
+    extend the grid by ``n_ext`` λ at an end while the corner sits there (module
+    docstring)."""
+    t_min, t_max = t_range
     grids = [t_f]
+    solved.solve(t_f)
 
     def located():
-        t = np.concatenate(grids if coarse is not None else [t_c, *grids])
-        parts = ([] if coarse is not None else [first]) + fine
-        rho = np.concatenate([p.residual_norm for p in parts])
-        eta = np.concatenate([p.seminorm for p in parts])
-        ok = (np.concatenate(([] if coarse is not None else [ok_c])
-                             + [admissible(p.forces) for p in fine]) if keep_f else None)
+        g = np.sort(np.concatenate(grids))
+        rho, eta, ok = solved.arrays(g)
+        t = g
+        if base is not None:
+            t = np.concatenate([base[0], g])
+            rho = np.concatenate([base[1], rho])
+            eta = np.concatenate([base[2], eta])
+            ok = np.concatenate([base[3], ok]) if ok is not None else None
         o = np.argsort(t)
         t, rho, eta = t[o], rho[o], eta[o]
-        ok = ok[o] if keep_f else None
+        ok = ok[o] if ok is not None else None
         lo = _lowest_admissible(t, ok)
         kappa, t_best = _corner(t, rho, eta, lo)
-        return t, rho, eta, ok, lo, kappa, t_best
+        return _Found(t=t, rho=rho, eta=eta, ok=ok, lo=lo, kappa=kappa, t_best=t_best, h=h,
+                      grid=g)
 
-    t, rho, eta, ok, lo, kappa, t_best = located()
-    if coarse is not None:
-        # the coarse model's corner is an estimate: while the corner sits at an end of the
-        # fine grid, extend the grid there by half as many λ at the same spacing
-        n_ext = max(2, n_fine // 2)
-        for _ in range(MAX_EXTENSIONS):
-            # an end is open when the corner sits next to it or the curvature there is
-            # above the interior's (the corner lies beyond it)
-            inner = kappa[1:-1][t[1:-1] >= (lo if lo is not None else -np.inf) - 1e-12]
-            top = inner.max() if inner.size else -np.inf
-            low_open = (t_best <= t[1] + 1e-9 * h or kappa[0] > top) and \
-                (lo is None or lo <= t[0]) and t[0] - h > t_min
-            high_open = (t_best >= t[-2] - 1e-9 * h or kappa[-1] > top) and t[-1] + h < t_max
-            if low_open:
-                t_new = t[0] - h * np.arange(1, n_ext + 1)
-            elif high_open:
-                t_new = t[-1] + h * np.arange(1, n_ext + 1)
-            else:
-                break
-            t_new = t_new[(t_new > t_min) & (t_new < t_max)]
-            if not t_new.size:
-                break
-            fine.append(sweep(model, d, np.exp(t_new), weights, keep=True))
-            grids.append(t_new)
-            t, rho, eta, ok, lo, kappa, t_best = located()
-    # the answer: the solved fine λ nearest to the corner (among the admissible ones)
-    nodes = np.concatenate(grids)
-    which = np.concatenate([np.full(g.size, i) for i, g in enumerate(grids)])
-    index = np.concatenate([np.arange(g.size) for g in grids])
-    cand = nodes >= (lo if lo is not None else -np.inf) - 1e-12
-    if not cand.any():
-        cand[:] = True
-    dist = np.where(cand, np.abs(nodes - t_best), np.inf)
-    j = int(np.argmin(dist))
-    if dist[j] <= 0.5 * h * (1 + 1e-9):
-        t_best = float(nodes[j])
-        sol = _solution(fine[which[j]], index[j])
-    else:  # the corner lies outside the fine grid: solve at it
-        sol = _solution(sweep(model, d, [np.exp(t_best)], weights, keep=True), 0)
-    curve = _curve(model, np.exp(t), rho, eta, kappa, t_best, ok)
-    return CornerSearch(curve=curve, solution=sol)
+    f = located()
+    if not extend:
+        return f
+    # the coarse model's corner is an estimate: while the corner sits at an end of the
+    # fine grid, extend the grid there by n_ext λ at the same spacing
+    for _ in range(MAX_EXTENSIONS):
+        t, kappa, lo, t_best = f.t, f.kappa, f.lo, f.t_best
+        # an end is open when the corner sits next to it or the curvature there is
+        # above the interior's (the corner lies beyond it)
+        inner = kappa[1:-1][t[1:-1] >= (lo if lo is not None else -np.inf) - 1e-12]
+        top = inner.max() if inner.size else -np.inf
+        low_open = (t_best <= t[1] + 1e-9 * h or kappa[0] > top) and \
+            (lo is None or lo <= t[0]) and t[0] - h > t_min
+        high_open = (t_best >= t[-2] - 1e-9 * h or kappa[-1] > top) and t[-1] + h < t_max
+        if low_open:
+            t_new = t[0] - h * np.arange(1, n_ext + 1)
+        elif high_open:
+            t_new = t[-1] + h * np.arange(1, n_ext + 1)
+        else:
+            break
+        t_new = t_new[(t_new > t_min) & (t_new < t_max)]
+        if not t_new.size:
+            break
+        solved.solve(t_new)
+        grids.append(t_new)
+        f = located()
+    return f
 
 
 def gcv(model: MFIModel, d, weights, bounds_scaled: tuple[float, float], *, probes: int = 8,
