@@ -35,6 +35,16 @@ def test_mfi_search_benchmark_smoke():
     assert len(stacked) == 1 and stacked[0][-1].endswith("×)")
 
 
+def test_mfi_breakdown_benchmark_smoke():
+    """The L-curve search's time breakdown runs on a short record: its stacked passes and
+    the rest, in sweeps, add up to its ratio (to rounding of the printed parts)."""
+    from benchmarks import bench_mfi
+
+    (row,) = bench_mfi.run_breakdown(durations=(0.4,), repeat=1)
+    parts = [float(p.split(": ")[1]) for p in row[3].split(" + ")]
+    assert parts and abs(sum(parts) + float(row[4]) - float(row[5])) < 0.02 * len(parts) + 0.02
+
+
 def test_calibration_benchmark_smoke():
     """The calibration benchmark runs; it checks the dynamic objective (scaled modes)
     against a plain simulation of the same trial before timing."""

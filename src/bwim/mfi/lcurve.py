@@ -24,8 +24,7 @@ Contract
   other λ of the fine grid is solved first, in one stacked pass, and searched the same
   way (extensions at twice the spacing).  When the static weights of all its admissible
   λ (at least three) agree within :data:`FLAT_TOL` of the largest, where the corner falls
-  among them
-  cannot move the weights by more than that, and its answer stands.  Otherwise the
+  among them cannot move the weights by more than that, and its answer stands.  Otherwise the
   other half is solved and the search runs on the full fine grid, reusing every λ
   solved: the answer is the full grid's (an L-curve with two corners within the window,
   whose weights differ, is searched at the full resolution).  The force histories are
