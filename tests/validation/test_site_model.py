@@ -107,6 +107,9 @@ def test_traffic_weighed_by_the_model(fitted):
                          bridge=model)
         assert ev.weighed and ev.identification is not None, ev.reason
         assert ev.gvw / (float(r["gvw_kN"]) * 1e3) - 1 == pytest.approx(0.0, abs=0.10)
+        # its axle groups' positions are measured for the day's check, as with the lines
+        (row,) = [x for x in ev.to_summary_rows(r["record"]) if x.weighed]
+        assert row.method == "mfi" and len(row.group_laterals) == len(row.vehicle_class)
 
 
 def test_model_file_round_trip(fitted, tmp_path):

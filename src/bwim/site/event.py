@@ -141,8 +141,8 @@ class VehicleWeighing:
     drift_method : str
     group_laterals : tuple of float
         Each axle group's lateral position, in the vehicle's lateral unit
-        (:func:`bwim.site.wheelpath.group_laterals`); measured for a vehicle the lines
-        weighed, empty otherwise.
+        (:func:`bwim.site.wheelpath.group_laterals`); measured for a weighed vehicle,
+        empty otherwise.
     """
 
     vehicle: VehicleDetection
@@ -416,8 +416,12 @@ def _vehicle(record: Record, ev: EventDetection, k: int, calibration: SiteCalibr
                            "not calibrated there", flags=(*flags, *health.flags))
     if mfi:  # the gauges the lines found faulty are left out of the MFI too
         faulty = {f.gauge for f in health.faults}
-        return _weigh_mfi(record, lv, (*flags, *health.flags), model, options, factor,
-                          method, drift_flags, faulty)
+        out = _weigh_mfi(record, lv, (*flags, *health.flags), model, options, factor,
+                         method, drift_flags, faulty)
+        if not out.weighed:
+            return out
+        return dataclasses.replace(out, group_laterals=_group_laterals(
+            record, lv, calibration, faulty))
     try:
         w = health.mark(weigh(record, v.passage, health.lines, combine=setup.combine,
                               scale_correction=method == "trend",
