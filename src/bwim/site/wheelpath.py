@@ -15,7 +15,8 @@ Contract
 --------
 * :func:`group_laterals` measures the lateral position of each axle group of a detected
   vehicle (groups: consecutive axles closer than ``group_spacing``, m, default
-  :data:`bwim.classify.DEFAULT_GROUP_SPACING`): the section gauges' load centroid
+  :data:`bwim.classify.DEFAULT_GROUP_SPACING`, as :func:`bwim.wim.group_axles` and the
+  weighing group them): the section gauges' load centroid
   (:func:`bwim.detect.lateral.lateral_position`, peak weights, its default threshold)
   over a short window around the record time at which the group's centre crosses the
   gauge line.  The window's half-width is the smaller of :data:`HALF_WINDOW` (m) and a
@@ -58,7 +59,7 @@ from bwim.errors import InputError, require_positive
 from bwim.records import Passage, Record
 from bwim.site.wander import MIN_VEHICLES, SIGMA_FLOOR
 from bwim.summary import SummaryRow
-from bwim.wim import MultiRunCalibration
+from bwim.wim import MultiRunCalibration, group_axles
 
 __all__ = [
     "FLAG_GROUP_OFF_PATH",
@@ -96,16 +97,6 @@ def gauge_line(lines: MultiRunCalibration) -> float:
     return float(np.median(line.x[np.argmax(ords, axis=0)]))
 
 
-def _groups(spacings: np.ndarray, group_spacing: float) -> list[list[int]]:
-    groups = [[0]]
-    for i, s in enumerate(spacings):
-        if s < group_spacing:
-            groups[-1].append(i + 1)
-        else:
-            groups.append([i + 1])
-    return groups
-
-
 def group_laterals(record: Record, passage: Passage, *, gauge_line: float,
                    window: tuple[float, float] | None = None,
                    gauges: Sequence[str] | None = None,
@@ -121,7 +112,7 @@ def group_laterals(record: Record, passage: Passage, *, gauge_line: float,
         raise InputError(f"gauge_line must be finite, got {gauge_line!r}")
     t = record.time
     offsets = passage.axle_offsets
-    groups = _groups(passage.axle_spacings, group_spacing)
+    groups = [list(g) for g in group_axles(passage, group_spacing)]
     quiet = None
     if window is not None:
         quiet = (t < window[0]) | (t > window[1])
