@@ -23,7 +23,8 @@ Contract
   quarter of the gap to the nearest axle of a neighbouring group, in time at the
   vehicle's speed.  The gauge line is ``gauge_line`` (m, in the passages' frame; for
   lines, :func:`gauge_line` gives it), the quiet level of each gauge its median outside
-  ``window`` (the vehicle's time on the span).  Unit: that of
+  ``window`` (the vehicle's time on the span; when less than a tenth of the record lies
+  outside it, or without ``window``, that of ``lateral_position``'s default).  Unit: that of
   :func:`~bwim.detect.lateral.lateral_position` (m, else gauge index).  Empty when a
   group's window lies outside the record or no gauge responded.
 * The groups' positions differ, for a vehicle alone, only by how each group's tyres
