@@ -104,6 +104,19 @@ def run(durations=(0.5, 1.0, 2.0, 4.0), batch_durations=(0.05, 0.1, 0.2), repeat
     return rows
 
 
+def _identified(duration: float, noise: float, data_mesh: tuple[int, int] | None):
+    """The record of ``duration`` s (with ``noise``), its ``identify_forces`` with the
+    defaults, the model of the order it chose and the scaled readings."""
+    bridge, rec = _record(duration, data_mesh=data_mesh)
+    if noise:
+        rec = rec.with_noise(noise, seed=1)
+    ident = identify_forces(bridge, rec)
+    scale = float(np.abs(rec.data).max())
+    model = build_model(bridge, bridge.modes(ident.n_modes), rec, scale,
+                        unknowns=ident.unknowns, order=ident.order)
+    return bridge, rec, ident, model, rec.data / scale
+
+
 def run_sweep_ratio(durations=(1.0, 2.0, 4.0, 8.0, 16.0), noise: float = 0.0,
                     data_mesh: tuple[int, int] | None = None, repeat: int = 3):
     """Rows of the main table (module docstring) for records of ``durations`` seconds from
@@ -111,14 +124,7 @@ def run_sweep_ratio(durations=(1.0, 2.0, 4.0, 8.0, 16.0), noise: float = 0.0,
     from the record."""
     rows = []
     for dur in durations:
-        bridge, rec = _record(dur, data_mesh=data_mesh)
-        if noise:
-            rec = rec.with_noise(noise, seed=1)
-        ident = identify_forces(bridge, rec)
-        scale = float(np.abs(rec.data).max())
-        model = build_model(bridge, bridge.modes(ident.n_modes), rec, scale,
-                            unknowns=ident.unknowns, order=ident.order)
-        d = rec.data / scale
+        bridge, rec, ident, model, d = _identified(dur, noise, data_mesh)
         one = sweep(model, d, [ident.lam_scaled], keep=True)
         # the L-curve's answer is the trajectory of a solved λ: one sweep there gives it
         forces = one.X[0][:, model.n_z:] * model.f_scale
@@ -203,14 +209,7 @@ def run_breakdown(durations=(1.0, 2.0, 4.0, 8.0, 16.0), noise: float = 0.0,
 
     rows = []
     for dur in durations:
-        bridge, rec = _record(dur, data_mesh=data_mesh)
-        if noise:
-            rec = rec.with_noise(noise, seed=1)
-        ident = identify_forces(bridge, rec)
-        scale = float(np.abs(rec.data).max())
-        model = build_model(bridge, bridge.modes(ident.n_modes), rec, scale,
-                            unknowns=ident.unknowns, order=ident.order)
-        d = rec.data / scale
+        bridge, rec, ident, model, d = _identified(dur, noise, data_mesh)
         best, one = None, np.inf
         for _ in range(repeat):
             calls.clear()
