@@ -68,10 +68,13 @@ def test_the_speeds_line(capsys):
                    "around them (beyond 5 σ: traces of another vehicle)"]
 
 
-def test_nothing_to_say_on_a_small_day(capsys):
+def test_a_small_day_says_its_lateral_checks_did_not_run(capsys):
     rows = [_row(k, 5.9, *(("s12",) if k == 3 else ()), paths=(5.9, 5.9)) for k in range(10)]
     _print_unconfirmed(refuse_unconfirmed_faults(rows))
     _print_wander(refuse_lateral_outliers(rows))
     _print_paths(refuse_off_path(rows))
     _print_speeds(drop_speed_outliers(rows))
-    assert capsys.readouterr().out == ""
+    assert capsys.readouterr().out.splitlines() == [
+        "lane 1 +x: 10 vehicle(s) weighed, too few for the day's lateral checks (they need "
+        "30): a vehicle beside one that no detector saw is not refused; weigh the whole day "
+        "together"]

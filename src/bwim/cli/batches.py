@@ -232,7 +232,10 @@ def _print_unconfirmed(check) -> None:
 
 
 def _print_wander(check) -> None:
-    """One line per lane whose lateral spread was measured, and how many it refused."""
+    """One line per lane whose lateral spread was measured, and how many it refused; one
+    per lane with vehicles weighed but too few to measure it."""
+    from bwim.site.wander import MIN_VEHICLES
+
     for w in check.lanes:
         unit = " m" if w.unit == "m" else " (gauge index)"
         n = sum(1 for r in check.rows if "lateral_outlier" in r.flags and r.lane == w.lane
@@ -241,6 +244,16 @@ def _print_wander(check) -> None:
               + f": lateral position {w.median:.2f}{unit} ± {w.sigma:.2f} over {w.n} "
               f"vehicle(s); {n} refused beyond {check.limit:g} σ (a vehicle beside it no "
               "detector saw)")
+    measured = {(w.lane, w.direction) for w in check.lanes}
+    thin: dict = {}
+    for r in check.rows:
+        if r.weighed and r.lateral is not None and (r.lane, r.direction) not in measured:
+            thin[(r.lane, r.direction)] = thin.get((r.lane, r.direction), 0) + 1
+    for (lane, direction), n in thin.items():
+        print(f"lane {lane if lane is not None else '?'} {direction or ''}".rstrip()
+              + f": {n} vehicle(s) weighed, too few for the day's lateral checks (they "
+              f"need {MIN_VEHICLES}): a vehicle beside one that no detector saw is not "
+              "refused; weigh the whole day together")
 
 
 def _print_paths(check) -> None:
