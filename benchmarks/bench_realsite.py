@@ -163,6 +163,12 @@ def run_day(seed: int, side_spans: float | None = None,
 
         day = cached_day(seed, N_TRAFFIC, side_spans)
     t_day = time.perf_counter() - t0
+    return {**weigh_day(day, seed, support_lobes), "day": t_day}
+
+
+def weigh_day(day: Path, seed: int, support_lobes: bool | None = None) -> dict:
+    """:func:`run_day` on the day in folder ``day`` (a ``short-span-4-lane`` day of
+    :func:`bwim.synthetic.make_test_day`), ``seed`` the thin-traffic draws' seed."""
     scenario = load_scenario(day / "scenario.toml")
     runs = sorted((day / "calibration").glob("*.txt"))
     setup = build_site_setup(scenario)
@@ -250,8 +256,7 @@ def run_day(seed: int, side_spans: float | None = None,
                      sum(1 for k in range(len(runs)) if k not in with_other
                          and not site.reasons[k]), len(runs) - len(with_other)),
             "n_events": len(paths), "t_read": t_read, "t_weigh": t_weigh,
-            "duration": duration, "day": t_day,
-            "thin": thin_traffic(as_weighed, lane1, truth, seed)}
+            "duration": duration, "thin": thin_traffic(as_weighed, lane1, truth, seed)}
 
 
 #: The thin traffic date of the real installation: 15 statically weighed 5- and 6-axle
@@ -266,9 +271,11 @@ def thin_traffic(rows: list[SummaryRow], reference: list, truth: dict, seed: int
     (``min_reference`` = 8) with the steering axle's nominal load given: the fleet's true
     mean (the class's commonest vehicle type's, from ``truth.csv``), or 5 % above it.
     Returns per correction the RMS over the draws of the draw's mean error and its
-    standard deviation, %."""
+    standard deviation, %; empty when the day has fewer such trucks than a draw."""
     ref = {r.record: r for r in reference}
     pool = [r for r in rows if r.weighed and r.record in ref and r.n_axles in (5, 6)]
+    if len(pool) < THIN_TRUCKS:
+        return {}
     steer = [float(t[0]["steer_kN"]) * 1e3 for t in truth.values()
              if len(t) == 1 and t[0]["kind"] != "calibration"
              and t[0]["vehicle_type"] == "artic_2+3"]
@@ -359,6 +366,15 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
     lobes = None if args.support_lobes is None else args.support_lobes == "on"
     days = [run_day(seed, args.side_spans, lobes) for seed in args.seeds]
+    what = ("" if args.side_spans is None
+            else f", slab continuous into {args.side_spans:g} m side spans") + (
+        "" if lobes is None else f", lines with lobes {args.support_lobes}")
+    print_days(days, what)
+
+
+def print_days(days: list[dict], what: str = "") -> None:
+    """The tables of the module docstring for the days :func:`run_day` weighed; ``what``
+    is added to the first table's title."""
     for d in days:
         rows = [[label, f"{res.n_vehicles}/{res.n_reference}",
                  *[cell(res, c) for c in CRITERIA], res.overall_class or "-"]
@@ -368,9 +384,6 @@ def main(argv: list[str] | None = None) -> None:
                   else f"traffic drift: class {fit.reference_class}, nominal "
                   f"{fit.nominal / 1e3:.1f} kN from the {fit.nominal_source}, "
                   f"{sum(fit.counts.values())} reference vehicles")
-        what = ("" if args.side_spans is None
-                else f", slab continuous into {args.side_spans:g} m side spans") + (
-            "" if lobes is None else f", lines with lobes {args.support_lobes}")
         print_table(f"Realistic site{what}, seed {d['seed']}: COST 323 (RR2, I) on the traffic "
                     f"date's lane-1 trucks, error % mean ± sd and class ({source}; "
                     f"{d['n_lane3']} lane-3 trucks counted, not weighed)",
@@ -393,13 +406,15 @@ def main(argv: list[str] | None = None) -> None:
                   "{} / {} / {}".format(*d["counted"]),
                   "{} / {} / {}".format(*d["traces"]),
                   f"{d['runs'][0]}/{d['runs'][1]}", f"{d['runs'][2]}/{d['runs'][3]}",
-                  f"{d['day']:.0f} s"] for d in days])
-    print_table(f"A thin traffic date, as on the real installation: {THIN_TRUCKS} lane-1 "
-                f"trucks of 5-6 axles alone, {THIN_DRAWS} draws a day; GVW error %, RMS "
-                "over the draws of each draw's mean and of its standard deviation",
-                ["seed", *days[0]["thin"].keys()],
-                [[d["seed"], *(f"mean {m:.1f}, sd {sd:.1f}" for m, sd in d["thin"].values())]
-                 for d in days])
+                  f"{d.get('day', 0.0):.0f} s"] for d in days])
+    thin = [d for d in days if d["thin"]]
+    if thin:
+        print_table(f"A thin traffic date, as on the real installation: {THIN_TRUCKS} "
+                    f"lane-1 trucks of 5-6 axles alone, {THIN_DRAWS} draws a day; GVW error "
+                    "%, RMS over the draws of each draw's mean and of its standard deviation",
+                    ["seed", *thin[0]["thin"].keys()],
+                    [[d["seed"], *(f"mean {m:.1f}, sd {sd:.1f}"
+                                   for m, sd in d["thin"].values())] for d in thin])
     print_table("Speed of bwim weigh on one core (CPU time; target: 150 events/s from files)",
                 ["seed", "events", "reading", "detection + weighing", "from files",
                  "detection + weighing / reading", "× real time"],

@@ -1,6 +1,8 @@
 """Fast smoke versions of the benchmarks: they run, and their fast paths agree with the
 baselines they are timed against (each benchmark checks that before timing)."""
 
+import csv
+
 from benchmarks import bench_fe
 
 
@@ -114,3 +116,24 @@ def test_stream_benchmark_smoke():
                                         "whole (read_logger + cut_events)",
                                         "trigger alone (in memory)"]
     assert rows[0][-1] == rows[1][-1] == "3"
+
+
+def test_realsite_benchmark_smoke(small_site, capsys):
+    """The realistic-site benchmark weighs the session's small site as bwim weigh does and
+    prints its tables: the five weighings of the traffic date's lane-1 trucks, the
+    detection table with every column, the speed table (the thin-traffic table needs a
+    day of 15 trucks or more, and is left out)."""
+    from benchmarks import bench_realsite
+
+    d = bench_realsite.weigh_day(small_site.out_dir, 4)
+    assert list(d["results"]) == ["bwim", "time of day", "no drift", "Moses", "oracle"]
+    assert d["n_events"] == 4 and d["thin"] == {}
+    with open(small_site.out_dir / "reference.csv", newline="") as f:
+        lane1 = [r for r in csv.DictReader(f) if r["lane"] == "1"]
+    assert d["n_ref"] == len(lane1) >= 1
+    assert d["results"]["bwim"].n_reference == len(lane1)
+    bench_realsite.print_days([d])
+    out = capsys.readouterr().out
+    assert "Realistic site, seed 4" in out and "axle group off path" in out
+    assert "left out by speed" in out and "Speed of bwim weigh" in out
+    assert "A thin traffic date" not in out
