@@ -231,6 +231,11 @@ def _print_unconfirmed(check) -> None:
               "unconfirmed_gauge_fault)")
 
 
+def _lane_label(lane: int | None, direction: str) -> str:
+    """``"lane 1 +x"``: how the day-level lines name a lane."""
+    return f"lane {lane if lane is not None else '?'} {direction or ''}".rstrip()
+
+
 def _print_wander(check) -> None:
     """One line per lane whose lateral spread was measured, and how many it refused; one
     per lane with vehicles weighed but too few to measure it."""
@@ -240,7 +245,7 @@ def _print_wander(check) -> None:
         unit = " m" if w.unit == "m" else " (gauge index)"
         n = sum(1 for r in check.rows if "lateral_outlier" in r.flags and r.lane == w.lane
                 and r.direction == w.direction)
-        print(f"lane {w.lane if w.lane is not None else '?'} {w.direction or ''}".rstrip()
+        print(_lane_label(w.lane, w.direction)
               + f": lateral position {w.median:.2f}{unit} ± {w.sigma:.2f} over {w.n} "
               f"vehicle(s); {n} refused beyond {check.limit:g} σ (a vehicle beside it no "
               "detector saw)")
@@ -250,7 +255,7 @@ def _print_wander(check) -> None:
         if r.weighed and r.lateral is not None and (r.lane, r.direction) not in measured:
             thin[(r.lane, r.direction)] = thin.get((r.lane, r.direction), 0) + 1
     for (lane, direction), n in thin.items():
-        print(f"lane {lane if lane is not None else '?'} {direction or ''}".rstrip()
+        print(_lane_label(lane, direction)
               + f": {n} vehicle(s) weighed, too few for the day's lateral checks (they "
               f"need {MIN_VEHICLES}): a vehicle beside one that no detector saw is not "
               "refused; weigh the whole day together")
@@ -267,7 +272,7 @@ def _print_paths(check) -> None:
         n = sum(1 for r in check.rows if "group_off_path" in r.flags and r.lane == lane
                 and r.direction == direction)
         roles = ", ".join(f"{sp.role} {sp.median:+.2f} ± {sp.sigma:.2f}" for sp in spreads)
-        print(f"lane {lane if lane is not None else '?'} {direction or ''}".rstrip()
+        print(_lane_label(lane, direction)
               + f": axle groups against their vehicle's others ({u}): {roles}; {n} refused "
               f"beyond {check.limit:g} σ (an axle of a vehicle beside it)")
 
@@ -278,7 +283,7 @@ def _print_speeds(check) -> None:
     for r in check.dropped:
         lanes.setdefault((r.lane, r.direction), []).append(r)
     for (lane, direction), rows in lanes.items():
-        print(f"lane {lane if lane is not None else '?'} {direction or ''}".rstrip()
+        print(_lane_label(lane, direction)
               + f": {len(rows)} vehicle(s) left out, at speeds far from the lane's traffic "
               f"around them (beyond {check.limit:g} σ: traces of another vehicle)")
 

@@ -54,6 +54,7 @@ from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass
 from datetime import date, datetime
+from datetime import time as dtime
 
 import numpy as np
 
@@ -117,7 +118,8 @@ class DriftSetup:
                              f"{self.min_reference!r}")
 
 
-def seconds_of_day(t: datetime) -> float:
+def seconds_of_day(t: datetime | dtime) -> float:
+    """Seconds since midnight of a clock time (a datetime's, or a time of day)."""
     return t.hour * 3600.0 + t.minute * 60.0 + t.second + t.microsecond * 1e-6
 
 

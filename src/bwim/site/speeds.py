@@ -37,6 +37,7 @@ import numpy as np
 
 from bwim.detect.signals import robust_sigma
 from bwim.errors import InputError
+from bwim.site.drift import seconds_of_day
 from bwim.site.wander import MIN_VEHICLES
 from bwim.summary import SummaryRow
 
@@ -81,7 +82,7 @@ def _seconds(t: datetime | time) -> float:
     if isinstance(t, datetime):
         return t.timestamp() if t.tzinfo is not None else (
             t - datetime(1970, 1, 1)).total_seconds()
-    return t.hour * 3600.0 + t.minute * 60.0 + t.second + t.microsecond * 1e-6
+    return seconds_of_day(t)
 
 
 def _usable(row: SummaryRow) -> bool:

@@ -38,6 +38,7 @@ from datetime import time as dtime
 import numpy as np
 
 from bwim.errors import InputError
+from bwim.site.drift import seconds_of_day
 from bwim.summary import SummaryRow
 
 __all__ = ["CONFIRM", "FLAG_UNCONFIRMED", "NEIGHBOURS", "FaultCheck",
@@ -93,7 +94,7 @@ def _order_key(item: tuple[int, SummaryRow]) -> tuple:
     if isinstance(t, datetime):
         return (0, t.timestamp(), k)
     if isinstance(t, dtime):
-        return (0, t.hour * 3600 + t.minute * 60 + t.second + t.microsecond * 1e-6, k)
+        return (0, seconds_of_day(t), k)
     return (1, 0.0, k)
 
 
