@@ -55,7 +55,7 @@ from bwim.io import read_reference
 from bwim.records import Passage
 from bwim.scenario import build_site_setup, load_record, load_scenario
 from bwim.site import calibrate_site, correct_drift
-from bwim.synthetic import make_test_day
+from bwim.synthetic import SITE_DAYS_VERSION, make_test_day
 from bwim.synthetic.layout import SHORT_SPAN_4_LANE, Continuity
 from bwim.wim import calibrate_lines, group_axles, weigh
 
@@ -77,7 +77,7 @@ def cached_day(seed: int, n_traffic: int, side_spans: float | None) -> Path:
         return site_day(seed)  # bench_realsite's day
     cache = Path(os.environ.get("BWIM_BENCH_CACHE", tempfile.gettempdir()))
     tag = "" if side_spans is None else f"-c{side_spans:g}"
-    folder = cache / f"bwim-realsite-{seed}-{n_traffic}-{MESH}{tag}"
+    folder = cache / f"bwim-realsite-v{SITE_DAYS_VERSION}-{seed}-{n_traffic}-{MESH}{tag}"
     if not (folder / "scenario.toml").exists():
         shutil.rmtree(folder, ignore_errors=True)
         layout = SHORT_SPAN_4_LANE if side_spans is None else dataclasses.replace(

@@ -39,7 +39,7 @@ from bwim.io import read_reference
 from bwim.scenario import build_site_setup, load_record, load_scenario
 from bwim.site import calibrate_site, correct_drift
 from bwim.site.drift import apply_traffic_drift, traffic_drift
-from bwim.synthetic import make_test_day
+from bwim.synthetic import SITE_DAYS_VERSION, make_test_day
 
 SEED = 33
 METHODS = ("temperature", "traffic", "time_of_day", "none")
@@ -50,7 +50,7 @@ THINNING = (1, 3, 10, 30)
 def drift_day(seed: int = SEED, n_traffic: int = N_TRAFFIC) -> Path:
     """The day of ``seed`` with its temperature channel, generated once into the cache."""
     cache = Path(os.environ.get("BWIM_BENCH_CACHE", tempfile.gettempdir()))
-    folder = cache / f"bwim-driftsite-{seed}-{n_traffic}-{MESH}"
+    folder = cache / f"bwim-driftsite-v{SITE_DAYS_VERSION}-{seed}-{n_traffic}-{MESH}"
     if not (folder / "scenario.toml").exists():  # written last: the day is complete
         shutil.rmtree(folder, ignore_errors=True)
         make_test_day(folder, site="short-span-4-lane", seed=seed, n_traffic=n_traffic,

@@ -38,7 +38,7 @@ from benchmarks._timing import print_table
 from bwim.errors import InputError
 from bwim.scenario import build_site_setup, load_record, load_scenario
 from bwim.site import calibrate_site, weigh_event
-from bwim.synthetic import make_test_day
+from bwim.synthetic import SITE_DAYS_VERSION, make_test_day
 
 SEED = 41
 N_TRAFFIC = 80
@@ -71,7 +71,7 @@ FAULTS = {
 def site_day() -> Path:
     """The day of :data:`SEED`, generated once into the cache (also bench_declarations')."""
     cache = Path(os.environ.get("BWIM_BENCH_CACHE", tempfile.gettempdir()))
-    folder = cache / f"bwim-faults-{SEED}-{N_TRAFFIC}"
+    folder = cache / f"bwim-faults-v{SITE_DAYS_VERSION}-{SEED}-{N_TRAFFIC}"
     if not (folder / "scenario.toml").exists():  # written last: the day is complete
         shutil.rmtree(folder, ignore_errors=True)
         make_test_day(folder, site="short-span-4-lane", seed=SEED, n_traffic=N_TRAFFIC,

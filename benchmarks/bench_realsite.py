@@ -30,9 +30,12 @@ not weighed, and listed):
   weighing from one crossing.
 
 Also printed: the detection on the reference trucks (axle count, speed, spacings) and on
-the two-vehicle events (flagged or refused, never weighed as one; and those with a weight
-written more than 15 % off its truck's, or two trucks weighed as one, flagged or not: what
-must not happen), the vehicles refused as outliers of their lane's lateral spread
+the two-vehicle events (two vehicles on the span at once: flagged or refused, never
+weighed as one; and those with a weight written more than 15 % off its truck's, or two
+trucks weighed as one, flagged or not: what must not happen), the files of two lane-1
+trucks one behind the other, never on the span together (each truck should be weighed as
+itself: those weighed within 15 % of their own, and the rows weighed wrong), the vehicles
+refused as outliers of their lane's lateral spread
 (``lateral_outlier``, :mod:`bwim.site.wander`: those of two-vehicle events, and those
 alone, which it should not refuse), those refused for an axle group off their wheel path
 (``group_off_path``, :mod:`bwim.site.wheelpath`, counted the same way), the vehicles of
@@ -87,7 +90,7 @@ from bwim.scenario import build_site_setup, load_record, load_scenario, record_r
 from bwim.site import calibrate_site, finish_day
 from bwim.site.drift import DriftSetup, apply_traffic_drift, corrected, traffic_drift
 from bwim.summary import SummaryRow
-from bwim.synthetic import make_test_day
+from bwim.synthetic import SITE_DAYS_VERSION, make_test_day
 from bwim.synthetic.layout import SHORT_SPAN_4_LANE
 from bwim.wim import weigh
 
@@ -109,7 +112,7 @@ def _floats(text: str) -> np.ndarray:
 def site_day(seed: int) -> Path:
     """The day of ``seed``, generated once into the cache."""
     cache = Path(os.environ.get("BWIM_BENCH_CACHE", tempfile.gettempdir()))
-    folder = cache / f"bwim-realsite-{seed}-{N_TRAFFIC}-{MESH}"
+    folder = cache / f"bwim-realsite-v{SITE_DAYS_VERSION}-{seed}-{N_TRAFFIC}-{MESH}"
     if not (folder / "scenario.toml").exists():  # written last: the day is complete
         shutil.rmtree(folder, ignore_errors=True)
         make_test_day(folder, site="short-span-4-lane", seed=seed, n_traffic=N_TRAFFIC,
@@ -224,13 +227,15 @@ def weigh_day(day: Path, seed: int, support_lobes: bool | None = None) -> dict:
                                                    - np.array(ref.axle_spacings)))))
     speed = float(np.percentile(speed_err, 95)) if speed_err else float("nan")
     spacing = float(np.percentile(spacing_err, 95)) if spacing_err else float("nan")
-    multi = [name for name, t in truth.items() if len(t) > 1 and t[0]["kind"] != "calibration"]
+    multi = [name for name, t in truth.items() if int(t[0]["n_vehicles"]) > 1
+             and t[0]["kind"] != "calibration"]
     flagged = sum(1 for name in multi
                   if all(not r.weighed or "multiple_presence" in r.flags
                          for r in by_record.get(name, [])))
     counted = _other_direction(default, truth)
     wrong = sum(1 for name in multi if any(_wrong(r, truth[name])
                                            for r in by_record.get(name, [])))
+    following = _following(by_record, truth)
     outliers = [r for r in default if "lateral_outlier" in r.flags]
     outliers_alone = sum(1 for r in outliers if len(truth[r.record]) == 1)
     off_path = [r for r in default if "group_off_path" in r.flags]
@@ -249,6 +254,7 @@ def weigh_day(day: Path, seed: int, support_lobes: bool | None = None) -> dict:
             "n_lane3": len(reference) - len(lane1), "count": count, "speed": speed,
             "spacing": spacing, "refused_disagree": n_refused,
             "multi": (flagged, len(multi)), "wrong": wrong, "counted": counted,
+            "following": following,
             "outliers": (len(outliers) - outliers_alone, outliers_alone),
             "off_path": (len(off_path) - off_path_alone, off_path_alone),
             "traces": traces,
@@ -318,6 +324,32 @@ def _wrong(row: SummaryRow, truth: list[dict]) -> bool:
     if len(same) != 1:
         return True
     return abs(row.gvw / (float(same[0]["gvw_kN"]) * 1e3) - 1.0) > WRONG
+
+
+def _following(by_record: dict[str, list[SummaryRow]], truth: dict[str, list[dict]]
+               ) -> tuple[int, int, int, int]:
+    """The traffic date's files with two lane-1 trucks one behind the other, never on the
+    span together: (trucks weighed within :data:`WRONG` of their own, trucks, rows
+    weighed wrong, files).  A row is matched to the truck nearest its clock time; a
+    weighed row is wrong when it is not that truck's weight within ``WRONG`` or its axle
+    count is not that truck's (two trucks weighed as one)."""
+    good = trucks = wrong = files = 0
+    for name, t in truth.items():
+        if (t[0]["kind"] != "traffic" or t[0]["configuration"] != "following"
+                or int(t[0]["n_vehicles"]) > 1 or not all(v["lane"] == "1" for v in t)):
+            continue
+        files += 1
+        trucks += len(t)
+        when = [datetime.fromisoformat(v["time"]) for v in t]
+        for r in by_record.get(name, []):
+            if not r.weighed or r.time is None:
+                continue
+            v = t[int(np.argmin([abs((r.time - w).total_seconds()) for w in when]))]
+            ok = (r.n_axles == int(v["n_axles"])
+                  and abs(r.gvw / (float(v["gvw_kN"]) * 1e3) - 1.0) <= WRONG)
+            good += ok
+            wrong += not ok
+    return good, trucks, wrong, files
 
 
 def _true_vehicle(row: SummaryRow, truth: list[dict]) -> bool:
@@ -393,6 +425,7 @@ def print_days(days: list[dict], what: str = "") -> None:
                 ["seed", "axle count right", "refused: detectors disagree",
                  "speed error p95", "spacing error p95", "two-vehicle events flagged",
                  "two-vehicle events weighed > 15 % off",
+                 "following trucks in one file: weighed right / trucks (rows wrong)",
                  "lateral outliers: two vehicles / one alone",
                  "axle group off path: two vehicles / one alone",
                  "other way: counted / true / phantom",
@@ -401,7 +434,9 @@ def print_days(days: list[dict], what: str = "") -> None:
                 [[d["seed"], f"{d['count']}/{d['n_ref']} (all)", f"{d['refused_disagree']} (0)",
                   f"{d['speed']:.2f} % (< 0.5)", f"{d['spacing']:.3f} m (< 0.1)",
                   f"{d['multi'][0]}/{d['multi'][1]} (≥ 95 %)",
-                  f"{d['wrong']} (0)", f"{d['outliers'][0]} / {d['outliers'][1]}",
+                  f"{d['wrong']} (0)",
+                  "{}/{} ({})".format(*d["following"][:3]),
+                  f"{d['outliers'][0]} / {d['outliers'][1]}",
                   f"{d['off_path'][0]} / {d['off_path'][1]}",
                   "{} / {} / {}".format(*d["counted"]),
                   "{} / {} / {}".format(*d["traces"]),

@@ -10,8 +10,12 @@ Contract
   - a vehicle that shares the span with another vehicle travelling its way (side by side
     or following) is refused (``multiple_presence``): one record cannot tell their weights
     apart with lines of one vehicle;
-  - any other vehicle's gauges are judged first (:func:`bwim.site.health.check_gauges`,
-    also for a vehicle weighed by MFI, below): a dead, stuck, reversed or gain-changed
+  - for any other vehicle, the vehicles that cross before or after it without sharing
+    the span (a truck following it in its lane, one that crossed the other way before
+    it) are cut off the record it is judged and weighed on
+    (:func:`bwim.site.isolate.own_part`);
+  - its gauges are judged first (:func:`bwim.site.health.check_gauges`, also for a
+    vehicle weighed by MFI, below): a dead, stuck, reversed or gain-changed
     gauge is left out and named (``gauge_fault:NAME``, quality ``warning``); too few
     healthy gauges refuse it, and so does a gauge that disagrees while a vehicle of the
     other direction is on the span;
@@ -77,6 +81,7 @@ from bwim.site.calibrate import (
     temperature_channel,
 )
 from bwim.site.health import check_gauges
+from bwim.site.isolate import own_part
 from bwim.site.lanes import EventDetection, LaneVehicle, detect_lanes
 from bwim.site.model import SiteModel
 from bwim.site.wheelpath import gauge_line, group_laterals
@@ -390,6 +395,9 @@ def _vehicle(record: Record, ev: EventDetection, k: int, calibration: SiteCalibr
     if FLAG_TRUNCATED in flags:
         return refused("the record starts or ends while the vehicle is on the bridge "
                        "(truncated): its weights cannot be whole")
+    # the vehicles that cross before or after it are cut off (bwim.site.isolate)
+    record = own_part(record, lv.window,
+                      [w.window for j, w in enumerate(ev.vehicles) if j != k])
     try:
         factor, method, drift_flags = _drift_factor(record, v.passage, calibration)
     except InputError as exc:

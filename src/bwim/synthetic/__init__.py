@@ -25,7 +25,13 @@ from bwim.synthetic.layout import (
     SiteLayout,
 )
 from bwim.synthetic.site import Drift, site_bridge
-from bwim.synthetic.sitedays import SiteDays, SiteEvent, VehicleRun, make_site_days
+from bwim.synthetic.sitedays import (
+    SITE_DAYS_VERSION,
+    SiteDays,
+    SiteEvent,
+    VehicleRun,
+    make_site_days,
+)
 from bwim.synthetic.testday import (
     COLUMNS,
     SITE_NAMES,
@@ -42,6 +48,7 @@ __all__ = [
     "COLUMNS",
     "FLEET_KINDS",
     "SHORT_SPAN_4_LANE",
+    "SITE_DAYS_VERSION",
     "SITE_NAMES",
     "TRUCK_KINDS",
     "AxleDetector",

@@ -18,7 +18,10 @@ writes what its logger would have recorded, plus the ground truth, into a new fo
     in the lanes' shares (:attr:`~bwim.synthetic.layout.Lane.heavy_share`) at 18–27 m/s.
     ``n_multiple`` events of each day have a second vehicle on the bridge: in the other
     direction (half of them; 4–7 axles), side by side in the other lane of the same
-    direction (30 %) or following in the same lane 3–7 m behind (20 %).
+    direction (30 %) or following in the same lane at its speed (20 %), a time gap of
+    :data:`FOLLOWING_GAP` between the bodies, in the first one's file (on a span shorter
+    than that gap, as the default layout's, never on the bridge with it: ``n_vehicles``
+    of ``truth.csv`` counts the vehicles on the bridge at once).
 ``scenario.toml``
     ``[bridge]`` the starting model an engineer would declare (the measured geometry,
     nominal concrete: :data:`NOMINAL_MODULUS`, :data:`NOMINAL_DENSITY`; elements of about
@@ -109,8 +112,13 @@ from bwim.synthetic.outfolder import checked_count, joined, prepare_folder
 from bwim.synthetic.thermal import ThermalDrift, draw_days
 from bwim.synthetic.traffic import calibration_truck
 
-__all__ = ["CALIBRATION_TYRES", "SiteDays", "SiteEvent", "VehicleRun", "make_site_days",
-           "nominal_bridge"]
+__all__ = ["CALIBRATION_TYRES", "SITE_DAYS_VERSION", "SiteDays", "SiteEvent", "VehicleRun",
+           "make_site_days", "nominal_bridge"]
+
+#: Raised whenever the same arguments simulate other files, so that a folder cached under
+#: an older version is not taken for this one's (2: following vehicles at the time gaps
+#: traffic keeps, instead of 3-7 m behind).
+SITE_DAYS_VERSION = 2
 
 PRE_TRIGGER = 154  #: samples before the first axle enters the bridge (0.30 s at 512 Hz)
 POST_TRIGGER = 0.2  #: s after the last axle leaves
@@ -133,6 +141,12 @@ TRAFFIC_WINDOW = (6 * 3600.0, 20 * 3600.0)  #: s, clock window of the traffic da
 MIN_GAP = 12.0  #: s between event starts on one date
 REDRAWS = 10  #: attempts at a road on which no tyre loses contact
 CONFIG_SHARE = (("opposite", 0.5), ("side_by_side", 0.3), ("following", 0.2))
+#: s, uniform: the time gap between a following vehicle's front and the vehicle ahead's
+#: rear at their common speed: up to the two seconds trucks are asked to keep in
+#: free-flowing traffic, and closer (docs/realistic_site.md, "Other traffic")
+FOLLOWING_GAP = (0.6, 2.0)
+FRONT_OVERHANG = 1.4  #: m, a vehicle's front from its first axle (docs/realistic_site.md)
+REAR_OVERHANG = 2.5  #: m, a vehicle's rear from its last axle (docs/realistic_site.md)
 #: The scenario's [bridge]: the starting model a user would declare (measured geometry,
 #: nominal concrete), coarser than the simulation's mesh (no inverse crime).
 MODEL_MESH = 0.75  #: m
@@ -593,13 +607,15 @@ def _plan(ss, layout, n_cal, n_traffic, n_cdt, n_multiple, cal_truck, fs, roughn
 
 def _second(layout, first: _Vehicle, config: str, r, step: float, *,
             lane: int = 0) -> _Vehicle | None:
-    """The other vehicle of a multiple-presence event, on the bridge with the first (in
-    ``lane`` when given)."""
+    """The other vehicle of a multiple-vehicle event (in ``lane`` when given): on the
+    bridge with the first, or following it in its lane at its speed (module
+    docstring)."""
     d_first = _on_time(layout, first.tv.vehicle, first.speed)
     if config == "following":
         tv = traffic_vehicle(draw_kind(r), r)
-        gap = float(r.uniform(3.0, 7.0))
-        rel = (float(first.tv.vehicle.length) + gap) / first.speed
+        gap = float(r.uniform(*FOLLOWING_GAP)) * first.speed  # bumper to bumper, m
+        rel = (float(first.tv.vehicle.length) + REAR_OVERHANG + gap + FRONT_OVERHANG) \
+            / first.speed
         lane, speed = first.lane, first.speed
     else:
         lane = lane or _other_lane(layout, first.lane, same_direction=config == "side_by_side",

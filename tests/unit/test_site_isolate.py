@@ -1,0 +1,83 @@
+"""bwim.site.isolate: the part of a record a vehicle has to itself.
+
+References: the cut times are closed forms of the windows (halfway through each quiet
+gap); the readings of a strain whose influence has compact support (a triangle of ±3 m
+about the gauges) are exactly zero before a vehicle's first axle reaches x = -3 m, so the
+part cut around the first of two vehicles holds exactly the first one's readings."""
+
+from __future__ import annotations
+
+import datetime as dt
+
+import numpy as np
+import pytest
+
+import bwim
+from bwim.records import Passage
+from bwim.site.isolate import own_part
+
+FS = 512.0
+HALF_SPAN = 3.0
+
+
+def _record(passages: list[Passage], *, duration: float = 4.0,
+            clock: dt.datetime | None = None) -> bwim.Record:
+    """Two gauges at x = 0 reading the sum over axles of a 10 kN-per-axle triangle."""
+    t = np.arange(0.0, duration, 1.0 / FS)
+    total = np.zeros_like(t)
+    for p in passages:
+        x = p.speed * (t[:, None] - p.delay) - p.axle_offsets[None, :]
+        total += np.clip(1.0 - np.abs(x) / HALF_SPAN, 0.0, None).sum(axis=1) * 10e3
+    data = np.column_stack([total, 0.5 * total])
+    sensors = (bwim.Sensor(x=0.0, y=4.0, name="g1"), bwim.Sensor(x=0.0, y=5.0, name="g2"))
+    return bwim.Record(time=t, data=data, sensors=sensors, clock=clock)
+
+
+def _window(p: Passage) -> tuple[float, float]:
+    """Record times at which the first axle enters and the last leaves x in (-3, 3)."""
+    return (p.delay - HALF_SPAN / p.speed,
+            p.delay + (p.axle_offsets[-1] + HALF_SPAN) / p.speed)
+
+
+def test_the_cuts_are_halfway_through_the_quiet_gaps():
+    rec = _record([])
+    part = own_part(rec, (1.0, 2.0), [(0.2, 0.6), (0.0, 0.4), (2.5, 3.1), (3.0, 3.5)])
+    # the latest window before ends at 0.6 s, the earliest after starts at 2.5 s
+    assert part.time[0] == pytest.approx(0.8, abs=1.0 / FS)
+    assert part.time[-1] == pytest.approx(2.25, abs=1.0 / FS)
+    assert part.time[0] >= 0.8 and part.time[-1] <= 2.25
+    # the time values are kept (not restarted at 0)
+    k = int(np.searchsorted(rec.time, part.time[0]))
+    np.testing.assert_array_equal(part.time, rec.time[k:k + part.time.size])
+    np.testing.assert_array_equal(part.data, rec.data[k:k + part.time.size])
+
+
+def test_nothing_to_cut_gives_the_record_itself():
+    rec = _record([])
+    assert own_part(rec, None, [(0.0, 0.5)]) is rec
+    assert own_part(rec, (1.0, 2.0), []) is rec
+    assert own_part(rec, (1.0, 2.0), [None]) is rec
+    # a window that overlaps (a vehicle on the span with it) does not cut
+    assert own_part(rec, (1.0, 2.0), [(1.5, 2.6), (0.4, 1.2)]) is rec
+
+
+def test_a_following_vehicle_is_cut_off_exactly():
+    clock = dt.datetime(2015, 10, 1, 9, 45, 52, 576000)
+    first = Passage(speed=20.0, axle_spacings=[3.5, 6.0, 1.3, 1.3], delay=0.4)
+    gap = 12.0 + 2.5 + 1.4  # m between the first's last axle and the second's first
+    second = Passage(speed=20.0, axle_spacings=[4.0],
+                     delay=first.delay + (first.axle_offsets[-1] + gap) / 20.0)
+    both = _record([first, second], clock=clock)
+    alone = _record([first], clock=clock)
+    part = own_part(both, _window(first), [_window(second)])
+    assert part.time[-1] < both.time[-1] - 0.5  # the second's time on the span is gone
+    assert part.clock == clock
+    # the second's readings are exactly zero in the part: it holds the first's alone
+    k = int(np.searchsorted(both.time, part.time[0]))
+    np.testing.assert_array_equal(part.data, alone.data[k:k + part.time.size])
+    # and the first's own readings are whole: they are zero where the part ends
+    assert np.all(part.data[-10:] == 0.0)
+    assert np.any(part.data > 0.0)
+    # cut around the second, the first is cut off as well (the gap's other half)
+    rest = own_part(both, _window(second), [_window(first)])
+    assert rest.time[0] == pytest.approx(part.time[-1], abs=1.5 / FS)
