@@ -13,8 +13,10 @@ import numpy as np
 import pytest
 
 import bwim
+from bwim.detect import VehicleDetection
 from bwim.records import Passage
-from bwim.site.isolate import own_part
+from bwim.site.isolate import detected_alone, own_part
+from bwim.site.lanes import EventDetection, LaneVehicle
 
 FS = 512.0
 HALF_SPAN = 3.0
@@ -81,3 +83,43 @@ def test_a_following_vehicle_is_cut_off_exactly():
     # cut around the second, the first is cut off as well (the gap's other half)
     rest = own_part(both, _window(second), [_window(first)])
     assert rest.time[0] == pytest.approx(part.time[-1], abs=1.5 / FS)
+
+
+def _lane_vehicle(n_axles: int, window: tuple[float, float], *, pair: int = 1,
+                  direction: str = "+x") -> LaneVehicle:
+    p = Passage(speed=20.0, axle_spacings=[1.5] * (n_axles - 1))
+    return LaneVehicle(vehicle=VehicleDetection(passage=p, confidence=0.9, window=window),
+                       lane=pair, direction=direction, pair=pair, window=window)
+
+
+def test_vehicles_one_after_the_other_are_detected_again_each_on_its_part():
+    """Algebra of the replacement (the detection is a stand-in that records the parts it
+    is given; the effect on real detections: tests/validation/test_realistic_lanes.py)."""
+    rec = _record([])
+    first, second = _lane_vehicle(5, (0.5, 1.2)), _lane_vehicle(2, (2.0, 2.5))
+    other_way = _lane_vehicle(4, (0.8, 1.5), pair=3, direction="-x")
+    event = EventDetection(vehicles=(first, other_way, second), by_lane={})
+    seen = []
+
+    def detect(part):
+        seen.append((float(part.time[0]), float(part.time[-1])))
+        if part.time[-1] < 1.9:  # the first's part: found again with 6 axles (and the
+            # vehicle the other way, in another pair)
+            return EventDetection(vehicles=(_lane_vehicle(6, (0.51, 1.2)),
+                                            _lane_vehicle(4, (0.8, 1.5), pair=3)),
+                                  by_lane={})
+        return EventDetection(vehicles=(), by_lane={})  # the second's: nothing found
+
+    out = detected_alone(rec, event, detect)
+    # the first's part ends halfway between its end (1.2) and the second's start (2.0),
+    # the vehicle the other way on the span with it does not cut; the second's starts
+    # halfway between the latest end before it (1.5, the other way's) and 2.0
+    assert seen == [pytest.approx((0.0, 1.6), abs=1.0 / FS),
+                    pytest.approx((1.75, rec.time[-1]), abs=1.0 / FS)]
+    assert [v.vehicle.n_axles for v in out.vehicles] == [6, 4, 2]
+    assert out.vehicles[1] is other_way and out.vehicles[2] is second
+    assert "5-axle vehicle detected again" in out.message
+    # vehicles that share the span, or are in other pairs, are not detected again
+    alone = EventDetection(vehicles=(first, other_way), by_lane={})
+    assert detected_alone(rec, alone, detect).vehicles == alone.vehicles
+    assert len(seen) == 2

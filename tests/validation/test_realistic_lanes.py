@@ -16,6 +16,9 @@
 6. Two lane-1 trucks in one file, the second following the first at a time gap the
    traffic keeps (never on the span together): each is weighed as its own truck
    (bwim.site.isolate cuts the other off the record each is weighed on).
+7. A light lane-1 truck's file joined to a heavy one's (before or after it): each
+   truck's axles are counted as in its own file (bwim.site.isolate detects each again
+   on its own part of the record).
 
 Data: the realistic site (:mod:`bwim.synthetic`, ``short-span-4-lane``, data mesh 0.5 m,
 gauge noise, drift, WIM-grade roads, docs/realistic_site.md), seed 5, 60 traffic events
@@ -267,3 +270,47 @@ def test_a_following_truck_in_the_same_file_is_cut_off_and_each_truck_weighed(da
         when = dt.datetime.fromisoformat(v["time"]) - dt.timedelta(
             seconds=1.5 / float(v["speed_m_s"]))
         assert abs((r.time - when).total_seconds()) < 0.005
+
+
+def _joined(a, b):
+    """Record ``b`` appended to record ``a`` (one sample step after a's end), each of b's
+    channels moved by its first samples' level less a's last samples' level (one offset
+    per channel, as one file has)."""
+    step = a.time[1] - a.time[0]
+    t = np.concatenate([a.time, a.time[-1] + step + b.time - b.time[0]])
+    d = np.concatenate([a.data, b.data - b.data[:50].mean(axis=0) + a.data[-50:].mean(axis=0)])
+    return dataclasses.replace(a, time=t, data=d)
+
+
+def test_a_light_truck_in_a_heavy_trucks_file_keeps_its_axles(day):
+    """The day's 4 heaviest and 4 lightest lane-1 trucks alone (341-390 kN and 134-166
+    kN), each light truck's file joined after and before each heavy truck's (32 files,
+    0.5 s of quiet between them).  A detection judges axles against the record's
+    strongest, so in the joined file the light truck's lightest axles were lost: 6 of
+    the 32 files gave a wrong axle count.  Each vehicle detected again on its own part of
+    the record (bwim.site.isolate.detected_alone): measured 31 of 32 files with both
+    counts right; the other is one 8-axle vehicle cut in two by its length, both parts
+    refused (multiple presence).  No file gives a weighed vehicle a wrong axle count.
+    (The weights are not compared: the two files were recorded hours apart and carry
+    different drift factors.)"""
+    d, scenario, site, truth = day
+    alone = sorted(((n, t[0]) for n, t in truth.items() if len(t) == 1
+                    and t[0]["kind"] == "traffic" and t[0]["lane"] == "1"),
+                   key=lambda x: float(x[1]["gvw_kN"]))
+    light, heavy = alone[:4], alone[-4:]
+    assert all(float(t["gvw_kN"]) < 170 for _, t in light)
+    assert all(float(t["gvw_kN"]) > 340 for _, t in heavy)
+    right = 0
+    for hn, ht in heavy:
+        for ln, lt in light:
+            h = load_record(d.out_dir / "traffic" / hn, scenario)
+            li = load_record(d.out_dir / "traffic" / ln, scenario)
+            for first, second in (((h, ht), (li, lt)), ((li, lt), (h, ht))):
+                ev = weigh_event(_joined(first[0], second[0]), site)
+                got = [v for v in ev.vehicles if v.lane == 1]
+                want = [int(first[1]["n_axles"]), int(second[1]["n_axles"])]
+                right += [v.vehicle.n_axles for v in got] == want
+                for v in got:  # a weighed vehicle has one of the two trucks' counts
+                    assert not v.weighed or v.vehicle.n_axles in want, (hn, ln)
+                assert sum(v.weighed for v in got) <= 2
+    assert right >= 31

@@ -3,7 +3,9 @@
 Contract
 --------
 * :func:`weigh_event` finds every vehicle of the record in every lane
-  (:func:`bwim.site.lanes.detect_lanes`) and decides, vehicle by vehicle:
+  (:func:`bwim.site.lanes.detect_lanes`; vehicles a pair found one after the other,
+  never on the span together, each detected again on its own part of the record:
+  :func:`bwim.site.isolate.detected_alone`) and decides, vehicle by vehicle:
 
   - a vehicle travelling the other way than the calibration truck is **counted, not
     weighed** (no lines were calibrated for that direction): refused with that reason;
@@ -81,7 +83,7 @@ from bwim.site.calibrate import (
     temperature_channel,
 )
 from bwim.site.health import check_gauges
-from bwim.site.isolate import own_part
+from bwim.site.isolate import detected_alone, own_part
 from bwim.site.lanes import EventDetection, LaneVehicle, detect_lanes
 from bwim.site.model import SiteModel
 from bwim.site.wheelpath import gauge_line, group_laterals
@@ -319,9 +321,12 @@ def weigh_event(record: Record, calibration: SiteCalibration, *,
     span = lines.core_support or lines.support  # a lobe beyond the zeros may be cut
     try:
         if setup.lanes:
-            ev = detect_lanes(record, setup, responses=calibration.responses,
-                              span=span, gauges=gauge_names(record),
-                              bending=calibration.bending)
+            def detect(rec: Record) -> EventDetection:
+                return detect_lanes(rec, setup, responses=calibration.responses, span=span,
+                                    gauges=gauge_names(rec), bending=calibration.bending)
+
+            # vehicles one after the other, each detected again on its own part
+            ev = detected_alone(record, detect(record), detect)
         else:
             det = detect_from_strain(record, lines.line_at(), span=span,
                                      gauges=gauge_names(record))

@@ -19,17 +19,28 @@ Contract
 * The part keeps the record's time values (so its clock, sensors and every time the
   detection gave stay valid) and drops the passages and truths of a simulated record.
   A window of None or a record with nothing to cut gives the record itself.
+* :func:`detected_alone` applies it to detection: an event whose detector pair found
+  vehicles that cross one after the other (never on the span together) has each of
+  them detected again on its own part of the record (``detect``, the event's own
+  detection called on the part), and the vehicle that detection finds in the same pair
+  over the same window replaces it.  Why: a detection judges an axle against the
+  record's strongest (the matching pursuit stops when the next axle lowers the misfit
+  by less than a share of the strongest axle's fall), so a light truck's steering axle
+  is lost beside a heavy truck in the same file that it never shares the span with.
+  On its own part it is judged as in its own file.  A vehicle the part's detection does
+  not find once, in the same pair over an overlapping window, is kept as first found.
 * Units: s.
 """
 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 
 from bwim.records import Record
+from bwim.site.lanes import EventDetection
 
-__all__ = ["own_part"]
+__all__ = ["detected_alone", "own_part"]
 
 
 def own_part(record: Record, window: tuple[float, float] | None,
@@ -53,3 +64,38 @@ def own_part(record: Record, window: tuple[float, float] | None,
     keep = (t >= lo) & (t <= hi)
     return dataclasses.replace(record, time=t[keep], data=record.data[keep], passages=(),
                                truths=())
+
+
+def _apart(a: tuple[float, float] | None, b: tuple[float, float] | None) -> bool:
+    """Whether two windows are both known and do not overlap."""
+    return a is not None and b is not None and (a[1] <= b[0] or b[1] <= a[0])
+
+
+def _overlap(a: tuple[float, float] | None, b: tuple[float, float] | None) -> bool:
+    return a is not None and b is not None and a[0] < b[1] and b[0] < a[1]
+
+
+def detected_alone(record: Record, event: EventDetection,
+                   detect: Callable[[Record], EventDetection]) -> EventDetection:
+    """``event`` with each vehicle that its detector pair found beside another it never
+    shares the span with detected again on its own part of ``record`` (module
+    docstring)."""
+    vehicles = list(event.vehicles)
+    notes = [event.message] if event.message else []
+    for k, lv in enumerate(event.vehicles):
+        if not any(j != k and w.pair == lv.pair and _apart(w.window, lv.window)
+                   for j, w in enumerate(event.vehicles)):
+            continue
+        part = own_part(record, lv.window,
+                        [w.window for j, w in enumerate(event.vehicles) if j != k])
+        if part is record:
+            continue
+        again = [w for w in detect(part).vehicles
+                 if w.pair == lv.pair and _overlap(w.window, lv.window)]
+        if len(again) == 1:
+            vehicles[k] = again[0]
+            if again[0].vehicle.n_axles != lv.vehicle.n_axles:
+                notes.append(f"lane {lv.pair}: a {lv.vehicle.n_axles}-axle vehicle detected "
+                             f"again on its own part of the record: {again[0].vehicle.n_axles}"
+                             " axles")
+    return dataclasses.replace(event, vehicles=tuple(vehicles), message="; ".join(notes))
