@@ -19,7 +19,11 @@ Contract
      and no other vehicle is on the span at the same time in any lane (then it is
      rejected with that reason: "another vehicle on the bridge: lane 3, −x, 5 axles"); a
      used run keeps its detected speed, arrival and lateral position with the truck's
-     spacings.  Gauge activity that no detected vehicle explains next to the truck (a
+     spacings.  A vehicle that crosses before or after the truck without sharing the
+     span with it (also in the truck's lane: the truck is then the one vehicle of its
+     layout) does not reject the run: the run is cut to the truck's own part of the
+     record (:func:`bwim.site.isolate.own_part`), and every later step uses that part.
+     Gauge activity that no detected vehicle explains next to the truck (a
      vehicle in a lane without detectors) rejects the run too.  The span is the lines'
      support, so this takes passes: first the runs with no other vehicle in the record
      at all give provisional lines, then every run is judged with their support; when
@@ -105,7 +109,8 @@ from bwim.records import Passage, Record
 from bwim.site.bending import DetectorBending, learn_bending
 from bwim.site.drift import TemperatureDrift, TimeOfDayDrift, seconds_of_day
 from bwim.site.health import FLAT_NOISE, GAIN_TOLERANCE, check_gauges
-from bwim.site.lanes import EventDetection, detect_lanes
+from bwim.site.isolate import own_part
+from bwim.site.lanes import EventDetection, LaneVehicle, detect_lanes
 from bwim.site.setup import SiteSetup
 from bwim.wim import MultiRunCalibration, Weighing, calibrate_lines, weigh
 from bwim.wim.influence_line import read_channels
@@ -273,10 +278,14 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
         # with another vehicle on the detectors smears the learned shapes and every
         # speed found with them), and the runs detected again with them
         if 2 <= len(kept) < len(records) and responses:
-            responses = _responses(records, setup, [], learn_from=kept) or responses
+            responses = _responses(_own_parts(records, events, setup, kept), setup, [],
+                                   learn_from=kept) or responses
             events = [detect_lanes(rec, setup, responses=responses, span=span,
                                    gauges=gauge_names(rec)) for rec in records]
             reasons, passages, kept = _without(flat, *_truck_runs(events, setup))
+        # from here on each run used is its truck's own part of the record: a vehicle
+        # before or after it in the file is cut off
+        records = _own_parts(records, events, setup, kept)
     lane_detections = [e.by_lane.get(setup.calibration_lane, Detection()) for e in events]
     cal = _site_calibration(records, setup, lane_detections, reasons, passages, kept)
     faulty = _faulty_gauge_runs(records, setup, cal, passages, kept)
@@ -610,19 +619,41 @@ def _bending(records: Sequence[Record], setup: SiteSetup, kept: Sequence[int]
 
 
 # --- 3. runs -------------------------------------------------------------------------------
+def _truck(ev: EventDetection, setup: SiteSetup, strict: bool = False) -> LaneVehicle | None:
+    """The calibration truck of a run: the one vehicle of the calibration lane, or, when
+    the lane holds more (not ``strict``), the one of them with the truck's axle count and
+    spacings (within :data:`SPACING_TOLERANCE`) that never shares the span with another
+    of them (a vehicle before or after it in the file); None otherwise."""
+    lane = setup.calibration_lane or 1
+    own = [v for v in ev.vehicles if v.pair == lane and v.lane == lane]
+    if len(own) == 1:
+        return own[0]
+    if strict:
+        return None
+    like = [v for v in own if v.vehicle.n_axles == setup.calibration_loads.size
+            and np.max(np.abs(v.vehicle.passage.axle_spacings - setup.calibration_spacings),
+                       initial=0.0) <= SPACING_TOLERANCE]
+    if len(like) != 1 or like[0].window is None:
+        return None
+    t = like[0]
+    apart = all(w.window is not None and (w.window[1] <= t.window[0] or t.window[1] <= w.window[0])
+                for w in own if w is not t)
+    return t if apart else None
+
+
 def _run_reason(ev: EventDetection, setup: SiteSetup, strict: bool = False) -> str:
     """Why a calibration run's detection cannot be used ("" if it can); ``strict``: any
     other vehicle in the record is one too many (the span is not known yet)."""
     lane = setup.calibration_lane or 1
     own = [v for v in ev.vehicles if v.pair == lane and v.lane == lane]
-    others = [v for v in ev.vehicles if v not in own]
     if not own:
         det = ev.by_lane.get(lane)
         why = det.message if det is not None and det.message else ev.message or "no axles"
         return f"no vehicle detected ({why})"
-    if len(own) > 1:
+    truck = _truck(ev, setup, strict)
+    if truck is None:
         return f"{len(own)} vehicles detected in lane {lane}, not one calibration truck"
-    truck = own[0]
+    others = [v for v in ev.vehicles if v is not truck]
     busy = others if strict else [
         w for w in others if w.window is not None and truck.window is not None
         and w.window[0] < truck.window[1] and truck.window[0] < w.window[1]]
@@ -643,6 +674,18 @@ def _run_reason(ev: EventDetection, setup: SiteSetup, strict: bool = False) -> s
     return ""
 
 
+def _own_parts(records: Sequence[Record], events: Sequence[EventDetection],
+               setup: SiteSetup, kept: Sequence[int]) -> list[Record]:
+    """``records`` with each run of ``kept`` cut to its truck's own part
+    (:func:`bwim.site.isolate.own_part`: the vehicles before or after it cut off)."""
+    out = list(records)
+    for k in kept:
+        truck = _truck(events[k], setup)
+        out[k] = own_part(records[k], truck.window,
+                          [w.window for w in events[k].vehicles if w is not truck])
+    return out
+
+
 def _truck_runs(events: Sequence[EventDetection], setup: SiteSetup, strict: bool = False):
     """Reasons and passages of the runs: the truck's layout is known exactly, so a usable
     run keeps its detected speed, arrival and lateral position with the truck's
@@ -652,8 +695,7 @@ def _truck_runs(events: Sequence[EventDetection], setup: SiteSetup, strict: bool
         reason = _run_reason(ev, setup, strict)
         reasons.append(reason)
         if not reason:
-            v = next(w for w in ev.vehicles if w.pair == (setup.calibration_lane or 1)).vehicle
-            p = v.passage
+            p = _truck(ev, setup, strict).vehicle.passage
             passages.append(Passage(speed=p.speed, lane=p.lane, delay=p.delay,
                                     axle_spacings=setup.calibration_spacings,
                                     track_width=p.track_width))
