@@ -70,6 +70,7 @@ from scipy.ndimage import maximum_filter1d
 from .assemble import VehicleEstimate
 from .groups import choose_groups
 from .response import LearnedResponses, band_pass, xcorr_lag
+from .signals import median
 from .vehicle_fit import (
     MIN_RATIO_BOUND,
     RATIO_SPREADS,
@@ -184,7 +185,7 @@ def pursue_axles(record_time: np.ndarray, y: np.ndarray, learned: LearnedRespons
     their times.  Returns the vehicles' estimates (empty when no axle stands out)."""
     t = np.asarray(record_time, dtype=float)
     y = np.asarray(y, dtype=float)
-    fs = 1.0 / float(np.median(np.diff(t)))
+    fs = 1.0 / median(np.diff(t))
     if not (learned.gauges and gauges is not None):
         gauges = None
     if gauges is not None:
@@ -234,7 +235,7 @@ def pursue_axles(record_time: np.ndarray, y: np.ndarray, learned: LearnedRespons
                      for a, b in itertools.pairwise(groups)), t[-1]]
     for k, group in enumerate(groups):
         # the vehicle's speed from its axles' lags
-        v = learned.distance / float(np.median(lags[group]))
+        v = learned.distance / median(lags[group])
         if not speed_range[0] <= v <= speed_range[1]:
             v = v0
         veh = _vehicle(pb, taus[group], v, limit, min_sp, min_height, snr_threshold,
