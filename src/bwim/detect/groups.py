@@ -18,8 +18,10 @@ Contract
   forces beyond the calibration truck's make spurious splits cheaper), with every
   axle's amplitudes positive and seen by both detectors.  Fast: a hypothesis's misfit
   needs only the readings' correlation with one axle's response and that response's
-  autocorrelation (:func:`explained`).  A group whose count stands keeps its refined
-  times unless they fit worse by the threshold.  A segment that holds none of the
+  autocorrelation (:func:`explained`; evenly spaced axles' systems depend on their
+  spacing alone: one inverse per spacing, every segment's hypotheses of one count at
+  once, :func:`evenly_explained`, :func:`group_counts`).  A group whose count stands
+  keeps its refined times unless they fit worse by the threshold.  A segment that holds none of the
   vehicle's axles and where no single axle could fit (:func:`one_axle_may_fit`: the
   one-axle test made once over the window, widened by a bound on its rounding) is noise
   and skipped without changing any choice.
