@@ -88,3 +88,21 @@ def test_xcorr_lag_is_the_direct_correlation(n):
     lag = xcorr_lag(y1, y2, 10, 200)
     assert lag == pytest.approx(_direct_lag(y1, y2, 10, 200), abs=1e-9)
     assert abs(lag - shift) < 1.0  # the pulses' shift, to a sample (measured 0.5 at most)
+
+
+def test_median_is_numpys():
+    """:func:`bwim.detect.signals.median` (one partial sort) equals ``numpy.median``
+    exactly (the same float), odd and even counts, repeated values (a uniform clock's
+    steps), and is NaN where a value is; ``robust_sigma`` with it equals 1.4826 MAD by
+    ``numpy.median``."""
+    from bwim.detect.signals import MAD_TO_SIGMA, median, robust_sigma
+
+    rng = np.random.default_rng(4)
+    for n in (1, 2, 3, 4, 7, 10, 101, 700):
+        for x in (rng.standard_normal(n) * 10.0 ** rng.uniform(-6, 6),
+                  np.round(rng.standard_normal(n), 1), np.diff(np.arange(n + 1) / 512.0)):
+            assert median(x) == np.median(x)
+            assert robust_sigma(x) == float(MAD_TO_SIGMA * np.median(np.abs(x - np.median(x))))
+        x = rng.standard_normal(n)
+        x[n // 2] = np.nan
+        assert np.isnan(median(x))

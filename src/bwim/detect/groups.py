@@ -18,8 +18,10 @@ Contract
   forces beyond the calibration truck's make spurious splits cheaper), with every
   axle's amplitudes positive and seen by both detectors.  Fast: a hypothesis's misfit
   needs only the readings' correlation with one axle's response and that response's
-  autocorrelation (:func:`explained`).  A group whose count stands keeps its refined
-  times unless they fit worse by the threshold.  A segment that holds none of the
+  autocorrelation (:func:`explained`; evenly spaced axles' systems depend on their
+  spacing alone: one inverse per spacing, every segment's hypotheses of one count at
+  once, :func:`evenly_explained`, :func:`group_counts`).  A group whose count stands
+  keeps its refined times unless they fit worse by the threshold.  A segment that holds none of the
   vehicle's axles and where no single axle could fit (:func:`one_axle_may_fit`: the
   one-axle test made once over the window, widened by a bound on its rounding) is noise
   and skipped without changing any choice.
@@ -37,8 +39,9 @@ from scipy.signal import find_peaks
 from .vehicle_fit import REACH, Problem, Rows, ridged_normal
 
 __all__ = ["GROUP_AXLES", "GROUP_DIP", "GROUP_EXTENT", "GROUP_SPACING", "LEVEL_GAIN",
-           "PEAK_FLOOR", "RARE_GROUP", "SEGMENT_MARGIN", "choose_groups", "explained",
-           "hypotheses", "one_axle_may_fit", "segments", "templates"]
+           "PEAK_FLOOR", "RARE_GROUP", "SEGMENT_MARGIN", "choose_groups", "evenly_explained",
+           "explained", "group_counts", "hypotheses", "one_axle_may_fit", "segments",
+           "templates"]
 
 #: Largest spacing within an axle group (tandem, tridem) whose count is chosen again, m.
 GROUP_SPACING = 2.2
@@ -114,24 +117,27 @@ def choose_groups(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp:
     # the responses' autocorrelation on the grid (zero beyond the response)
     auto = [np.concatenate([r[::st], np.zeros(max(0, s_max * GROUP_AXLES - r[::st].size + 1))])
             for _, _, r in tpl]
-    one = np.array([max(auto[0][0], 1e-300), max(auto[1][0], 1e-300)])  # one axle's
     out, changed = [], False
     parts_of = segments(pb, local, v, margin, st)
     bare = one_axle_may_fit(pb, resid, tpl, auto, st, n_grid)
     at_list = at.tolist()
+    # the segments worth a choice: their grid points' correlations with one axle end to
+    # end (both detectors), the vehicle's axles in each, its readings' and residual's
+    # energies where its axles act
+    chosen, corr_all = [], ([], [])
     for first, last in parts_of:
         i0, i1 = bisect.bisect_left(at_list, first), bisect.bisect_right(at_list, last)
         if i0 == i1 and bare[last + 1] == bare[first]:
             continue  # no axle of the vehicle here and no one axle fits: noise
         g = np.arange(i0, i1)
-        corr = []
         first, last = max(first, 0), min(last, n_grid - 1)
-        bounds = []
+        energy = r_inside = 0.0
         for c, (j0, h, _) in enumerate(tpl):
             # the readings less the others' axles, where this group's act
             a, b = max(first * st + j0, 0), min(last * st + j0 + h.size, rows.size)
             z = resid[c][a:b] + parts[c][a:b, g].sum(axis=1) if g.size else resid[c][a:b]
-            bounds.append((z, a, b))
+            energy += float(z @ z)
+            r_inside += float(resid[c][a:b] @ resid[c][a:b])
             # correlation with an axle at grid point m (sample st m), on the segment:
             # Σ_j z[st m + j0 + j] h[j], zero where the response leaves the window
             part = np.zeros(last - first + 1)
@@ -143,42 +149,20 @@ def choose_groups(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp:
                 if m1 >= m0:
                     part[m0 - first:m1 - first + 1] = cc[st * m0 + j0 - a:
                                                          st * m1 + j0 - a + 1:st]
-            corr.append(part)
-        # the group's readings and residual where it acts
-        energy = sum(float(z @ z) for z, _, _ in bounds)
-        r_inside = sum(float(resid[c][a:b] @ resid[c][a:b]) for c, (_, a, b) in enumerate(bounds))
-        best = None
-        for k in range(1, GROUP_AXLES + 1):
-            if k == 1:  # one axle at every grid point: explained() without the indexing
-                hyp = np.arange(last - first + 1)[:, None]
-                b = np.stack(corr, axis=-1)
-                amps = b / one
-                gained = np.sum(amps * b, axis=1)
-                positive = (amps[:, 0] > 0) & (amps[:, 1] > 0)
-                with np.errstate(divide="ignore", invalid="ignore"):
-                    lr = np.log(amps[:, 1] / (pb.ratio * amps[:, 0]))
-                valid = positive & (np.abs(np.where(positive, lr, np.inf)) <= pb.bound)
-            else:
-                hyp = hypotheses(0, last - first, k, s_min, s_max)  # grid points less first
-                if hyp.shape[0] == 0:
-                    break
-                gained, amps = explained(hyp, corr, auto)
-                positive = np.all(amps > 0, axis=(1, 2))
-                with np.errstate(divide="ignore", invalid="ignore"):
-                    lr = np.log(amps[..., 1] / (pb.ratio * amps[..., 0]))
-                valid = positive & np.all(np.abs(np.where(positive[:, None], lr, np.inf))
-                                          <= pb.bound, axis=1)
-            if not valid.any():
-                break
-            j = int(np.argmax(np.where(valid, gained, -np.inf)))
-            if best is not None:
-                gain = gained[j] - best[0]
-                left = energy - best[0]  # the group's residual with one axle fewer
-                level = (r_total - r_inside + left) / n_samples
-                rare = RARE_GROUP if k > 3 else 1.0
-                if gain < limit or gain < LEVEL_GAIN * rare * level:
-                    break
-            best = (float(gained[j]), hyp[j])
+            corr_all[c].append(part)
+        chosen.append((first, last, g, energy, r_inside))
+    if not chosen:
+        counts = []
+    else:
+        corr = [np.concatenate(corr_all[0]), np.concatenate(corr_all[1])]
+        lengths = np.array([last - first + 1 for first, last, *_ in chosen])
+        # the vehicle's residual outside each segment, and the segment's readings' energy
+        outside = [r_total - r_inside for *_, r_inside in chosen]
+        energies = [energy for *_, energy, _ in chosen]
+        counts = group_counts(pb, corr, auto, lengths, outside, energies, limit, n_samples,
+                         s_min, s_max)
+    offsets = np.cumsum([0, *(last - first + 1 for first, last, *_ in chosen)])
+    for (first, last, g, _, _), best, off in zip(chosen, counts, offsets, strict=False):
         if best is None:
             out.extend(taus[g])
             continue
@@ -186,7 +170,8 @@ def choose_groups(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp:
             # the count stands: the refined times stay unless they fit worse by more
             # than the threshold (two of a tridem's axles on one merged peak)
             mine = np.clip(at[g], first, last)[None, :] - first
-            if explained(mine, corr, auto)[0][0] > best[0] - limit:
+            seg = [corr[0][off:off + last - first + 1], corr[1][off:off + last - first + 1]]
+            if explained(mine, seg, auto)[0][0] > best[0] - limit:
                 out.extend(taus[g])
                 continue
         out.extend(pb.t[lo + st * (best[1] + first)])
@@ -281,6 +266,100 @@ def hypotheses(first: int, last: int, k: int, s_min: int, s_max: int) -> np.ndar
     start, sp = np.nonzero(np.arange(first, last + 1)[:, None]
                            + (k - 1) * np.arange(s_min, s_max + 1)[None, :] <= last)
     return (first + start)[:, None] + (s_min + sp)[:, None] * np.arange(k)[None, :]
+
+
+def evenly_explained(lengths: np.ndarray, k: int, s_min: int, s_max: int, corr, auto
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`hypotheses` ``(0, L - 1, k, s_min, s_max)`` (k ≥ 2) of every segment of
+    ``lengths`` grid points, whose correlations ``corr`` (per detector) lie end to end,
+    and what :func:`explained` gives for each: ``(hyp, owner, gained, amps)``, ``hyp`` in
+    each segment's own grid points, ``owner`` its segment (ascending; in a segment the
+    order of :func:`hypotheses`).  Evenly spaced axles' systems depend on their spacing
+    alone (the autocorrelation at multiples of it), so each spacing's is inverted once
+    and applied to every start of every segment (the numbers of solving each, to
+    rounding)."""
+    lengths = np.asarray(lengths, dtype=int)
+    spacings = np.arange(s_min, s_max + 1)
+    owner_of = np.repeat(np.arange(lengths.size), lengths)  # each grid point's segment
+    offsets = np.cumsum(lengths) - lengths
+    local = np.arange(owner_of.size) - offsets[owner_of]
+    row, sp = np.nonzero(local[:, None] + (k - 1) * spacings[None, :]
+                         <= (lengths - 1)[owner_of][:, None])
+    steps = spacings[sp][:, None] * np.arange(k)[None, :]
+    hyp = local[row][:, None] + steps
+    if hyp.shape[0] == 0:
+        return hyp, np.zeros(0, dtype=int), np.zeros(0), np.zeros((0, k, 2))
+    n_s = int(sp.max()) + 1  # the spacings used
+    lags = spacings[:n_s, None, None] * np.abs(np.arange(k)[:, None] - np.arange(k)[None, :])
+    eye = np.eye(k)
+    G = np.stack([auto[c][lags] + 1e-12 * auto[c][0] * eye for c in range(2)])
+    at = row[:, None] + steps  # in the correlations end to end
+    b = np.stack([corr[0][at], corr[1][at]])  # (2, n_hyp, k)
+    a = (np.linalg.inv(G)[:, sp] @ b[..., None])[..., 0]
+    gained = np.sum(a * b, axis=2)
+    return hyp, owner_of[row], gained[0] + gained[1], np.moveaxis(a, 0, -1)
+
+
+def group_counts(pb: Problem, corr, auto, lengths: np.ndarray, outside, energies,
+                 limit: float, n_samples: int, s_min: int, s_max: int) -> list:
+    """Each segment's choice (:func:`choose_groups`): ``(misfit removed, grid points)``
+    of the most evenly spaced axles such that each more lowers the misfit by ``limit``
+    and by LEVEL_GAIN times the residual per sample with one axle fewer (``(outside +
+    (energy - removed)) / n_samples``: the vehicle's residual outside the segment, the
+    segment's readings' energy), every axle positive and seen by both detectors; None
+    where no single axle is.  ``corr``: the segments' correlations end to end; every
+    segment's hypotheses of one count evaluated at once."""
+    n = lengths.size
+    offsets = np.cumsum(lengths) - lengths
+    # one axle at every grid point: explained() without the indexing
+    b = np.stack(corr, axis=-1)
+    one = np.array([max(auto[0][0], 1e-300), max(auto[1][0], 1e-300)])
+    amps = b / one
+    gained = np.sum(amps * b, axis=1)
+    positive = (amps[:, 0] > 0) & (amps[:, 1] > 0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        lr = np.log(amps[:, 1] / (pb.ratio * amps[:, 0]))
+    valid = positive & (np.abs(np.where(positive, lr, np.inf)) <= pb.bound)
+    score = np.where(valid, gained, -np.inf)
+    best: list = [None] * n
+    active = []
+    for i in range(n):
+        o = int(offsets[i])
+        j = int(np.argmax(score[o:o + lengths[i]]))
+        if score[o + j] > -np.inf:  # a valid one (valid ones are finite)
+            best[i] = (float(gained[o + j]), np.array([j]))
+            active.append(i)
+    for k in range(2, GROUP_AXLES + 1):
+        if not active:
+            break
+        sub = [corr[c][np.concatenate([np.arange(offsets[i], offsets[i] + lengths[i])
+                                       for i in active])] for c in range(2)]
+        hyp, owner, gained, amps = evenly_explained(lengths[active], k, s_min, s_max, sub,
+                                                    auto)
+        positive = np.all(amps > 0, axis=(1, 2))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            lr = np.log(amps[..., 1] / (pb.ratio * amps[..., 0]))
+        valid = positive & np.all(np.abs(np.where(positive[:, None], lr, np.inf))
+                                  <= pb.bound, axis=1)
+        score = np.where(valid, gained, -np.inf)
+        bounds = np.searchsorted(owner, np.arange(len(active) + 1))
+        rare = RARE_GROUP if k > 3 else 1.0
+        still = []
+        for q, i in enumerate(active):
+            h0, h1 = int(bounds[q]), int(bounds[q + 1])
+            if h0 == h1:
+                continue  # no k axles fit in the segment
+            j = h0 + int(np.argmax(score[h0:h1]))
+            if not score[j] > -np.inf:
+                continue
+            gain = gained[j] - best[i][0]
+            level = (outside[i] + (energies[i] - best[i][0])) / n_samples
+            if gain < limit or gain < LEVEL_GAIN * rare * level:
+                continue
+            best[i] = (float(gained[j]), hyp[j])
+            still.append(i)
+        active = still
+    return best
 
 
 def explained(hyp: np.ndarray, corr, auto) -> tuple[np.ndarray, np.ndarray]:

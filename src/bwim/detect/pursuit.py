@@ -70,6 +70,7 @@ from scipy.ndimage import maximum_filter1d
 from .assemble import VehicleEstimate
 from .groups import choose_groups
 from .response import LearnedResponses, band_pass, xcorr_lag
+from .signals import median
 from .vehicle_fit import (
     MIN_RATIO_BOUND,
     RATIO_SPREADS,
@@ -79,7 +80,6 @@ from .vehicle_fit import (
     make_problem,
     refine,
     relative,
-    ridged_normal,
     solution,
 )
 
@@ -121,9 +121,11 @@ class _Matcher:
     """The axle time whose atoms (both detectors, one amplitude in their gain ratio) best
     match a residual (all samples) at the speed ``v``; the second detector's atom may be
     up to ``slack`` samples off that speed.  The atoms are made once (the speed is fixed
-    while the pursuit runs)."""
+    while the pursuit runs); the residual is read from a buffer padded by :attr:`pad`
+    zeros each side (every atom's reach), the times already taken from a mask kept up to
+    date (:meth:`exclude`)."""
 
-    def __init__(self, pb: Problem, v: float, slack: int = 0):
+    def __init__(self, pb: Problem, v: float, slack: int, min_gap: float):
         self.pb, self.v, self.slack = pb, v, slack
         self.parts = []
         energy = 0.0
@@ -135,30 +137,35 @@ class _Matcher:
             atom = np.interp(v * np.arange(m_lo, m_hi + 1) / pb.fs - d, u, k, left=0.0,
                              right=0.0) * scale
             energy += float(atom @ atom)
-            self.parts.append((m_lo, max(0, -m_lo), max(0, m_hi), atom))
+            self.parts.append((m_lo, m_hi, atom))
         self.energy = max(energy, 1e-300)
+        self.pad = max(0, *(-m_lo for m_lo, _, _ in self.parts),
+                       *(m_hi for _, m_hi, _ in self.parts))
+        self.gap = min_gap / v
+        self.excluded = np.zeros(pb.t.size, dtype=bool)
 
-    def best(self, res: np.ndarray, taken: np.ndarray, min_gap: float) -> tuple[float, float]:
-        """The best new axle for the residual ``res`` (n_t, 2), not within ``min_gap`` m
-        of travel of the times ``taken``: its time at detector 1 and the time the second
+    def exclude(self, tk: float) -> None:
+        """No new axle within ``min_gap`` m of travel of the time ``tk`` (t ascending: a
+        slice holds them)."""
+        t, gap = self.pb.t, self.gap
+        a = max(int(np.searchsorted(t, tk - gap)) - 1, 0)
+        b = int(np.searchsorted(t, tk + gap, side="right")) + 1
+        self.excluded[a:b] |= np.abs(t[a:b] - tk) < gap
+
+    def best(self, res: np.ndarray) -> tuple[float, float]:
+        """The best new axle for the residual ``res`` (2, pad + n_t + pad; zeros in the
+        pads), not where excluded: its time at detector 1 and the time the second
         detector's atom says (both at detector 1 for the speed ``v``)."""
-        pb, v, slack = self.pb, self.v, self.slack
-        t = pb.t
+        t, slack, pad = self.pb.t, self.slack, self.pad
         n = t.size
-        corr = []
-        for c, (m_lo, lo, hi, atom) in enumerate(self.parts):
-            r = np.concatenate([np.zeros(lo), res[:, c], np.zeros(hi)])
-            corr.append(np.correlate(r, atom, mode="valid")[m_lo + lo:m_lo + lo + n])
+        # Σ_i res[m + m_lo + i] atom[i] for every sample m (zero beyond the record)
+        corr = [np.correlate(res[c, pad + m_lo:pad + n + m_hi], atom, mode="valid")
+                for c, (m_lo, m_hi, atom) in enumerate(self.parts)]
         # the second detector's best within ±slack samples (the largest value: exact)
         c2 = (maximum_filter1d(corr[1], 2 * slack + 1, mode="constant", cval=-np.inf)
               if slack else corr[1])
         score = np.maximum(corr[0] + c2, 0.0) ** 2 / self.energy
-        gap = min_gap / v
-        for tk in taken:  # not on an axle already found (t ascending: a slice holds them)
-            a = max(int(np.searchsorted(t, tk - gap)) - 1, 0)
-            b = int(np.searchsorted(t, tk + gap, side="right")) + 1
-            near = t[a:b]
-            score[a:b][np.abs(near - tk) < gap] = 0.0
+        score[self.excluded] = 0.0
         m = int(np.argmax(score))
         off = 0
         if slack:  # where that best was (the first of equals, as argmax)
@@ -178,7 +185,7 @@ def pursue_axles(record_time: np.ndarray, y: np.ndarray, learned: LearnedRespons
     their times.  Returns the vehicles' estimates (empty when no axle stands out)."""
     t = np.asarray(record_time, dtype=float)
     y = np.asarray(y, dtype=float)
-    fs = 1.0 / float(np.median(np.diff(t)))
+    fs = 1.0 / median(np.diff(t))
     if not (learned.gauges and gauges is not None):
         gauges = None
     if gauges is not None:
@@ -197,21 +204,20 @@ def pursue_axles(record_time: np.ndarray, y: np.ndarray, learned: LearnedRespons
     thr2 = snr_threshold**2
     min_sp = max(min_axle_spacing, MIN_SPACING_WIDTH * float(np.mean(
         [r.fwhm for r in learned.responses])))
-    omp = _Pursuit(pb, v0)
-    first = 0.0
-    refused = np.zeros(0)  # candidates one detector does not see: not tried again
     lag = learned.distance / v0
     slack = int(np.ceil(SPEED_SLACK * lag * fs))
-    matcher = _Matcher(pb, v0, slack)
+    matcher = _Matcher(pb, v0, slack, EXCLUDE * min_sp)
+    omp = _Pursuit(pb, v0, matcher.pad)
+    first = 0.0
     for _ in range(2 * MAX_AXLES):
-        tk, tk2 = matcher.best(omp.res, np.append(omp.taus, refused), EXCLUDE * min_sp)
+        tk, tk2 = matcher.best(omp.res)
         amps, chi_new, state = omp.trial(tk, tk2)
         gain = omp.chi - chi_new
         first = max(first, gain)
         if gain < max(thr2, PURSUIT_SHARE * first) or omp.taus.size >= MAX_AXLES:
             break
+        matcher.exclude(tk)  # taken, or one detector does not see it: not tried again
         if not _acceptable(pb, amps, min_height):
-            refused = np.append(refused, tk)
             continue
         omp.accept(tk, tk2, chi_new, state)
     order = np.argsort(omp.taus)
@@ -229,7 +235,7 @@ def pursue_axles(record_time: np.ndarray, y: np.ndarray, learned: LearnedRespons
                      for a, b in itertools.pairwise(groups)), t[-1]]
     for k, group in enumerate(groups):
         # the vehicle's speed from its axles' lags
-        v = learned.distance / float(np.median(lags[group]))
+        v = learned.distance / median(lags[group])
         if not speed_range[0] <= v <= speed_range[1]:
             v = v0
         veh = _vehicle(pb, taus[group], v, limit, min_sp, min_height, snr_threshold,
@@ -250,10 +256,11 @@ class _Pursuit:
     """Orthogonal matching pursuit over the whole record: the axles' responses with each
     detector's rest projected out, their Gram matrix and least-squares amplitudes kept up
     to date as axles are added.  Both detectors' problems as one stack of two (numpy
-    gives the same numbers as two separate ones)."""
+    gives the same numbers as two separate ones).  The residual (:attr:`res`, 2 × n_t)
+    sits in a buffer with ``pad`` zeros each side (what :class:`_Matcher` reads)."""
 
-    def __init__(self, pb: Problem, v: float):
-        self.pb, self.v = pb, v
+    def __init__(self, pb: Problem, v: float, pad: int = 0):
+        self.pb, self.v, self.pad = pb, v, pad
         self.taus = np.zeros(0)  # at detector 1
         self.taus2 = np.zeros(0)  # the second detector's, less D / v
         y = []
@@ -263,24 +270,47 @@ class _Pursuit:
         self.Q = np.stack(pb.q_rest)  # (2, n_t, k)
         self.Qt = self.Q.transpose(0, 2, 1)
         self.y = np.stack(y)[..., None]  # (2, n_t, 1)
-        self.cols = np.zeros((2, pb.t.size, 0))
-        self.res = np.column_stack(y)
-        self.chi = float(np.sum(self.res**2))
+        n = pb.t.size
+        self.Xt = np.zeros((2, 0, n))  # the axles' projected responses, one per row
+        self.G = np.zeros((2, 0, 0))  # their Gram matrix (no ridge)
+        self._xy = np.empty((2, n, 2))  # a new response, then the readings
+        self._xy[:, :, 1] = self.y[..., 0]
+        self._buffer = np.zeros((2, n + 2 * pad))
+        self._buffer[:, pad:pad + n] = self.y[..., 0]
+        self.chi = float(np.sum(np.column_stack(y) ** 2))
+
+    @property
+    def res(self) -> np.ndarray:
+        """The residual, (2, pad + n_t + pad), zeros in the pads."""
+        return self._buffer
 
     def trial(self, tk: float, tk2: float):
         """Amplitudes (n + 1, 2; the new axle last), misfit and state with an axle at
-        ``tk`` added (at ``tk2`` for the second detector)."""
+        ``tk`` added (at ``tk2`` for the second detector).  The Gram matrix grows by the
+        new response's products (the same numbers as made whole, to rounding); the ridge
+        of :func:`~bwim.detect.vehicle_fit.ridged_normal`."""
         dt = self.pb.t[None, :, None] - np.array([tk, tk2])[:, None, None]
         x = self.pb.both_atoms(self.v, dt)[0]  # (2, n_t, 1)
-        x = x - self.Q @ (self.Qt @ x)
-        X = np.concatenate([self.cols, x], axis=2)
-        Xt, G = ridged_normal(X)
-        a = np.linalg.solve(G, Xt @ self.y)
-        res = (self.y - X @ a)[..., 0].T.copy()  # (n_t, 2)
-        return a[..., 0].T.copy(), float(np.sum(res**2)), (X, res)
+        x -= self.Q @ (self.Qt @ x)
+        p = self.G.shape[1]
+        Xt = np.concatenate([self.Xt, x.reshape(2, 1, -1)], axis=1)  # (2, p + 1, n_t)
+        xy = self._xy
+        xy[:, :, 0] = x[..., 0]
+        gb = Xt @ xy  # (2, p + 1, 2): the new response's products, then Xᵀ y
+        G = np.empty((2, p + 1, p + 1))
+        G[:, :p, :p] = self.G
+        G[:, :, p] = gb[:, :, 0]
+        G[:, p, :p] = gb[:, :p, 0]
+        ridged = G.copy()
+        diag = ridged.reshape(2, -1)[:, ::p + 2]  # a view
+        diag += 1e-12 * (diag.sum(axis=-1) / (p + 1) + 1e-300)[:, None]
+        a = np.linalg.solve(ridged, gb[:, :, 1:])
+        res = (self.y - Xt.transpose(0, 2, 1) @ a)[..., 0].T.copy()  # (n_t, 2)
+        return a[..., 0].T.copy(), float(np.sum(res**2)), (Xt, G, res)
 
     def accept(self, tk: float, tk2: float, chi: float, state) -> None:
-        self.cols, self.res = state
+        self.Xt, self.G, res = state
+        self._buffer[:, self.pad:self.pad + res.shape[0]] = res.T
         self.taus = np.append(self.taus, tk)
         self.taus2 = np.append(self.taus2, tk2)
         self.chi = chi

@@ -7,6 +7,8 @@ Contract
   pulse much shorter than half the window keeps its shape and timing (no phase shift).
 * :func:`robust_sigma` is the normalised median absolute deviation, 1.4826 MAD, the
   standard deviation of Gaussian noise that ignores a minority of large samples (pulses).
+* :func:`median` is ``numpy.median`` of a 1-D array (the mean of the two middle values
+  for an even count; NaN if any value is), the same number, by one partial sort.
 * :func:`parabolic_vertex` gives the sub-sample position of local maxima: the vertex of
   the parabola through the three samples around each (fractional sample index).
 * :func:`split_vehicles` cuts a sequence of axles into vehicles at gaps longer than a
@@ -35,7 +37,7 @@ from scipy.ndimage import median_filter
 from bwim.records import Record
 from bwim.sensors import Sensor
 
-__all__ = ["channel_data", "gaussian_average", "gaussian_kernel", "parabolic_vertex",
+__all__ = ["channel_data", "gaussian_average", "gaussian_kernel", "median", "parabolic_vertex",
            "remove_baseline", "robust_sigma", "split_vehicles"]
 
 #: Gaussian kernels reach this many standard deviations (scipy.ndimage's default).
@@ -45,12 +47,25 @@ TRUNCATE = 4.0
 MAD_TO_SIGMA = 1.482602218505602
 
 
+def median(values: np.ndarray) -> float:
+    """The median of the values of a 1-D array (see the module docstring); NaN for none."""
+    v = np.asarray(values, dtype=float).reshape(-1)
+    n = v.size
+    if n == 0 or np.isnan(v).any():
+        return float(np.median(v)) if n else float("nan")
+    k = n // 2
+    if n % 2:
+        return float(np.partition(v, k)[k])
+    part = np.partition(v, (k - 1, k))
+    return float((part[k - 1] + part[k]) / 2)
+
+
 def robust_sigma(values: np.ndarray) -> float:
     """1.4826 × median |v − median v|: the noise standard deviation, robust to pulses."""
     v = np.asarray(values, dtype=float)
     if v.size == 0:
         return 0.0
-    return float(MAD_TO_SIGMA * np.median(np.abs(v - np.median(v))))
+    return float(MAD_TO_SIGMA * median(np.abs(v - median(v))))
 
 
 def remove_baseline(values: np.ndarray, window: int) -> np.ndarray:
