@@ -281,6 +281,26 @@ def test_segments_equal_their_loop_definition():
                                                                         margin, st)
 
 
+def test_a_window_shorter_than_the_detectors_lag_gives_the_first_detectors_groups():
+    """A vehicle's window shorter than the lag between the detectors (in samples) holds
+    nothing of the second detector's readings moved back by the lag: its groups are the
+    first detector's alone (what the loop definition gives with the second's readings
+    zero), where an error used to refuse the whole event."""
+    from bwim.detect.groups import segments
+    from bwim.detect.vehicle_fit import make_problem
+
+    v = 21.0
+    t, y, g, learned = _same_model(np.array([0.3]), v, np.array([[20.0, 5.0]]))
+    pb = make_problem(t, y, g, learned, v)
+    lag = round(pb.shift[1] / v * pb.fs)
+    n = lag - 3
+    bump = np.exp(-0.5 * ((np.arange(n) - n / 2) / 4.0) ** 2)
+    local = [bump, bump[::-1].copy()]
+    got = segments(pb, local, v, 2, 1)
+    assert got == _segments_loop(pb, [bump, np.zeros(n)], v, 2, 1)
+    assert len(got) == 1
+
+
 def test_noise_segments_skipped_only_where_no_axle_fits():
     """choose_groups skips a segment without axles when no grid point of it passes a
     widened one-axle test made once over the window: every grid point where the exact

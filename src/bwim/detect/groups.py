@@ -229,7 +229,8 @@ def segments(pb: Problem, local, v: float, margin: int, st: int) -> list[tuple[i
         if top <= 0:
             continue
         shift = lag if c else 0
-        e[:e.size - shift] += z[shift:] / top
+        if shift < e.size:  # a window shorter than the lag: the second adds nothing
+            e[:e.size - shift] += z[shift:] / top
     if not e.max() > 0:
         return []
     floor = PEAK_FLOOR * float(e.max())
