@@ -24,9 +24,15 @@ keeps the upper corner (checked there).
 Third table: where the search's time goes (:func:`run_breakdown`), each stacked pass
 (samples × λ) and the rest of ``identify_forces`` in units of one sweep at the chosen λ,
 measured in the same run.  On the clean 1 s record the bracket misses: the coarse problem
-(5 modes at 250 Hz) puts the corner 1.2 decades from the record's model (14 modes), the
-corner lands at an end of the half grid and an extension pass follows, which costs about
-one sweep however few λ it holds.  Tried and not kept (issue 23 item 2): one GEMM over
+(5 modes at 250 Hz) fits the fast crossing worse than the record's model (14 modes), and
+its corner lies above the model's by about twice the decades between their misfit
+floors; the model's corner lies below the half grid.  An extension pass there would cost
+about one sweep however few λ it holds; the half grid is not extended towards smaller λ
+(:mod:`bwim.mfi.lcurve`, half grid first), so the clean records take one pass on the model.
+Tried and not kept: two more λ below the half grid in its pass (the 16 s record then
+missed, a stacked λ costing more there) and a coarse grid of twice the density (the 1 s
+bracket still missed); a coarse problem on the model's modes was measured, not built
+(its pass costs two to three times as much).  Also tried and not kept: one GEMM over
 all λ (another memory layout) and the per-mode 2 × 2 block products, both slower than
 the batched products at 1 and 8 λ (the per-λ work already runs at the BLAS rate); and
 refining around every local curvature maximum of the coarse L-curve, which does not

@@ -22,13 +22,22 @@ Contract
   The chosen λ lies within half a fine spacing of the located corner.
 * Half grid first (with a coarse problem and ``weigh``, the static weights per λ): every
   other λ of the fine grid is solved first, in one stacked pass, and searched the same
-  way (extensions at twice the spacing).  When the static weights of all its admissible
-  λ (at least three) agree within :data:`FLAT_TOL` of the largest, where the corner falls
-  among them cannot move the weights by more than that, and its answer stands.  Otherwise the
+  way (extensions at twice the spacing, towards larger λ only: with the corner below it,
+  its smallest λ is taken).  When the static weights of all its admissible λ (at least
+  three) agree within :data:`FLAT_TOL` of the largest, where the corner falls among them
+  cannot move the weights by more than that, and its answer stands.  Otherwise the
   other half is solved and the search runs on the full fine grid, reusing every λ
   solved: the answer is the full grid's (an L-curve with two corners within the window,
   whose weights differ, is searched at the full resolution).  The force histories are
   not held to that tolerance: another λ changes them more than the weights.
+* Why not downwards: a coarse problem of fewer modes fits the record worse, and the
+  corner lies where the penalty's misfit reaches the misfit floor, so its corner lies
+  above the model's (far above when the record's fast crossing excites the modes it
+  lacks), and an extension would cost a pass of its own.  Below the corner the data, not
+  the penalty, fix the forces: the static weights stop depending on λ there when the
+  readings are clean, and when they are noisy the half grid's weights disagree and the
+  full grid is searched, extended downwards as before.  Towards larger λ the penalty
+  smooths the forces and the weights move, so the grid is extended there.
 * Admissible λ (``admissible=``, given by :func:`~bwim.mfi.identify_forces` for first
   order, whose λ → ∞ limit is constant forces: the static weights): tyre forces are
   compressive, so a λ whose identified forces turn tensile where the forces are weighed
@@ -45,7 +54,7 @@ Contract
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.interpolate import CubicSpline
@@ -247,7 +256,7 @@ def lcurve_search(model: MFIModel, d, weights, lam_range: tuple[float, float], *
         # every other λ of the fine grid first: when the static weights of all its
         # admissible λ agree within flat_tol, the corner's place within it cannot move them
         half = _fine_search(solved, t_f[1::2], 2 * h, max(2, n_ext // 2), (t_min, t_max),
-                            extend=True)
+                            extend=True, down=False)
         if solved.flat(half.grid, half.lo, flat_tol):
             return half.result(model, d, weights, solved)
     found = _fine_search(solved, t_f, h, n_ext, (t_min, t_max), extend=coarse is not None,
@@ -343,11 +352,12 @@ class _Found:
 
 
 def _fine_search(solved: _Solved, t_f: np.ndarray, h: float, n_ext: int, t_range, *,
-                 extend: bool, base=None) -> _Found:
+                 extend: bool, base=None, down: bool = True) -> _Found:
     """Solve ``t_f`` (spacing ``h``) and locate the corner on it, with the coarse nodes
     ``base`` = (t, ρ, η, admissible) when they were solved on the model; with ``extend``,
     extend the grid by ``n_ext`` λ at an end while the corner sits there (module
-    docstring)."""
+    docstring), at its low end only with ``down`` (otherwise its smallest λ is the
+    corner)."""
     t_min, t_max = t_range
     grids = [t_f]
     solved.solve(t_f)
@@ -383,6 +393,10 @@ def _fine_search(solved: _Solved, t_f: np.ndarray, h: float, n_ext: int, t_range
         low_open = (t_best <= t[1] + 1e-9 * h or kappa[0] > top) and \
             (lo is None or lo <= t[0]) and t[0] - h > t_min
         high_open = (t_best >= t[-2] - 1e-9 * h or kappa[-1] > top) and t[-1] + h < t_max
+        if low_open and not down:
+            # the corner lies below the grid: its smallest λ is the nearest (module
+            # docstring, half grid first)
+            return replace(f, t_best=float(f.grid.min()))
         if low_open:
             t_new = t[0] - h * np.arange(1, n_ext + 1)
         elif high_open:
