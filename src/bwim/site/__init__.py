@@ -15,6 +15,8 @@ Contract
 * :mod:`bwim.site.lanes`: the vehicles of an event in every lane, multiple presence.
 * :mod:`bwim.site.event`: :func:`weigh_event` (:class:`EventWeighing`, one
   :class:`VehicleWeighing` per vehicle, each a summary row).
+* :mod:`bwim.site.isolate`: the part of a record a vehicle has to itself (vehicles one
+  after the other in one file, each detected, weighed and calibrated on its own part).
 * :mod:`bwim.site.health`: :func:`check_gauges` (:class:`GaugeHealth`), the gauges of a
   vehicle judged before it is weighed: a faulty one left out (``gauge_fault:NAME``).
 * :mod:`bwim.site.drift`: the drift of the strain-to-load ratio from one day to the next
