@@ -42,19 +42,26 @@ def test_explained_is_the_explicit_least_squares():
         gained, amps = explained(hyp, corr, auto)
         assert gained.shape == (hyp.shape[0],) and amps.shape == (*hyp.shape, 2)
         for i, ms in enumerate(hyp):
-            ref, ref_amps, energy = 0.0, [], 0.0
-            for z, h in zip(zs, hs, strict=True):
-                energy += float(z @ z)
-                D = np.zeros((z.size, k))
-                for j, m in enumerate(ms):
-                    D[m:m + h.size, j] = h
-                a = np.linalg.lstsq(D, z, rcond=None)[0]
-                ref += float(z @ z - (z - D @ a) @ (z - D @ a))
-                ref_amps.append(a)
-            assert abs(gained[i] - ref) <= TOL * energy
-            scale = max(np.abs(ref_amps).max(), 1.0)
-            np.testing.assert_allclose(amps[i], np.column_stack(ref_amps), rtol=0,
-                                       atol=TOL * scale)
+            _check_against_lstsq(ms, zs, hs, gained[i], amps[i])
+
+
+def _check_against_lstsq(ms, zs, hs, gained, amps):
+    """One hypothesis (axles at samples ``ms``) against explicit least squares
+    (``numpy.linalg.lstsq`` on the shifted responses ``hs``) of the readings ``zs``, one
+    per detector: the misfit removed within TOL of the energy, the amplitudes within TOL
+    of the largest."""
+    ref, ref_amps, energy = 0.0, [], 0.0
+    for z, h in zip(zs, hs, strict=True):
+        energy += float(z @ z)
+        D = np.zeros((z.size, len(ms)))
+        for j, m in enumerate(ms):
+            D[m:m + h.size, j] = h
+        a = np.linalg.lstsq(D, z, rcond=None)[0]
+        ref += float(z @ z - (z - D @ a) @ (z - D @ a))
+        ref_amps.append(a)
+    assert abs(gained - ref) <= TOL * energy
+    scale = max(np.abs(ref_amps).max(), 1.0)
+    np.testing.assert_allclose(amps, np.column_stack(ref_amps), rtol=0, atol=TOL * scale)
 
 
 def test_evenly_spaced_hypotheses_of_many_segments_at_once():
@@ -89,20 +96,8 @@ def test_evenly_spaced_hypotheses_of_many_segments_at_once():
             np.testing.assert_array_equal(mine, hypotheses(0, n - 1, k, s_min, s_max))
         assert np.all(np.diff(owner) >= 0) and not np.any(owner == 1)
         for i, (ms, seg) in enumerate(zip(hyp, owner, strict=True)):
-            ref, ref_amps, energy = 0.0, [], 0.0
-            for c, h in enumerate(hs):
-                z = signals[c][seg]
-                energy += float(z @ z)
-                D = np.zeros((z.size, k))
-                for j, m in enumerate(ms):
-                    D[m:m + h.size, j] = h
-                a = np.linalg.lstsq(D, z, rcond=None)[0]
-                ref += float(z @ z - (z - D @ a) @ (z - D @ a))
-                ref_amps.append(a)
-            assert abs(gained[i] - ref) <= TOL * energy
-            scale = max(np.abs(ref_amps).max(), 1.0)
-            np.testing.assert_allclose(amps[i], np.column_stack(ref_amps), rtol=0,
-                                       atol=TOL * scale)
+            _check_against_lstsq(ms, [signals[c][seg] for c in range(len(hs))], hs,
+                                 gained[i], amps[i])
 
 
 def _counts_loop(ref, corr, auto, lengths, outside, energies, limit, n_samples, s_min,
