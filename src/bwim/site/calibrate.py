@@ -29,7 +29,9 @@ Contract
      at all give provisional lines, then every run is judged with their support; when
      runs were rejected, the calibration lane's responses are learned again from the
      runs kept (another vehicle on the detectors smears the learned shapes) and every
-     run is detected and judged again with them.
+     run is detected and judged again with them.  From the second pass on, what the
+     other pairs read of the span's bending is known from the first pass's runs
+     (:mod:`bwim.site.bending`): a trace of it is not another vehicle.
   4. **Lines** of every gauge from the used runs stacked (:func:`bwim.wim.calibrate_lines`:
      per-run scale factors, their trend, outlier runs rejected with a reason).
   5. **Drift**: the runs' factors over the time of day
@@ -269,10 +271,13 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
     if len(kept) >= 2:
         span = _site_calibration(records, setup, [Detection()] * len(records), reasons,
                                  passages, kept).lines.support
+        # what the other pairs read of the span's bending, from these runs of the truck
+        # alone: a trace of it is not another vehicle
+        bending = _bending(records, setup, kept)
         # pass 2: with the lines' support, another vehicle counts when it is on the span
         # at the same time as the truck
         events = [detect_lanes(rec, setup, responses=responses, span=span,
-                               gauges=gauge_names(rec)) for rec in records]
+                               gauges=gauge_names(rec), bending=bending) for rec in records]
         reasons, passages, kept = _without(flat, *_truck_runs(events, setup))
         # pass 3: the responses learned again from the runs of the truck alone (a run
         # with another vehicle on the detectors smears the learned shapes and every
@@ -281,7 +286,8 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
             responses = _responses(_own_parts(records, events, setup, kept), setup, [],
                                    learn_from=kept) or responses
             events = [detect_lanes(rec, setup, responses=responses, span=span,
-                                   gauges=gauge_names(rec)) for rec in records]
+                                   gauges=gauge_names(rec), bending=bending)
+                      for rec in records]
             reasons, passages, kept = _without(flat, *_truck_runs(events, setup))
         # from here on each run used is its truck's own part of the record: a vehicle
         # before or after it in the file is cut off
