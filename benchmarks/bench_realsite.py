@@ -328,8 +328,8 @@ def _wrong(row: SummaryRow, truth: list[dict]) -> bool:
 
 def _following(by_record: dict[str, list[SummaryRow]], truth: dict[str, list[dict]]
                ) -> tuple[int, int, int, int]:
-    """The traffic date's files with two lane-1 trucks one behind the other, never on the
-    span together: (trucks weighed within :data:`WRONG` of their own, trucks, rows
+    """The traffic files (both dates) with two lane-1 trucks one behind the other, never
+    on the span together: (trucks weighed within :data:`WRONG` of their own, trucks, rows
     weighed wrong, files).  A row is matched to the truck nearest its clock time; a
     weighed row is wrong when it is not that truck's weight within ``WRONG`` or its axle
     count is not that truck's (two trucks weighed as one)."""
