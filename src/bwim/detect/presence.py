@@ -27,7 +27,8 @@ from bwim.wim import InfluenceLine
 
 from .signals import robust_sigma
 
-__all__ = ["overlapping", "resolve_span", "span_windows", "unexplained_activity"]
+__all__ = ["overlapping", "resolve_span", "span_windows", "unexplained_activity",
+           "windows_overlap"]
 
 
 def resolve_span(span: float | Sequence[float] | InfluenceLine | None
@@ -59,13 +60,18 @@ def span_windows(passages: Sequence[Passage], span: tuple[float, float]) -> np.n
     return out
 
 
+def windows_overlap(a, b) -> bool:
+    """Whether two windows (start, end), s, share some time; False when either is None."""
+    return a is not None and b is not None and a[0] < b[1] and b[0] < a[1]
+
+
 def overlapping(windows: np.ndarray) -> np.ndarray:
     """Whether each window overlaps another one, bool, shape (n,)."""
     w = np.asarray(windows, dtype=float).reshape(-1, 2)
     hit = np.zeros(len(w), dtype=bool)
     for i in range(len(w)):
         for j in range(i + 1, len(w)):
-            if w[i, 0] < w[j, 1] and w[j, 0] < w[i, 1]:
+            if windows_overlap(w[i], w[j]):
                 hit[i] = hit[j] = True
     return hit
 

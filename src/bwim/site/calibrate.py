@@ -103,6 +103,7 @@ from bwim.detect import (
     detect_known_truck,
     learn_responses,
 )
+from bwim.detect.presence import windows_overlap
 from bwim.detect.response import band_pass, peak_polarity
 from bwim.detect.result import FLAG_MULTIPLE_PRESENCE
 from bwim.detect.signals import robust_sigma
@@ -642,7 +643,7 @@ def _truck(ev: EventDetection, setup: SiteSetup, strict: bool = False) -> LaneVe
     if len(like) != 1 or like[0].window is None:
         return None
     t = like[0]
-    apart = all(w.window is not None and (w.window[1] <= t.window[0] or t.window[1] <= w.window[0])
+    apart = all(w.window is not None and not windows_overlap(w.window, t.window)
                 for w in own if w is not t)
     return t if apart else None
 
@@ -660,9 +661,7 @@ def _run_reason(ev: EventDetection, setup: SiteSetup, strict: bool = False) -> s
     if truck is None:
         return f"{len(own)} vehicles detected in lane {lane}, not one calibration truck"
     others = [v for v in ev.vehicles if v is not truck]
-    busy = others if strict else [
-        w for w in others if w.window is not None and truck.window is not None
-        and w.window[0] < truck.window[1] and truck.window[0] < w.window[1]]
+    busy = others if strict else [w for w in others if windows_overlap(w.window, truck.window)]
     if busy:
         shown = ", ".join(f"lane {w.lane}, {w.direction}, {w.vehicle.n_axles} axles"
                           for w in busy)

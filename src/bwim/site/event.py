@@ -70,6 +70,7 @@ import numpy as np
 
 from bwim.classify import axle_configuration
 from bwim.detect import Detection, VehicleDetection, detect_from_strain
+from bwim.detect.presence import windows_overlap
 from bwim.detect.result import FLAG_MULTIPLE_PRESENCE, FLAG_TRUNCATED
 from bwim.errors import BwimError, InputError
 from bwim.fe.bridge import Bridge
@@ -385,8 +386,7 @@ def _vehicle(record: Record, ev: EventDetection, k: int, calibration: SiteCalibr
         return refused(f"counted, not weighed: no lines for lane {lv.lane} ({lv.direction}): "
                        "the calibration truck drove the other way")
     same_way = [w for j, w in enumerate(ev.vehicles) if j != k and w.direction == lv.direction
-                and w.lane is not None and lv.window is not None and w.window is not None
-                and w.window[0] < lv.window[1] and lv.window[0] < w.window[1]]
+                and w.lane is not None and windows_overlap(w.window, lv.window)]
     if same_way:
         lanes = ", ".join(str(w.lane) for w in same_way)
         return refused(f"multiple presence: {1 + len(same_way)} vehicles travelling "

@@ -37,6 +37,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable, Iterable
 
+from bwim.detect.presence import windows_overlap
 from bwim.records import Record
 from bwim.site.lanes import EventDetection
 
@@ -68,11 +69,7 @@ def own_part(record: Record, window: tuple[float, float] | None,
 
 def _apart(a: tuple[float, float] | None, b: tuple[float, float] | None) -> bool:
     """Whether two windows are both known and do not overlap."""
-    return a is not None and b is not None and (a[1] <= b[0] or b[1] <= a[0])
-
-
-def _overlap(a: tuple[float, float] | None, b: tuple[float, float] | None) -> bool:
-    return a is not None and b is not None and a[0] < b[1] and b[0] < a[1]
+    return a is not None and b is not None and not windows_overlap(a, b)
 
 
 def detected_alone(record: Record, event: EventDetection,
@@ -91,7 +88,7 @@ def detected_alone(record: Record, event: EventDetection,
         if part is record:
             continue
         again = [w for w in detect(part).vehicles
-                 if w.pair == lv.pair and _overlap(w.window, lv.window)]
+                 if w.pair == lv.pair and windows_overlap(w.window, lv.window)]
         if len(again) == 1:
             vehicles[k] = again[0]
             if again[0].vehicle.n_axles != lv.vehicle.n_axles:

@@ -59,7 +59,7 @@ import numpy as np
 
 from bwim.classify import DEFAULT_GROUP_SPACING
 from bwim.detect import Detection, LearnedResponses, VehicleDetection, detect_axles
-from bwim.detect.presence import unexplained_activity
+from bwim.detect.presence import unexplained_activity, windows_overlap
 from bwim.detect.result import FLAG_MULTIPLE_PRESENCE
 from bwim.detect.signals import channel_data
 from bwim.errors import BwimError
@@ -275,15 +275,11 @@ def _echo(v: VehicleDetection, pair: DetectorLane, setup: SiteSetup,
     centre = setup.centres()[nearest][0]
     if abs(v.lateral - pair.y) <= 0.75 * abs(centre - pair.y):
         return False
-    return any(other.direction != pair.direction and _overlap(v.window, w.window)
+    return any(other.direction != pair.direction and windows_overlap(v.window, w.window)
                and (v.confidence < _ECHO_CONFIDENCE
                     or abs(abs(w.passage.speed) - abs(v.passage.speed))
                     <= _SAME_SPEED * abs(v.passage.speed))
                for other, w in seen)
-
-
-def _overlap(a: tuple[float, float] | None, b: tuple[float, float] | None) -> bool:
-    return a is not None and b is not None and a[0] < b[1] and b[0] < a[1]
 
 
 def _deduplicated(found: list[LaneVehicle], setup: SiteSetup) -> list[LaneVehicle]:
@@ -295,7 +291,7 @@ def _deduplicated(found: list[LaneVehicle], setup: SiteSetup) -> list[LaneVehicl
             b = found[j]
             if not (keep[i] and keep[j]) or a.pair == b.pair or a.direction != b.direction:
                 continue
-            if not _overlap(a.window, b.window):
+            if not windows_overlap(a.window, b.window):
                 continue
             drop = j if _own_pair_score(a, pairs) >= _own_pair_score(b, pairs) else i
             keep[drop] = False
@@ -348,7 +344,7 @@ def _presence(vehicles: list[LaneVehicle]) -> list[LaneVehicle]:
     out = []
     for i, v in enumerate(vehicles):
         others = tuple(w.lane if w.lane is not None else w.pair
-                       for j, w in enumerate(vehicles) if j != i and _overlap(v.window,
+                       for j, w in enumerate(vehicles) if j != i and windows_overlap(v.window,
                                                                               w.window))
         veh = v.vehicle
         if others and FLAG_MULTIPLE_PRESENCE not in veh.flags:
