@@ -55,3 +55,24 @@ def test_a_long_vehicle_within_the_limit_stays_one():
 def test_three_following_vehicles_give_three():
     parts = split_long(_vehicle([*ARTIC, 7.0, *ARTIC, 6.0, *RIGID]))
     assert [p.n_axles for p in parts] == [5, 5, 2]
+
+
+@pytest.mark.parametrize(("front", "gap", "rear"), [
+    (ARTIC, 8.0, ARTIC),   # 8 m between them: never on the 6 m span together
+    (ARTIC, 5.5, RIGID),   # 5.5 m: both on it while the gap crosses it
+    (RIGID, 7.0, ARTIC),
+])
+def test_given_the_span_each_part_has_its_own_window(front, gap, rear):
+    """Closed form: a vehicle whose first axle passes x = 0 at ``delay`` with its last
+    axle ``length`` behind is on the span (−3, 3) m from ``delay − 3/v`` to
+    ``delay + (3 + length)/v``; the parts are multiple presence only when those overlap
+    (the gap between them shorter than the span)."""
+    speed, delay, span = 22.0, 1.0, (-3.0, 3.0)
+    whole = _vehicle([*front, gap, *rear], speed=speed, delay=delay)
+    parts = split_long(whole, span)
+    rear_delay = delay + (sum(front) + gap) / speed
+    expected = [(delay - 3.0 / speed, delay + (3.0 + sum(front)) / speed),
+                (rear_delay - 3.0 / speed, rear_delay + (3.0 + sum(rear)) / speed)]
+    for p, w in zip(parts, expected, strict=True):
+        assert p.window == pytest.approx(w, abs=1e-12)
+        assert ("multiple_presence" in p.flags) == (gap < span[1] - span[0])

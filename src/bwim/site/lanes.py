@@ -35,9 +35,10 @@ Contract
 * **Following vehicles**: a detected vehicle whose axles spread over more than
   :data:`MAX_WHEELBASE` (the longest vehicle allowed on European roads) is vehicles
   following each other: it is cut between axle groups where two plausible vehicles
-  part (:func:`split_long`; again while a part is too long); the parts keep the whole's
-  window,
-  so they are each other's multiple presence (and are refused, never weighed as one).
+  part (:func:`split_long`; again while a part is too long).  Each part's window is its
+  own time on the span: parts on the span together are each other's multiple presence
+  (refused, never weighed as one); parts one after the other are vehicles one after the
+  other, each detected again on its own part of the record (:mod:`bwim.site.isolate`).
 * **Multiple presence**: vehicles whose windows on the span overlap are each flagged
   ``multiple_presence``; :attr:`LaneVehicle.others` names the lanes of the others.  A
   vehicle no detector saw (a lane without detectors) shows as gauge activity outside
@@ -59,7 +60,7 @@ import numpy as np
 
 from bwim.classify import DEFAULT_GROUP_SPACING
 from bwim.detect import Detection, LearnedResponses, VehicleDetection, detect_axles
-from bwim.detect.presence import unexplained_activity, windows_overlap
+from bwim.detect.presence import span_windows, unexplained_activity, windows_overlap
 from bwim.detect.result import FLAG_MULTIPLE_PRESENCE
 from bwim.detect.signals import channel_data
 from bwim.errors import BwimError
@@ -169,7 +170,7 @@ def detect_lanes(record: Record, setup: SiteSetup, *,
         if not det.vehicles and det.message and pair.lane == setup.calibration_lane:
             notes.append(f"lane {pair.lane}: {det.message}")
         for v in det.vehicles:
-            parts = split_long(v)
+            parts = split_long(v, lane_span)
             if len(parts) > 1:
                 notes.append(f"lane {pair.lane}: {v.n_axles} axles over "
                              f"{float(np.sum(v.passage.axle_spacings)):.1f} m, longer than "
@@ -207,14 +208,20 @@ def _axles_of(values: np.ndarray, axles: slice) -> np.ndarray:
     return values[axles] if len(values) else values
 
 
-def split_long(v: VehicleDetection) -> list[VehicleDetection]:
+def split_long(v: VehicleDetection,
+               span: tuple[float, float] | None = None) -> list[VehicleDetection]:
     """``v`` as the vehicles it holds: one when its axles span at most
-    :data:`MAX_WHEELBASE`, else cut, each part cut again, all flagged
-    ``multiple_presence``.  The cut is the longest axle spacing that leaves two vehicles
-    of two axles or more, lies between axle groups (spacings of
-    :data:`bwim.classify.DEFAULT_GROUP_SPACING` or more) with a single axle leading the
-    rear vehicle, and leaves both within the limit; failing that, without the limit;
-    failing that, the longest spacing."""
+    :data:`MAX_WHEELBASE`, else cut, each part cut again.  The cut is the longest axle
+    spacing that leaves two vehicles of two axles or more, lies between axle groups
+    (spacings of :data:`bwim.classify.DEFAULT_GROUP_SPACING` or more) with a single axle
+    leading the rear vehicle, and leaves both within the limit; failing that, without
+    the limit; failing that, the longest spacing.
+
+    ``span`` (m, the lines' support in the pair's frame, as :func:`detect_axles` takes
+    it): each part's window is its own time on the span, and the two parts are flagged
+    ``multiple_presence`` only when those windows overlap (vehicles one after the other
+    are not on the span together).  Without it the parts keep the whole's window and
+    are both flagged.  Every other flag and the lateral position are the whole's."""
     spacings = np.asarray(v.passage.axle_spacings, dtype=float)
     if spacings.size < 2 or float(spacings.sum()) <= MAX_WHEELBASE:
         return [v]
@@ -231,20 +238,25 @@ def split_long(v: VehicleDetection) -> list[VehicleDetection]:
                                     and offsets[-1] - offsets[k + 1] <= MAX_WHEELBASE))]
 
     cut = max(cuts(True) or cuts(False) or range(n), key=lambda k: spacings[k])
-    parts = []
-    for axles in (slice(0, cut + 1), slice(cut + 1, None)):
-        first = axles.start
-        p = v.passage
-        passage = Passage(speed=p.speed, lane=p.lane, axle_spacings=spacings[axles][:-1]
-                          if axles.stop is not None else spacings[first:],
-                          delay=p.delay + offsets[first] / p.speed, track_width=p.track_width)
-        flags = v.flags if FLAG_MULTIPLE_PRESENCE in v.flags else (*v.flags,
-                                                                  FLAG_MULTIPLE_PRESENCE)
-        parts.append(dataclasses.replace(
-            v, passage=passage, flags=flags, axle_times=_axles_of(v.axle_times, axles),
-            axle_amplitudes=_axles_of(v.axle_amplitudes, axles),
-            detector_times=_axles_of(v.detector_times, axles)))
-    return [w for part in parts for w in split_long(part)]
+    p = v.passage
+    halves = [(axles, Passage(speed=p.speed, lane=p.lane,
+                              axle_spacings=spacings[axles][:-1] if axles.stop is not None
+                              else spacings[axles.start:],
+                              delay=p.delay + offsets[axles.start] / p.speed,
+                              track_width=p.track_width))
+              for axles in (slice(0, cut + 1), slice(cut + 1, None))]
+    windows = ([v.window] * 2 if span is None else
+               [tuple(float(x) for x in w) for w in span_windows([q for _, q in halves], span)])
+    together = span is None or windows_overlap(*windows)
+    flags = (v.flags if not together or FLAG_MULTIPLE_PRESENCE in v.flags
+             else (*v.flags, FLAG_MULTIPLE_PRESENCE))
+    parts = [dataclasses.replace(
+        v, passage=passage, flags=flags, window=window,
+        axle_times=_axles_of(v.axle_times, axles),
+        axle_amplitudes=_axles_of(v.axle_amplitudes, axles),
+        detector_times=_axles_of(v.detector_times, axles))
+        for (axles, passage), window in zip(halves, windows, strict=True)]
+    return [w for part in parts for w in split_long(part, span)]
 
 
 #: Relative speed difference within which two pairs' vehicles may be one vehicle.
