@@ -28,6 +28,7 @@ from benchmarks import (  # noqa: E402
     bench_realsite,
     bench_site,
     bench_site_model,
+    bench_speed_budget,
     bench_stream,
     bench_testday,
     bench_vbi,
@@ -53,6 +54,7 @@ def main() -> None:
     bench_detect_site.main([])
     bench_stream.main([])
     bench_realsite.main()
+    bench_speed_budget.main([])
     bench_drift.main()
     bench_axle_shares.main([])
     bench_faults.main()
