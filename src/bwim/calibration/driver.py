@@ -19,6 +19,19 @@ is the truth).  Both answers are reported (:attr:`Calibration.two_stage`); the b
 its removal are measured by ``tests/validation/test_calibration.py`` and
 ``bwim reproduce``.
 
+**Mass from the free vibration** (``mass="auto"``, the default, when the records carry
+a tail of free vibration after the truck leaves; ``"free"`` to require it; ``"dynamic"``
+for the stages' answer alone): after the stages (and the mesh correction), every mass
+family is scaled by one factor fitted to the free vibration after exit
+(:func:`~bwim.calibration.quasistatic.fit_mass`, the first mode, amplitudes free, the
+calibrated stiffness fixed; docs/theory.md §12), on the model the parameters belong to
+(the corrector model with the mesh correction).  The free vibration depends on the bridge
+alone, so the mass it gives carries no error of the road or of the truck's model, which
+the dynamic misfit passes on to the mass; it sets the model's first natural frequency to
+the measured one, and the mass error becomes that of the stiffness.  The stages' mass
+distribution over zones and girders is kept; the standard error is the fit's
+(:attr:`~bwim.calibration.quasistatic.MassFit.standard_error`).
+
 Every stage is one :func:`~bwim.calibration.stages.run_stage`.  ``method`` chooses the
 optimiser of stages 1–2: ``"ce"`` (the paper's Cross-Entropy, sub-structured when there
 are several zones, with the neighbour map from which zones touch which measurement
@@ -57,6 +70,7 @@ from bwim.calibration.problem import (
     noise_weights,
     peak_weights,
 )
+from bwim.calibration.quasistatic import MassFit, fit_mass
 from bwim.calibration.sensitivity import Identifiability, identifiability
 from bwim.calibration.stages import SUBSTRUCTURED_SMOOTHING, Method, StageResult, run_stage
 from bwim.errors import InputError, parse_enum
@@ -67,7 +81,8 @@ from bwim.records import Record
 from bwim.road import RoadProfile
 from bwim.vehicles import Vehicle
 
-__all__ = ["Calibration", "Refine", "calibrate"]
+__all__ = ["FREE_MASS_BOUNDS", "FREE_MASS_MODES", "Calibration", "MassSource", "Refine",
+           "calibrate"]
 
 
 _REFINE_NAME = "joint refinement (dynamic)"
@@ -82,6 +97,22 @@ class Refine(StrEnum):
 
     NONE = "none"
     LM = "lm"
+
+
+class MassSource(StrEnum):
+    """Where the calibrated mass comes from (module docstring)."""
+
+    AUTO = "auto"  #: the free vibration when the records have one, else the stages
+    FREE = "free"  #: the free vibration after exit, required
+    DYNAMIC = "dynamic"  #: the stages' dynamic misfit (the paper's)
+
+
+#: Modes of the free-vibration mass fit: the first (the higher modes' frequencies also
+#: carry the transverse stiffness's error into the mass).
+FREE_MASS_MODES = 1
+#: Search box of the free-vibration mass scale, factors of the stages' masses; a scale at
+#: either end is a failed fit.
+FREE_MASS_BOUNDS = (0.5, 2.0)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -132,6 +163,10 @@ class Calibration(OptimizeResult):
         What the mesh defect correction did (``mesh_correction=``): its passes, parameter
         changes and defect.  ``two_stage`` then holds the paper's two stages on the
         uncorrected model, ``params`` the corrected answer.
+    mass : MassFit or None
+        The free-vibration mass fit (``mass=``; its ``x`` scales the stages' masses), or
+        None when the mass is the stages' (``mass="dynamic"``, no mass unknown, or
+        ``"auto"`` without a free vibration to fit).
     """
 
     bridge: Bridge
@@ -145,6 +180,7 @@ class Calibration(OptimizeResult):
     weighting: str = "none"
     discretisation: MeshConvergence | None = None
     mesh_correction: MeshCorrection | None = None
+    mass: MassFit | None = None
 
     @property
     def history(self) -> tuple[object, ...]:
@@ -191,6 +227,7 @@ def calibrate(
     weights=None,
     mesh_check: float | None = None,
     mesh_correction: int | str = 0,
+    mass: MassSource | str = MassSource.AUTO,
     n_modes: int | None = None,
     n_jobs: int = 1,
     client=None,
@@ -270,6 +307,16 @@ def calibrate(
         :data:`~bwim.calibration.meshdefect.AUTO_TOL`) at every sensor, at most
         :data:`~bwim.calibration.meshdefect.AUTO_MAX_LEVELS`; none if it is already
         there.  Default 0: no correction.  See :attr:`Calibration.mesh_correction`.
+    mass : "auto", "free" or "dynamic"
+        Where the mass comes from (module docstring): ``"free"``, one scale of every mass
+        family fitted to the free vibration after the truck leaves (needs every mass
+        family of the bridge among ``unknowns`` and a tail of at least three periods of
+        the first mode recorded; ``success=False`` with the reason otherwise);
+        ``"dynamic"``, the stages' answer (the paper's); ``"auto"`` (default), ``"free"``
+        when those hold, else ``"dynamic"`` (a failed fit then keeps the stages' masses
+        and says so in ``message``, without failing the calibration).  The scale is
+        searched within :data:`FREE_MASS_BOUNDS` of the stages' masses.  See
+        :attr:`Calibration.mass`.
     n_modes : int, optional
         Modes of the dynamic simulations (default: up to sampling_rate / 8).
     n_jobs, client
@@ -282,6 +329,7 @@ def calibrate(
     t0 = time.perf_counter()
     method = parse_enum(Method, method, "method")
     refine = parse_enum(Refine, refine, "refine")
+    mass = parse_enum(MassSource, mass, "mass")
     if isinstance(start_bridge, Bridge) and unknowns is None:
         unknowns = tuple(u for u in ("E_x", "E_y", "mu") if u in start_bridge.params)
     records = _check_inputs(start_bridge, records, unknowns, bounds)
@@ -306,16 +354,56 @@ def calibrate(
                                   unknowns=unknowns, records=records, ctx=ctx)
         correction = mesh.solve(first)
         passes += mesh.states
-    return _result(passes, correction, unknowns=unknowns, records=records, ctx=ctx,
-                   weighting=weighting, disc=disc, mesh_check=mesh_check, t0=t0)
+    free = _free_mass(mass, passes[-1].bridge, correction, unknowns, records, ctx)
+    return _result(passes, correction, free, mass is MassSource.FREE, unknowns=unknowns,
+                   records=records, ctx=ctx, weighting=weighting, disc=disc,
+                   mesh_check=mesh_check, t0=t0)
 
 
-def _result(passes: list[_Pass], correction: MeshCorrection | None, *,
+def _free_mass(mass: MassSource, bridge: Bridge, correction: MeshCorrection | None,
+               unknowns: tuple[str, ...], records: list[Record],
+               ctx: _Context) -> MassFit | None:
+    """The free-vibration mass fit ``mass`` asks for (None: keep the stages' masses)."""
+    if mass is MassSource.DYNAMIC:
+        return None
+    families = [f for f in Bridge.MASS_FAMILIES if f in bridge.params]
+    missing = [f for f in families if f not in unknowns]
+    if missing or not families:
+        if mass is MassSource.AUTO:
+            return None
+        why = (f"the mass families {missing} are not among the unknowns" if missing
+               else "the bridge has no mass family")
+        return MassFit(x=np.nan, fun=np.nan, frequencies=np.zeros(0), n_samples=0,
+                       success=False, message=f"mass='free': {why}")
+    model = correction.bridge if correction is not None else bridge
+    lo, hi = FREE_MASS_BOUNDS
+    fit = fit_mass(model, records, n_modes=FREE_MASS_MODES, weights=ctx.weights,
+                   bounds=FREE_MASS_BOUNDS)
+    if mass is MassSource.AUTO and fit.n_samples == 0:
+        return None
+    if fit.success and not lo * (1 + 1e-3) < fit.x < hi * (1 - 1e-3):
+        fit = replace(fit, success=False, message=f"the mass scale {fit.x:.4g} reached a "
+                                                  f"bound of {FREE_MASS_BOUNDS}")
+    return fit
+
+
+def _result(passes: list[_Pass], correction: MeshCorrection | None, free: MassFit | None,
+            free_required: bool, *,
             unknowns: tuple[str, ...], records: list[Record], ctx: _Context, weighting: str,
             disc: MeshConvergence | None, mesh_check: float | None, t0: float) -> Calibration:
-    """The last pass's model and uncertainties, the first pass's two stages, every stage,
-    the identifiability and mesh check of the answer, and the outcome in scipy's terms."""
-    current, uncertainty = passes[-1].bridge, passes[-1].uncertainty
+    """The last pass's model and uncertainties (its masses scaled by the free-vibration
+    fit ``free`` when it succeeded; a failed fit fails the calibration when
+    ``free_required``), the first pass's two stages, every stage, the
+    identifiability and mesh check of the answer, and the outcome in scipy's terms."""
+    current, uncertainty = passes[-1].bridge, dict(passes[-1].uncertainty)
+    if free is not None and free.success:
+        scaled = {f: current.params[f] * free.x for f in Bridge.MASS_FAMILIES
+                  if f in current.params}
+        current = current.with_params(**scaled)
+        uncertainty.update({f: np.abs(v) * free.standard_error / free.x
+                            for f, v in scaled.items()})
+        if correction is not None:
+            correction = replace(correction, bridge=correction.bridge.with_params(**scaled))
     stages = tuple(s for p in passes for s in p.stages)
     two_stage = passes[0].two_stage
     stiff = tuple(u for u in unknowns if u in Bridge.STIFFNESS_FAMILIES)
@@ -333,15 +421,19 @@ def _result(passes: list[_Pass], correction: MeshCorrection | None, *,
                    f"{failed[0].name}: {failed[0].message}")
     elif correction is not None and not correction.converged:
         message = correction.summary()
+    elif free is not None and not free.success:
+        message = (f"the free-vibration mass fit did not succeed ({free.message}); the "
+                   "masses are the stages'")
     else:
         message = f"every stage succeeded; the last, {stages[-1].name}: {stages[-1].message}"
     return Calibration(bridge=current, params=params, uncertainty=unc, stages=stages,
                        x=space.vector(), labels=tuple(space.labels()), fun=stages[-1].fun,
                        nfev=sum(s.nfev for s in stages), nit=sum(s.nit for s in stages),
-                       success=not failed and (correction is None or correction.converged),
+                       success=not failed and (correction is None or correction.converged)
+                       and (free is None or free.success or not free_required),
                        message=message, wall_time=time.perf_counter() - t0,
                        identifiability=report, two_stage=two, weighting=weighting,
-                       discretisation=disc, mesh_correction=correction)
+                       discretisation=disc, mesh_correction=correction, mass=free)
 
 
 def _weights(weights, records: list[Record], bridge: Bridge, vehicle: Vehicle,

@@ -114,6 +114,11 @@ class MassFit:
         Free-vibration samples used (over all records and channels).
     success : bool
     message : str
+    standard_error : float
+        Standard error of ``x``: ``sqrt(2 s² / f''(x))``, ``f`` the projected residual
+        (its curvature by central differences, ``2 JᵀJ`` of the Gauss-Newton model) and
+        ``s² = fun / (n_samples − amplitudes − 1)`` the residual variance per sample
+        (white residuals assumed; NaN without a fit or with a flat cost).
     """
 
     x: float
@@ -122,6 +127,7 @@ class MassFit:
     n_samples: int
     success: bool
     message: str
+    standard_error: float = float("nan")
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -627,5 +633,11 @@ def fit_mass(
     r = so.minimize_scalar(cost, bounds=(lo, hi), method="bounded",
                            options={"xatol": 1e-6})
     n = sum(d.size for _, d in segs)
+    dof = n - sum(2 * om0.size * d.shape[1] for _, d in segs) - 1
+    h = 1e-3 * float(r.x)
+    curvature = (cost(r.x + h) - 2 * float(r.fun) + cost(r.x - h)) / h**2
+    se = (float(np.sqrt(2 * float(r.fun) / dof / curvature))
+          if dof > 0 and curvature > 0 else float("nan"))
     return MassFit(x=float(r.x), fun=float(r.fun), frequencies=om0 / np.sqrt(r.x) / 2 / np.pi,
-                   n_samples=n, success=bool(r.success), message=str(r.message))
+                   n_samples=n, success=bool(r.success), message=str(r.message),
+                   standard_error=se)
