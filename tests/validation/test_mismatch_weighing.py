@@ -104,10 +104,11 @@ def test_corrected_chain_on_wim_grade_roads_with_a_finer_truth():
     two crossings (road measured with 1 mm RMS error, start 28 / 42 GPa, 1950 kg/m²,
     ``mesh_correction=1``), then MFI on the 24 × 16 model its parameters belong to, of the
     six vehicles on ISO class A roads (COST 323's smooth approach; same seeds and noise).
-    Issue 12's target: every GVW within 2 % (met: measured +0.56, +0.12, −1.12, −1.15,
-    +0.57, −0.32 %), every axle within 5 % (missed by one tridem axle: largest axle error
-    5.25 %, the others ≤ 3.2 %).  The bound on the axles is the measured value, rounded
-    up."""
+    Issue 12's target: every GVW within 2 % (met: measured +0.55, +0.11, −1.13, −1.09,
+    +0.57, −0.32 %), every axle within 5 % (met since the mass comes from the free
+    vibration after exit, ``calibrate``'s default ``mass="auto"``: largest axle error
+    2.62 %; with the stages' mass, ``mass="dynamic"``, one tridem axle missed it at
+    5.25 %)."""
     from benchmarks.bench_mismatch import (
         corrected_chain,
         smooth_road_records,
@@ -120,4 +121,4 @@ def test_corrected_chain_on_wim_grade_roads_with_a_finer_truth():
     assert chain.mesh_correction.converged and chain.mesh_correction.mesh == (24, 16)
     _, recs = smooth_road_records("A", sigma=data[4], data_mesh=(48, 32))
     for k, (gvw, axles) in enumerate(weigh_all(chain.mesh_correction.bridge, recs)):
-        assert abs(gvw) < 2.0 and np.abs(axles).max() < 5.5, (k, gvw, axles)
+        assert abs(gvw) < 2.0 and np.abs(axles).max() < 5.0, (k, gvw, axles)

@@ -2,7 +2,7 @@
 
 Same-model data throughout (a two-zone beam under constant moving forces, simulated on the
 model that is calibrated): these tests check the wiring and the statistics only; the
-accuracy against a finer model's data is tests/validation/test_mesh12_free_mass.py.
+accuracy against a finer model's data is tests/validation/test_free_vibration_mass.py.
 References: the options' contract (bwim.calibration.driver docstring); for the standard
 error, the Monte Carlo spread of the fitted scale over noise seeds.
 """
