@@ -323,10 +323,15 @@ def _held(readings: np.ndarray) -> np.ndarray:
     """Per channel whether it holds its maximum or its minimum over the record for at
     least :data:`CLIP_RUN` consecutive samples (only those can be clipped)."""
     out = np.zeros(readings.shape[1], dtype=bool)
+    m = readings.shape[0] - CLIP_RUN + 1  # the runs' possible starts
+    if m <= 0:
+        return out
     for extreme in (readings.max(axis=0), readings.min(axis=0)):
-        count = np.zeros((readings.shape[0] + 1, readings.shape[1]), dtype=np.int64)
-        np.cumsum(readings == extreme, axis=0, out=count[1:])
-        out |= np.any(count[CLIP_RUN:] - count[:-CLIP_RUN] == CLIP_RUN, axis=0)
+        at = readings == extreme
+        run = at[:m].copy()  # at the extreme from each start for CLIP_RUN samples
+        for j in range(1, CLIP_RUN):
+            run &= at[j:j + m]
+        out |= run.any(axis=0)
     return out
 
 
@@ -389,7 +394,7 @@ def _worst(record: Record, passage: Passage, lines: MultiRunCalibration,
     c = _compare(w, sub)
     if c is None:
         return None, {}, model
-    trend = _trends(record, w, sub)
+    trend = _trends(record, w, model.readings)
     noise = sub.channel_noise
     y = _positions(sub)
     expected = _predicted(y, c.gain, c.snr)
@@ -422,15 +427,16 @@ def _worst(record: Record, passage: Passage, lines: MultiRunCalibration,
     if worst is None:  # a gain fault first: its residual has a trend too...
         worst = drifting
     elif drifting is not None and drifting.gauge == worst.gauge and \
-            _explains_drift(record, w, sub, names.index(worst.gauge)):
+            _explains_drift(record, w, model.readings, names.index(worst.gauge)):
         worst = drifting  # ... unless a baseline change explains its residual better
     return worst, ratios, model
 
 
-def _residuals(record: Record, w: Weighing, sub: MultiRunCalibration) -> np.ndarray:
-    """Each channel's residual over the whole record: reading − offset − fitted static
-    reading (0 with no axle on the support), logger units, shape (n_t, n_channels)."""
-    r = read_channels(record, sub.channels) - w.offsets
+def _residuals(record: Record, w: Weighing, readings: np.ndarray) -> np.ndarray:
+    """Each channel's residual over the whole record: reading (``readings``, the
+    weighing's channels) − offset − fitted static reading (0 with no axle on the
+    support), logger units, shape (n_t, n_channels)."""
+    r = readings - w.offsets
     r[_samples(record, w)] -= w.fitted
     return r
 
@@ -443,18 +449,18 @@ def _samples(record: Record, w: Weighing) -> np.ndarray:
     return on
 
 
-def _trends(record: Record, w: Weighing, sub: MultiRunCalibration) -> np.ndarray:
+def _trends(record: Record, w: Weighing, readings: np.ndarray) -> np.ndarray:
     """Each channel's residual's least-squares straight line in time: its change from the
     first sample to the last, logger units."""
     t = record.time - record.time.mean()
-    return (t @ _residuals(record, w, sub)) / (t @ t) * float(record.time[-1] - record.time[0])
+    return (t @ _residuals(record, w, readings)) / (t @ t) * float(record.time[-1] - record.time[0])
 
 
-def _explains_drift(record: Record, w: Weighing, sub: MultiRunCalibration, g: int) -> bool:
+def _explains_drift(record: Record, w: Weighing, readings: np.ndarray, g: int) -> bool:
     """Whether channel ``g``'s residual is explained better by a straight line in time (a
     baseline change) than by a multiple of its fitted static reading (a gain error): the
     larger sum of squares explained by the one regressor."""
-    r = _residuals(record, w, sub)[:, g]
+    r = _residuals(record, w, readings)[:, g]
     f = np.zeros_like(r)
     f[_samples(record, w)] = w.fitted[:, g]
     t = record.time - record.time.mean()

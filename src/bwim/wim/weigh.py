@@ -322,6 +322,12 @@ class WeighingModel:
     design: _Design
     centred: _Centred
 
+    @property
+    def readings(self) -> np.ndarray:
+        """The calibration's channels' readings over the record, (n_t, n_channels), as
+        :func:`bwim.wim.influence_line.read_channels` gives them (not to be changed)."""
+        return self.design.readings
+
     def weigh(self, *, scale_correction: bool = True, scale: float | None = None
               ) -> Weighing:
         """The weighing with :func:`weigh`'s ``scale_correction`` and ``scale``."""
