@@ -13,6 +13,10 @@ Contract
   report groups), ``s(t₀)`` the calibration's :class:`~bwim.wim.scale_trend.ScaleTrend` at
   the record's clock time ``t₀ = record.clock_seconds()``, ``I_g(·; y)`` channel ``g``'s line at
   the vehicle's lateral covariate ``y``, ``c_g`` the channel's baseline offset.
+* :func:`weighing_model` makes everything of a weighing that does not depend on the
+  scale (the readings, the lines' readings of a unit weight on each axle group, their
+  offsets removed) once; its :meth:`WeighingModel.weigh` gives :func:`weigh`'s result
+  for any ``scale_correction`` and ``scale``, the same numbers.
 * Weights in N; readings in the calibration's units; positions in the passages' frame.
 * Every result carries plausibility ``flags`` (strings, written as they are to
   summary.csv) and a ``quality``: ``"reject"`` if any flag of :data:`HARD_FLAGS` is set,
