@@ -38,7 +38,7 @@ from .result import (
     Detection,
     VehicleDetection,
 )
-from .signals import channel_data
+from .signals import channel_data, median
 
 __all__ = ["END_SHARE", "END_SPAN", "VehicleEstimate", "assemble_detection", "ends_loaded"]
 
@@ -58,7 +58,7 @@ def ends_loaded(time: np.ndarray, total: np.ndarray) -> bool:
     on the bridge, at its end or its start."""
     t = np.asarray(time, dtype=float)
     y = np.asarray(total, dtype=float)
-    n = max(2, round(END_SPAN / float(np.median(np.diff(t)))))
+    n = max(2, round(END_SPAN / median(np.diff(t))))
     if y.size < 4 * n:
         return False
     start, end = float(y[:n].mean()), float(y[-n:].mean())

@@ -30,7 +30,7 @@ from bwim.errors import InputError, require_range
 from bwim.records import Record
 from bwim.sensors import Sensor, SensorKind
 
-from .signals import channel_data
+from .signals import channel_data, column_medians, median
 
 __all__ = ["LateralPosition", "lateral_position", "section_gauges"]
 
@@ -124,8 +124,8 @@ def lateral_position(
     sens = section_gauges(record, gauges)
     names = tuple(s.name for s in sens)
     ys = [getattr(s, "y", None) for s in sens]
-    metres = (len(sens) > 1 and all(y is not None for y in ys)
-              and np.ptp(np.asarray(ys, dtype=float)) > 0)
+    # the sensors' y are finite (bwim.sensors.Sensor): they differ when max > min
+    metres = len(sens) > 1 and all(y is not None for y in ys) and max(ys) > min(ys)
     unit = "m" if metres else "gauge index"
     if not sens:
         return LateralPosition(value=float("nan"), unit=unit, weights=np.zeros(0), gauges=())
@@ -146,15 +146,17 @@ def lateral_position(
     if quiet.shape != t.shape or not quiet.any():
         raise InputError("quiet must be a boolean mask of the record's samples with at "
                          "least one True")
-    dev = data[inside] - np.median(data[quiet], axis=0)
+    level = column_medians(data[quiet])
     if weight == "peak":
-        w = np.clip(dev.max(axis=0), 0.0, None)
+        # the largest deviation: the largest reading less the level (a subtraction
+        # rounds monotonically: the same number as the largest of the differences)
+        w = np.maximum(data[inside].max(axis=0) - level, 0.0)
     else:
-        w = np.clip(dev, 0.0, None).sum(axis=0) * float(np.median(np.diff(t)))
-    if not np.any(w > 0):
+        w = np.maximum(data[inside] - level, 0.0).sum(axis=0) * median(np.diff(t))
+    if not (w > 0).any():
         return LateralPosition(value=float("nan"), unit=unit, weights=np.zeros(len(sens)),
                                gauges=names)
-    w = np.clip(w - thr * w.max(), 0.0, None)
+    w = np.maximum(w - thr * w.max(), 0.0)
     coord = np.asarray(ys, dtype=float) if metres else np.arange(1.0, len(sens) + 1.0)
     return LateralPosition(value=float(w @ coord / w.sum()), unit=unit, weights=w,
                            gauges=names)

@@ -25,7 +25,7 @@ from bwim.errors import InputError, require_finite, require_positive
 from bwim.records import Passage
 from bwim.wim import InfluenceLine
 
-from .signals import robust_sigma
+from .signals import median, robust_sigma
 
 __all__ = ["overlapping", "resolve_span", "span_windows", "unexplained_activity",
            "windows_overlap"]
@@ -101,7 +101,7 @@ def unexplained_activity(
     outside = ~inside
     if outside.sum() < 0.1 * t.size or not inside.any():
         return np.zeros((0, 2))
-    dev = s - np.median(s[outside])
+    dev = s - median(s[outside])
     noise = robust_sigma(np.diff(s)) / np.sqrt(2.0)
     limit = max(fraction * np.abs(dev[inside]).max(), snr * noise)
     active = outside & (np.abs(dev) > limit)
@@ -109,7 +109,7 @@ def unexplained_activity(
         return np.zeros((0, 2))
     edges = np.flatnonzero(np.diff(np.concatenate([[0], active.astype(int), [0]])))
     runs = edges.reshape(-1, 2)  # [start, stop) sample indices
-    dt = float(np.median(np.diff(t)))
+    dt = median(np.diff(t))
     keep = (runs[:, 1] - runs[:, 0]) * dt >= min_duration
     runs = runs[keep]
     return np.column_stack([t[runs[:, 0]], t[runs[:, 1] - 1]]) if runs.size else np.zeros((0, 2))

@@ -8,7 +8,9 @@ Contract
 * :func:`robust_sigma` is the normalised median absolute deviation, 1.4826 MAD, the
   standard deviation of Gaussian noise that ignores a minority of large samples (pulses).
 * :func:`median` is ``numpy.median`` of a 1-D array (the mean of the two middle values
-  for an even count; NaN if any value is), the same number, by one partial sort.
+  for an even count; NaN if any value is), the same number, by one partial sort;
+  :func:`column_medians` is ``numpy.median(values, axis=0)`` of a 2-D array, the same
+  numbers, by one partial sort of each column laid out contiguously.
 * :func:`parabolic_vertex` gives the sub-sample position of local maxima: the vertex of
   the parabola through the three samples around each (fractional sample index).
 * :func:`split_vehicles` cuts a sequence of axles into vehicles at gaps longer than a
@@ -37,7 +39,8 @@ from scipy.ndimage import median_filter
 from bwim.records import Record
 from bwim.sensors import Sensor
 
-__all__ = ["channel_data", "gaussian_average", "gaussian_kernel", "median", "parabolic_vertex",
+__all__ = ["channel_data", "column_medians", "gaussian_average", "gaussian_kernel", "median",
+           "parabolic_vertex",
            "remove_baseline", "robust_sigma", "split_vehicles"]
 
 #: Gaussian kernels reach this many standard deviations (scipy.ndimage's default).
@@ -58,6 +61,28 @@ def median(values: np.ndarray) -> float:
         return float(np.partition(v, k)[k])
     part = np.partition(v, (k - 1, k))
     return float((part[k - 1] + part[k]) / 2)
+
+
+def column_medians(values: np.ndarray) -> np.ndarray:
+    """The median of each column of a 2-D array (n, k), shape (k,) (see the module
+    docstring); NaN for a column holding one, and for every column when n = 0."""
+    v = np.asarray(values, dtype=float)
+    n = v.shape[0]
+    if n == 0:
+        return np.full(v.shape[1], np.nan)
+    rows = np.ascontiguousarray(v.T)  # each column's values one after the other
+    k = n // 2
+    # the middle order statistics (the mean of the two for an even count) and the
+    # largest, NaN when the column holds one (NaN sorts last): numpy.median's partial
+    # sort, the same indices (so the same order of equal values, e.g. 0 and -0)
+    rows.partition([k, -1] if n % 2 else [k - 1, k, -1], axis=1)
+    middle = rows[:, k:k + 1] if n % 2 else rows[:, k - 1:k + 1]
+    out = np.add.reduce(middle, axis=1)  # their mean as numpy.mean makes it
+    out /= middle.shape[1]
+    nan = np.isnan(rows[:, -1])
+    if nan.any():
+        out[nan] = np.nan
+    return out
 
 
 def robust_sigma(values: np.ndarray) -> float:

@@ -436,9 +436,12 @@ def _vehicle(record: Record, ev: EventDetection, k: int, calibration: SiteCalibr
         return dataclasses.replace(out, group_laterals=_group_laterals(
             record, lv, calibration, faulty))
     try:
-        w = health.mark(weigh(record, v.passage, health.lines, combine=setup.combine,
-                              scale_correction=method == "trend",
-                              scale=None if method == "trend" else factor))
+        scaling = {"scale_correction": method == "trend",
+                   "scale": None if method == "trend" else factor}
+        # the gauge check's last weighing had the healthy channels: its model, scaled
+        w = health.mark(health.model.weigh(**scaling) if health.model is not None else
+                        weigh(record, v.passage, health.lines, combine=setup.combine,
+                              **scaling))
     except _EVENT_ERRORS as exc:
         return refused(f"weighing failed: {_why(exc)}")
     flags = tuple(dict.fromkeys([*flags, *w.flags, *drift_flags]))

@@ -90,9 +90,10 @@ import numpy as np
 from bwim.errors import BwimError, InputError
 from bwim.plausibility import ordered_flags, quality_of
 from bwim.records import Passage, Record
-from bwim.wim import Weighing, weigh
+from bwim.wim import Weighing
 from bwim.wim.influence_line import read_channels
 from bwim.wim.multirun import MultiRunCalibration
+from bwim.wim.weigh import WeighingModel, weighing_model
 
 __all__ = ["CLIP_CHANCE", "CLIP_RUN", "DRIFT_NOISE", "FAULT_KINDS", "FLAG_GAUGE_FAULT",
            "FLAT_NOISE", "GAIN_TOLERANCE", "MIN_COMPARED", "SIGNIFICANCE",
@@ -184,6 +185,11 @@ class GaugeHealth:
         Each healthy channel's gain ratio over what the others predict, ``a_g / â_g``,
         in the last comparison (empty when none was made: another vehicle on the span,
         too few channels, a failed weighing).
+    model : WeighingModel or None
+        The last comparison's weighing before its scale
+        (:func:`bwim.wim.weigh.weighing_model` of the record, the passage and
+        :attr:`lines`, with ``combine``): the healthy channels' weighing with any scale
+        without making it again; None when no comparison weighed those channels.
     """
 
     faults: tuple[GaugeFault, ...]
@@ -191,6 +197,7 @@ class GaugeHealth:
     lines: MultiRunCalibration | None
     reason: str = ""
     ratios: Mapping[str, float] = field(default_factory=dict)
+    model: WeighingModel | None = None
 
     @property
     def usable(self) -> bool:
@@ -242,11 +249,13 @@ def check_gauges(record: Record, passage: Passage, lines: MultiRunCalibration, *
     faults += _clipped(readings, lines, record, passage, skip={f.gauge for f in faults})
     bad = {f.gauge for f in faults}
     ratios: dict[str, float] = {}
+    model = None  # the last comparison's, when it weighed the healthy channels
     while len(names) - len(bad) >= MIN_COMPARED and 2 * len(bad) < len(names):
-        fault, ratios = _worst(record, passage, lines,
-                                    [n for n in names if n not in bad], combine)
+        fault, ratios, model = _worst(record, passage, lines,
+                                      [n for n in names if n not in bad], combine)
         if fault is None:
             break
+        model = None
         if not alone:
             return GaugeHealth(
                 faults=tuple(faults), healthy=tuple(n for n in names if n not in bad),
@@ -265,7 +274,7 @@ def check_gauges(record: Record, passage: Passage, lines: MultiRunCalibration, *
             reason=f"too few healthy gauges: {len(healthy)} of {len(names)}, faulty: {shown}")
     return GaugeHealth(faults=tuple(faults), healthy=healthy,
                        lines=restrict_lines(lines, healthy),
-                       ratios=MappingProxyType(ratios))
+                       ratios=MappingProxyType(ratios), model=model)
 
 
 def _flat(readings: np.ndarray, lines: MultiRunCalibration) -> list[GaugeFault]:
@@ -314,10 +323,15 @@ def _held(readings: np.ndarray) -> np.ndarray:
     """Per channel whether it holds its maximum or its minimum over the record for at
     least :data:`CLIP_RUN` consecutive samples (only those can be clipped)."""
     out = np.zeros(readings.shape[1], dtype=bool)
+    m = readings.shape[0] - CLIP_RUN + 1  # the runs' possible starts
+    if m <= 0:
+        return out
     for extreme in (readings.max(axis=0), readings.min(axis=0)):
-        count = np.zeros((readings.shape[0] + 1, readings.shape[1]), dtype=np.int64)
-        np.cumsum(readings == extreme, axis=0, out=count[1:])
-        out |= np.any(count[CLIP_RUN:] - count[:-CLIP_RUN] == CLIP_RUN, axis=0)
+        at = readings == extreme
+        run = at[:m].copy()  # at the extreme from each start for CLIP_RUN samples
+        for j in range(1, CLIP_RUN):
+            run &= at[j:j + m]
+        out |= run.any(axis=0)
     return out
 
 
@@ -361,20 +375,26 @@ def _clipped(readings: np.ndarray, lines: MultiRunCalibration, record: Record,
 
 
 def _worst(record: Record, passage: Passage, lines: MultiRunCalibration,
-           names: list[str], combine: str) -> tuple[GaugeFault | None, dict[str, float]]:
+           names: list[str], combine: str
+           ) -> tuple[GaugeFault | None, dict[str, float], WeighingModel | None]:
     """Step 3: the most significant gain or drift fault among ``names`` (None when every
-    one passes or the weighing fails) and every channel's ratio (empty when it fails)."""
+    one passes or the weighing fails), every channel's ratio (empty when it fails) and
+    the weighing's model (None when it could not be made)."""
     sub = restrict_lines(lines, names)
     try:
-        w = weigh(record, passage, sub, combine=combine, scale_correction=False)
+        model = weighing_model(record, passage, sub, combine=combine)
     except _WEIGH_ERRORS:
-        return None, {}
+        return None, {}, None
+    try:
+        w = model.weigh(scale_correction=False)
+    except _WEIGH_ERRORS:
+        return None, {}, model
     if not np.isfinite(w.gvw) or w.gvw <= 0:
-        return None, {}
+        return None, {}, model
     c = _compare(w, sub)
     if c is None:
-        return None, {}
-    trend = _trends(record, w, sub)
+        return None, {}, model
+    trend = _trends(record, w, model.readings)
     noise = sub.channel_noise
     y = _positions(sub)
     expected = _predicted(y, c.gain, c.snr)
@@ -407,15 +427,16 @@ def _worst(record: Record, passage: Passage, lines: MultiRunCalibration,
     if worst is None:  # a gain fault first: its residual has a trend too...
         worst = drifting
     elif drifting is not None and drifting.gauge == worst.gauge and \
-            _explains_drift(record, w, sub, names.index(worst.gauge)):
+            _explains_drift(record, w, model.readings, names.index(worst.gauge)):
         worst = drifting  # ... unless a baseline change explains its residual better
-    return worst, ratios
+    return worst, ratios, model
 
 
-def _residuals(record: Record, w: Weighing, sub: MultiRunCalibration) -> np.ndarray:
-    """Each channel's residual over the whole record: reading − offset − fitted static
-    reading (0 with no axle on the support), logger units, shape (n_t, n_channels)."""
-    r = read_channels(record, sub.channels) - w.offsets
+def _residuals(record: Record, w: Weighing, readings: np.ndarray) -> np.ndarray:
+    """Each channel's residual over the whole record: reading (``readings``, the
+    weighing's channels) − offset − fitted static reading (0 with no axle on the
+    support), logger units, shape (n_t, n_channels)."""
+    r = readings - w.offsets
     r[_samples(record, w)] -= w.fitted
     return r
 
@@ -428,18 +449,18 @@ def _samples(record: Record, w: Weighing) -> np.ndarray:
     return on
 
 
-def _trends(record: Record, w: Weighing, sub: MultiRunCalibration) -> np.ndarray:
+def _trends(record: Record, w: Weighing, readings: np.ndarray) -> np.ndarray:
     """Each channel's residual's least-squares straight line in time: its change from the
     first sample to the last, logger units."""
     t = record.time - record.time.mean()
-    return (t @ _residuals(record, w, sub)) / (t @ t) * float(record.time[-1] - record.time[0])
+    return (t @ _residuals(record, w, readings)) / (t @ t) * float(record.time[-1] - record.time[0])
 
 
-def _explains_drift(record: Record, w: Weighing, sub: MultiRunCalibration, g: int) -> bool:
+def _explains_drift(record: Record, w: Weighing, readings: np.ndarray, g: int) -> bool:
     """Whether channel ``g``'s residual is explained better by a straight line in time (a
     baseline change) than by a multiple of its fitted static reading (a gain error): the
     larger sum of squares explained by the one regressor."""
-    r = _residuals(record, w, sub)[:, g]
+    r = _residuals(record, w, readings)[:, g]
     f = np.zeros_like(r)
     f[_samples(record, w)] = w.fitted[:, g]
     t = record.time - record.time.mean()

@@ -13,6 +13,10 @@ Contract
   report groups), ``s(t₀)`` the calibration's :class:`~bwim.wim.scale_trend.ScaleTrend` at
   the record's clock time ``t₀ = record.clock_seconds()``, ``I_g(·; y)`` channel ``g``'s line at
   the vehicle's lateral covariate ``y``, ``c_g`` the channel's baseline offset.
+* :func:`weighing_model` makes everything of a weighing that does not depend on the
+  scale (the readings, the lines' readings of a unit weight on each axle group, their
+  offsets removed) once; its :meth:`WeighingModel.weigh` gives :func:`weigh`'s result
+  for any ``scale_correction`` and ``scale``, the same numbers.
 * Weights in N; readings in the calibration's units; positions in the passages' frame.
 * Every result carries plausibility ``flags`` (strings, written as they are to
   summary.csv) and a ``quality``: ``"reject"`` if any flag of :data:`HARD_FLAGS` is set,
@@ -60,6 +64,7 @@ axle reaches the support.  ``baseline="none"``: readings are taken as offset-fre
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
@@ -80,7 +85,8 @@ from bwim.wim.influence_line import Channel, read_channels
 from bwim.wim.moses import AxleGroups, group_axles, group_share
 from bwim.wim.multirun import MultiRunCalibration
 
-__all__ = ["HARD_FLAGS", "NORMAL_CONDITION", "SOFT_FLAGS", "Limits", "Weighing", "weigh"]
+__all__ = ["HARD_FLAGS", "NORMAL_CONDITION", "SOFT_FLAGS", "Limits", "Weighing",
+           "WeighingModel", "weigh", "weighing_model"]
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class Weighing:
@@ -271,12 +277,75 @@ def weigh(
     """
     event = _inputs(record, passage, calibration, groups=groups, combine=combine,
                     lateral=lateral, baseline=baseline, limits=limits)
+    _check_scale(scale)
+    return _model(record, calibration, event).weigh(scale_correction=scale_correction,
+                                                    scale=scale)
+
+
+def _check_scale(scale: float | None) -> None:
     if scale is not None and not (np.isfinite(scale) and scale > 0):
         raise InputError(f"scale must be a positive factor, got {scale!r}")
-    design = _design(record, event, calibration, scale_correction, scale)
-    centred = _centred(design, event)
-    fit = _fit(design, centred, event, calibration)
-    flags = _flags(event, design, centred, fit, calibration)
+
+
+def weighing_model(
+    record: Record,
+    passage: Passage | None,
+    calibration: MultiRunCalibration,
+    *,
+    groups: Any = "auto",
+    combine: str = "auto",
+    lateral: float | None = None,
+    baseline: str = "fit",
+    limits: Limits | None = None,
+) -> WeighingModel:
+    """What :func:`weigh` makes before the scale: the checked options, the readings and
+    the lines' readings of a unit weight on each axle group, offsets removed; the
+    arguments are :func:`weigh`'s.  Its :meth:`WeighingModel.weigh` gives the weighing
+    (the numbers of :func:`weigh` with the same arguments) for any scale: two weighings
+    of one vehicle that differ by their scale only (the gauge check's and the drift
+    corrected one, :mod:`bwim.site.event`) make the model once."""
+    return _model(record, calibration, _inputs(
+        record, passage, calibration, groups=groups, combine=combine, lateral=lateral,
+        baseline=baseline, limits=limits))
+
+
+def _model(record: Record, calibration: MultiRunCalibration, event: _Inputs
+           ) -> WeighingModel:
+    design = _design(record, event, calibration)
+    return WeighingModel(record=record, calibration=calibration, event=event,
+                         design=design, centred=_centred(design, event))
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class WeighingModel:
+    """One vehicle's weighing before its scale (:func:`weighing_model`)."""
+
+    record: Record
+    calibration: MultiRunCalibration
+    event: _Inputs
+    design: _Design
+    centred: _Centred
+
+    @property
+    def readings(self) -> np.ndarray:
+        """The calibration's channels' readings over the record, (n_t, n_channels), as
+        :func:`bwim.wim.influence_line.read_channels` gives them (not to be changed)."""
+        return self.design.readings
+
+    def weigh(self, *, scale_correction: bool = True, scale: float | None = None
+              ) -> Weighing:
+        """The weighing with :func:`weigh`'s ``scale_correction`` and ``scale``."""
+        _check_scale(scale)
+        record, calibration, event = self.record, self.calibration, self.event
+        design = _scaled(self.design, calibration, scale_correction, scale)
+        centred = self.centred
+        fit = _fit(design, centred, event, calibration)
+        flags = _flags(event, design, centred, fit, calibration)
+        return _weighing(record, calibration, event, design, fit, flags)
+
+
+def _weighing(record: Record, calibration: MultiRunCalibration, event: _Inputs,
+              design: _Design, fit: _Fit, flags: tuple[str, ...]) -> Weighing:
     return Weighing(
         axle_weights=fit.axle_weights, group_weights=fit.group_weights,
         groups=event.groups.groups, gvw=float(fit.axle_weights.sum()), residual=fit.residual,
@@ -345,27 +414,33 @@ class _Design:
     trend_used: bool  # the factor is the scale trend's at clock_time
 
 
-def _design(record: Record, event: _Inputs, calibration: MultiRunCalibration,
-            scale_correction: bool, scale: float | None = None) -> _Design:
+def _design(record: Record, event: _Inputs, calibration: MultiRunCalibration) -> _Design:
     """The model of the readings: the lines at the vehicle's lateral covariate under each
-    axle, summed by group, and the day's scale factor."""
+    axle, summed by group (the scale factor 1: :func:`_scaled` sets it)."""
     line = calibration.line
     E = read_channels(record, line.channels)  # (n_t, n_c)
     ords = calibration.ordinates_at(event.lateral)[1:-1]  # interior ordinates (m, n_c)
     pos = event.passage.axle_x(record.time)  # (n_t, n_axles)
     M = _unit_readings(pos, ords, line.x[0], line.spacing, line.x.size - 1)
     Mg = np.matmul(event.groups.share.T, M)  # (n_t, n_groups, n_c): Σ_i share_ig M_kic
-    t0 = record.clock_seconds()
+    lo, hi = line.support
+    on = ((pos > lo) & (pos < hi)).any(axis=1)
+    return _Design(readings=E, positions=pos, groups=Mg, on=on, support=(lo, hi),
+                   clock_time=record.clock_seconds(), scale=1.0, trend_used=False)
+
+
+def _scaled(design: _Design, calibration: MultiRunCalibration, scale_correction: bool,
+            scale: float | None) -> _Design:
+    """``design`` with the day's scale factor: ``scale`` when given, else the scale
+    trend's at the clock time with ``scale_correction``, else 1."""
     trend = calibration.scale_trend
     if scale is not None:
         s = float(scale)
     else:
-        s = float(trend(t0)) if (scale_correction and trend is not None) else 1.0
-    lo, hi = line.support
-    on = ((pos > lo) & (pos < hi)).any(axis=1)
-    return _Design(readings=E, positions=pos, groups=Mg, on=on, support=(lo, hi),
-                   clock_time=t0, scale=s,
-                   trend_used=scale is None and scale_correction and trend is not None)
+        s = float(trend(design.clock_time)) if (scale_correction and trend is not None) \
+            else 1.0
+    return dataclasses.replace(design, scale=s, trend_used=scale is None and scale_correction
+                               and trend is not None)
 
 
 def _unit_readings(pos: np.ndarray, ords: np.ndarray, x0: float, h: float, n: int
