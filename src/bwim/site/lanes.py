@@ -36,9 +36,10 @@ Contract
   :data:`MAX_WHEELBASE` (the longest vehicle allowed on European roads) is vehicles
   following each other: it is cut between axle groups where two plausible vehicles
   part (:func:`split_long`; again while a part is too long).  Each part's window is its
-  own time on the span: parts on the span together are each other's multiple presence
-  (refused, never weighed as one); parts one after the other are vehicles one after the
-  other, each detected again on its own part of the record (:mod:`bwim.site.isolate`).
+  own time on the span, and each is flagged ``multiple_presence`` (refused, never
+  weighed as one) until it is confirmed: parts one after the other are vehicles one
+  after the other, each detected again on its own part of the record
+  (:mod:`bwim.site.isolate`), and that detection replaces it.
 * **Multiple presence**: vehicles whose windows on the span overlap are each flagged
   ``multiple_presence``; :attr:`LaneVehicle.others` names the lanes of the others.  A
   vehicle no detector saw (a lane without detectors) shows as gauge activity outside
@@ -217,11 +218,13 @@ def split_long(v: VehicleDetection,
     leading the rear vehicle, and leaves both within the limit; failing that, without
     the limit; failing that, the longest spacing.
 
-    ``span`` (m, the lines' support in the pair's frame, as :func:`detect_axles` takes
-    it): each part's window is its own time on the span, and the two parts are flagged
-    ``multiple_presence`` only when those windows overlap (vehicles one after the other
-    are not on the span together).  Without it the parts keep the whole's window and
-    are both flagged.  Every other flag and the lateral position are the whole's."""
+    Every part is flagged ``multiple_presence`` and keeps the whole's other flags and
+    lateral position.  ``span`` (m, the lines' support in the pair's frame, as
+    :func:`detect_axles` takes it): each part's window is its own time on the span
+    (without it, the whole's).  Parts one after the other are then each detected again
+    on their own part of the record (:func:`bwim.site.isolate.detected_alone`), whose
+    detection replaces them; a part that detection does not confirm stays flagged (its
+    axles and lateral position were read beside the other vehicle's)."""
     spacings = np.asarray(v.passage.axle_spacings, dtype=float)
     if spacings.size < 2 or float(spacings.sum()) <= MAX_WHEELBASE:
         return [v]
@@ -247,9 +250,8 @@ def split_long(v: VehicleDetection,
               for axles in (slice(0, cut + 1), slice(cut + 1, None))]
     windows = ([v.window] * 2 if span is None else
                [tuple(float(x) for x in w) for w in span_windows([q for _, q in halves], span)])
-    together = span is None or windows_overlap(*windows)
-    flags = (v.flags if not together or FLAG_MULTIPLE_PRESENCE in v.flags
-             else (*v.flags, FLAG_MULTIPLE_PRESENCE))
+    flags = v.flags if FLAG_MULTIPLE_PRESENCE in v.flags else (*v.flags,
+                                                              FLAG_MULTIPLE_PRESENCE)
     parts = [dataclasses.replace(
         v, passage=passage, flags=flags, window=window,
         axle_times=_axles_of(v.axle_times, axles),
