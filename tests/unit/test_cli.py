@@ -345,3 +345,21 @@ def test_demo_quick_runs_the_whole_chain(tmp_path, capsys, monkeypatch):
     for k in ("E_x", "E_y", "mu"):
         assert calibrated[k][0] == pytest.approx(true[k][0], rel=5e-5), k
     assert list((tmp_path / "demo").glob("*.png"))
+
+
+def test_calibrate_mass_option(files, capsys):
+    """--mass reaches calibrate: "free" on a record without a free vibration after the
+    truck leaves (the scenario records no tail) keeps the stages' mass and says why;
+    "dynamic" prints no mass line; an unknown choice is exit 2 (the accuracy of the
+    free-vibration mass is tests/validation/test_free_vibration_mass.py's)."""
+    d = files["dir"]
+    code, out, err = _run(["calibrate", files["start"], files["cal_h5"], "-o",
+                           d / "free.toml", "--method", "lm", "--mass", "free"], capsys)
+    assert code == 0, err
+    assert "mass: the stages' (the free-vibration fit failed" in out
+    code, out, err = _run(["calibrate", files["start"], files["cal_h5"], "-o",
+                           d / "dynamic.toml", "--method", "lm", "--mass", "dynamic"], capsys)
+    assert code == 0 and "free vibration" not in out and "mass:" not in out, out
+    with pytest.raises(SystemExit) as exc:
+        main(["calibrate", str(files["start"]), str(files["cal_h5"]), "--mass", "heavy"])
+    assert exc.value.code == 2

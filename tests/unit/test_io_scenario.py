@@ -624,6 +624,11 @@ def test_identify_and_calibrate_options(tmp_path):
              'mesh_correction = "auto"\n')
     assert s.calibrate.kwargs() == {"weights": "noise", "mesh_check": 0.05,
                                     "mesh_correction": "auto"}
+    s = load(tmp_path, PLATE + '[calibrate]\nmass = "dynamic"\n')
+    assert s.calibrate.kwargs() == {"mass": "dynamic"}
+    p = write(tmp_path, PLATE + '[calibrate]\nmass = "heavy"\n')
+    with pytest.raises(InputError, match=r"\[calibrate\] mass: .*'heavy'"):
+        scn.load_scenario(p)
     for bad, shown in (("4", "4"), ("-1", "-1"), ('"fine"', "'fine'"), ("true", "true")):
         p = write(tmp_path, PLATE + f"[calibrate]\nmesh_correction = {bad}\n")
         with raises(f'{p}: [calibrate] mesh_correction: must be an integer from 0 to 3 or '

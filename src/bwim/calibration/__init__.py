@@ -1,6 +1,6 @@
 """Calibration of the bridge FE model from strains under a truck of known weight."""
 
-from bwim.calibration.driver import Calibration, Refine, calibrate
+from bwim.calibration.driver import Calibration, MassSource, Refine, calibrate
 from bwim.calibration.logger import LoggerCalibration, calibrate_logger
 from bwim.calibration.meshdefect import MeshCorrection, mesh_defects
 from bwim.calibration.problem import (
@@ -32,6 +32,7 @@ __all__ = [
     "Identifiability",
     "LoggerCalibration",
     "MassFit",
+    "MassSource",
     "MeshCorrection",
     "Method",
     "ParameterSpace",

@@ -137,13 +137,16 @@ class Calibration(OptimizeResult):
     fun : float
         The objective of the last stage at its answer (the summed squared misfit,
         :attr:`StageResult.fun`): by default the joint refinement's dynamic misfit; with
-        the mesh correction, against the last pass's corrected readings.
+        the mesh correction, against the last pass's corrected readings.  With the mass
+        from the free vibration (:attr:`mass`) it is the stages' misfit, before the
+        masses were scaled (``x`` holds the scaled masses).
     nfev : int
         Objective evaluations over all stages.
     nit : int
         Iterations over all stages (each stage's ``nit``).
     success : bool
-        Every stage stopped normally and, with the mesh correction, its passes converged.
+        Every stage stopped normally and, with the mesh correction, its passes converged;
+        with ``mass="free"``, the free-vibration fit succeeded too.
     message : str
         Why the calibration stopped: the first stage that did not succeed, the
         correction that did not converge, or the last stage's message.

@@ -188,6 +188,11 @@ COMMANDS: tuple[Command, ...] = (
              help="correct the model's discretisation error by a model bisected N times "
              "(1-3), or as often as its sensors need (auto); default: the scenario's, "
              "else none (a site's logger files: else auto)"),
+         arg("--mass", choices=["auto", "free", "dynamic"],
+             help="where the mass comes from: the free vibration after the truck leaves "
+             "(free), the crossings' dynamic misfit (dynamic, the paper's), or free when the "
+             "records hold a free vibration, else dynamic (auto); default: the scenario's, "
+             "else auto"),
          arg("--gains", choices=["common", "per_channel"],
              help="a site's logger files: one logger scale for every gauge (common, the "
              "default) or a gain per gauge"),

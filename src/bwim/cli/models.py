@@ -77,8 +77,8 @@ def calibrate_command(args: argparse.Namespace) -> int:
     road = build_road(scenario)
     records = load_records(paths, scenario)
     kwargs = scenario.calibrate.kwargs() if scenario.calibrate is not None else {}
-    for key in ("method", "seed"):
-        if getattr(args, key) is not None:
+    for key in ("method", "seed", "mass"):
+        if getattr(args, key, None) is not None:
             kwargs[key] = getattr(args, key)
     if args.jobs is not None:
         kwargs["n_jobs"] = args.jobs
@@ -108,6 +108,10 @@ def calibrate_command(args: argparse.Namespace) -> int:
         nx, ny = cal.mesh_correction.mesh
         print(f"{cal.mesh_correction.summary()}\nthe calibrated model is saved on the "
               f"{nx}x{ny} mesh the corrected parameters belong to")
+    if cal.mass is not None:
+        print(f"mass from the free vibration after exit: x {cal.mass.x:.4f} "
+              f"± {cal.mass.standard_error:.2g} of the stages' masses" if cal.mass.success
+              else f"mass: the stages' (the free-vibration fit failed: {cal.mass.message})")
     if cal.discretisation is not None:
         print(f"mesh check: {cal.discretisation.summary().replace(chr(10), '; ')}")
     print(f"{cal.nfev} evaluations, wall time {cal.wall_time:.1f} s")
@@ -128,6 +132,10 @@ def _site_model(args: argparse.Namespace, scenario, paths, out: Path) -> int:
         if getattr(args, key) is not None:
             raise InputError(f"--{key.replace('_', '-')} is not used for a site's logger "
                              "files (the road-free fit has no optimiser choice)")
+    if getattr(args, "mass", None) is not None:
+        raise InputError("--mass is not used for a site's logger files (the road-free fit "
+                         "takes the mass from the free vibration when it stands out of the "
+                         "noise)")
     start = build_bridge(scenario)
     records = []
     for p in paths:

@@ -19,7 +19,7 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
-from bwim.calibration import Method, Refine
+from bwim.calibration import MassSource, Method, Refine
 from bwim.calibration.meshdefect import MAX_LEVELS
 from bwim.dynamics import DEFAULT_APPROACH, DEFAULT_SAMPLING_RATE, VBIMethod
 from bwim.errors import InputError
@@ -448,6 +448,7 @@ class CalibrateSpec:
     weights: str | None = opt(choice("none", "noise", "peak", "model"))
     mesh_check: float | None = opt(at_least(0.0, strict=True, high=1.0))
     mesh_correction: int | str | None = opt(_levels_or_auto)
+    mass: str | None = opt(choice(*MassSource))
     n_modes: int | None = opt(int_from(1))
     n_jobs: int | None = opt(jobs)
 
