@@ -30,3 +30,14 @@ def test_calibrate_refuses_a_bad_mesh_correction_in_one_line(small_site, tmp_pat
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1 and "mesh_correction" in err[0]
     assert not out.exists()
+
+
+def test_calibrate_refuses_the_mass_option_for_logger_files(small_site, tmp_path, capsys):
+    """``--mass`` is the paper calibration's; a site's logger fit takes the mass from the
+    free vibration itself: exit 2, one line naming the option, no model written."""
+    out = tmp_path / "model.toml"
+    code = main(["calibrate", str(small_site.scenario), str(small_site.out_dir / "calibration"),
+                 "-o", str(out), "--mass", "free"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "--mass" in err[0]
+    assert not out.exists()
