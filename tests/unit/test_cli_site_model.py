@@ -2,6 +2,8 @@
 with a one-line error before anything is weighed or written (issue 23: never weigh with
 a model that cannot weigh its own calibration truck).  Data: the session's small site."""
 
+import pytest
+
 from bwim.cli import main
 from bwim.scenario import build_bridge, load_scenario, save_site_model
 from bwim.site import SiteModel
@@ -21,23 +23,18 @@ def test_weigh_refuses_a_model_that_is_not_accepted(small_site, tmp_path, capsys
     assert len(err) == 1 and "not accepted" in err[0] and "+14.0 %" in err[0]
 
 
-def test_calibrate_refuses_a_bad_mesh_correction_in_one_line(small_site, tmp_path, capsys):
-    """``bwim calibrate SITE calibration/ --mesh-correction fine``: exit 2, one line
-    naming the option, no model written."""
+@pytest.mark.parametrize(("option", "value", "named"), [
+    ("--mesh-correction", "fine", "mesh_correction"),  # not a number of bisections
+    ("--mass", "free", "--mass"),  # the paper calibration's; the logger fit has its own
+])
+def test_calibrate_refuses_a_bad_option_in_one_line(small_site, tmp_path, capsys, option,
+                                                     value, named):
+    """``bwim calibrate SITE calibration/ --mesh-correction fine`` (a bad value) and
+    ``--mass free`` (the site's logger fit takes the mass from the free vibration
+    itself): exit 2, one line naming the option, no model written."""
     out = tmp_path / "model.toml"
     code = main(["calibrate", str(small_site.scenario), str(small_site.out_dir / "calibration"),
-                 "-o", str(out), "--mesh-correction", "fine"])
+                 "-o", str(out), option, value])
     err = capsys.readouterr().err.strip().splitlines()
-    assert code == 2 and len(err) == 1 and "mesh_correction" in err[0]
-    assert not out.exists()
-
-
-def test_calibrate_refuses_the_mass_option_for_logger_files(small_site, tmp_path, capsys):
-    """``--mass`` is the paper calibration's; a site's logger fit takes the mass from the
-    free vibration itself: exit 2, one line naming the option, no model written."""
-    out = tmp_path / "model.toml"
-    code = main(["calibrate", str(small_site.scenario), str(small_site.out_dir / "calibration"),
-                 "-o", str(out), "--mass", "free"])
-    err = capsys.readouterr().err.strip().splitlines()
-    assert code == 2 and len(err) == 1 and "--mass" in err[0]
+    assert code == 2 and len(err) == 1 and named in err[0]
     assert not out.exists()
