@@ -217,10 +217,24 @@ def _print_drift(site, fit) -> None:
     elif method in ("auto", "traffic", "time_of_day") and site.time_of_day is not None:
         print("drift: the calibration runs' factor over the time of day (vehicles on other "
               "dates are flagged outside_calibration_time)")
+        if method != "time_of_day":
+            print("note: " + _traffic_unused(site.setup.drift))
     else:
         print(f"drift: {method}")
     for note in site.notes:
         print(f"note: {note}")
+
+
+def _traffic_unused(drift) -> str:
+    """Why the traffic's own reference could not correct the drift, and what it needs."""
+    if drift.reference_load is not None:
+        return ("the traffic's own reference was not used: no vehicle of the reference "
+                "class in the batch")
+    return ("the traffic's own reference was not used: it needs the steering axle's nominal "
+            f"load, from at least {drift.min_reference} vehicles of the commonest "
+            "articulated class in the calibration date's traffic weighed in the same batch, "
+            "or given as [drift] reference_kN (docs/cli.md: with a thin traffic date, give "
+            "it)")
 
 
 def _print_unconfirmed(check) -> None:
