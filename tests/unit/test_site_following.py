@@ -65,9 +65,8 @@ def test_three_following_vehicles_give_three():
 def test_given_the_span_each_part_has_its_own_window(front, gap, rear):
     """Closed form: a vehicle whose first axle passes x = 0 at ``delay`` with its last
     axle ``length`` behind is on the span (−3, 3) m from ``delay − 3/v`` to
-    ``delay + (3 + length)/v``.  Both parts stay flagged multiple presence (what they
-    were read as beside each other is not weighed until each is detected again on its
-    own part of the record: bwim.site.isolate)."""
+    ``delay + (3 + length)/v``; the parts are multiple presence only when those overlap
+    (the gap between them shorter than the span)."""
     speed, delay, span = 22.0, 1.0, (-3.0, 3.0)
     whole = _vehicle([*front, gap, *rear], speed=speed, delay=delay)
     parts = split_long(whole, span)
@@ -76,35 +75,35 @@ def test_given_the_span_each_part_has_its_own_window(front, gap, rear):
                 (rear_delay - 3.0 / speed, rear_delay + (3.0 + sum(rear)) / speed)]
     for p, w in zip(parts, expected, strict=True):
         assert p.window == pytest.approx(w, abs=1e-12)
-        assert "multiple_presence" in p.flags
+        assert ("multiple_presence" in p.flags) == (gap < span[1] - span[0])
 
 
-def test_a_part_is_weighed_only_once_its_own_detection_confirms_it():
-    """The parts of a long vehicle one after the other go to
-    bwim.site.isolate.detected_alone (each detected again on its own part of the record):
-    a part found again once is replaced by that detection (unflagged here); a part the
-    detection does not find keeps its ``multiple_presence`` flag, so it is refused (its
-    axles were read beside the other vehicle's).  The detection is a stand-in."""
+def test_a_cut_part_is_replaced_only_by_its_own_detection():
+    """The parts of a long vehicle one after the other, marked ``cut`` as
+    bwim.site.lanes.detect_lanes marks them, go to bwim.site.isolate.detected_alone: a
+    part found again once on its own part of the record is replaced by that detection
+    (no longer ``cut``); a part not found stays ``cut`` (bwim.site.event refuses it:
+    tests/validation/test_realistic_lanes.py).  The detection is a stand-in."""
     import bwim
     from bwim.site.isolate import detected_alone
     from bwim.site.lanes import EventDetection, LaneVehicle
 
     parts = split_long(_vehicle([*ARTIC, 8.0, *ARTIC]), (-3.0, 3.0))
-    lanes = tuple(LaneVehicle(vehicle=p, lane=1, direction="+x", pair=1, window=p.window)
-                  for p in parts)
+    lanes = tuple(LaneVehicle(vehicle=p, lane=1, direction="+x", pair=1, window=p.window,
+                              cut=True) for p in parts)
     t = np.arange(0.0, 4.0, 1.0 / 512.0)
     rec = bwim.Record(time=t, data=np.zeros((t.size, 1)),
                       sensors=(bwim.Sensor(x=0.0, y=4.0, name="g1"),))
     first = parts[0].window
 
-    def detect(part):  # finds the first part's vehicle (5 axles, no flag), nothing else
+    def detect(part):  # finds the first part's vehicle (5 axles), nothing else
         if part.time[0] <= first[0] and part.time[-1] >= first[1]:
-            v = _vehicle(ARTIC)
-            v = VehicleDetection(passage=v.passage, confidence=0.9, window=first)
+            v = VehicleDetection(passage=_vehicle(ARTIC).passage, confidence=0.9,
+                                 window=first)
             return EventDetection(vehicles=(LaneVehicle(vehicle=v, lane=1, direction="+x",
                                                         pair=1, window=first),), by_lane={})
         return EventDetection(vehicles=(), by_lane={})
 
     out = detected_alone(rec, EventDetection(vehicles=lanes, by_lane={}), detect)
-    assert "multiple_presence" not in out.vehicles[0].vehicle.flags
-    assert out.vehicles[1] is lanes[1] and "multiple_presence" in lanes[1].vehicle.flags
+    assert not out.vehicles[0].cut and out.vehicles[0].vehicle.n_axles == 5
+    assert out.vehicles[1] is lanes[1] and out.vehicles[1].cut

@@ -333,6 +333,34 @@ def test_a_light_truck_in_a_heavy_trucks_file_keeps_its_axles(day):
     assert right == 32
 
 
+def test_a_part_cut_by_length_is_not_weighed_unless_its_own_part_confirms_it(
+        day, monkeypatch):
+    """The joined light/heavy files of the test above with the re-detection on each
+    vehicle's own part switched off (bwim.site.event's detected_alone made the identity):
+    the vehicles that detect_lanes cut out of one long detection are marked ``cut`` and
+    every such part is refused with that reason, none weighed (measured: one file of the
+    32, an 8-axle detection cut in two; with the re-detection both parts are found again
+    and weighed, the test above)."""
+    import bwim.site.event as event_module
+
+    d, scenario, site, truth = day
+    monkeypatch.setattr(event_module, "detected_alone", lambda record, ev, detect: ev)
+    alone = sorted(((n, t[0]) for n, t in truth.items() if len(t) == 1
+                    and t[0]["kind"] == "traffic" and t[0]["lane"] == "1"),
+                   key=lambda x: float(x[1]["gvw_kN"]))
+    cut = 0
+    for hn, _ in alone[-4:]:
+        for ln, _ in alone[:4]:
+            h = load_record(d.out_dir / "traffic" / hn, scenario)
+            li = load_record(d.out_dir / "traffic" / ln, scenario)
+            for first, second in ((h, li), (li, h)):
+                for v in weigh_event(_joined(first, second), site).vehicles:
+                    if "cut by their length" in v.reason:
+                        cut += 1
+                        assert not v.weighed
+    assert cut >= 2
+
+
 def test_a_calibration_run_with_a_vehicle_before_or_after_the_truck_is_cut_and_used(
         day, day_rows):
     """The day's first calibration run used (the truck alone) joined to a traffic file:

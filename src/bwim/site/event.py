@@ -393,8 +393,12 @@ def _vehicle(record: Record, ev: EventDetection, k: int, calibration: SiteCalibr
                        f"{lv.direction} on the bridge at once (lanes {lv.lane}, {lanes}), "
                        "not weighed as one")
     if FLAG_MULTIPLE_PRESENCE in flags and not lv.others:
-        return refused("multiple presence: another vehicle on the bridge at once, or one "
-                       "in the same lane not told apart from it; not weighed as one")
+        return refused("multiple presence: two vehicles on the bridge at once, not "
+                       "weighed as one")
+    if lv.cut:
+        return refused("vehicles following each other detected as one and cut by their "
+                       "length; this part was not found again on its own part of the "
+                       "record, so its axles are not trusted: not weighed")
     if "axle_count_mismatch" in flags:
         return refused("the axle detectors disagree on the number of axles")
     if FLAG_TRUNCATED in flags:

@@ -36,10 +36,11 @@ Contract
   :data:`MAX_WHEELBASE` (the longest vehicle allowed on European roads) is vehicles
   following each other: it is cut between axle groups where two plausible vehicles
   part (:func:`split_long`; again while a part is too long).  Each part's window is its
-  own time on the span, and each is flagged ``multiple_presence`` (refused, never
-  weighed as one) until it is confirmed: parts one after the other are vehicles one
-  after the other, each detected again on its own part of the record
-  (:mod:`bwim.site.isolate`), and that detection replaces it.
+  own time on the span: parts on the span together are each other's multiple presence
+  (refused, never weighed as one); parts one after the other are detected again each on
+  its own part of the record (:mod:`bwim.site.isolate`), whose detection replaces it.
+  Until then a part is :attr:`LaneVehicle.cut` (its axles were read beside the other's)
+  and is not weighed.
 * **Multiple presence**: vehicles whose windows on the span overlap are each flagged
   ``multiple_presence``; :attr:`LaneVehicle.others` names the lanes of the others.  A
   vehicle no detector saw (a lane without detectors) shows as gauge activity outside
@@ -93,6 +94,11 @@ class LaneVehicle:
         Record times it enters and leaves the span.
     others : tuple of int
         The lanes of the other vehicles on the span at the same time.
+    cut : bool
+        Cut from a longer detection by its length (:func:`split_long`): its axles and
+        lateral position were read beside another vehicle's.  Not to be weighed until
+        its own part of the record confirms it (:func:`bwim.site.isolate.detected_alone`
+        replaces it by that detection).
     """
 
     vehicle: VehicleDetection
@@ -101,6 +107,7 @@ class LaneVehicle:
     pair: int
     window: tuple[float, float] | None
     others: tuple[int, ...] = ()
+    cut: bool = False
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -152,6 +159,7 @@ def detect_lanes(record: Record, setup: SiteSetup, *,
     responses = responses or {}
     by_lane: dict[int, Detection] = {}
     seen: list[tuple[DetectorLane, VehicleDetection]] = []
+    cut: list[VehicleDetection] = []  # the parts of vehicles cut by their length
     found: list[LaneVehicle] = []
     notes: list[str] = []
     for pair in setup.lanes:
@@ -177,6 +185,7 @@ def detect_lanes(record: Record, setup: SiteSetup, *,
                              f"{float(np.sum(v.passage.axle_spacings)):.1f} m, longer than "
                              f"any vehicle ({MAX_WHEELBASE:g} m): {len(parts)} vehicles "
                              "following each other")
+                cut.extend(parts)
             seen.extend((pair, w) for w in parts)
     for pair, v in seen:
         lane = pair.lane
@@ -191,7 +200,8 @@ def detect_lanes(record: Record, setup: SiteSetup, *,
         if v.lateral_unit == "m" and np.isfinite(v.lateral):
             lane = setup.lane_of(v.lateral, pair.direction) or lane
         found.append(LaneVehicle(vehicle=v, lane=lane, direction=pair.direction,
-                                 pair=pair.lane, window=v.window))
+                                 pair=pair.lane, window=v.window,
+                                 cut=any(v is w for w in cut)))
     vehicles = _deduplicated(found, setup)
     vehicles = _presence(vehicles)
     vehicles = _unseen_neighbours(record, vehicles, gauges, notes)
@@ -218,13 +228,13 @@ def split_long(v: VehicleDetection,
     leading the rear vehicle, and leaves both within the limit; failing that, without
     the limit; failing that, the longest spacing.
 
-    Every part is flagged ``multiple_presence`` and keeps the whole's other flags and
-    lateral position.  ``span`` (m, the lines' support in the pair's frame, as
-    :func:`detect_axles` takes it): each part's window is its own time on the span
-    (without it, the whole's).  Parts one after the other are then each detected again
-    on their own part of the record (:func:`bwim.site.isolate.detected_alone`), whose
-    detection replaces them; a part that detection does not confirm stays flagged (its
-    axles and lateral position were read beside the other vehicle's)."""
+    Each part keeps the whole's flags and lateral position.  ``span`` (m, the lines'
+    support in the pair's frame, as :func:`detect_axles` takes it): each part's window is
+    its own time on the span, and the parts are flagged ``multiple_presence`` only when
+    those windows overlap (vehicles one after the other are not on the span together).
+    Without it the parts keep the whole's window and are both flagged.  A part's axles
+    and lateral position were read beside the other's: :func:`detect_lanes` marks it
+    :attr:`LaneVehicle.cut`, not weighed until its own part of the record confirms it."""
     spacings = np.asarray(v.passage.axle_spacings, dtype=float)
     if spacings.size < 2 or float(spacings.sum()) <= MAX_WHEELBASE:
         return [v]
@@ -250,8 +260,9 @@ def split_long(v: VehicleDetection,
               for axles in (slice(0, cut + 1), slice(cut + 1, None))]
     windows = ([v.window] * 2 if span is None else
                [tuple(float(x) for x in w) for w in span_windows([q for _, q in halves], span)])
-    flags = v.flags if FLAG_MULTIPLE_PRESENCE in v.flags else (*v.flags,
-                                                              FLAG_MULTIPLE_PRESENCE)
+    together = span is None or windows_overlap(*windows)
+    flags = (v.flags if not together or FLAG_MULTIPLE_PRESENCE in v.flags
+             else (*v.flags, FLAG_MULTIPLE_PRESENCE))
     parts = [dataclasses.replace(
         v, passage=passage, flags=flags, window=window,
         axle_times=_axles_of(v.axle_times, axles),
