@@ -121,8 +121,8 @@ def test_stream_benchmark_smoke():
 def test_realsite_benchmark_smoke(small_site, capsys):
     """The realistic-site benchmark weighs the session's small site as bwim weigh does and
     prints its tables: the five weighings of the traffic date's lane-1 trucks, the
-    detection table with every column, the speed table (the thin-traffic table needs a
-    day of 15 trucks or more, and is left out)."""
+    detection table with every column, the speed table and where the time goes (the
+    thin-traffic table needs a day of 15 trucks or more, and is left out)."""
     from benchmarks import bench_realsite
 
     d = bench_realsite.weigh_day(small_site.out_dir, 4)
@@ -136,4 +136,6 @@ def test_realsite_benchmark_smoke(small_site, capsys):
     out = capsys.readouterr().out
     assert "Realistic site, seed 4" in out and "axle group off path" in out
     assert "left out by speed" in out and "Speed of bwim weigh" in out
+    assert "Where an event's CPU time goes" in out
+    assert 0 < d["t_detect"] < d["t_weigh"]  # detection alone is part of the batch's time
     assert "A thin traffic date" not in out
