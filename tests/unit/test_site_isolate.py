@@ -7,6 +7,7 @@ part cut around the first of two vehicles holds exactly the first one's readings
 
 from __future__ import annotations
 
+import dataclasses
 import datetime as dt
 
 import numpy as np
@@ -86,18 +87,23 @@ def test_a_following_vehicle_is_cut_off_exactly():
 
 
 def _lane_vehicle(n_axles: int, window: tuple[float, float], *, pair: int = 1,
-                  direction: str = "+x") -> LaneVehicle:
+                  direction: str = "+x", others: tuple[int, ...] = ()) -> LaneVehicle:
+    """A stand-in detection; with ``others`` flagged multiple presence as
+    bwim.site.lanes.detect_lanes flags a vehicle on the span with those lanes'."""
     p = Passage(speed=20.0, axle_spacings=[1.5] * (n_axles - 1))
-    return LaneVehicle(vehicle=VehicleDetection(passage=p, confidence=0.9, window=window),
-                       lane=pair, direction=direction, pair=pair, window=window)
+    flags = ("multiple_presence",) if others else ()
+    return LaneVehicle(vehicle=VehicleDetection(passage=p, confidence=0.9, window=window,
+                                                flags=flags),
+                       lane=pair, direction=direction, pair=pair, window=window,
+                       others=others)
 
 
 def test_vehicles_one_after_the_other_are_detected_again_each_on_its_part():
     """Algebra of the replacement (the detection is a stand-in that records the parts it
     is given; the effect on real detections: tests/validation/test_realistic_lanes.py)."""
     rec = _record([])
-    first, second = _lane_vehicle(5, (0.5, 1.2)), _lane_vehicle(2, (2.0, 2.5))
-    other_way = _lane_vehicle(4, (0.8, 1.5), pair=3, direction="-x")
+    first, second = _lane_vehicle(5, (0.5, 1.2), others=(3,)), _lane_vehicle(2, (2.0, 2.5))
+    other_way = _lane_vehicle(4, (0.8, 1.5), pair=3, direction="-x", others=(1,))
     event = EventDetection(vehicles=(first, other_way, second), by_lane={})
     seen = []
 
@@ -123,3 +129,58 @@ def test_vehicles_one_after_the_other_are_detected_again_each_on_its_part():
     alone = EventDetection(vehicles=(first, other_way), by_lane={})
     assert detected_alone(rec, alone, detect).vehicles == alone.vehicles
     assert len(seen) == 2
+
+
+def _presence(v: LaneVehicle) -> tuple[bool, tuple[int, ...]]:
+    return "multiple_presence" in v.vehicle.flags, v.others
+
+
+def test_multiple_presence_stays_the_events_after_a_replacement():
+    """The replacement's multiple presence is read from the event's vehicles, not from
+    its part's detection (stand-in detections; the reference is the windows' overlaps):
+    (a) a vehicle the other way on the span with it that its part cuts off (and so does
+    not find) stays its ``others``; (b) a vehicle its part's detection saw that the event
+    does not hold (a trace the event's detection left out) is not; (c) a flag the part
+    gave without another vehicle (gauge activity no detector saw) stays."""
+    rec = _record([])
+    first = _lane_vehicle(5, (0.5, 1.2), others=(3,))
+    other_way = _lane_vehicle(5, (1.0, 1.9), pair=3, direction="-x", others=(1,))
+    second = _lane_vehicle(2, (2.0, 2.5))
+    event = EventDetection(vehicles=(first, other_way, second), by_lane={})
+
+    def cut_off(part):  # (a) the first's part ends at 1.6 s, mid other_way: not found
+        if part.time[-1] < 1.9:
+            return EventDetection(vehicles=(_lane_vehicle(5, (0.5, 1.2)),), by_lane={})
+        return EventDetection(vehicles=(), by_lane={})
+
+    out = detected_alone(rec, event, cut_off)
+    assert [_presence(v) for v in out.vehicles] == [(True, (3,)), (True, (1,)),
+                                                    (False, ())]
+    assert out.vehicles[1] is other_way
+
+    alone = _lane_vehicle(4, (0.3, 0.9))
+    late = _lane_vehicle(5, (1.8, 2.6), others=(3,))
+    late_other = _lane_vehicle(4, (1.4, 2.2), pair=3, direction="-x", others=(1,))
+    event = EventDetection(vehicles=(alone, late_other, late), by_lane={})
+
+    def with_trace(part):  # (b) the first's part holds a trace of its own in lane 3
+        if part.time[-1] < 1.8:
+            return EventDetection(vehicles=(
+                _lane_vehicle(4, (0.3, 0.9), others=(3,)),
+                _lane_vehicle(2, (0.6, 1.0), pair=3, direction="-x", others=(1,))),
+                by_lane={})
+        return EventDetection(vehicles=(), by_lane={})
+
+    out = detected_alone(rec, event, with_trace)
+    assert [_presence(v) for v in out.vehicles] == [(False, ()), (True, (1,)), (True, (3,))]
+
+    def unseen(part):  # (c) gauge activity beside it in its part: flagged, no others
+        if part.time[-1] < 1.8:
+            v = _lane_vehicle(4, (0.3, 0.9))
+            flagged = dataclasses.replace(v.vehicle, flags=("multiple_presence",))
+            return EventDetection(vehicles=(dataclasses.replace(v, vehicle=flagged),),
+                                  by_lane={})
+        return EventDetection(vehicles=(), by_lane={})
+
+    out = detected_alone(rec, event, unseen)
+    assert _presence(out.vehicles[0]) == (True, ())

@@ -29,6 +29,9 @@ Contract
   is lost beside a heavy truck in the same file that it never shares the span with.
   On its own part it is judged as in its own file.  A vehicle the part's detection does
   not find once, in the same pair over an overlapping window, is kept as first found.
+  Multiple presence stays the event's: a replacement's ``others`` are the event's
+  vehicles its window overlaps, not the part's (the part may cut a vehicle of the other
+  direction off, or hold a trace the event's detection left out).
 * Units: s.
 """
 
@@ -38,8 +41,9 @@ import dataclasses
 from collections.abc import Callable, Iterable
 
 from bwim.detect.presence import windows_overlap
+from bwim.detect.result import FLAG_MULTIPLE_PRESENCE
 from bwim.records import Record
-from bwim.site.lanes import EventDetection
+from bwim.site.lanes import EventDetection, LaneVehicle
 
 __all__ = ["detected_alone", "own_part"]
 
@@ -78,6 +82,7 @@ def detected_alone(record: Record, event: EventDetection,
     shares the span with detected again on its own part of ``record`` (module
     docstring)."""
     vehicles = list(event.vehicles)
+    replaced: dict[int, LaneVehicle] = {}
     notes = [event.message] if event.message else []
     for k, lv in enumerate(event.vehicles):
         if not any(j != k and w.pair == lv.pair and _apart(w.window, lv.window)
@@ -91,8 +96,53 @@ def detected_alone(record: Record, event: EventDetection,
                  if w.pair == lv.pair and windows_overlap(w.window, lv.window)]
         if len(again) == 1:
             vehicles[k] = again[0]
+            replaced[k] = lv
             if again[0].vehicle.n_axles != lv.vehicle.n_axles:
                 notes.append(f"lane {lv.pair}: a {lv.vehicle.n_axles}-axle vehicle detected "
                              f"again on its own part of the record: {again[0].vehicle.n_axles}"
                              " axles")
+    if replaced:
+        vehicles = _presence_again(vehicles, replaced)
     return dataclasses.replace(event, vehicles=tuple(vehicles), message="; ".join(notes))
+
+
+def _lane(v: LaneVehicle) -> int:
+    return v.lane if v.lane is not None else v.pair
+
+
+def _presence_again(vehicles: list[LaneVehicle], replaced: dict[int, LaneVehicle]
+                    ) -> list[LaneVehicle]:
+    """The event's multiple presence after the replacements (``replaced``: index → the
+    vehicle as first found), from the event's vehicles, not the parts': a replacement's
+    ``others`` are the event's vehicles its window overlaps (the part may have cut one
+    off, or seen one the event's detection left out), flagged ``multiple_presence`` for
+    them or for what flagged it without another vehicle (gauge activity no detector saw,
+    in the part or the whole record); every other vehicle keeps its own and gains a
+    replacement that now overlaps it."""
+    def overlapping(k: int) -> tuple[int, ...]:
+        return tuple(_lane(w) for j, w in enumerate(vehicles)
+                     if j != k and windows_overlap(vehicles[k].window, w.window))
+
+    def flagged(veh, on: bool):
+        has = FLAG_MULTIPLE_PRESENCE in veh.flags
+        if on and not has:
+            return dataclasses.replace(veh, flags=(*veh.flags, FLAG_MULTIPLE_PRESENCE))
+        if has and not on:
+            return dataclasses.replace(veh, flags=tuple(f for f in veh.flags
+                                                        if f != FLAG_MULTIPLE_PRESENCE))
+        return veh
+
+    out = []
+    for k, v in enumerate(vehicles):
+        others = overlapping(k)
+        if k in replaced:
+            first = replaced[k]
+            unseen = any(FLAG_MULTIPLE_PRESENCE in w.vehicle.flags and not w.others
+                         for w in (v, first))
+            out.append(dataclasses.replace(v, others=others, vehicle=flagged(
+                v.vehicle, bool(others) or unseen)))
+        else:
+            more = tuple(dict.fromkeys([*v.others, *others]))
+            out.append(v if more == v.others else dataclasses.replace(
+                v, others=more, vehicle=flagged(v.vehicle, True)))
+    return sorted(out, key=lambda w: (w.window or (float("inf"),))[0])
