@@ -159,3 +159,20 @@ def test_drift_section_reaches_the_site_setup(tmp_path):
         scn.load_scenario(_write(tmp_path, SITE + "[drift]\nmin_reference = 2\n",
                                  name="bad.toml"))
     assert "\n" not in str(info.value)
+
+
+def test_a_pairs_longest_vehicle_is_read_and_checked(tmp_path):
+    """``max_length`` in ``[axle_detectors]`` reaches the site's detector lane (25.25 m
+    where European Modular System combinations run; 18.75 m without it); zero or less is
+    refused in one line naming the table."""
+    from bwim.scenario import build_site_setup
+    from bwim.site.setup import MAX_WHEELBASE
+
+    [lane] = build_site_setup(scn.load_scenario(_write(tmp_path, SITE))).lanes
+    assert lane.max_length == MAX_WHEELBASE == 18.75
+    ems = SITE.replace("distance = 3.0\n", "distance = 3.0\nmax_length = 25.25\n")
+    [lane] = build_site_setup(scn.load_scenario(_write(tmp_path, ems))).lanes
+    assert lane.max_length == 25.25
+    bad = SITE.replace("distance = 3.0\n", "distance = 3.0\nmax_length = 0\n")
+    with pytest.raises(InputError, match=r"\[axle_detectors\]: max_length must be positive"):
+        scn.load_scenario(_write(tmp_path, bad))

@@ -398,3 +398,63 @@ def test_a_calibration_run_with_a_vehicle_before_or_after_the_truck_is_cut_and_u
         assert "vehicles detected in lane 1" not in reasons[0]
         used += reasons[0] == ""
     assert used == 4
+
+
+def _following_closely(a, b, truth_a, truth_b, gap):
+    """Record ``b``'s truck driven ``gap`` m (rear axle to steering axle) behind record
+    ``a``'s at ``a``'s speed, added onto ``a`` (the slab is linear): ``b`` resampled in
+    time by the ratio of the speeds, less its first samples' level."""
+    va, vb = float(truth_a["speed_m_s"]), float(truth_b["speed_m_s"])
+
+    def at_gauges(t):  # the truck's steering axle at the gauges, s into its record
+        return (dt.datetime.fromisoformat(t["time"])
+                - dt.datetime.fromisoformat(t["event_start"])).total_seconds()
+
+    length = sum(float(x) for x in truth_a["axle_spacings_m"].split(";"))
+    shift = at_gauges(truth_a) + (length + gap) / va - at_gauges(truth_b) * vb / va
+    step = a.time[1] - a.time[0]
+    t = np.arange(0.0, max(a.time[-1], shift + b.time[-1] * vb / va) + 0.3, step)
+    tb = (t - shift) * va / vb
+    base = b.data[:50].mean(axis=0)
+    data = np.column_stack([np.interp(t, a.time, a.data[:, c])
+                            + np.interp(tb, b.time, b.data[:, c] - base[c], left=0.0,
+                                        right=0.0) for c in range(a.data.shape[1])])
+    return dataclasses.replace(a, time=t, data=data, passages=(), truths=())
+
+
+def test_trucks_too_close_to_tell_apart_are_never_weighed_in_parts(day):
+    """The day's first lane-1 2-axle truck with its first lane-1 5-axle truck 6.5, 7 and 8
+    m behind it (rear axle to steering axle) at its speed (22.8 m/s: a 0.2 s gap between
+    the bodies, or one 23-25 m combination of the European Modular System, admitted in
+    some member states): the detection joins the 7 axles (longer than 18.75 m), and no
+    spacing leaves room for two vehicles at that speed (2.4 m of overhangs + 0.5 s × 22.8
+    m/s = 13.8 m, bwim.site.lanes.split_long), so the whole is refused, neither weighed
+    as one nor in parts (before: cut at the 6.5-8 m spacing and written as two vehicles
+    of 171 and 390 kN).  A site that admits 25.25 m combinations (the pair's
+    ``max_length``) weighs it as one 7-axle vehicle: within 2 % of the sum of the two
+    trucks weighed each in its own file, brought to one drift factor (measured -0.6 to
+    -0.8 %)."""
+    d, scenario, site, truth = day
+    alone = {n: t[0] for n, t in sorted(truth.items()) if len(t) == 1
+             and t[0]["kind"] == "traffic" and t[0]["lane"] == "1"}
+    rigid = next(n for n, t in alone.items() if t["n_axles"] == "2")
+    artic = next(n for n, t in alone.items() if t["n_axles"] == "5")
+    a = load_record(d.out_dir / "traffic" / rigid, scenario)
+    b = load_record(d.out_dir / "traffic" / artic, scenario)
+    ems = dataclasses.replace(site, setup=dataclasses.replace(site.setup, lanes=tuple(
+        dataclasses.replace(p, max_length=25.25) for p in site.setup.lanes)))
+    wa, wb = weigh_event(a, site), weigh_event(b, site)
+    assert wa.weighed and wb.weighed
+    # weights are the readings over the drift factor: b's at a's factor (the joined
+    # record's clock is a's)
+    total = wa.gvw + wb.gvw * wb.drift_factor / wa.drift_factor
+    for gap in (6.5, 7.0, 8.0):
+        record = _following_closely(a, b, alone[rigid], alone[artic], gap)
+        lane1 = [v for v in weigh_event(record, site).vehicles if v.lane == 1]
+        assert [v.vehicle.n_axles for v in lane1] == [7]
+        assert not lane1[0].weighed and "too close to tell apart" in lane1[0].reason
+        one = [v for v in weigh_event(record, ems).vehicles if v.lane == 1]
+        assert [v.vehicle.n_axles for v in one] == [7] and one[0].weighed, one[0].reason
+        assert one[0].drift_factor == pytest.approx(wa.drift_factor, rel=1e-6)
+        assert abs(one[0].gvw / total - 1.0) < 0.02
+

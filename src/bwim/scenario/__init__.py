@@ -73,7 +73,9 @@ Contract
   ``[axle_detectors]``
       ``channels`` = [first, second] (logger channels, in the order traffic meets them),
       ``distance`` (m), [``position`` = 0: the first detector's x in the influence-line
-      frame], [``max_spacing``: the largest axle spacing within one vehicle, m].
+      frame], [``max_spacing``: the largest axle spacing within one vehicle, m],
+      [``max_length`` = 18.75: the longest vehicle's spread from first to last axle, m;
+      25.25 where European Modular System combinations run].
   ``[vehicle]``
       ``axle_loads`` (static, N) with ``axle_spacings`` (m): a calibration truck known by
       its weights only (a :class:`bwim.MovingForces`); or

@@ -338,7 +338,9 @@ def build_site_setup(scenario: Scenario) -> SiteSetup:
             lanes.append(DetectorLane(channels=det.channels, distance=det.distance,
                                       lane=det.lane if det.lane is not None else k,
                                       direction=det.direction, position=det.position,
-                                      y=det.y, max_spacing=det.max_spacing))
+                                      y=det.y, max_spacing=det.max_spacing,
+                                      **({} if det.max_length is None
+                                         else {"max_length": det.max_length})))
     cal = next((ln.lane for ln, det in zip(lanes, scenario.axle_detectors, strict=True)
                 if det.calibration), None)
     traffic = [Lane(number=ln.number, y=ln.y, direction=ln.direction)

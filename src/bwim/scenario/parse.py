@@ -177,6 +177,8 @@ def _parse_detectors(value: Any, src: str) -> tuple[AxleDetectorSpec, ...]:
             raise at.error(f"distance must be positive, got {spec.distance:g}")
         if spec.max_spacing is not None and not spec.max_spacing > 0:
             raise at.error(f"max_spacing must be positive, got {spec.max_spacing:g}")
+        if spec.max_length is not None and not spec.max_length > 0:
+            raise at.error(f"max_length must be positive, got {spec.max_length:g}")
         for ch in spec.channels:
             if ch in seen_channels:
                 raise at.error(f"channel {ch!r} is already a detector of entry "

@@ -279,12 +279,16 @@ class AxleDetectorSpec:
     ``position`` is the first detector's x in the lines' frame (default: 0 for the lane
     the calibration truck drives, whose first detector the lines are measured from;
     ``distance`` for a −x lane whose pair is the same one mirrored); ``calibration`` marks
-    the lane of the calibration truck (default: the first table)."""
+    the lane of the calibration truck (default: the first table); ``max_spacing`` the
+    largest axle spacing within one vehicle and ``max_length`` the longest vehicle's spread
+    from its first to its last axle (m; default 18.75, 25.25 where European Modular
+    System combinations run)."""
 
     channels: tuple[str, ...] = req(strings)
     distance: float = req(number)
     position: float | None = opt(number)
     max_spacing: float | None = opt(number)
+    max_length: float | None = opt(number)
     lane: int | None = opt(int_from(1))
     direction: str = opt(choice(*DIRECTIONS), "+x")
     y: float | None = opt(number)

@@ -12,6 +12,10 @@ Contract
   - a vehicle that shares the span with another vehicle travelling its way (side by side
     or following) is refused (``multiple_presence``): one record cannot tell their weights
     apart with lines of one vehicle;
+  - a vehicle longer than its pair's ``max_length`` that has no axle spacing with room
+    for two vehicles following each other (:attr:`~bwim.site.lanes.LaneVehicle.joined`)
+    is refused, and so is a part cut out of a longer one that its own part of the record
+    did not confirm (:attr:`~bwim.site.lanes.LaneVehicle.cut`);
   - for any other vehicle, the vehicles that cross before or after it without sharing
     the span (a truck following it in its lane, one that crossed the other way before
     it) are cut off the record it is judged and weighed on
@@ -395,6 +399,12 @@ def _vehicle(record: Record, ev: EventDetection, k: int, calibration: SiteCalibr
     if FLAG_MULTIPLE_PRESENCE in flags and not lv.others:
         return refused("multiple presence: two vehicles on the bridge at once, not "
                        "weighed as one")
+    if lv.joined:
+        length = float(np.sum(v.passage.axle_spacings))
+        return refused(f"{v.n_axles} axles over {length:.1f} m, longer than any vehicle the "
+                       "site admits, with no gap between them that vehicles following each "
+                       "other leave at its speed: a longer combination or vehicles too "
+                       "close to tell apart, not weighed as one or in parts")
     if lv.cut:
         return refused("vehicles following each other detected as one and cut by their "
                        "length; this part was not found again on its own part of the "

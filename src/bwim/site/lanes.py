@@ -32,10 +32,14 @@ Contract
   wrong order read as a slow vehicle) and is left out, with a note.  A light vehicle
   that crosses the pair while a heavy one bends the span more than its own axles read
   is left out with it.
-* **Following vehicles**: a detected vehicle whose axles spread over more than
-  :data:`MAX_WHEELBASE` (the longest vehicle allowed on European roads) is vehicles
-  following each other: it is cut between axle groups where two plausible vehicles
-  part (:func:`split_long`; again while a part is too long).  Each part's window is its
+* **Following vehicles**: a detected vehicle whose axles spread over more than its
+  pair's ``max_length`` (:data:`~bwim.site.setup.MAX_WHEELBASE` by default, the longest
+  standard vehicle on European roads) is vehicles following each other: it is cut
+  between axle groups where two plausible vehicles part, at a spacing with room for two
+  bodies and a time gap between them (:data:`MIN_OVERHANGS` + :data:`MIN_HEADWAY` ×
+  speed; :func:`split_long`, again while a part is too long).  Without such a spacing
+  it is a longer combination than the site admits or vehicles too close to tell apart:
+  :attr:`LaneVehicle.joined`, weighed neither as one nor in parts.  Each part's window is its
   own time on the span: parts on the span together are each other's multiple presence
   (refused, never weighed as one); parts one after the other are detected again each on
   its own part of the record (:mod:`bwim.site.isolate`), whose detection replaces it.
@@ -65,12 +69,13 @@ from bwim.detect import Detection, LearnedResponses, VehicleDetection, detect_ax
 from bwim.detect.presence import span_windows, unexplained_activity, windows_overlap
 from bwim.detect.result import FLAG_MULTIPLE_PRESENCE
 from bwim.detect.signals import channel_data
-from bwim.errors import BwimError
+from bwim.errors import BwimError, require_positive
 from bwim.records import Passage, Record
 from bwim.site.bending import DetectorBending
-from bwim.site.setup import DetectorLane, SiteSetup
+from bwim.site.setup import MAX_WHEELBASE, DetectorLane, SiteSetup
 
-__all__ = ["MAX_WHEELBASE", "EventDetection", "LaneVehicle", "detect_lanes", "split_long"]
+__all__ = ["MAX_WHEELBASE", "MIN_HEADWAY", "MIN_OVERHANGS", "EventDetection", "LaneVehicle",
+           "detect_lanes", "split_long", "too_long"]
 
 #: What one lane's detection may raise without ending the event's detection.
 _ERRORS = (BwimError, ArithmeticError, ValueError, np.linalg.LinAlgError)
@@ -99,6 +104,11 @@ class LaneVehicle:
         lateral position were read beside another vehicle's.  Not to be weighed until
         its own part of the record confirms it (:func:`bwim.site.isolate.detected_alone`
         replaces it by that detection).
+    joined : bool
+        Its axles spread over more than its pair's longest vehicle and no spacing between
+        them leaves room for two vehicles following each other (:func:`split_long`): a
+        longer combination than the site admits, or vehicles too close to tell apart.
+        Not to be weighed, neither as one nor in parts.
     """
 
     vehicle: VehicleDetection
@@ -108,6 +118,7 @@ class LaneVehicle:
     window: tuple[float, float] | None
     others: tuple[int, ...] = ()
     cut: bool = False
+    joined: bool = False
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -160,6 +171,7 @@ def detect_lanes(record: Record, setup: SiteSetup, *,
     by_lane: dict[int, Detection] = {}
     seen: list[tuple[DetectorLane, VehicleDetection]] = []
     cut: list[VehicleDetection] = []  # the parts of vehicles cut by their length
+    joined: list[VehicleDetection] = []  # too long, and no room to cut them
     found: list[LaneVehicle] = []
     notes: list[str] = []
     for pair in setup.lanes:
@@ -179,13 +191,22 @@ def detect_lanes(record: Record, setup: SiteSetup, *,
         if not det.vehicles and det.message and pair.lane == setup.calibration_lane:
             notes.append(f"lane {pair.lane}: {det.message}")
         for v in det.vehicles:
-            parts = split_long(v, lane_span)
+            parts = split_long(v, lane_span, max_length=pair.max_length)
+            length = float(np.sum(v.passage.axle_spacings))
             if len(parts) > 1:
-                notes.append(f"lane {pair.lane}: {v.n_axles} axles over "
-                             f"{float(np.sum(v.passage.axle_spacings)):.1f} m, longer than "
-                             f"any vehicle ({MAX_WHEELBASE:g} m): {len(parts)} vehicles "
-                             "following each other")
+                notes.append(f"lane {pair.lane}: {v.n_axles} axles over {length:.1f} m, "
+                             f"longer than any vehicle ({pair.max_length:g} m): "
+                             f"{len(parts)} vehicles following each other")
                 cut.extend(parts)
+            for w in parts:
+                if too_long(w, pair.max_length):
+                    notes.append(
+                        f"lane {pair.lane}: {w.n_axles} axles over "
+                        f"{float(np.sum(w.passage.axle_spacings)):.1f} m, longer than any "
+                        f"vehicle ({pair.max_length:g} m) with no gap between them that "
+                        "vehicles following each other leave at its speed: a longer "
+                        "combination or vehicles too close to tell apart")
+                    joined.append(w)
             seen.extend((pair, w) for w in parts)
     for pair, v in seen:
         lane = pair.lane
@@ -201,17 +222,21 @@ def detect_lanes(record: Record, setup: SiteSetup, *,
             lane = setup.lane_of(v.lateral, pair.direction) or lane
         found.append(LaneVehicle(vehicle=v, lane=lane, direction=pair.direction,
                                  pair=pair.lane, window=v.window,
-                                 cut=any(v is w for w in cut)))
+                                 cut=any(v is w for w in cut),
+                                 joined=any(v is w for w in joined)))
     vehicles = _deduplicated(found, setup)
     vehicles = _presence(vehicles)
     vehicles = _unseen_neighbours(record, vehicles, gauges, notes)
     return EventDetection(vehicles=tuple(vehicles), by_lane=by_lane, message="; ".join(notes))
 
 
-#: m: no vehicle's first and last axles are further apart than the longest vehicle allowed
-#: on European roads (18.75 m, a road train: Council Directive 96/53/EC, Annex I); axles
-#: spread over more are vehicles following each other.
-MAX_WHEELBASE = 18.75
+#: s: the shortest time gap, bumper to bumper, of a vehicle following another at speed
+#: that :func:`split_long` takes for two vehicles (the detection's own limit between
+#: vehicles, :data:`bwim.detect.options.DEFAULT_MAX_AXLE_SPACING`, is this gap at 80 km/h).
+MIN_HEADWAY = 0.5
+#: m: the least body beyond the axles between two vehicles following each other: a cab's
+#: front overhang (about 1.4 m) and a rear overhang of at least 1 m.
+MIN_OVERHANGS = 2.4
 
 
 def _axles_of(values: np.ndarray, axles: slice) -> np.ndarray:
@@ -219,14 +244,19 @@ def _axles_of(values: np.ndarray, axles: slice) -> np.ndarray:
     return values[axles] if len(values) else values
 
 
-def split_long(v: VehicleDetection,
-               span: tuple[float, float] | None = None) -> list[VehicleDetection]:
-    """``v`` as the vehicles it holds: one when its axles span at most
-    :data:`MAX_WHEELBASE`, else cut, each part cut again.  The cut is the longest axle
+def split_long(v: VehicleDetection, span: tuple[float, float] | None = None, *,
+               max_length: float = MAX_WHEELBASE) -> list[VehicleDetection]:
+    """``v`` as the vehicles it holds: one when its axles span at most ``max_length``
+    (m), else cut, each part cut again.  A cut lies only where the axle spacing leaves
+    room for two vehicles following each other at ``v``'s speed: at least
+    :data:`MIN_OVERHANGS` + :data:`MIN_HEADWAY` × speed.  The cut is the longest such
     spacing that leaves two vehicles of two axles or more, lies between axle groups
     (spacings of :data:`bwim.classify.DEFAULT_GROUP_SPACING` or more) with a single axle
     leading the rear vehicle, and leaves both within the limit; failing that, without
-    the limit; failing that, the longest spacing.
+    the limit; failing that, the longest such spacing.  Without one, ``v`` stays whole
+    although longer than ``max_length``: a longer combination than the limit allows, or
+    vehicles too close to tell apart (:func:`too_long` says so; :func:`detect_lanes`
+    marks it :attr:`LaneVehicle.joined`, not weighed).
 
     Each part keeps the whole's flags and lateral position.  ``span`` (m, the lines'
     support in the pair's frame, as :func:`detect_axles` takes it): each part's window is
@@ -235,22 +265,28 @@ def split_long(v: VehicleDetection,
     Without it the parts keep the whole's window and are both flagged.  A part's axles
     and lateral position were read beside the other's: :func:`detect_lanes` marks it
     :attr:`LaneVehicle.cut`, not weighed until its own part of the record confirms it."""
+    max_length = require_positive("max_length", max_length)
     spacings = np.asarray(v.passage.axle_spacings, dtype=float)
-    if spacings.size < 2 or float(spacings.sum()) <= MAX_WHEELBASE:
+    if spacings.size < 2 or float(spacings.sum()) <= max_length:
         return [v]
     offsets = np.concatenate([[0.0], np.cumsum(spacings)])
     n = spacings.size
+    # room for the bodies and the time gap of two vehicles following each other
+    room = MIN_OVERHANGS + MIN_HEADWAY * float(v.passage.speed)
 
     def cuts(within: bool) -> list[int]:
         # both sides vehicles of two axles or more, the cut between axle groups, the
         # rear side led by a single (steering) axle; ``within``: both sides not too long
         return [k for k in range(1, n - 1)
-                if spacings[k] >= DEFAULT_GROUP_SPACING
+                if spacings[k] >= max(DEFAULT_GROUP_SPACING, room)
                 and spacings[k + 1] >= DEFAULT_GROUP_SPACING
-                and (not within or (offsets[k] <= MAX_WHEELBASE
-                                    and offsets[-1] - offsets[k + 1] <= MAX_WHEELBASE))]
+                and (not within or (offsets[k] <= max_length
+                                    and offsets[-1] - offsets[k + 1] <= max_length))]
 
-    cut = max(cuts(True) or cuts(False) or range(n), key=lambda k: spacings[k])
+    apart = [k for k in range(n) if spacings[k] >= room]
+    if not apart:
+        return [v]
+    cut = max(cuts(True) or cuts(False) or apart, key=lambda k: spacings[k])
     p = v.passage
     halves = [(axles, Passage(speed=p.speed, lane=p.lane,
                               axle_spacings=spacings[axles][:-1] if axles.stop is not None
@@ -269,7 +305,13 @@ def split_long(v: VehicleDetection,
         axle_amplitudes=_axles_of(v.axle_amplitudes, axles),
         detector_times=_axles_of(v.detector_times, axles))
         for (axles, passage), window in zip(halves, windows, strict=True)]
-    return [w for part in parts for w in split_long(part, span)]
+    return [w for part in parts for w in split_long(part, span, max_length=max_length)]
+
+
+def too_long(v: VehicleDetection, max_length: float = MAX_WHEELBASE) -> bool:
+    """Whether ``v``'s axles spread over more than ``max_length`` (m): what
+    :func:`split_long` leaves whole when no spacing has room for two vehicles."""
+    return float(np.sum(v.passage.axle_spacings)) > max_length
 
 
 #: Relative speed difference within which two pairs' vehicles may be one vehicle.

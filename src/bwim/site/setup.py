@@ -6,8 +6,12 @@ Contract
 * A :class:`DetectorLane` is one lane's pair of axle detectors: the two channels in the
   order that lane's traffic meets them, their ``distance`` (m), the lane's ``number`` and
   travel ``direction`` (``"+x"``: the bridge frame's own, ``"-x"``: the other way), the
-  detectors' lateral position ``y`` (m, when known) and ``position``: the x (m) of the
-  first detector that lane's traffic meets, in the frame of the influence lines.  That
+  detectors' lateral position ``y`` (m, when known), ``position``: the x (m) of the
+  first detector that lane's traffic meets, in the frame of the influence lines, the
+  largest axle spacing within one vehicle ``max_spacing`` (m; default the detection's)
+  and ``max_length``: the longest vehicle's spread from first to last axle (m,
+  :data:`MAX_WHEELBASE` by default; 25.25 where European Modular System combinations
+  run).  That
   frame is the calibration lane's: its first detector is at x = 0 unless its position
   says otherwise.  Default positions: 0 for a lane that travels like the calibration
   lane (its pair is assumed across from the calibration pair), ``distance`` of the
@@ -29,6 +33,7 @@ Contract
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -37,7 +42,15 @@ import numpy as np
 from bwim.errors import InputError, require_finite, require_positive
 from bwim.site.drift import DriftSetup
 
-__all__ = ["DETECTION_METHODS", "DIRECTIONS", "DetectorLane", "Lane", "SiteSetup"]
+__all__ = ["DETECTION_METHODS", "DIRECTIONS", "MAX_WHEELBASE", "DetectorLane", "Lane",
+           "SiteSetup"]
+
+#: m: no vehicle's first and last axles are further apart than the longest standard
+#: combination on European roads (18.75 m overall, a road train: Council Directive
+#: 96/53/EC, Annex I); axles spread over more are vehicles following each other, or a
+#: longer combination where a member state admits one (25.25 m, the European Modular
+#: System: Art. 4(4)-(5) of the Directive), which a pair's ``max_length`` then allows.
+MAX_WHEELBASE = 18.75
 
 #: Travel directions in the bridge frame.
 DIRECTIONS = ("+x", "-x")
@@ -71,6 +84,7 @@ class DetectorLane:
     position: float | None = None
     y: float | None = None
     max_spacing: float | None = None
+    max_length: float = MAX_WHEELBASE
 
     def __post_init__(self) -> None:
         ch = tuple(self.channels)
@@ -86,6 +100,7 @@ class DetectorLane:
         if self.max_spacing is not None:
             object.__setattr__(self, "max_spacing",
                                require_positive("max_spacing", self.max_spacing))
+        object.__setattr__(self, "max_length", require_positive("max_length", self.max_length))
 
     @property
     def sign(self) -> int:
@@ -225,9 +240,7 @@ class SiteSetup:
         for ln in lanes:
             if ln.position is None:
                 pos = 0.0 if ln.direction == ref.direction else ref.distance
-                ln = DetectorLane(channels=ln.channels, distance=ln.distance, lane=ln.lane,
-                                  direction=ln.direction, position=pos, y=ln.y,
-                                  max_spacing=ln.max_spacing)
+                ln = dataclasses.replace(ln, position=pos)
             out.append(ln)
         return tuple(out)
 
