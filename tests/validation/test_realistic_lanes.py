@@ -458,3 +458,34 @@ def test_trucks_too_close_to_tell_apart_are_never_weighed_in_parts(day):
         assert one[0].drift_factor == pytest.approx(wa.drift_factor, rel=1e-6)
         assert abs(one[0].gvw / total - 1.0) < 0.02
 
+
+def test_a_following_trucks_drift_is_read_from_the_whole_event(day):
+    """A temperature probe written once a file (its first sample; NaN gaps after, as a
+    temperature channel may have) and the drift by the temperature: both trucks of the
+    day's lane-1 following pair are weighed with the temperature's factor, although the
+    second is weighed on its own part of the record, which holds no reading of the probe
+    (before: refused, "the temperature channel 'temp' has no reading in this record")."""
+    from bwim.sensors import Sensor, SensorKind
+
+    d, scenario, site, truth = day
+
+    def with_probe(record, celsius):
+        column = np.full((record.time.size, 1), np.nan)
+        column[0, 0] = celsius
+        probe = Sensor(x=0.0, y=0.0, name="temp", kind=SensorKind.TEMPERATURE)
+        return dataclasses.replace(record, data=np.hstack([record.data, column]),
+                                   sensors=(*record.sensors, probe))
+
+    setup = dataclasses.replace(site.setup, drift=dataclasses.replace(site.setup.drift,
+                                                                     method="temperature"))
+    runs = [with_probe(load_record(p, scenario), 10.0 + 2.0 * k)
+            for k, p in enumerate(d.calibration)]
+    by_temperature = calibrate_site(runs, setup)
+    assert by_temperature.temperature is not None
+    pair = next(n for n, t in truth.items() if t[0]["configuration"] == "following"
+                and t[0]["kind"] == "traffic" and all(v["lane"] == "1" for v in t))
+    record = with_probe(load_record(d.out_dir / "traffic" / pair, scenario), 15.0)
+    vehicles = weigh_event(record, by_temperature).vehicles
+    assert len(vehicles) == 2
+    assert all(v.weighed and v.drift_method == "temperature" for v in vehicles), \
+        [v.reason for v in vehicles]

@@ -16,6 +16,7 @@ Contract
     for two vehicles following each other (:attr:`~bwim.site.lanes.LaneVehicle.joined`)
     is refused, and so is a part cut out of a longer one that its own part of the record
     did not confirm (:attr:`~bwim.site.lanes.LaneVehicle.cut`);
+  - the day's drift at the vehicle (below) is read from the event's whole record;
   - for any other vehicle, the vehicles that cross before or after it without sharing
     the span (a truck following it in its lane, one that crossed the other way before
     it) are cut off the record it is judged and weighed on
@@ -414,13 +415,16 @@ def _vehicle(record: Record, ev: EventDetection, k: int, calibration: SiteCalibr
     if FLAG_TRUNCATED in flags:
         return refused("the record starts or ends while the vehicle is on the bridge "
                        "(truncated): its weights cannot be whole")
-    # the vehicles that cross before or after it are cut off (bwim.site.isolate)
-    record = own_part(record, lv.window,
-                      [w.window for j, w in enumerate(ev.vehicles) if j != k])
+    # the day's drift at this vehicle from the event's whole record (its temperature is
+    # the event's: a part of the record may miss the probe's readings) ...
     try:
         factor, method, drift_flags = _drift_factor(record, v.passage, calibration)
     except InputError as exc:
         return refused(f"drift correction failed: {_why(exc)}")
+    # ... the rest on its own part: the vehicles that cross before or after it are cut off
+    # (bwim.site.isolate)
+    record = own_part(record, lv.window,
+                      [w.window for j, w in enumerate(ev.vehicles) if j != k])
     mfi = model is not None and lv.lane == setup.calibration_lane
     if mfi and not model.accepted:
         return refused(f"the bridge model is not accepted: {model.reason}")
