@@ -30,7 +30,10 @@ alone, so the mass it gives carries no error of the road or of the truck's model
 the dynamic misfit passes on to the mass; it sets the model's first natural frequency to
 the measured one, and the mass error becomes that of the stiffness.  The stages' mass
 distribution over zones and girders is kept; the standard error is the fit's
-(:attr:`~bwim.calibration.quasistatic.MassFit.standard_error`).
+(:attr:`~bwim.calibration.quasistatic.MassFit.standard_error`).  The fit
+fails when the free vibration does not stand out of the noise
+(:attr:`~bwim.calibration.quasistatic.MassFit.snr` below ``snr_noise``: its optimum would
+be the noise's) or when the scale reaches a bound of :data:`FREE_MASS_BOUNDS`.
 
 Every stage is one :func:`~bwim.calibration.stages.run_stage`.  ``method`` chooses the
 optimiser of stages 1–2: ``"ce"`` (the paper's Cross-Entropy, sub-structured when there
@@ -314,10 +317,12 @@ def calibrate(
         Where the mass comes from (module docstring): ``"free"``, one scale of every mass
         family fitted to the free vibration after the truck leaves (needs every mass
         family of the bridge among ``unknowns`` and a tail of at least three periods of
-        the first mode recorded; ``success=False`` with the reason otherwise);
-        ``"dynamic"``, the stages' answer (the paper's); ``"auto"`` (default), ``"free"``
-        when those hold, else ``"dynamic"`` (a failed fit then keeps the stages' masses
-        and says so in ``message``, without failing the calibration).  The scale is
+        the first mode recorded; a fit
+        that fails, the free vibration not out of the noise or the scale at a bound, gives
+        ``success=False`` with the reason); ``"dynamic"``, the stages' answer (the
+        paper's); ``"auto"`` (default), ``"free"`` when those hold, else ``"dynamic"`` (a
+        failed fit then keeps the stages' masses and says why in ``message``, without
+        failing the calibration).  The scale is
         searched within :data:`FREE_MASS_BOUNDS` of the stages' masses.  See
         :attr:`Calibration.mass`.
     n_modes : int, optional
