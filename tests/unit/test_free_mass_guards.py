@@ -17,7 +17,7 @@ import pytest
 
 import bwim
 from bwim.calibration import calibrate, fit_mass
-from bwim.calibration.driver import FREE_MASS_BOUNDS
+from bwim.calibration.driver import FREE_MASS_BOUNDS, FREE_MASS_PERIODS
 
 TRUCK = bwim.MovingForces(axle_loads=[60e3, 100e3], axle_spacings=[4.0])
 SENSORS = [bwim.Sensor(x=6.0), bwim.Sensor(x=10.0), bwim.Sensor(x=14.0)]
@@ -118,3 +118,25 @@ def test_calibrate_keeps_the_stages_mass_when_the_free_vibration_is_noise(clean)
         assert c.mass is not None and not c.mass.success
         assert "not out of the noise" in c.message and "the masses are the stages'" in c.message
     assert auto.success and not free.success
+
+
+@pytest.mark.parametrize("periods, fitted", [(2.9, False), (3.15, True)])
+def test_free_mass_needs_three_periods_of_the_models_first_mode(periods, fitted):
+    """A tail just under :data:`FREE_MASS_PERIODS` (3) periods of the first mode is not
+    fitted (``mass="free"`` fails, no sample used), one just over is.  Before the fix
+    2.12 periods sufficed (fit_mass counts periods of f₁/√0.5).  The periods are counted
+    on the stages' model (``mass="dynamic"``) over the samples after exit (measured 2.89
+    and 3.13)."""
+    f1 = float(_beam().modes(1).frequencies[0])
+    clean = _clean(periods / f1)
+    rec = clean.with_noise(sigma=0.005 * float(np.abs(clean.data).max()), seed=0)
+    got = {m: calibrate(_start(), [rec], TRUCK, method="lm", mass=m)
+           for m in ("free", "dynamic")}
+    f1_model = float(got["dynamic"].bridge.modes(1).frequencies[0])
+    t = rec.time[_after_exit(rec)]
+    held = (t[-1] - t[0]) * f1_model
+    assert (held < FREE_MASS_PERIODS - 0.05) if not fitted else (
+        held > FREE_MASS_PERIODS + 0.05), held
+    free = got["free"]
+    assert free.success is fitted and free.mass.success is fitted, free.message
+    assert (free.mass.n_samples > 0) is fitted
