@@ -656,9 +656,11 @@ def fit_mass(
         sw = np.ones(rec.data.shape[1]) if weights is None else np.sqrt(weights[k])
         segs.append((tau, rec.data[sel] * sw, estimate_noise([rec])[0] * sw))
     if not segs:
+        need = min_periods * np.sqrt(bounds[0])  # periods of the model's f1
         return MassFit(x=np.nan, fun=np.nan, frequencies=modes.frequencies, n_samples=0,
-                       success=False, message="no free vibration after exit (record a "
-                                              f"tail of ≥ {min_periods} periods)")
+                       success=False, message=f"no free vibration after exit (record a tail "
+                       f"of ≥ {need:.3g} periods of the first mode, "
+                       f"{need / modes.frequencies[0]:.3g} s)")
 
     def residuals(s):
         om = om0 / np.sqrt(s)

@@ -116,6 +116,11 @@ def calibrate_command(args: argparse.Namespace) -> int:
         print(f"mesh check: {cal.discretisation.summary().replace(chr(10), '; ')}")
     print(f"{cal.nfev} evaluations, wall time {cal.wall_time:.1f} s")
     print(f"calibrated model: {out}")
+    if not cal.success:
+        why = " ".join(cal.message.split())
+        print(f"bwim: the calibration did not succeed: {why} (the model is written for "
+              "inspection)", file=sys.stderr)
+        return 1
     return 0
 
 
