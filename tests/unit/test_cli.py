@@ -372,3 +372,18 @@ def test_calibrate_mass_option(files, capsys):
         main(["calibrate", str(files["start"]), str(files["cal_h5"]), "--mass", "heavy"])
     assert exc.value.code == 2
 
+
+def test_calibrate_refuses_the_scenario_mass_for_logger_files(small_site, tmp_path, capsys):
+    """``[calibrate] mass`` in a scenario with ``[logger]`` is refused like ``--mass``
+    (the site's logger fit takes the mass from the free vibration itself): exit 2, one
+    line naming the key and the scenario, no model written."""
+    text = Path(small_site.scenario).read_text(encoding="utf-8")
+    scenario = tmp_path / "scenario.toml"
+    scenario.write_text(text + '\n[calibrate]\nmass = "free"\n', encoding="utf-8")
+    out = tmp_path / "model.toml"
+    code = main(["calibrate", str(scenario), str(small_site.out_dir / "calibration"),
+                 "-o", str(out)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1, err
+    assert "[calibrate] mass" in err[0] and str(scenario) in err[0]
+    assert not out.exists()
