@@ -133,7 +133,7 @@ class MassFit:
         ``Σ_s (‖d_s‖² − ‖r_s‖²) / σ_s²`` over the tail's channels s (d the readings, r the
         residual, σ the channel's noise, :func:`~bwim.calibration.problem.estimate_noise`;
         ``N A² / 2σ²`` for one undamped mode of amplitude A over N samples); noise alone
-        gives about ``2 × modes × channels``.  Infinite on noise-free records, NaN
+        gives about ``2 × modes × channels``.  Infinite when no channel has noise, NaN
         without a fit.
     snr_noise : float
         The ``snr`` noise alone exceeds with probability :data:`FREE_FALSE_ALARM`: the χ²
