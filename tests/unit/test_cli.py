@@ -349,17 +349,41 @@ def test_demo_quick_runs_the_whole_chain(tmp_path, capsys, monkeypatch):
 
 def test_calibrate_mass_option(files, capsys):
     """--mass reaches calibrate: "free" on a record without a free vibration after the
-    truck leaves (the scenario records no tail) keeps the stages' mass and says why;
-    "dynamic" prints no mass line; an unknown choice is exit 2 (the accuracy of the
-    free-vibration mass is tests/validation/test_free_vibration_mass.py's)."""
+    truck leaves (the scenario records no tail) keeps the stages' mass and says why, and,
+    the fit being required, the calibration failed: exit 1 with one line on stderr, the
+    model written for inspection (as for a site model that fails its self-check,
+    docs/cli.md); "dynamic" prints no mass line; an unknown choice is exit 2 (the
+    accuracy of the free-vibration mass is tests/validation/test_free_vibration_mass.py's).
+    """
     d = files["dir"]
     code, out, err = _run(["calibrate", files["start"], files["cal_h5"], "-o",
                            d / "free.toml", "--method", "lm", "--mass", "free"], capsys)
-    assert code == 0, err
+    assert code == 1, err
     assert "mass: the stages' (the free-vibration fit failed" in out
+    # stderr: the progress lines, then the one line of the failure
+    lines = [x for x in err.strip().splitlines() if not x.startswith("bwim: calibrating:")]
+    assert len(lines) == 1 and lines[0].startswith("bwim: the calibration did not succeed")
+    assert "no free vibration after exit" in lines[0]
+    assert (d / "free.toml").exists()
     code, out, err = _run(["calibrate", files["start"], files["cal_h5"], "-o",
                            d / "dynamic.toml", "--method", "lm", "--mass", "dynamic"], capsys)
     assert code == 0 and "free vibration" not in out and "mass:" not in out, out
     with pytest.raises(SystemExit) as exc:
         main(["calibrate", str(files["start"]), str(files["cal_h5"]), "--mass", "heavy"])
     assert exc.value.code == 2
+
+
+def test_calibrate_refuses_the_scenario_mass_for_logger_files(small_site, tmp_path, capsys):
+    """``[calibrate] mass`` in a scenario with ``[logger]`` is refused like ``--mass``
+    (the site's logger fit takes the mass from the free vibration itself): exit 2, one
+    line naming the key and the scenario, no model written."""
+    text = Path(small_site.scenario).read_text(encoding="utf-8")
+    scenario = tmp_path / "scenario.toml"
+    scenario.write_text(text + '\n[calibrate]\nmass = "free"\n', encoding="utf-8")
+    out = tmp_path / "model.toml"
+    code = main(["calibrate", str(scenario), str(small_site.out_dir / "calibration"),
+                 "-o", str(out)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1, err
+    assert "[calibrate] mass" in err[0] and str(scenario) in err[0]
+    assert not out.exists()

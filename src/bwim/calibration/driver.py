@@ -30,7 +30,11 @@ alone, so the mass it gives carries no error of the road or of the truck's model
 the dynamic misfit passes on to the mass; it sets the model's first natural frequency to
 the measured one, and the mass error becomes that of the stiffness.  The stages' mass
 distribution over zones and girders is kept; the standard error is the fit's
-(:attr:`~bwim.calibration.quasistatic.MassFit.standard_error`).
+(:attr:`~bwim.calibration.quasistatic.MassFit.standard_error`).  A record's tail is
+fitted when it holds :data:`FREE_MASS_PERIODS` periods of the model's first mode; the fit
+fails when the free vibration does not stand out of the noise
+(:attr:`~bwim.calibration.quasistatic.MassFit.snr` below ``snr_noise``: its optimum would
+be the noise's) or when the scale reaches a bound of :data:`FREE_MASS_BOUNDS`.
 
 Every stage is one :func:`~bwim.calibration.stages.run_stage`.  ``method`` chooses the
 optimiser of stages 1–2: ``"ce"`` (the paper's Cross-Entropy, sub-structured when there
@@ -81,8 +85,8 @@ from bwim.records import Record
 from bwim.road import RoadProfile
 from bwim.vehicles import Vehicle
 
-__all__ = ["FREE_MASS_BOUNDS", "FREE_MASS_MODES", "Calibration", "MassSource", "Refine",
-           "calibrate"]
+__all__ = ["FREE_MASS_BOUNDS", "FREE_MASS_MODES", "FREE_MASS_PERIODS", "Calibration",
+           "MassSource", "Refine", "calibrate"]
 
 
 _REFINE_NAME = "joint refinement (dynamic)"
@@ -113,6 +117,9 @@ FREE_MASS_MODES = 1
 #: Search box of the free-vibration mass scale, factors of the stages' masses; a scale at
 #: either end is a failed fit.
 FREE_MASS_BOUNDS = (0.5, 2.0)
+#: Periods of the model's first mode (the stages' model) a record's free vibration after
+#: exit must hold to be fitted.
+FREE_MASS_PERIODS = 3.0
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -313,11 +320,13 @@ def calibrate(
     mass : "auto", "free" or "dynamic"
         Where the mass comes from (module docstring): ``"free"``, one scale of every mass
         family fitted to the free vibration after the truck leaves (needs every mass
-        family of the bridge among ``unknowns`` and a tail of at least three periods of
-        the first mode recorded; ``success=False`` with the reason otherwise);
-        ``"dynamic"``, the stages' answer (the paper's); ``"auto"`` (default), ``"free"``
-        when those hold, else ``"dynamic"`` (a failed fit then keeps the stages' masses
-        and says so in ``message``, without failing the calibration).  The scale is
+        family of the bridge among ``unknowns`` and a tail of at least
+        :data:`FREE_MASS_PERIODS` (three) periods of the model's first mode recorded; a fit
+        that fails, the free vibration not out of the noise or the scale at a bound, gives
+        ``success=False`` with the reason); ``"dynamic"``, the stages' answer (the
+        paper's); ``"auto"`` (default), ``"free"`` when those hold, else ``"dynamic"`` (a
+        failed fit then keeps the stages' masses and says why in ``message``, without
+        failing the calibration).  The scale is
         searched within :data:`FREE_MASS_BOUNDS` of the stages' masses.  See
         :attr:`Calibration.mass`.
     n_modes : int, optional
@@ -380,8 +389,9 @@ def _free_mass(mass: MassSource, bridge: Bridge, correction: MeshCorrection | No
                        success=False, message=f"mass='free': {why}")
     model = correction.bridge if correction is not None else bridge
     lo, hi = FREE_MASS_BOUNDS
+    # fit_mass counts periods of the search box's highest first frequency, f1 / sqrt(lo)
     fit = fit_mass(model, records, n_modes=FREE_MASS_MODES, weights=ctx.weights,
-                   bounds=FREE_MASS_BOUNDS)
+                   bounds=FREE_MASS_BOUNDS, min_periods=FREE_MASS_PERIODS / np.sqrt(lo))
     if mass is MassSource.AUTO and fit.n_samples == 0:
         return None
     if fit.success and not lo * (1 + 1e-3) < fit.x < hi * (1 - 1e-3):

@@ -42,8 +42,14 @@ Mass: after the last axle leaves, the strains are the bridge's free vibration,
 ``Σ_m e^{−ζ_m ω_m t}(a_{s,m} cos ω_d t + b_{s,m} sin ω_d t)``.  With the stiffness fixed,
 a uniform scale of the mass scales every ω_m by ``√(μ₀/μ)``; μ (one scale for every mass
 family) minimises the projected residual of that fit (amplitudes linear, a grid then a
-bounded scalar search).  ζ_m is the model's Rayleigh damping.  Needs at least
-``min_free_periods`` periods of the first mode after exit (record a ``tail``).
+bounded scalar search).  ζ_m is the model's Rayleigh damping.  Needs a ``tail``
+recorded after exit of at least ``min_free_periods`` periods of the highest first-mode
+frequency of the mass search box, ``f₁/√bounds[0]`` (``min_free_periods·√bounds[0]``
+periods of the model's own ``f₁``).  The fit fails when the free vibration does not stand
+out of the noise: when the energy it explains, in units of each channel's noise variance
+(:func:`~bwim.calibration.problem.estimate_noise`), is below what noise alone exceeds with
+probability :data:`FREE_FALSE_ALARM` (:attr:`MassFit.snr`): the fit's optimum would then be
+the noise's.
 
 Contract
 --------
@@ -89,11 +95,14 @@ from bwim.optimize import OptimizeResult
 from bwim.records import Record
 from bwim.vehicles import Vehicle
 
-__all__ = ["MassFit", "QuasiStaticCalibration", "calibrate_quasistatic", "fit_mass",
-           "moving_force_columns"]
+__all__ = ["FREE_FALSE_ALARM", "MassFit", "QuasiStaticCalibration", "calibrate_quasistatic",
+           "fit_mass", "moving_force_columns"]
 
 #: Default cut-off as a fraction of the starting model's first natural frequency.
 DEFAULT_CUTOFF_FRACTION = 0.6
+#: The free-vibration fit fails when noise alone would explain as much of the tail as the
+#: fit does with at least this probability (:attr:`MassFit.snr_noise`).
+FREE_FALSE_ALARM = 1e-4
 _STIFFNESS = ("E_x", "E_y", "E_girder")
 _MASS = ("mu", "mu_girder")
 
@@ -119,6 +128,19 @@ class MassFit:
         (its curvature by central differences, ``2 JᵀJ`` of the Gauss-Newton model) and
         ``s² = fun / (n_samples − amplitudes − 1)`` the residual variance per sample
         (white residuals assumed; NaN without a fit or with a flat cost).
+    snr : float
+        The free vibration's signal-to-noise ratio: the energy the fit explains at x,
+        ``Σ_s (‖d_s‖² − ‖r_s‖²) / σ_s²`` over the tail's channels s (d the readings, r the
+        residual, σ the channel's noise, :func:`~bwim.calibration.problem.estimate_noise`;
+        ``N A² / 2σ²`` for one undamped mode of amplitude A over N samples); noise alone
+        gives about ``2 × modes × channels``.  Infinite when no channel has noise, NaN
+        without a fit.
+    snr_noise : float
+        The ``snr`` noise alone exceeds with probability :data:`FREE_FALSE_ALARM`: the χ²
+        quantile with ``2 × modes × channels`` degrees of freedom at ``FREE_FALSE_ALARM /
+        K``, K = 1 + T Δf the independent trial frequencies of the search (T the longest
+        tail, Δf the highest mode's frequency range over ``bounds``).  The fit fails when
+        ``snr < snr_noise``.
     """
 
     x: float
@@ -128,6 +150,8 @@ class MassFit:
     success: bool
     message: str
     standard_error: float = float("nan")
+    snr: float = float("nan")
+    snr_noise: float = float("nan")
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -591,7 +615,29 @@ def fit_mass(
     weights: Sequence[np.ndarray] | None = None,
 ) -> MassFit:
     """The mass scale x (μ = x μ₀ for every mass family of ``bridge``) from the free
-    vibration after the last axle leaves (see module docstring).  No road needed."""
+    vibration after the last axle leaves (see module docstring).  No road needed.
+
+    Parameters
+    ----------
+    bridge : Bridge
+        The model (its stiffness and damping fixed; x scales its masses).
+    records : Record or sequence of Record
+        Records whose passages have left the span before the record ends.
+    n_modes : int
+        Modes of the free vibration fitted.
+    min_periods : float
+        A record's tail counts when it holds this many periods of the highest first-mode
+        frequency of the search, ``f₁ / √bounds[0]`` (f₁ the model's):
+        ``min_periods × √bounds[0]`` periods of f₁.  Without such a tail the fit fails
+        with ``n_samples = 0``.
+    bounds : (float, float)
+        The search box of x (it brackets 1).
+    weights : sequence of arrays, optional
+        Per-record channel weights of the squared residuals.
+
+    The fit fails (``success=False``, x still reported) when the free vibration is not
+    out of the noise: ``snr < snr_noise`` (:class:`MassFit`).
+    """
     records = list(records) if isinstance(records, (list, tuple)) else [records]
     if not 0 < bounds[0] < 1 < bounds[1]:
         raise InputError(f"bounds must bracket 1, got {bounds!r}")
@@ -608,23 +654,28 @@ def fit_mass(
         if tau[-1] * modes.frequencies[0] / np.sqrt(bounds[0]) < min_periods:
             continue
         sw = np.ones(rec.data.shape[1]) if weights is None else np.sqrt(weights[k])
-        segs.append((tau, rec.data[sel] * sw))
+        segs.append((tau, rec.data[sel] * sw, estimate_noise([rec])[0] * sw))
     if not segs:
+        need = min_periods * np.sqrt(bounds[0])  # periods of the model's f1
         return MassFit(x=np.nan, fun=np.nan, frequencies=modes.frequencies, n_samples=0,
-                       success=False, message="no free vibration after exit (record a "
-                                              f"tail of ≥ {min_periods} periods)")
+                       success=False, message=f"no free vibration after exit (record a tail "
+                       f"of ≥ {need:.3g} periods of the first mode, "
+                       f"{need / modes.frequencies[0]:.3g} s)")
 
-    def cost(s):
+    def residuals(s):
         om = om0 / np.sqrt(s)
         zeta = ratio(om)
         wd = om * np.sqrt(1 - np.minimum(zeta, 0.99) ** 2)
-        total = 0.0
-        for tau, d in segs:
+        out = []
+        for tau, d, _ in segs:
             env = np.exp(-np.outer(tau, zeta * om))
             B = np.hstack([env * np.cos(np.outer(tau, wd)), env * np.sin(np.outer(tau, wd))])
             c = np.linalg.lstsq(B, d, rcond=None)[0]
-            total += float(((d - B @ c) ** 2).sum())
-        return total
+            out.append(d - B @ c)
+        return out
+
+    def cost(s):
+        return sum(float((r**2).sum()) for r in residuals(s))
 
     grid = np.exp(np.linspace(np.log(bounds[0]), np.log(bounds[1]), 241))
     vals = np.array([cost(s) for s in grid])
@@ -632,12 +683,41 @@ def fit_mass(
     lo, hi = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
     r = so.minimize_scalar(cost, bounds=(lo, hi), method="bounded",
                            options={"xatol": 1e-6})
-    n = sum(d.size for _, d in segs)
-    dof = n - sum(2 * om0.size * d.shape[1] for _, d in segs) - 1
+    n = sum(d.size for _, d, _ in segs)
+    dof = n - sum(2 * om0.size * d.shape[1] for _, d, _ in segs) - 1
     h = 1e-3 * float(r.x)
     curvature = (cost(r.x + h) - 2 * float(r.fun) + cost(r.x - h)) / h**2
     se = (float(np.sqrt(2 * float(r.fun) / dof / curvature))
           if dof > 0 and curvature > 0 else float("nan"))
+    snr, snr_noise = _free_snr(segs, residuals(r.x), modes.frequencies, bounds)
+    success, message = bool(r.success), str(r.message)
+    if success and snr < snr_noise:
+        success, message = False, (
+            f"the free vibration after exit is not out of the noise (snr {snr:.3g}, below "
+            f"the {snr_noise:.3g} noise alone exceeds with probability "
+            f"{FREE_FALSE_ALARM:g}): the fit's optimum would be the noise's")
     return MassFit(x=float(r.x), fun=float(r.fun), frequencies=om0 / np.sqrt(r.x) / 2 / np.pi,
-                   n_samples=n, success=bool(r.success), message=str(r.message),
-                   standard_error=se)
+                   n_samples=n, success=success, message=message, standard_error=se,
+                   snr=snr, snr_noise=snr_noise)
+
+
+def _free_snr(segs: list, residuals: list[np.ndarray], frequencies: np.ndarray,
+              bounds: tuple[float, float]) -> tuple[float, float]:
+    """``(snr, snr_noise)`` of :class:`MassFit` from the fitted tails ``segs`` (time, data,
+    channel noise) and their residuals at the answer."""
+    import scipy.stats
+
+    sig = np.concatenate([sg for _, _, sg in segs])
+    top = float(sig.max())
+    if top <= 0:
+        snr = float("inf")
+    else:
+        var = np.maximum(sig, 1e-3 * top) ** 2  # a noise-free channel: floored (noise_weights)
+        explained = np.concatenate([(d**2).sum(axis=0) - (res**2).sum(axis=0)
+                                    for (_, d, _), res in zip(segs, residuals, strict=True)])
+        snr = float((explained / var).sum())
+    tail = max(float(tau[-1]) for tau, _, _ in segs)
+    trials = 1.0 + tail * float(frequencies[-1]) * (1 / np.sqrt(bounds[0])
+                                                     - 1 / np.sqrt(bounds[1]))
+    dof = 2 * frequencies.size * sig.size
+    return snr, float(scipy.stats.chi2.isf(FREE_FALSE_ALARM / trials, dof))

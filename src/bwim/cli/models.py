@@ -58,7 +58,7 @@ def simulate_command(args: argparse.Namespace) -> int:
 
 # --- calibrate -------------------------------------------------------------------------------
 def calibrate_command(args: argparse.Namespace) -> int:
-    from bwim.calibration import calibrate
+    from bwim.calibration import MassSource, calibrate
     from bwim.scenario import build_bridge, build_road, build_vehicle, load_scenario, save_bridge
 
     check_jobs(args.jobs)
@@ -116,6 +116,12 @@ def calibrate_command(args: argparse.Namespace) -> int:
         print(f"mesh check: {cal.discretisation.summary().replace(chr(10), '; ')}")
     print(f"{cal.nfev} evaluations, wall time {cal.wall_time:.1f} s")
     print(f"calibrated model: {out}")
+    # the mass was required from the free vibration (mass="free") and could not be fitted
+    if kwargs.get("mass") == MassSource.FREE and cal.mass is not None and not cal.mass.success:
+        why = " ".join(cal.message.split())
+        print(f"bwim: the calibration did not succeed: {why} (the model is written for "
+              "inspection)", file=sys.stderr)
+        return 1
     return 0
 
 
@@ -132,10 +138,13 @@ def _site_model(args: argparse.Namespace, scenario, paths, out: Path) -> int:
         if getattr(args, key) is not None:
             raise InputError(f"--{key.replace('_', '-')} is not used for a site's logger "
                              "files (the road-free fit has no optimiser choice)")
-    if getattr(args, "mass", None) is not None:
-        raise InputError("--mass is not used for a site's logger files (the road-free fit "
-                         "takes the mass from the free vibration when it stands out of the "
-                         "noise)")
+    given_mass = scenario.calibrate.mass if scenario.calibrate is not None else None
+    for name, value in (("--mass", getattr(args, "mass", None)),
+                        (f"{scenario.source}: [calibrate] mass", given_mass)):
+        if value is not None:
+            raise InputError(f"{name} is not used for a site's logger files (the road-free "
+                             "fit takes the mass from the free vibration when it stands out "
+                             "of the noise)")
     start = build_bridge(scenario)
     records = []
     for p in paths:
