@@ -373,17 +373,23 @@ def test_calibrate_mass_option(files, capsys):
     assert exc.value.code == 2
 
 
-def test_calibrate_refuses_the_scenario_mass_for_logger_files(small_site, tmp_path, capsys):
-    """``[calibrate] mass`` in a scenario with ``[logger]`` is refused like ``--mass``
-    (the site's logger fit takes the mass from the free vibration itself): exit 2, one
-    line naming the key and the scenario, no model written."""
+@pytest.mark.parametrize(("keys", "named"), [
+    ('mass = "free"', "[calibrate] mass"),
+    ('method = "lm"\nseed = 3', "[calibrate] method, seed"),
+])
+def test_calibrate_refuses_the_scenario_keys_it_would_ignore_for_logger_files(
+        small_site, tmp_path, capsys, keys, named):
+    """``[calibrate]`` keys in a scenario with ``[logger]`` other than
+    ``mesh_correction`` (the only one the site's road-free fit reads; it takes the mass
+    from the free vibration itself) are refused like ``--mass``, not silently ignored:
+    exit 2, one line naming the keys and the scenario, no model written."""
     text = Path(small_site.scenario).read_text(encoding="utf-8")
     scenario = tmp_path / "scenario.toml"
-    scenario.write_text(text + '\n[calibrate]\nmass = "free"\n', encoding="utf-8")
+    scenario.write_text(text + f"\n[calibrate]\n{keys}\n", encoding="utf-8")
     out = tmp_path / "model.toml"
     code = main(["calibrate", str(scenario), str(small_site.out_dir / "calibration"),
                  "-o", str(out)])
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1, err
-    assert "[calibrate] mass" in err[0] and str(scenario) in err[0]
+    assert named in err[0] and str(scenario) in err[0]
     assert not out.exists()

@@ -138,13 +138,18 @@ def _site_model(args: argparse.Namespace, scenario, paths, out: Path) -> int:
         if getattr(args, key) is not None:
             raise InputError(f"--{key.replace('_', '-')} is not used for a site's logger "
                              "files (the road-free fit has no optimiser choice)")
-    given_mass = scenario.calibrate.mass if scenario.calibrate is not None else None
-    for name, value in (("--mass", getattr(args, "mass", None)),
-                        (f"{scenario.source}: [calibrate] mass", given_mass)):
-        if value is not None:
-            raise InputError(f"{name} is not used for a site's logger files (the road-free "
-                             "fit takes the mass from the free vibration when it stands out "
-                             "of the noise)")
+    if getattr(args, "mass", None) is not None:
+        raise InputError("--mass is not used for a site's logger files (the road-free fit "
+                         "takes the mass from the free vibration when it stands out of the "
+                         "noise)")
+    # of [calibrate], the road-free fit reads mesh_correction only: no key is ignored
+    unused = sorted(k for k in (scenario.calibrate.kwargs() if scenario.calibrate is not None
+                                else {}) if k != "mesh_correction")
+    if unused:
+        raise InputError(f"{scenario.source}: [calibrate] {', '.join(unused)}: not used for "
+                         "a site's logger files (the road-free fit reads mesh_correction "
+                         "only; its mass comes from the free vibration when it stands out "
+                         "of the noise)")
     start = build_bridge(scenario)
     records = []
     for p in paths:
