@@ -109,7 +109,7 @@ def choose_groups(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp:
     n_samples = 2 * rows.size
     tpl = templates(pb, v)
     st = pb.step  # hypotheses on every st-th sample
-    at = np.round((taus - pb.t[lo]) * pb.fs / st).astype(int)  # axles' grid points
+    at = ((taus - pb.t[lo]) * pb.fs / st).round().astype(int)  # axles' grid points
     margin = round(SEGMENT_MARGIN / v * pb.fs)
     s_min = max(1, int(np.ceil(min_sp / v * pb.fs / st)))
     s_max = int(np.floor(GROUP_SPACING / v * pb.fs / st))
@@ -119,7 +119,7 @@ def choose_groups(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp:
             for _, _, r in tpl]
     out, changed = [], False
     parts_of = segments(pb, local, v, margin, st)
-    bare = one_axle_may_fit(pb, resid, tpl, auto, st, n_grid)
+    bare = one_axle_may_fit(pb, resid, tpl, auto, st, n_grid).tolist()  # read one by one
     at_list = at.tolist()
     # the segments worth a choice: their grid points' correlations with one axle end to
     # end (both detectors), the vehicle's axles in each, its readings' and residual's
@@ -293,12 +293,12 @@ def evenly_explained(lengths: np.ndarray, k: int, s_min: int, s_max: int, corr, 
     n_s = int(sp.max()) + 1  # the spacings used
     lags = spacings[:n_s, None, None] * np.abs(np.arange(k)[:, None] - np.arange(k)[None, :])
     eye = np.eye(k)
-    G = np.stack([auto[c][lags] + 1e-12 * auto[c][0] * eye for c in range(2)])
+    G = np.array([auto[c][lags] + 1e-12 * auto[c][0] * eye for c in range(2)])
     at = row[:, None] + steps  # in the correlations end to end
-    b = np.stack([corr[0][at], corr[1][at]])  # (2, n_hyp, k)
+    b = np.array([corr[0][at], corr[1][at]])  # (2, n_hyp, k)
     a = (np.linalg.inv(G)[:, sp] @ b[..., None])[..., 0]
-    gained = np.sum(a * b, axis=2)
-    return hyp, owner_of[row], gained[0] + gained[1], np.moveaxis(a, 0, -1)
+    gained = (a * b).sum(axis=2)
+    return hyp, owner_of[row], gained[0] + gained[1], a.transpose(1, 2, 0)
 
 
 def group_counts(pb: Problem, corr, auto, lengths: np.ndarray, outside, energies,
@@ -313,10 +313,10 @@ def group_counts(pb: Problem, corr, auto, lengths: np.ndarray, outside, energies
     n = lengths.size
     offsets = np.cumsum(lengths) - lengths
     # one axle at every grid point: explained() without the indexing
-    b = np.stack(corr, axis=-1)
+    b = np.array(corr).T  # (n, 2)
     one = np.array([max(auto[0][0], 1e-300), max(auto[1][0], 1e-300)])
     amps = b / one
-    gained = np.sum(amps * b, axis=1)
+    gained = (amps * b).sum(axis=1)
     positive = (amps[:, 0] > 0) & (amps[:, 1] > 0)
     with np.errstate(divide="ignore", invalid="ignore"):
         lr = np.log(amps[:, 1] / (pb.ratio * amps[:, 0]))
@@ -326,7 +326,7 @@ def group_counts(pb: Problem, corr, auto, lengths: np.ndarray, outside, energies
     active = []
     for i in range(n):
         o = int(offsets[i])
-        j = int(np.argmax(score[o:o + lengths[i]]))
+        j = int(score[o:o + lengths[i]].argmax())
         if score[o + j] > -np.inf:  # a valid one (valid ones are finite)
             best[i] = (float(gained[o + j]), np.array([j]))
             active.append(i)
@@ -337,7 +337,7 @@ def group_counts(pb: Problem, corr, auto, lengths: np.ndarray, outside, energies
                                        for i in active])] for c in range(2)]
         hyp, owner, gained, amps = evenly_explained(lengths[active], k, s_min, s_max, sub,
                                                     auto)
-        positive = np.all(amps > 0, axis=(1, 2))
+        positive = (amps > 0).all(axis=(1, 2))
         with np.errstate(divide="ignore", invalid="ignore"):
             lr = np.log(amps[..., 1] / (pb.ratio * amps[..., 0]))
         valid = positive & np.all(np.abs(np.where(positive[:, None], lr, np.inf))
@@ -350,7 +350,7 @@ def group_counts(pb: Problem, corr, auto, lengths: np.ndarray, outside, energies
             h0, h1 = int(bounds[q]), int(bounds[q + 1])
             if h0 == h1:
                 continue  # no k axles fit in the segment
-            j = h0 + int(np.argmax(score[h0:h1]))
+            j = h0 + int(score[h0:h1].argmax())
             if not score[j] > -np.inf:
                 continue
             gain = gained[j] - best[i][0]
@@ -367,14 +367,14 @@ def explained(hyp: np.ndarray, corr, auto) -> tuple[np.ndarray, np.ndarray]:
     """Misfit each hypothesis removes (both detectors) and its amplitudes (n_hyp, k, 2)."""
     k = hyp.shape[1]
     if k == 1:
-        b = np.stack([corr[0][hyp[:, 0]], corr[1][hyp[:, 0]]], axis=-1)  # (n_hyp, 2)
+        b = np.array([corr[0][hyp[:, 0]], corr[1][hyp[:, 0]]]).T  # (n_hyp, 2)
         a = b / np.array([max(auto[0][0], 1e-300), max(auto[1][0], 1e-300)])
-        return np.sum(a * b, axis=1), a[:, None, :]
+        return (a * b).sum(axis=1), a[:, None, :]
     lag = np.abs(hyp[:, :, None] - hyp[:, None, :])
     eye = np.eye(k)
     # both detectors' systems as one stack (each solved on its own: the same numbers)
-    b = np.stack([corr[0][hyp], corr[1][hyp]])  # (2, n_hyp, k)
-    G = np.stack([auto[c][lag] + 1e-12 * auto[c][0] * eye for c in range(2)])
+    b = np.array([corr[0][hyp], corr[1][hyp]])  # (2, n_hyp, k)
+    G = np.array([auto[c][lag] + 1e-12 * auto[c][0] * eye for c in range(2)])
     a = np.linalg.solve(G, b[..., None])[..., 0]
-    gained = np.sum(a * b, axis=2)
-    return gained[0] + gained[1], np.moveaxis(a, 0, -1)
+    gained = (a * b).sum(axis=2)
+    return gained[0] + gained[1], a.transpose(1, 2, 0)

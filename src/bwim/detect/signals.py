@@ -164,9 +164,10 @@ def gaussian_average(y: np.ndarray, filters: Sequence[tuple[float, float]]) -> n
     n = y.shape[0]
     if n == 0:
         return np.zeros_like(y)
-    shape = (r, *y.shape[1:])
-    padded = np.concatenate([np.broadcast_to(y[:1], shape), y,
-                             np.broadcast_to(y[-1:], shape)])
+    padded = np.empty((n + 2 * r, *y.shape[1:]))  # the ends extended by their edge values
+    padded[:r] = y[0]
+    padded[r:r + n] = y
+    padded[r + n:] = y[-1]
     size = scipy.fft.next_fast_len(n + 4 * r, real=True)  # linear, not circular
     spec = np.fft.rfft(padded, size, axis=0)
     spec *= np.fft.rfft(kernel, size).reshape(-1, *([1] * (y.ndim - 1)))

@@ -271,14 +271,24 @@ class Solution:
                 except np.linalg.LinAlgError:
                     Ginv[c] = np.linalg.pinv(G[c])
         coef = Ginv @ (Mt @ w.y)
-        a = coef[:, :n, 0]
-        # removing regressor i raises the misfit by coef_i² / [(MᵀM)⁻¹]_ii
-        gains = a**2 / np.maximum(Ginv.diagonal(axis1=1, axis2=2)[:, :n], 1e-300)
         # every step-th sample: scaled to the misfit of all samples
-        self.k = math.sqrt(pb.step)
+        self.k, self.step = math.sqrt(pb.step), pb.step
         self.res = (w.y - M @ coef).reshape(-1) * self.k
-        self.amps, self.gains = a.T.copy(), (gains[0] + gains[1]) * pb.step
-        self.M, self.Mt, self.Ginv, self.a = M, Mt, Ginv, a
+        self.M, self.Mt, self.Ginv, self.a = M, Mt, Ginv, coef[:, :n, 0]
+
+    # amplitudes and removal costs when read (a refinement's rejected trials never are)
+    @cached_property
+    def amps(self) -> np.ndarray:
+        """The axles' amplitudes (n, 2)."""
+        return self.a.T.copy()
+
+    @cached_property
+    def gains(self) -> np.ndarray:
+        """Each axle's removal cost (level variances of all samples)."""
+        # removing regressor i raises the misfit by coef_i² / [(MᵀM)⁻¹]_ii
+        n = self.taus.size
+        gains = self.a**2 / np.maximum(self.Ginv.diagonal(axis1=1, axis2=2)[:, :n], 1e-300)
+        return (gains[0] + gains[1]) * self.step
 
     def jacobian(self) -> np.ndarray:
         """The variable-projection Jacobian (Kaufman) of the residual in (τ_1 … τ_n, v)."""
@@ -317,7 +327,7 @@ def refine(pb: Problem, taus: np.ndarray, v: float, iterations: int = MAX_LM, *,
     ``start``: the :class:`Solution` with slopes at these times and speed on their window
     when already made (the same numbers, not made again)."""
     taus = np.sort(np.asarray(taus, dtype=float))
-    p = np.append(taus, v)
+    p = np.concatenate((taus, [v]))
     sol = solution(pb, taus, v, start)
     rows = sol.w
     r, amps, gains = sol.res, sol.amps, sol.gains
@@ -347,13 +357,13 @@ def refine(pb: Problem, taus: np.ndarray, v: float, iterations: int = MAX_LM, *,
             if c2 < cost:
                 rel = (cost - c2) / max(cost, 1e-300)
                 sol = trial_sol
-                p, r, amps, gains, cost = (np.append(tt, vv), sol.res, sol.amps, sol.gains,
+                p, r, amps, gains, cost = (np.concatenate((tt, [vv])), sol.res, sol.amps, sol.gains,
                                            c2)
                 lam = max(lam / 3.0, 1e-7)
                 improved = True
                 break
             lam *= 10.0
-        if not improved or rel < CONVERGED or np.max(np.abs(step[:-1])) * p[-1] < 5e-3:
+        if not improved or rel < CONVERGED or np.abs(step[:-1]).max() * p[-1] < 5e-3:
             break
     return VehicleFit(taus=p[:-1], v=float(p[-1]), amps=amps, chi=cost, gains=gains,
                       solution=sol)
