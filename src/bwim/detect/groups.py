@@ -36,6 +36,7 @@ import bisect
 import numpy as np
 from scipy.signal import find_peaks
 
+from .signals import last_axis_sum
 from .vehicle_fit import REACH, Problem, Rows, ridged_normal
 
 __all__ = ["GROUP_AXLES", "GROUP_DIP", "GROUP_EXTENT", "GROUP_SPACING", "LEVEL_GAIN",
@@ -93,8 +94,8 @@ def choose_groups(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp:
     times, or None."""
     taus = np.sort(taus)
     n = taus.size
-    lo = int(np.searchsorted(pb.t, span[0] - REACH / v))
-    hi = int(np.searchsorted(pb.t, span[1] + (pb.shift[1] + REACH) / v, side="right"))
+    lo = int(pb.t.searchsorted(span[0] - REACH / v))
+    hi = int(pb.t.searchsorted(span[1] + (pb.shift[1] + REACH) / v, side="right"))
     w = Rows(pb, np.arange(lo, hi))
     rows = w.rows
     # both detectors' least squares as one stack of two (the same numbers as two)
@@ -103,7 +104,7 @@ def choose_groups(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp:
     coef = np.linalg.solve(G, Mt @ w.y)
     local = (w.y - w.rest @ coef[:, n:])[..., 0]  # (2, n_rows)
     parts = X * coef[:, None, :n, 0]  # (2, n_rows, n)
-    fitted = parts.sum(axis=2)
+    fitted = last_axis_sum(parts)
     resid = local - fitted
     r_total = sum(float(r @ r) for r in resid)
     n_samples = 2 * rows.size
@@ -211,7 +212,7 @@ def one_axle_may_fit(pb: Problem, resid, tpl, auto, st: int, n_grid: int) -> np.
         lr = np.log(a1 / (pb.ratio * a0))
         slack = 4.0 * (tol[0] / np.where(sure, b[0], 1.0) + tol[1] / np.where(sure, b[1], 1.0))
     maybe = pos[0] & pos[1] & (~sure | (np.abs(lr) <= pb.bound + slack + 1e-12))
-    return np.concatenate([[0], np.cumsum(maybe)])
+    return np.concatenate([[0], maybe.cumsum()])
 
 
 def segments(pb: Problem, local, v: float, margin: int, st: int) -> list[tuple[int, int]]:
@@ -242,20 +243,20 @@ def segments(pb: Problem, local, v: float, margin: int, st: int) -> list[tuple[i
         # between two neighbouring peaks a and b, the first lowest sample (b, a peak, is
         # higher than a sample between: the lowest of a … b lies in a … b - 1)
         lows = np.minimum.reduceat(e[:peaks[-1]], peaks[:-1])
-        equal = np.flatnonzero(e[peaks[0]:peaks[-1]] == np.repeat(lows, np.diff(peaks)))
-        where = peaks[0] + equal[np.searchsorted(equal, peaks[:-1] - peaks[0])]
+        equal = (e[peaks[0]:peaks[-1]] == lows.repeat(peaks[1:] - peaks[:-1])).nonzero()[0]
+        where = peaks[0] + equal[equal.searchsorted(peaks[:-1] - peaks[0])]
         cuts = where[lows < GROUP_DIP * np.minimum(e[peaks[:-1]], e[peaks[1:]])]
     cuts = np.concatenate([[0], cuts, [e.size - 1]])
     # each part a … b (both ends in it): where it exceeds GROUP_EXTENT of its highest
     a, b = cuts[:-1], cuts[1:]
     size = b - a + 1
-    starts = np.cumsum(size) - size
-    idx = np.arange(int(size.sum())) - np.repeat(starts - a, size)
+    starts = size.cumsum() - size
+    idx = np.arange(int(size.sum())) - (starts - a).repeat(size)
     vals = e[idx]
     high = GROUP_EXTENT * np.maximum.reduceat(vals, starts)
-    above = np.flatnonzero(vals >= np.repeat(high, size))
-    lo = np.maximum(idx[above[np.searchsorted(above, starts)]] - margin, a)
-    hi = np.minimum(idx[above[np.searchsorted(above, starts + size) - 1]] + margin, b)
+    above = (vals >= high.repeat(size)).nonzero()[0]
+    lo = np.maximum(idx[above[above.searchsorted(starts)]] - margin, a)
+    hi = np.minimum(idx[above[above.searchsorted(starts + size) - 1]] + margin, b)
     return list(zip((lo // st).tolist(), (hi // st).tolist(), strict=True))
 
 
@@ -281,11 +282,11 @@ def evenly_explained(lengths: np.ndarray, k: int, s_min: int, s_max: int, corr, 
     rounding)."""
     lengths = np.asarray(lengths, dtype=int)
     spacings = np.arange(s_min, s_max + 1)
-    owner_of = np.repeat(np.arange(lengths.size), lengths)  # each grid point's segment
-    offsets = np.cumsum(lengths) - lengths
+    owner_of = np.arange(lengths.size).repeat(lengths)  # each grid point's segment
+    offsets = lengths.cumsum() - lengths
     local = np.arange(owner_of.size) - offsets[owner_of]
-    row, sp = np.nonzero(local[:, None] + (k - 1) * spacings[None, :]
-                         <= (lengths - 1)[owner_of][:, None])
+    row, sp = (local[:, None] + (k - 1) * spacings[None, :]
+                <= (lengths - 1)[owner_of][:, None]).nonzero()
     steps = spacings[sp][:, None] * np.arange(k)[None, :]
     hyp = local[row][:, None] + steps
     if hyp.shape[0] == 0:
@@ -296,8 +297,9 @@ def evenly_explained(lengths: np.ndarray, k: int, s_min: int, s_max: int, corr, 
     G = np.array([auto[c][lags] + 1e-12 * auto[c][0] * eye for c in range(2)])
     at = row[:, None] + steps  # in the correlations end to end
     b = np.array([corr[0][at], corr[1][at]])  # (2, n_hyp, k)
-    a = (np.linalg.inv(G)[:, sp] @ b[..., None])[..., 0]
-    gained = (a * b).sum(axis=2)
+    # each hypothesis's inverse (np.take: the indexing's numbers, without its slow path)
+    a = (np.linalg.inv(G).take(sp, axis=1) @ b[..., None])[..., 0]
+    gained = last_axis_sum(a * b)
     return hyp, owner_of[row], gained[0] + gained[1], a.transpose(1, 2, 0)
 
 
@@ -311,16 +313,16 @@ def group_counts(pb: Problem, corr, auto, lengths: np.ndarray, outside, energies
     where no single axle is.  ``corr``: the segments' correlations end to end; every
     segment's hypotheses of one count evaluated at once."""
     n = lengths.size
-    offsets = np.cumsum(lengths) - lengths
+    offsets = lengths.cumsum() - lengths
     # one axle at every grid point: explained() without the indexing
     b = np.array(corr).T  # (n, 2)
     one = np.array([max(auto[0][0], 1e-300), max(auto[1][0], 1e-300)])
     amps = b / one
-    gained = (amps * b).sum(axis=1)
+    gained = last_axis_sum(amps * b)
     positive = (amps[:, 0] > 0) & (amps[:, 1] > 0)
     with np.errstate(divide="ignore", invalid="ignore"):
         lr = np.log(amps[:, 1] / (pb.ratio * amps[:, 0]))
-    valid = positive & (np.abs(np.where(positive, lr, np.inf)) <= pb.bound)
+    valid = positive & (np.abs(lr) <= pb.bound)
     score = np.where(valid, gained, -np.inf)
     best: list = [None] * n
     active = []
@@ -337,13 +339,12 @@ def group_counts(pb: Problem, corr, auto, lengths: np.ndarray, outside, energies
                                        for i in active])] for c in range(2)]
         hyp, owner, gained, amps = evenly_explained(lengths[active], k, s_min, s_max, sub,
                                                     auto)
-        positive = (amps > 0).all(axis=(1, 2))
         with np.errstate(divide="ignore", invalid="ignore"):
             lr = np.log(amps[..., 1] / (pb.ratio * amps[..., 0]))
-        valid = positive & np.all(np.abs(np.where(positive[:, None], lr, np.inf))
-                                  <= pb.bound, axis=1)
+        # every axle positive at both detectors and seen by both
+        valid = ((amps[..., 0] > 0) & (amps[..., 1] > 0) & (np.abs(lr) <= pb.bound)).all(axis=1)
         score = np.where(valid, gained, -np.inf)
-        bounds = np.searchsorted(owner, np.arange(len(active) + 1))
+        bounds = owner.searchsorted(np.arange(len(active) + 1))
         rare = RARE_GROUP if k > 3 else 1.0
         still = []
         for q, i in enumerate(active):
@@ -369,12 +370,12 @@ def explained(hyp: np.ndarray, corr, auto) -> tuple[np.ndarray, np.ndarray]:
     if k == 1:
         b = np.array([corr[0][hyp[:, 0]], corr[1][hyp[:, 0]]]).T  # (n_hyp, 2)
         a = b / np.array([max(auto[0][0], 1e-300), max(auto[1][0], 1e-300)])
-        return (a * b).sum(axis=1), a[:, None, :]
+        return last_axis_sum(a * b), a[:, None, :]
     lag = np.abs(hyp[:, :, None] - hyp[:, None, :])
     eye = np.eye(k)
     # both detectors' systems as one stack (each solved on its own: the same numbers)
     b = np.array([corr[0][hyp], corr[1][hyp]])  # (2, n_hyp, k)
     G = np.array([auto[c][lag] + 1e-12 * auto[c][0] * eye for c in range(2)])
     a = np.linalg.solve(G, b[..., None])[..., 0]
-    gained = (a * b).sum(axis=2)
+    gained = last_axis_sum(a * b)
     return gained[0] + gained[1], a.transpose(1, 2, 0)

@@ -148,8 +148,8 @@ class _Matcher:
         """No new axle within ``min_gap`` m of travel of the time ``tk`` (t ascending: a
         slice holds them)."""
         t, gap = self.pb.t, self.gap
-        a = max(int(np.searchsorted(t, tk - gap)) - 1, 0)
-        b = int(np.searchsorted(t, tk + gap, side="right")) + 1
+        a = max(int(t.searchsorted(tk - gap)) - 1, 0)
+        b = int(t.searchsorted(tk + gap, side="right")) + 1
         self.excluded[a:b] |= np.abs(t[a:b] - tk) < gap
 
     def best(self, res: np.ndarray) -> tuple[float, float]:
@@ -228,7 +228,7 @@ def pursue_axles(record_time: np.ndarray, y: np.ndarray, learned: LearnedRespons
     limit = max(thr2, GAIN_SHARE * first)
     out = []
     groups = np.split(np.arange(taus.size),
-                      np.flatnonzero(np.diff(taus) * v0 > max_axle_spacing) + 1)
+                      ((taus[1:] - taus[:-1]) * v0 > max_axle_spacing).nonzero()[0] + 1)
     # each vehicle's axles may lie between the midpoints to its neighbours' (the pursuit
     # may have missed some: the axle groups are found again there)
     edges = [t[0], *(0.5 * (taus[a[-1]] + taus[b[0]])
@@ -333,7 +333,7 @@ def _drop_close(fit: VehicleFit, min_sp: float) -> np.ndarray | None:
     none is that close."""
     if fit.taus.size < 2:
         return None
-    d = np.diff(fit.taus) * fit.v
+    d = (fit.taus[1:] - fit.taus[:-1]) * fit.v
     i = int(d.argmin())
     if d[i] >= min_sp:
         return None

@@ -231,8 +231,8 @@ def relative(amps: np.ndarray) -> np.ndarray:
 def window(pb: Problem, taus: np.ndarray, v: float) -> np.ndarray:
     """Samples from REACH m of travel before the first axle reaches detector 1 to REACH m
     after the last leaves detector 2."""
-    lo = np.searchsorted(pb.t, taus.min() - REACH / v)
-    hi = np.searchsorted(pb.t, taus.max() + (pb.shift[1] + REACH) / v, side="right")
+    lo = pb.t.searchsorted(taus.min() - REACH / v)
+    hi = pb.t.searchsorted(taus.max() + (pb.shift[1] + REACH) / v, side="right")
     return np.arange(lo, hi, pb.step)
 
 
