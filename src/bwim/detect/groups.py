@@ -136,7 +136,8 @@ def choose_groups(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp:
         for c, (j0, h, _) in enumerate(tpl):
             # the readings less the others' axles, where this group's act
             a, b = max(first * st + j0, 0), min(last * st + j0 + h.size, rows.size)
-            z = resid[c][a:b] + parts[c][a:b, g].sum(axis=1) if g.size else resid[c][a:b]
+            z = (resid[c][a:b] + last_axis_sum(parts[c][a:b].take(g, axis=1)) if g.size
+                 else resid[c][a:b])
             energy += float(z @ z)
             r_inside += float(resid[c][a:b] @ resid[c][a:b])
             # correlation with an axle at grid point m (sample st m), on the segment:

@@ -360,7 +360,8 @@ def _vehicle(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp: floa
         if close is not None:
             fit = refine(pb, close, fit.v)
             continue
-        weak = ((fit.gains < limit) | (relative(fit.amps).min(axis=1) < min_height)
+        share = relative(fit.amps)  # each axle's lower (np.minimum: the min over its row)
+        weak = ((fit.gains < limit) | (np.minimum(share[:, 0], share[:, 1]) < min_height)
                 | ~pb.seen_by_both(fit.amps))
         if weak.any() and fit.taus.size > 1:
             i = int(np.where(weak, fit.gains, np.inf).argmin())
