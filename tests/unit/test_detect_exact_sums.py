@@ -94,3 +94,44 @@ def test_gaussian_average_padding_gives_the_same_bytes():
         for filters in ([(2.5, 1.0)], [(5.12, 1.0), (30.72, -1.0)]):
             got = gaussian_average(y, filters)
             assert got.tobytes() == _gaussian_average_before(y, filters).tobytes()
+
+
+def _problem(gauges: bool):
+    """A Problem of two Gaussian responses (1.2 m at half height, gains 4 apart) on random
+    readings, with 6 random-walk gauges or high-passed (algebra only: no detection)."""
+    from bwim.detect.response import DetectorResponse, LearnedResponses
+    from bwim.detect.vehicle_fit import make_problem
+
+    u = np.linspace(-1.5, 1.5, 61)
+    k = np.exp(-4 * np.log(2) * (u / 1.2) ** 2)
+    k[[0, -1]] = 0.0
+    names = tuple(f"g{j}" for j in range(6)) if gauges else ()
+    resp = tuple(DetectorResponse(channel=c, u=u, k=k, noise=1.0, misfit=1.0,
+                                  bending=-0.2 * np.ones(len(names))) for c in ("a", "b"))
+    learned = LearnedResponses(responses=resp, distance=3.0, amplitudes=np.ones((2, 2)),
+                               speeds=np.ones(2), first_axle_times=np.zeros(2),
+                               residuals=np.zeros(2), reasons=("", ""), distance_offset=0.0,
+                               nit=1, gauges=names, gain_ratio=0.25, amplitude_spread=0.1)
+    rng = np.random.default_rng(2)
+    n = 600
+    t = np.arange(n) / 512.0
+    g = rng.standard_normal((n, 6)).cumsum(axis=0) if gauges else None
+    return make_problem(t, rng.standard_normal((n, 2)), g, learned, 20.0)
+
+
+def test_rows_read_through_a_slice_give_the_same_fit():
+    """A window's rows read through a slice (views) or gathered by their index array: the
+    same residual, amplitudes, removal costs and Jacobian, as bytes."""
+    from bwim.detect.vehicle_fit import Rows, Solution, window
+
+    for gauges in (True, False):
+        pb = _problem(gauges)
+        taus = np.array([0.25, 0.31, 0.52])
+        rows = window(pb, taus, 20.0)
+        assert pb.step > 1 and rows.size > 20
+        a = Solution(pb, taus, 20.0, Rows(pb, rows), True)
+        b = Solution(pb, taus, 20.0, Rows(pb, rows, slice(int(rows[0]), int(rows[-1]) + 1,
+                                                          pb.step)), True)
+        for x, y in ((a.res, b.res), (a.amps, b.amps), (a.gains, b.gains),
+                     (a.jacobian(), b.jacobian())):
+            assert x.tobytes() == y.tobytes()

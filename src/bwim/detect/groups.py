@@ -96,7 +96,7 @@ def choose_groups(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp:
     n = taus.size
     lo = int(pb.t.searchsorted(span[0] - REACH / v))
     hi = int(pb.t.searchsorted(span[1] + (pb.shift[1] + REACH) / v, side="right"))
-    w = Rows(pb, np.arange(lo, hi))
+    w = Rows(pb, np.arange(lo, hi), slice(lo, hi))
     rows = w.rows
     # both detectors' least squares as one stack of two (the same numbers as two)
     X = pb.both_atoms(v, w.t[:, None] - taus[None, :])[0]
@@ -120,7 +120,7 @@ def choose_groups(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp:
             for _, _, r in tpl]
     out, changed = [], False
     parts_of = segments(pb, local, v, margin, st)
-    bare = one_axle_may_fit(pb, resid, tpl, auto, st, n_grid).tolist()  # read one by one
+    bare = None  # one_axle_may_fit, made when a segment without axles asks (read one by one)
     at_list = at.tolist()
     # the segments worth a choice: their grid points' correlations with one axle end to
     # end (both detectors), the vehicle's axles in each, its readings' and residual's
@@ -128,8 +128,11 @@ def choose_groups(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp:
     chosen, corr_all = [], ([], [])
     for first, last in parts_of:
         i0, i1 = bisect.bisect_left(at_list, first), bisect.bisect_right(at_list, last)
-        if i0 == i1 and bare[last + 1] == bare[first]:
-            continue  # no axle of the vehicle here and no one axle fits: noise
+        if i0 == i1:
+            if bare is None:
+                bare = one_axle_may_fit(pb, resid, tpl, auto, st, n_grid).tolist()
+            if bare[last + 1] == bare[first]:
+                continue  # no axle of the vehicle here and no one axle fits: noise
         g = np.arange(i0, i1)
         first, last = max(first, 0), min(last, n_grid - 1)
         energy = r_inside = 0.0

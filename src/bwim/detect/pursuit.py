@@ -297,7 +297,8 @@ class _Pursuit:
         of :func:`~bwim.detect.vehicle_fit.ridged_normal`."""
         dt = self.pb.t[None, :, None] - np.array([tk, tk2])[:, None, None]
         x = self.pb.both_atoms(self.v, dt)[0]  # (2, n_t, 1)
-        x -= self.Q @ (self.Qt @ x)
+        if self.Q.shape[2]:  # no rest (high-passed): x less zeros is x
+            x -= self.Q @ (self.Qt @ x)
         p = self.taus.size
         Xt = self._Xt[:, :p + 1]  # (2, p + 1, n_t), the new response last
         Xt[:, p] = x[..., 0]

@@ -240,12 +240,15 @@ class Rows:
     """What every fit on one vehicle's window reads: the sampled rows' times, readings
     (2, n_rows, 1) and rest columns (2, n_rows, k), copied once per window."""
 
-    def __init__(self, pb: Problem, rows: np.ndarray):
+    def __init__(self, pb: Problem, rows: np.ndarray, index: slice | None = None):
+        """``index``: a slice selecting the same rows (read through views rather than
+        gathered by the index array: the same numbers, faster)."""
         y, rest = pb.stacked
+        at = rows if index is None else index
         self.rows = rows
-        self.t = pb.t[rows]
-        self.y = np.ascontiguousarray(y[:, rows])  # C order: numpy's products then give
-        self.rest = np.ascontiguousarray(rest[:, rows])  # the numbers of one detector's
+        self.t = pb.t[at]
+        self.y = np.ascontiguousarray(y[:, at])  # C order: numpy's products then give
+        self.rest = np.ascontiguousarray(rest[:, at])  # the numbers of one detector's
 
 
 class Solution:
@@ -317,7 +320,9 @@ def solution(pb: Problem, taus: np.ndarray, v: float, start: Solution | None = N
     if (start is not None and start.v == v and np.array_equal(start.taus, taus)
             and start.slopes and np.array_equal(start.w.rows, rows)):
         return start
-    return Solution(pb, taus, v, Rows(pb, rows), True)
+    # the window is every step-th sample from its first: a slice selects the same rows
+    index = slice(int(rows[0]), int(rows[-1]) + 1, pb.step) if rows.size else None
+    return Solution(pb, taus, v, Rows(pb, rows, index), True)
 
 
 def refine(pb: Problem, taus: np.ndarray, v: float, iterations: int = MAX_LM, *,
@@ -330,7 +335,7 @@ def refine(pb: Problem, taus: np.ndarray, v: float, iterations: int = MAX_LM, *,
     p = np.concatenate((taus, [v]))
     sol = solution(pb, taus, v, start)
     rows = sol.w
-    r, amps, gains = sol.res, sol.amps, sol.gains
+    r = sol.res
     cost = float(r @ r)
     lam = 1e-3
     scale = np.full(taus.size + 1, 1.0 / v)  # τ in s, v in m/s: metres
@@ -357,13 +362,13 @@ def refine(pb: Problem, taus: np.ndarray, v: float, iterations: int = MAX_LM, *,
             if c2 < cost:
                 rel = (cost - c2) / max(cost, 1e-300)
                 sol = trial_sol
-                p, r, amps, gains, cost = (np.concatenate((tt, [vv])), sol.res, sol.amps, sol.gains,
-                                           c2)
+                p, r, cost = np.concatenate((tt, [vv])), sol.res, c2
                 lam = max(lam / 3.0, 1e-7)
                 improved = True
                 break
             lam *= 10.0
         if not improved or rel < CONVERGED or np.abs(step[:-1]).max() * p[-1] < 5e-3:
             break
-    return VehicleFit(taus=p[:-1], v=float(p[-1]), amps=amps, chi=cost, gains=gains,
+    # the last accepted solution's amplitudes and removal costs (made once, when read)
+    return VehicleFit(taus=p[:-1], v=float(p[-1]), amps=sol.amps, chi=cost, gains=sol.gains,
                       solution=sol)
