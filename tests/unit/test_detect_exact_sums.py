@@ -15,8 +15,9 @@ from __future__ import annotations
 import numpy as np
 import scipy.fft
 
-from bwim.detect.pursuit import _without
+from bwim.detect.pursuit import _acceptable, _without
 from bwim.detect.signals import gaussian_average, gaussian_kernel, last_axis_sum
+from bwim.detect.vehicle_fit import relative
 
 
 def _arrays(seed: int, count: int):
@@ -66,6 +67,27 @@ def test_without_is_np_delete():
         for i in range(n):
             got = _without(taus, i)
             assert got.tobytes() == np.delete(taus, i).tobytes()
+
+
+def test_acceptable_is_the_relative_amplitudes_test():
+    """The pursuit's test of a new axle (its amplitudes over each detector's largest, both
+    at least min_height) equals the numpy expression it replaces, relative(amps)[-1].min()
+    >= min_height, on amplitudes of both signs, zeros, ties and NaN."""
+    rng = np.random.default_rng(8)
+    n_true = 0
+    for trial in range(3000):
+        amps = rng.standard_normal((int(rng.integers(1, 7)), 2)) + 0.8
+        if trial % 5 == 0:
+            amps[rng.integers(0, amps.shape[0]), rng.integers(0, 2)] = 0.0
+        if trial % 7 == 0:
+            amps[-1] = amps.max(axis=0)  # ties at the top
+        if trial % 11 == 0:
+            amps[rng.integers(0, amps.shape[0]), rng.integers(0, 2)] = np.nan
+        h = float(rng.choice([0.0, 0.1, 0.5, 1.0]))
+        ref = bool(relative(amps)[-1].min() >= h)
+        assert _acceptable(None, amps, h) is ref
+        n_true += ref
+    assert 300 < n_true < 2700  # both outcomes exercised
 
 
 def _gaussian_average_before(y, filters):

@@ -249,7 +249,11 @@ def _acceptable(pb: Problem, amps: np.ndarray, min_height: float) -> bool:
     """Whether the last axle of ``amps`` reaches ``min_height`` of the largest amplitude
     at both detectors (the gain ratio is checked on the refined vehicle: merged peaks
     explained in part share their amplitudes unevenly between the detectors)."""
-    return bool(relative(amps)[-1].min() >= min_height)
+    # relative(amps)[-1].min() >= min_height for the last row alone, in Python floats (the
+    # same IEEE operations; a NaN fails both tests)
+    top = amps.max(axis=0).tolist()
+    return all(a / (m if m > 0 else 1.0) >= min_height
+               for a, m in zip(amps[-1].tolist(), top, strict=True))
 
 
 class _Pursuit:
