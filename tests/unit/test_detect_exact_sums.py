@@ -157,3 +157,15 @@ def test_rows_read_through_a_slice_give_the_same_fit():
         for x, y in ((a.res, b.res), (a.amps, b.amps), (a.gains, b.gains),
                      (a.jacobian(), b.jacobian())):
             assert x.tobytes() == y.tobytes()
+
+
+def test_grid_steps_are_np_diff_then_np_append():
+    from bwim.detect.vehicle_fit import _steps
+
+    rng = np.random.default_rng(4)
+    for n in (2, 3, 61, 400):
+        k = rng.standard_normal(n) * 10.0 ** rng.integers(-6, 6, n)
+        k[[0, -1]] = 0.0
+        got = _steps([(None, k, None), (None, -k, None)])
+        for s, kk in zip(got, (k, -k), strict=True):
+            assert s.tobytes() == np.append(np.diff(kk), 0.0).tobytes()

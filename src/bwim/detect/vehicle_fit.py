@@ -123,7 +123,7 @@ class Problem:
     def stacked(self) -> tuple[np.ndarray, np.ndarray]:
         """The readings (2, n_t, 1) and the rest's columns (2, n_t, k), one detector after
         the other."""
-        return np.stack([self.y[:, c] for c in range(2)])[..., None], np.stack(self.rest)
+        return np.array([self.y[:, c] for c in range(2)])[..., None], np.array(self.rest)
 
     @cached_property
     def _both(self):
@@ -212,14 +212,20 @@ def make_problem(t: np.ndarray, y: np.ndarray, gauges: np.ndarray | None,
         rest = tuple(np.column_stack([bending[:, c], np.ones_like(tc), tc]) * w[c]
                      for c in range(2))
         grids = tuple(r.padded() for r in learned.responses)
-        q = np.linalg.qr(np.stack(rest))[0]  # both at once (each on its own: the same)
+        q = np.linalg.qr(np.array(rest))[0]  # both at once (each on its own: the same)
         return Problem(y=(y - y.mean(axis=0)) * w, rest=rest, q_rest=(q[0], q[1]), grids=grids,
-                        steps=tuple(np.append(np.diff(g[1]), 0.0) for g in grids), **common)
+                        steps=_steps(grids), **common)
     y_hp = high_pass(y, HIGH_PASS / v * fs) * w
     empty = np.zeros((t.size, 0))
     grids = tuple(r.high_passed() for r in learned.responses)
     return Problem(y=y_hp, rest=(empty, empty), q_rest=(empty, empty), grids=grids,
-                    steps=tuple(np.append(np.diff(g[1]), 0.0) for g in grids), **common)
+                    steps=_steps(grids), **common)
+
+
+def _steps(grids) -> tuple:
+    """Per grid K's differences between ordinates, 0 after the last (np.diff and
+    np.append's numbers, by slices)."""
+    return tuple(np.concatenate((k[1:] - k[:-1], [0.0])) for _, k, _ in grids)
 
 
 def relative(amps: np.ndarray) -> np.ndarray:
