@@ -326,7 +326,7 @@ def group_counts(pb: Problem, corr, auto, lengths: np.ndarray, outside, energies
     positive = (amps[:, 0] > 0) & (amps[:, 1] > 0)
     with np.errstate(divide="ignore", invalid="ignore"):
         lr = np.log(amps[:, 1] / (pb.ratio * amps[:, 0]))
-    valid = positive & (np.abs(lr) <= pb.bound)
+    valid = positive & (np.abs(lr) <= pb.bound)  # (lr of a non-positive one: ANDed away)
     score = np.where(valid, gained, -np.inf)
     best: list = [None] * n
     active = []
