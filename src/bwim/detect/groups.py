@@ -36,6 +36,7 @@ import bisect
 import numpy as np
 from scipy.signal import find_peaks
 
+from .signals import last_axis_sum
 from .vehicle_fit import REACH, Problem, Rows, ridged_normal
 
 __all__ = ["GROUP_AXLES", "GROUP_DIP", "GROUP_EXTENT", "GROUP_SPACING", "LEVEL_GAIN",
@@ -93,9 +94,9 @@ def choose_groups(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp:
     times, or None."""
     taus = np.sort(taus)
     n = taus.size
-    lo = int(np.searchsorted(pb.t, span[0] - REACH / v))
-    hi = int(np.searchsorted(pb.t, span[1] + (pb.shift[1] + REACH) / v, side="right"))
-    w = Rows(pb, np.arange(lo, hi))
+    lo = int(pb.t.searchsorted(span[0] - REACH / v))
+    hi = int(pb.t.searchsorted(span[1] + (pb.shift[1] + REACH) / v, side="right"))
+    w = Rows(pb, np.arange(lo, hi), slice(lo, hi))
     rows = w.rows
     # both detectors' least squares as one stack of two (the same numbers as two)
     X = pb.both_atoms(v, w.t[:, None] - taus[None, :])[0]
@@ -103,13 +104,13 @@ def choose_groups(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp:
     coef = np.linalg.solve(G, Mt @ w.y)
     local = (w.y - w.rest @ coef[:, n:])[..., 0]  # (2, n_rows)
     parts = X * coef[:, None, :n, 0]  # (2, n_rows, n)
-    fitted = parts.sum(axis=2)
+    fitted = last_axis_sum(parts)
     resid = local - fitted
     r_total = sum(float(r @ r) for r in resid)
     n_samples = 2 * rows.size
     tpl = templates(pb, v)
     st = pb.step  # hypotheses on every st-th sample
-    at = np.round((taus - pb.t[lo]) * pb.fs / st).astype(int)  # axles' grid points
+    at = ((taus - pb.t[lo]) * pb.fs / st).round().astype(int)  # axles' grid points
     margin = round(SEGMENT_MARGIN / v * pb.fs)
     s_min = max(1, int(np.ceil(min_sp / v * pb.fs / st)))
     s_max = int(np.floor(GROUP_SPACING / v * pb.fs / st))
@@ -119,7 +120,7 @@ def choose_groups(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp:
             for _, _, r in tpl]
     out, changed = [], False
     parts_of = segments(pb, local, v, margin, st)
-    bare = one_axle_may_fit(pb, resid, tpl, auto, st, n_grid)
+    bare = None  # one_axle_may_fit, made when a segment without axles asks (read one by one)
     at_list = at.tolist()
     # the segments worth a choice: their grid points' correlations with one axle end to
     # end (both detectors), the vehicle's axles in each, its readings' and residual's
@@ -127,15 +128,19 @@ def choose_groups(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp:
     chosen, corr_all = [], ([], [])
     for first, last in parts_of:
         i0, i1 = bisect.bisect_left(at_list, first), bisect.bisect_right(at_list, last)
-        if i0 == i1 and bare[last + 1] == bare[first]:
-            continue  # no axle of the vehicle here and no one axle fits: noise
+        if i0 == i1:
+            if bare is None:
+                bare = one_axle_may_fit(pb, resid, tpl, auto, st, n_grid).tolist()
+            if bare[last + 1] == bare[first]:
+                continue  # no axle of the vehicle here and no one axle fits: noise
         g = np.arange(i0, i1)
         first, last = max(first, 0), min(last, n_grid - 1)
         energy = r_inside = 0.0
         for c, (j0, h, _) in enumerate(tpl):
             # the readings less the others' axles, where this group's act
             a, b = max(first * st + j0, 0), min(last * st + j0 + h.size, rows.size)
-            z = resid[c][a:b] + parts[c][a:b, g].sum(axis=1) if g.size else resid[c][a:b]
+            z = (resid[c][a:b] + last_axis_sum(parts[c][a:b].take(g, axis=1)) if g.size
+                 else resid[c][a:b])
             energy += float(z @ z)
             r_inside += float(resid[c][a:b] @ resid[c][a:b])
             # correlation with an axle at grid point m (sample st m), on the segment:
@@ -211,7 +216,7 @@ def one_axle_may_fit(pb: Problem, resid, tpl, auto, st: int, n_grid: int) -> np.
         lr = np.log(a1 / (pb.ratio * a0))
         slack = 4.0 * (tol[0] / np.where(sure, b[0], 1.0) + tol[1] / np.where(sure, b[1], 1.0))
     maybe = pos[0] & pos[1] & (~sure | (np.abs(lr) <= pb.bound + slack + 1e-12))
-    return np.concatenate([[0], np.cumsum(maybe)])
+    return np.concatenate([[0], maybe.cumsum()])
 
 
 def segments(pb: Problem, local, v: float, margin: int, st: int) -> list[tuple[int, int]]:
@@ -242,20 +247,20 @@ def segments(pb: Problem, local, v: float, margin: int, st: int) -> list[tuple[i
         # between two neighbouring peaks a and b, the first lowest sample (b, a peak, is
         # higher than a sample between: the lowest of a … b lies in a … b - 1)
         lows = np.minimum.reduceat(e[:peaks[-1]], peaks[:-1])
-        equal = np.flatnonzero(e[peaks[0]:peaks[-1]] == np.repeat(lows, np.diff(peaks)))
-        where = peaks[0] + equal[np.searchsorted(equal, peaks[:-1] - peaks[0])]
+        equal = (e[peaks[0]:peaks[-1]] == lows.repeat(peaks[1:] - peaks[:-1])).nonzero()[0]
+        where = peaks[0] + equal[equal.searchsorted(peaks[:-1] - peaks[0])]
         cuts = where[lows < GROUP_DIP * np.minimum(e[peaks[:-1]], e[peaks[1:]])]
     cuts = np.concatenate([[0], cuts, [e.size - 1]])
     # each part a … b (both ends in it): where it exceeds GROUP_EXTENT of its highest
     a, b = cuts[:-1], cuts[1:]
     size = b - a + 1
-    starts = np.cumsum(size) - size
-    idx = np.arange(int(size.sum())) - np.repeat(starts - a, size)
+    starts = size.cumsum() - size
+    idx = np.arange(int(size.sum())) - (starts - a).repeat(size)
     vals = e[idx]
     high = GROUP_EXTENT * np.maximum.reduceat(vals, starts)
-    above = np.flatnonzero(vals >= np.repeat(high, size))
-    lo = np.maximum(idx[above[np.searchsorted(above, starts)]] - margin, a)
-    hi = np.minimum(idx[above[np.searchsorted(above, starts + size) - 1]] + margin, b)
+    above = (vals >= high.repeat(size)).nonzero()[0]
+    lo = np.maximum(idx[above[above.searchsorted(starts)]] - margin, a)
+    hi = np.minimum(idx[above[above.searchsorted(starts + size) - 1]] + margin, b)
     return list(zip((lo // st).tolist(), (hi // st).tolist(), strict=True))
 
 
@@ -281,11 +286,11 @@ def evenly_explained(lengths: np.ndarray, k: int, s_min: int, s_max: int, corr, 
     rounding)."""
     lengths = np.asarray(lengths, dtype=int)
     spacings = np.arange(s_min, s_max + 1)
-    owner_of = np.repeat(np.arange(lengths.size), lengths)  # each grid point's segment
-    offsets = np.cumsum(lengths) - lengths
+    owner_of = np.arange(lengths.size).repeat(lengths)  # each grid point's segment
+    offsets = lengths.cumsum() - lengths
     local = np.arange(owner_of.size) - offsets[owner_of]
-    row, sp = np.nonzero(local[:, None] + (k - 1) * spacings[None, :]
-                         <= (lengths - 1)[owner_of][:, None])
+    row, sp = (local[:, None] + (k - 1) * spacings[None, :]
+                <= (lengths - 1)[owner_of][:, None]).nonzero()
     steps = spacings[sp][:, None] * np.arange(k)[None, :]
     hyp = local[row][:, None] + steps
     if hyp.shape[0] == 0:
@@ -293,12 +298,13 @@ def evenly_explained(lengths: np.ndarray, k: int, s_min: int, s_max: int, corr, 
     n_s = int(sp.max()) + 1  # the spacings used
     lags = spacings[:n_s, None, None] * np.abs(np.arange(k)[:, None] - np.arange(k)[None, :])
     eye = np.eye(k)
-    G = np.stack([auto[c][lags] + 1e-12 * auto[c][0] * eye for c in range(2)])
+    G = np.array([auto[c][lags] + 1e-12 * auto[c][0] * eye for c in range(2)])
     at = row[:, None] + steps  # in the correlations end to end
-    b = np.stack([corr[0][at], corr[1][at]])  # (2, n_hyp, k)
-    a = (np.linalg.inv(G)[:, sp] @ b[..., None])[..., 0]
-    gained = np.sum(a * b, axis=2)
-    return hyp, owner_of[row], gained[0] + gained[1], np.moveaxis(a, 0, -1)
+    b = np.array([corr[0][at], corr[1][at]])  # (2, n_hyp, k)
+    # each hypothesis's inverse (np.take: the indexing's numbers, without its slow path)
+    a = (np.linalg.inv(G).take(sp, axis=1) @ b[..., None])[..., 0]
+    gained = last_axis_sum(a * b)
+    return hyp, owner_of[row], gained[0] + gained[1], a.transpose(1, 2, 0)
 
 
 def group_counts(pb: Problem, corr, auto, lengths: np.ndarray, outside, energies,
@@ -311,22 +317,22 @@ def group_counts(pb: Problem, corr, auto, lengths: np.ndarray, outside, energies
     where no single axle is.  ``corr``: the segments' correlations end to end; every
     segment's hypotheses of one count evaluated at once."""
     n = lengths.size
-    offsets = np.cumsum(lengths) - lengths
+    offsets = lengths.cumsum() - lengths
     # one axle at every grid point: explained() without the indexing
-    b = np.stack(corr, axis=-1)
+    b = np.array(corr).T  # (n, 2)
     one = np.array([max(auto[0][0], 1e-300), max(auto[1][0], 1e-300)])
     amps = b / one
-    gained = np.sum(amps * b, axis=1)
+    gained = last_axis_sum(amps * b)
     positive = (amps[:, 0] > 0) & (amps[:, 1] > 0)
     with np.errstate(divide="ignore", invalid="ignore"):
         lr = np.log(amps[:, 1] / (pb.ratio * amps[:, 0]))
-    valid = positive & (np.abs(np.where(positive, lr, np.inf)) <= pb.bound)
+    valid = positive & (np.abs(lr) <= pb.bound)  # (lr of a non-positive one: ANDed away)
     score = np.where(valid, gained, -np.inf)
     best: list = [None] * n
     active = []
     for i in range(n):
         o = int(offsets[i])
-        j = int(np.argmax(score[o:o + lengths[i]]))
+        j = int(score[o:o + lengths[i]].argmax())
         if score[o + j] > -np.inf:  # a valid one (valid ones are finite)
             best[i] = (float(gained[o + j]), np.array([j]))
             active.append(i)
@@ -337,20 +343,19 @@ def group_counts(pb: Problem, corr, auto, lengths: np.ndarray, outside, energies
                                        for i in active])] for c in range(2)]
         hyp, owner, gained, amps = evenly_explained(lengths[active], k, s_min, s_max, sub,
                                                     auto)
-        positive = np.all(amps > 0, axis=(1, 2))
         with np.errstate(divide="ignore", invalid="ignore"):
             lr = np.log(amps[..., 1] / (pb.ratio * amps[..., 0]))
-        valid = positive & np.all(np.abs(np.where(positive[:, None], lr, np.inf))
-                                  <= pb.bound, axis=1)
+        # every axle positive at both detectors and seen by both
+        valid = ((amps[..., 0] > 0) & (amps[..., 1] > 0) & (np.abs(lr) <= pb.bound)).all(axis=1)
         score = np.where(valid, gained, -np.inf)
-        bounds = np.searchsorted(owner, np.arange(len(active) + 1))
+        bounds = owner.searchsorted(np.arange(len(active) + 1))
         rare = RARE_GROUP if k > 3 else 1.0
         still = []
         for q, i in enumerate(active):
             h0, h1 = int(bounds[q]), int(bounds[q + 1])
             if h0 == h1:
                 continue  # no k axles fit in the segment
-            j = h0 + int(np.argmax(score[h0:h1]))
+            j = h0 + int(score[h0:h1].argmax())
             if not score[j] > -np.inf:
                 continue
             gain = gained[j] - best[i][0]
@@ -367,14 +372,14 @@ def explained(hyp: np.ndarray, corr, auto) -> tuple[np.ndarray, np.ndarray]:
     """Misfit each hypothesis removes (both detectors) and its amplitudes (n_hyp, k, 2)."""
     k = hyp.shape[1]
     if k == 1:
-        b = np.stack([corr[0][hyp[:, 0]], corr[1][hyp[:, 0]]], axis=-1)  # (n_hyp, 2)
+        b = np.array([corr[0][hyp[:, 0]], corr[1][hyp[:, 0]]]).T  # (n_hyp, 2)
         a = b / np.array([max(auto[0][0], 1e-300), max(auto[1][0], 1e-300)])
-        return np.sum(a * b, axis=1), a[:, None, :]
+        return last_axis_sum(a * b), a[:, None, :]
     lag = np.abs(hyp[:, :, None] - hyp[:, None, :])
     eye = np.eye(k)
     # both detectors' systems as one stack (each solved on its own: the same numbers)
-    b = np.stack([corr[0][hyp], corr[1][hyp]])  # (2, n_hyp, k)
-    G = np.stack([auto[c][lag] + 1e-12 * auto[c][0] * eye for c in range(2)])
+    b = np.array([corr[0][hyp], corr[1][hyp]])  # (2, n_hyp, k)
+    G = np.array([auto[c][lag] + 1e-12 * auto[c][0] * eye for c in range(2)])
     a = np.linalg.solve(G, b[..., None])[..., 0]
-    gained = np.sum(a * b, axis=2)
-    return gained[0] + gained[1], np.moveaxis(a, 0, -1)
+    gained = last_axis_sum(a * b)
+    return gained[0] + gained[1], a.transpose(1, 2, 0)

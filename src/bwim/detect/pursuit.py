@@ -148,8 +148,8 @@ class _Matcher:
         """No new axle within ``min_gap`` m of travel of the time ``tk`` (t ascending: a
         slice holds them)."""
         t, gap = self.pb.t, self.gap
-        a = max(int(np.searchsorted(t, tk - gap)) - 1, 0)
-        b = int(np.searchsorted(t, tk + gap, side="right")) + 1
+        a = max(int(t.searchsorted(tk - gap)) - 1, 0)
+        b = int(t.searchsorted(tk + gap, side="right")) + 1
         self.excluded[a:b] |= np.abs(t[a:b] - tk) < gap
 
     def best(self, res: np.ndarray) -> tuple[float, float]:
@@ -166,11 +166,11 @@ class _Matcher:
               if slack else corr[1])
         score = np.maximum(corr[0] + c2, 0.0) ** 2 / self.energy
         score[self.excluded] = 0.0
-        m = int(np.argmax(score))
+        m = int(score.argmax())
         off = 0
         if slack:  # where that best was (the first of equals, as argmax)
             a = max(m - slack, 0)
-            off = a + int(np.argmax(corr[1][a:m + slack + 1])) - m
+            off = a + int(corr[1][a:m + slack + 1].argmax()) - m
         return float(t[m]), float(t[m + off])
 
 
@@ -228,7 +228,7 @@ def pursue_axles(record_time: np.ndarray, y: np.ndarray, learned: LearnedRespons
     limit = max(thr2, GAIN_SHARE * first)
     out = []
     groups = np.split(np.arange(taus.size),
-                      np.flatnonzero(np.diff(taus) * v0 > max_axle_spacing) + 1)
+                      ((taus[1:] - taus[:-1]) * v0 > max_axle_spacing).nonzero()[0] + 1)
     # each vehicle's axles may lie between the midpoints to its neighbours' (the pursuit
     # may have missed some: the axle groups are found again there)
     edges = [t[0], *(0.5 * (taus[a[-1]] + taus[b[0]])
@@ -249,7 +249,11 @@ def _acceptable(pb: Problem, amps: np.ndarray, min_height: float) -> bool:
     """Whether the last axle of ``amps`` reaches ``min_height`` of the largest amplitude
     at both detectors (the gain ratio is checked on the refined vehicle: merged peaks
     explained in part share their amplitudes unevenly between the detectors)."""
-    return bool(relative(amps)[-1].min() >= min_height)
+    # relative(amps)[-1].min() >= min_height for the last row alone, in Python floats (the
+    # same IEEE operations; a NaN fails both tests)
+    top = amps.max(axis=0).tolist()
+    return all(a / (m if m > 0 else 1.0) >= min_height
+               for a, m in zip(amps[-1].tolist(), top, strict=True))
 
 
 class _Pursuit:
@@ -257,7 +261,11 @@ class _Pursuit:
     detector's rest projected out, their Gram matrix and least-squares amplitudes kept up
     to date as axles are added.  Both detectors' problems as one stack of two (numpy
     gives the same numbers as two separate ones).  The residual (:attr:`res`, 2 × n_t)
-    sits in a buffer with ``pad`` zeros each side (what :class:`_Matcher` reads)."""
+    sits in a buffer with ``pad`` zeros each side (what :class:`_Matcher` reads).  The
+    responses and their Gram matrix live in buffers sized for MAX_AXLES + 1 axles: a
+    trial writes the new axle's row after the accepted ones (each detector's rows stay
+    contiguous, so numpy's products make the same BLAS calls as on arrays of their own),
+    an accepted axle keeps it."""
 
     def __init__(self, pb: Problem, v: float, pad: int = 0):
         self.pb, self.v, self.pad = pb, v, pad
@@ -267,12 +275,14 @@ class _Pursuit:
         for c in range(2):
             Q = pb.q_rest[c]
             y.append(pb.y[:, c] - Q @ (Q.T @ pb.y[:, c]))
-        self.Q = np.stack(pb.q_rest)  # (2, n_t, k)
+        self.Q = np.array(pb.q_rest)  # (2, n_t, k)
         self.Qt = self.Q.transpose(0, 2, 1)
-        self.y = np.stack(y)[..., None]  # (2, n_t, 1)
+        self.y = np.array(y)[..., None]  # (2, n_t, 1)
         n = pb.t.size
-        self.Xt = np.zeros((2, 0, n))  # the axles' projected responses, one per row
-        self.G = np.zeros((2, 0, 0))  # their Gram matrix (no ridge)
+        # the axles' projected responses, one per row, and their Gram matrix (no ridge):
+        # the first taus.size rows (and columns) are the accepted axles'
+        self._Xt = np.empty((2, MAX_AXLES + 1, n))
+        self._G = np.empty((2, MAX_AXLES + 1, MAX_AXLES + 1))
         self._xy = np.empty((2, n, 2))  # a new response, then the readings
         self._xy[:, :, 1] = self.y[..., 0]
         self._buffer = np.zeros((2, n + 2 * pad))
@@ -291,14 +301,15 @@ class _Pursuit:
         of :func:`~bwim.detect.vehicle_fit.ridged_normal`."""
         dt = self.pb.t[None, :, None] - np.array([tk, tk2])[:, None, None]
         x = self.pb.both_atoms(self.v, dt)[0]  # (2, n_t, 1)
-        x -= self.Q @ (self.Qt @ x)
-        p = self.G.shape[1]
-        Xt = np.concatenate([self.Xt, x.reshape(2, 1, -1)], axis=1)  # (2, p + 1, n_t)
+        if self.Q.shape[2]:  # no rest (high-passed): x less zeros is x
+            x -= self.Q @ (self.Qt @ x)
+        p = self.taus.size
+        Xt = self._Xt[:, :p + 1]  # (2, p + 1, n_t), the new response last
+        Xt[:, p] = x[..., 0]
         xy = self._xy
         xy[:, :, 0] = x[..., 0]
         gb = Xt @ xy  # (2, p + 1, 2): the new response's products, then Xᵀ y
-        G = np.empty((2, p + 1, p + 1))
-        G[:, :p, :p] = self.G
+        G = self._G[:, :p + 1, :p + 1]
         G[:, :, p] = gb[:, :, 0]
         G[:, p, :p] = gb[:, :p, 0]
         ridged = G.copy()
@@ -306,14 +317,20 @@ class _Pursuit:
         diag += 1e-12 * (diag.sum(axis=-1) / (p + 1) + 1e-300)[:, None]
         a = np.linalg.solve(ridged, gb[:, :, 1:])
         res = (self.y - Xt.transpose(0, 2, 1) @ a)[..., 0].T.copy()  # (n_t, 2)
-        return a[..., 0].T.copy(), float(np.sum(res**2)), (Xt, G, res)
+        return a[..., 0].T.copy(), float(np.sum(res**2)), res
 
     def accept(self, tk: float, tk2: float, chi: float, state) -> None:
-        self.Xt, self.G, res = state
+        """Keep the axle of the last :meth:`trial` (``state``: its residual)."""
+        res = state
         self._buffer[:, self.pad:self.pad + res.shape[0]] = res.T
-        self.taus = np.append(self.taus, tk)
-        self.taus2 = np.append(self.taus2, tk2)
+        self.taus = np.concatenate((self.taus, [tk]))
+        self.taus2 = np.concatenate((self.taus2, [tk2]))
         self.chi = chi
+
+
+def _without(taus: np.ndarray, i: int) -> np.ndarray:
+    """``taus`` (1-D) without its ``i``-th value: ``np.delete(taus, i)``, by slices."""
+    return np.concatenate((taus[:i], taus[i + 1:]))
 
 
 def _drop_close(fit: VehicleFit, min_sp: float) -> np.ndarray | None:
@@ -321,12 +338,12 @@ def _drop_close(fit: VehicleFit, min_sp: float) -> np.ndarray | None:
     none is that close."""
     if fit.taus.size < 2:
         return None
-    d = np.diff(fit.taus) * fit.v
-    i = int(np.argmin(d))
+    d = (fit.taus[1:] - fit.taus[:-1]) * fit.v
+    i = int(d.argmin())
     if d[i] >= min_sp:
         return None
     weaker = i if fit.gains[i] < fit.gains[i + 1] else i + 1
-    return np.delete(fit.taus, weaker)
+    return _without(fit.taus, weaker)
 
 
 def _vehicle(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp: float,
@@ -348,11 +365,12 @@ def _vehicle(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp: floa
         if close is not None:
             fit = refine(pb, close, fit.v)
             continue
-        weak = ((fit.gains < limit) | (relative(fit.amps).min(axis=1) < min_height)
+        share = relative(fit.amps)  # each axle's lower (np.minimum: the min over its row)
+        weak = ((fit.gains < limit) | (np.minimum(share[:, 0], share[:, 1]) < min_height)
                 | ~pb.seen_by_both(fit.amps))
         if weak.any() and fit.taus.size > 1:
-            i = int(np.argmin(np.where(weak, fit.gains, np.inf)))
-            fit = refine(pb, np.delete(fit.taus, i), fit.v)
+            i = int(np.where(weak, fit.gains, np.inf).argmin())
+            fit = refine(pb, _without(fit.taus, i), fit.v)
             continue
         break
     if fit.taus.size == 0 or not pb.seen_by_both(fit.amps).any():
@@ -384,5 +402,5 @@ def _prune(pb: Problem, taus: np.ndarray, v: float, limit: float, both: bool = F
             weak |= ~pb.seen_by_both(sol.amps)
         if not weak.any():
             return taus, sol
-        taus = np.delete(taus, int(np.argmin(np.where(weak, sol.gains, np.inf))))
+        taus = _without(taus, int(np.where(weak, sol.gains, np.inf).argmin()))
     return taus, None

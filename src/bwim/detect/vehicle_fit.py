@@ -123,7 +123,7 @@ class Problem:
     def stacked(self) -> tuple[np.ndarray, np.ndarray]:
         """The readings (2, n_t, 1) and the rest's columns (2, n_t, k), one detector after
         the other."""
-        return np.stack([self.y[:, c] for c in range(2)])[..., None], np.stack(self.rest)
+        return np.array([self.y[:, c] for c in range(2)])[..., None], np.array(self.rest)
 
     @cached_property
     def _both(self):
@@ -212,14 +212,20 @@ def make_problem(t: np.ndarray, y: np.ndarray, gauges: np.ndarray | None,
         rest = tuple(np.column_stack([bending[:, c], np.ones_like(tc), tc]) * w[c]
                      for c in range(2))
         grids = tuple(r.padded() for r in learned.responses)
-        q = np.linalg.qr(np.stack(rest))[0]  # both at once (each on its own: the same)
+        q = np.linalg.qr(np.array(rest))[0]  # both at once (each on its own: the same)
         return Problem(y=(y - y.mean(axis=0)) * w, rest=rest, q_rest=(q[0], q[1]), grids=grids,
-                        steps=tuple(np.append(np.diff(g[1]), 0.0) for g in grids), **common)
+                        steps=_steps(grids), **common)
     y_hp = high_pass(y, HIGH_PASS / v * fs) * w
     empty = np.zeros((t.size, 0))
     grids = tuple(r.high_passed() for r in learned.responses)
     return Problem(y=y_hp, rest=(empty, empty), q_rest=(empty, empty), grids=grids,
-                    steps=tuple(np.append(np.diff(g[1]), 0.0) for g in grids), **common)
+                    steps=_steps(grids), **common)
+
+
+def _steps(grids) -> tuple:
+    """Per grid K's differences between ordinates, 0 after the last (np.diff and
+    np.append's numbers, by slices)."""
+    return tuple(np.concatenate((k[1:] - k[:-1], [0.0])) for _, k, _ in grids)
 
 
 def relative(amps: np.ndarray) -> np.ndarray:
@@ -231,8 +237,8 @@ def relative(amps: np.ndarray) -> np.ndarray:
 def window(pb: Problem, taus: np.ndarray, v: float) -> np.ndarray:
     """Samples from REACH m of travel before the first axle reaches detector 1 to REACH m
     after the last leaves detector 2."""
-    lo = np.searchsorted(pb.t, taus.min() - REACH / v)
-    hi = np.searchsorted(pb.t, taus.max() + (pb.shift[1] + REACH) / v, side="right")
+    lo = pb.t.searchsorted(taus.min() - REACH / v)
+    hi = pb.t.searchsorted(taus.max() + (pb.shift[1] + REACH) / v, side="right")
     return np.arange(lo, hi, pb.step)
 
 
@@ -240,12 +246,15 @@ class Rows:
     """What every fit on one vehicle's window reads: the sampled rows' times, readings
     (2, n_rows, 1) and rest columns (2, n_rows, k), copied once per window."""
 
-    def __init__(self, pb: Problem, rows: np.ndarray):
+    def __init__(self, pb: Problem, rows: np.ndarray, index: slice | None = None):
+        """``index``: a slice selecting the same rows (read through views rather than
+        gathered by the index array: the same numbers, faster)."""
         y, rest = pb.stacked
+        at = rows if index is None else index
         self.rows = rows
-        self.t = pb.t[rows]
-        self.y = np.ascontiguousarray(y[:, rows])  # C order: numpy's products then give
-        self.rest = np.ascontiguousarray(rest[:, rows])  # the numbers of one detector's
+        self.t = pb.t[at]
+        self.y = np.ascontiguousarray(y[:, at])  # C order: numpy's products then give
+        self.rest = np.ascontiguousarray(rest[:, at])  # the numbers of one detector's
 
 
 class Solution:
@@ -271,14 +280,24 @@ class Solution:
                 except np.linalg.LinAlgError:
                     Ginv[c] = np.linalg.pinv(G[c])
         coef = Ginv @ (Mt @ w.y)
-        a = coef[:, :n, 0]
-        # removing regressor i raises the misfit by coef_i² / [(MᵀM)⁻¹]_ii
-        gains = a**2 / np.maximum(Ginv.diagonal(axis1=1, axis2=2)[:, :n], 1e-300)
         # every step-th sample: scaled to the misfit of all samples
-        self.k = math.sqrt(pb.step)
+        self.k, self.step = math.sqrt(pb.step), pb.step
         self.res = (w.y - M @ coef).reshape(-1) * self.k
-        self.amps, self.gains = a.T.copy(), (gains[0] + gains[1]) * pb.step
-        self.M, self.Mt, self.Ginv, self.a = M, Mt, Ginv, a
+        self.M, self.Mt, self.Ginv, self.a = M, Mt, Ginv, coef[:, :n, 0]
+
+    # amplitudes and removal costs when read (a refinement's rejected trials never are)
+    @cached_property
+    def amps(self) -> np.ndarray:
+        """The axles' amplitudes (n, 2)."""
+        return self.a.T.copy()
+
+    @cached_property
+    def gains(self) -> np.ndarray:
+        """Each axle's removal cost (level variances of all samples)."""
+        # removing regressor i raises the misfit by coef_i² / [(MᵀM)⁻¹]_ii
+        n = self.taus.size
+        gains = self.a**2 / np.maximum(self.Ginv.diagonal(axis1=1, axis2=2)[:, :n], 1e-300)
+        return (gains[0] + gains[1]) * self.step
 
     def jacobian(self) -> np.ndarray:
         """The variable-projection Jacobian (Kaufman) of the residual in (τ_1 … τ_n, v)."""
@@ -307,7 +326,9 @@ def solution(pb: Problem, taus: np.ndarray, v: float, start: Solution | None = N
     if (start is not None and start.v == v and np.array_equal(start.taus, taus)
             and start.slopes and np.array_equal(start.w.rows, rows)):
         return start
-    return Solution(pb, taus, v, Rows(pb, rows), True)
+    # the window is every step-th sample from its first: a slice selects the same rows
+    index = slice(int(rows[0]), int(rows[-1]) + 1, pb.step) if rows.size else None
+    return Solution(pb, taus, v, Rows(pb, rows, index), True)
 
 
 def refine(pb: Problem, taus: np.ndarray, v: float, iterations: int = MAX_LM, *,
@@ -317,10 +338,10 @@ def refine(pb: Problem, taus: np.ndarray, v: float, iterations: int = MAX_LM, *,
     ``start``: the :class:`Solution` with slopes at these times and speed on their window
     when already made (the same numbers, not made again)."""
     taus = np.sort(np.asarray(taus, dtype=float))
-    p = np.append(taus, v)
+    p = np.concatenate((taus, [v]))
     sol = solution(pb, taus, v, start)
     rows = sol.w
-    r, amps, gains = sol.res, sol.amps, sol.gains
+    r = sol.res
     cost = float(r @ r)
     lam = 1e-3
     scale = np.full(taus.size + 1, 1.0 / v)  # τ in s, v in m/s: metres
@@ -347,13 +368,13 @@ def refine(pb: Problem, taus: np.ndarray, v: float, iterations: int = MAX_LM, *,
             if c2 < cost:
                 rel = (cost - c2) / max(cost, 1e-300)
                 sol = trial_sol
-                p, r, amps, gains, cost = (np.append(tt, vv), sol.res, sol.amps, sol.gains,
-                                           c2)
+                p, r, cost = np.concatenate((tt, [vv])), sol.res, c2
                 lam = max(lam / 3.0, 1e-7)
                 improved = True
                 break
             lam *= 10.0
-        if not improved or rel < CONVERGED or np.max(np.abs(step[:-1])) * p[-1] < 5e-3:
+        if not improved or rel < CONVERGED or np.abs(step[:-1]).max() * p[-1] < 5e-3:
             break
-    return VehicleFit(taus=p[:-1], v=float(p[-1]), amps=amps, chi=cost, gains=gains,
+    # the last accepted solution's amplitudes and removal costs (made once, when read)
+    return VehicleFit(taus=p[:-1], v=float(p[-1]), amps=sol.amps, chi=cost, gains=sol.gains,
                       solution=sol)
