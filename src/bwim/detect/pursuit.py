@@ -356,6 +356,8 @@ def _vehicle(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp: floa
     fit = refine(pb, pruned, v, FIRST_LM, start=sol)
     kept, sol = _prune(pb, fit.taus, fit.v, limit, both=True, start=fit.solution)
     grouped = choose_groups(pb, kept, fit.v, limit, min_sp, span)
+    if grouped is not None and grouped.size == 0:
+        return None  # every axle lay outside the axle groups of its readings: noise
     if grouped is not None:
         fit = refine(pb, grouped, fit.v)
     elif kept.size < fit.taus.size:
