@@ -8,7 +8,8 @@ Contract
 * :func:`robust_sigma` is the normalised median absolute deviation, 1.4826 MAD, the
   standard deviation of Gaussian noise that ignores a minority of large samples (pulses).
 * :func:`median` is ``numpy.median`` of a 1-D array (the mean of the two middle values
-  for an even count; NaN if any value is), the same number, by one partial sort;
+  for an even count; NaN if any value is), the same number by one partial sort (equal as
+  numbers: where numpy gives +0.0, ties of signed zeros may give -0.0);
   :func:`column_medians` is ``numpy.median(values, axis=0)`` of a 2-D array, the same
   numbers, by one partial sort of each column laid out contiguously.
 * :func:`last_axis_sum` is ``values.sum(axis=-1)``, the same numbers: numpy adds a last
