@@ -213,3 +213,27 @@ def test_unknown_channel_and_no_gauge():
         *rec.sensors[:3], Sensor(name="ad", kind="temperature")])
     with pytest.raises(InputError, match="'ad' is a temperature channel"):
         cut_events(warm, TriggerSettings(channels=["g0", "ad"]))
+
+
+@pytest.mark.parametrize(("total", "flagged"), [(11.5, True), (13.5, False)])
+def test_a_stream_that_ends_within_the_merge_gap_of_an_event(total, flagged):
+    """A tractor's pulse (10 s, 1 s long) and a stream that ends 0.55 s after its trigger
+    closes, less than the merge gap (the default join, max(merge_gap, pre + post) = 1 s):
+    its trailer's pulse could have followed and been the same event, so the event is
+    flagged ``open_at_end`` though its trigger closed; ending 2.55 s after, it is not."""
+    rec = _record(total, [(10.0, 1.0, 100.0)])
+    evs = cut_events(rec, TriggerSettings(baseline=5.0)).events
+    assert len(evs) == 1
+    assert ("open_at_end" in evs[0].flags) is flagged
+    assert evs[0].off == pytest.approx(_crossings(10.0, 1.0, 100.0, 6.0, 3.0)[1], abs=0.01)
+
+
+@pytest.mark.parametrize(("t0", "flagged"), [(0.4, True), (2.5, False)])
+def test_a_stream_that_begins_within_the_merge_gap_of_an_event(t0, flagged):
+    """A trailer's pulse whose trigger opens 0.4 s after the stream's first sample (less
+    than the 1 s merge gap: its tractor's pulse could have come just before the stream
+    began) is flagged ``open_at_start``; one opening 2.5 s in is not."""
+    rec = _record(20.0, [(t0, 1.0, 100.0)])
+    evs = cut_events(rec, TriggerSettings(baseline=5.0)).events
+    assert len(evs) == 1
+    assert ("open_at_start" in evs[0].flags) is flagged

@@ -323,8 +323,10 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path, batch) -> int:
         raise InputError("weighing logger files needs --calibration-records (runs of the "
                          "calibration truck)")
     paths = record_paths(args.records, any_suffix=True)
+    cut_open: dict[str, tuple[str, ...]] = {}  # events the recording's start or end cut
     items = ([Item(name=display_name(p), source=p) for p in paths] if not args.continuous
-             else _continuous_items(paths, scenario, folder / EVENTS, resume=args.resume))
+             else _continuous_items(paths, scenario, folder / EVENTS, resume=args.resume,
+                                    cut_open=cut_open))
     bridge = options = None
     if args.bridge:
         from bwim.scenario import load_model
@@ -342,7 +344,7 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path, batch) -> int:
     def finalize(rows):  # the lanes' spread and the traffic's drift need the whole day
         from bwim.site import finish_day
 
-        day = finish_day(rows, site)
+        day = finish_day([_open_refused(r, cut_open.get(r.record)) for r in rows], site)
         days[:] = [day]
         return list(day.rows)
 
@@ -386,10 +388,27 @@ def _print_gauges(batch) -> None:
 EVENTS = "events"
 
 
-def _continuous_items(paths: Sequence[Path], scenario, events: Path, *, resume: bool) -> list:
+#: Stream flags of an event that the recording's start or end may have cut.
+_OPEN = ("open_at_start", "open_at_end")
+
+
+def _open_refused(row, flags: tuple[str, ...] | None):
+    """A weighed row of an event the recording's start or end may have cut, refused (its
+    vehicle may go on beyond the recording: a tractor without its trailer)."""
+    if not flags or not row.weighed:
+        return row
+    return row.refused("the recording begins or ends within this event, so the vehicle may "
+                       "go on beyond it (a tractor without its trailer): its weights cannot "
+                       "be whole", *flags)
+
+
+def _continuous_items(paths: Sequence[Path], scenario, events: Path, *, resume: bool,
+                      cut_open: dict[str, tuple[str, ...]] | None = None) -> list:
     """Each long logger file cut into events (:func:`bwim.stream.cut_file`, default
     trigger), each event written to ``events/FILE#k.h5`` (k from 1) and named ``FILE#k``;
-    with ``resume`` an event file already written is kept as it is."""
+    with ``resume`` an event file already written is kept as it is.  ``cut_open`` gets
+    the names of the events the recording's start or end may have cut, with those
+    flags."""
     from bwim.batch import Item
     from bwim.io import write_record
     from bwim.scenario import build_logger_format, build_sensors
@@ -403,6 +422,8 @@ def _continuous_items(paths: Sequence[Path], scenario, events: Path, *, resume: 
         for n, ev in enumerate(cut_file(p, fmt, sensors=sensors), start=1):
             name = f"{display_name(p)}#{n}"
             target = events / f"{name}.h5"
+            if cut_open is not None and any(f in _OPEN for f in ev.flags):
+                cut_open[name] = tuple(f for f in ev.flags if f in _OPEN)
             if not (resume and target.exists()):
                 write_record(ev.record, target)
             items.append(Item(name=name, source=target))

@@ -13,9 +13,12 @@ Contract
   With a clock, its time starts at 0 at its first sample and its ``clock`` is the clock of
   that sample (as a logger that writes one file per event: the clock time of every sample
   is the stream's); without one, its time is the stream's own (it may be a time of day).
-* Flags: ``open_at_start`` (the stream began inside the event), ``open_at_end`` (the
-  stream ended before the trigger closed), ``max_duration`` (a trigger was closed at
-  :attr:`~bwim.stream.settings.TriggerSettings.max_duration`).
+* Flags: ``open_at_start`` (the stream began inside the event, or less than the merge
+  gap before its trigger opened), ``open_at_end`` (the stream ended before the trigger
+  closed, or less than the merge gap after), ``max_duration`` (a trigger was closed at
+  :attr:`~bwim.stream.settings.TriggerSettings.max_duration`).  An event flagged
+  ``open_*`` may hold part of a vehicle only: ``bwim weigh --continuous`` refuses its
+  rows.
 * :class:`EventCut` is a whole record's cut: its events in time order, the settings, the
   number of samples and the sampling rate.
 """

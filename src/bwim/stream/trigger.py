@@ -28,10 +28,15 @@ Contract
   ``2 max_duration + baseline`` of data whatever the stream's length).  The events do
   not depend on how the stream is split: :func:`cut_events` on the whole record gives
   the same windows.
+* An event that the stream's start or end may have cut is flagged: ``open_at_start``
+  when its trigger opens less than the merge gap after the stream's first sample (at it:
+  the stream began inside a crossing), ``open_at_end`` when the stream ends with the
+  trigger open or less than the merge gap after it closed (a later trigger, a trailer's
+  axles after its tractor's, would have been the same event).
 * Limits: the stream should begin at rest (a stream that begins inside a crossing has a
-  wrong start-up baseline for its first frames; flag ``open_at_start`` when it begins
-  above the threshold); channels of opposite signs cancel in the sum (name the channels
-  to sum); a quantised noise-free signal has ``σ = 0``: give ``settings.noise``.
+  wrong start-up baseline for its first frames); channels of opposite signs cancel in the
+  sum (name the channels to sum); a quantised noise-free signal has ``σ = 0``: give
+  ``settings.noise``.
 """
 
 from __future__ import annotations
@@ -188,7 +193,12 @@ class _Trigger:
         if self.active is not None:
             self._end(self.n, ("open_at_end",))
         if self.pending is not None:
-            self._emit(self.pending)
+            p = self.pending
+            if p.off + self.join > self.n and "open_at_end" not in p.flags:
+                # the stream ended less than the merge gap after the trigger closed: a later
+                # trigger (a trailer's axles after its tractor's) would have been this event
+                p.flags = (*p.flags, "open_at_end")
+            self._emit(p)
             self.pending = None
         return self._take()
 
@@ -228,8 +238,11 @@ class _Trigger:
                 if not hits.size:
                     break
                 k += int(hits[0])
+                # the stream began inside it, or less than the merge gap before it (a
+                # trigger before the stream's start would have been the same event)
                 self.active = _Run(on=a + k, baseline=self.b, noise=self.sigma,
-                                   flags=("open_at_start",) if a + k == 0 else ())
+                                   flags=("open_at_start",) if a + k < max(self.join, 1)
+                                   else ())
                 quiet = False
             else:
                 below = np.flatnonzero(z[k:] < s.off)
