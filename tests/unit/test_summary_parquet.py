@@ -90,3 +90,22 @@ def test_a_file_that_is_not_a_summary_is_one_line(tmp_path):
     pa.parquet.write_table(pa.table({"a": [1]}), other)
     with pytest.raises(InputError, match="not a bwim summary"):
         read_summary_parquet(other)
+
+
+def test_the_parquet_file_has_the_usual_permissions(tmp_path):
+    """Written through bwim.atomic like every other output: the mode the umask gives a new
+    file (0644 under umask 022), not a private temporary file's 0600."""
+    import os
+
+    from bwim.io.summary_parquet import write_summary_parquet
+    from bwim.summary import SummaryRow
+
+    old = os.umask(0o022)
+    try:
+        out = tmp_path / "summary.parquet"
+        write_summary_parquet(out, [SummaryRow(record="e1.txt", status="failed",
+                                               reason="unreadable")])
+    finally:
+        os.umask(old)
+    assert out.stat().st_mode & 0o777 == 0o644
+    assert [p.name for p in tmp_path.iterdir()] == ["summary.parquet"]

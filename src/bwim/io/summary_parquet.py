@@ -21,14 +21,13 @@ Contract
 from __future__ import annotations
 
 import os
-import tempfile
 from collections.abc import Iterable
 from datetime import datetime
 from datetime import time as dtime
-from pathlib import Path
 from typing import Any
 
 from bwim.errors import InputError
+from bwim.io.atomic import atomic_output
 from bwim.io.summary import COLUMNS
 from bwim.summary import SummaryRow
 
@@ -114,17 +113,12 @@ def write_summary_parquet(path: str | os.PathLike, rows: Iterable[SummaryRow]) -
                        metadata={"bwim.columns_version": VERSION})
     table = pa.table({name: pa.array(data[name], type=types[name]) for name in COLUMNS},
                      schema=schema)
-    target = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
-    os.close(fd)
-    try:
-        pa.parquet.write_table(table, tmp)
-        os.replace(tmp, target)
-    except OSError as exc:
-        raise InputError(f"cannot write {target}: {exc.strerror or exc}") from None
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+    # the project's one atomic write (the usual file permissions, nothing left behind)
+    with atomic_output(path) as tmp:
+        try:
+            pa.parquet.write_table(table, str(tmp))
+        except OSError as exc:
+            raise InputError(f"cannot write {path}: {exc.strerror or exc}") from None
 
 
 def read_summary_parquet(path: str | os.PathLike) -> tuple[SummaryRow, ...]:
