@@ -347,3 +347,19 @@ def test_profile_outside_the_scenario_folder_is_refused(tmp_path, capsys):
     code, _, err = _run(["simulate", scen, "-o", tmp_path / "r.h5"], capsys)
     one_line_error(code, err, "not a road profile")
     assert "bin/bash" not in err and "x:0:0" not in err
+
+
+def test_weigh_refuses_to_write_into_its_records_folder(small_site, tmp_path, capsys):
+    """``-o`` the records' own folder: its outputs would sit among the logger files and be
+    read as records by the next ``bwim weigh`` of that folder (review of stop 32: a
+    ``--resume`` then failed, another output folder gave 5 failed rows).  Exit 2, one
+    line, the folder unchanged."""
+    import shutil
+
+    records = tmp_path / "traffic"
+    shutil.copytree(small_site.out_dir / "traffic", records)
+    before = sorted(p.name for p in records.iterdir())
+    code, _, err = _run(["weigh", small_site.scenario, records, "--calibration-records",
+                         small_site.out_dir / "calibration", "-o", records], capsys)
+    one_line_error(code, err, "is the input folder")
+    assert sorted(p.name for p in records.iterdir()) == before

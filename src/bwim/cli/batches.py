@@ -436,7 +436,7 @@ def _continuous_items(paths: Sequence[Path], scenario, events: Path, *, resume: 
 def weigh_command(args: argparse.Namespace) -> int:
     from bwim.batch import BatchFolder
     from bwim.io.gauge_health import GAUGE_HEALTH_NAME
-    from bwim.io.outputs import refuse_input_overwrite
+    from bwim.io.outputs import refuse_input_overwrite, refuse_output_in_inputs
     from bwim.scenario import load_scenario
 
     check_jobs(args.jobs)
@@ -449,6 +449,7 @@ def weigh_command(args: argparse.Namespace) -> int:
     if args.continuous and not site:
         raise InputError("--continuous cuts logger files: the scenario needs a [logger] "
                          "section")
+    refuse_output_in_inputs(args.output, [*args.records, *(args.calibration_records or [])])
     folder = out_folder(args.output)  # created once the inputs are known to exist
     if site:
         outputs = [folder / "calibration_runs.csv", folder / "influence_lines.h5",

@@ -40,7 +40,7 @@ from bwim.errors import InputError
 
 __all__ = ["EXIT_FAILED", "EXIT_OK", "EXIT_USAGE", "LOCK_NAME", "MANIFEST_NAME", "Manifest",
            "OutputLock", "file_key", "refuse_existing", "refuse_input_overwrite",
-           "signals_as_interrupt"]
+           "refuse_output_in_inputs", "signals_as_interrupt"]
 
 EXIT_OK = 0  #: every input processed
 EXIT_FAILED = 1  #: some inputs failed (their summary rows say why)
@@ -68,6 +68,30 @@ def refuse_input_overwrite(outputs: Iterable[str | os.PathLike],
             if _same(out, src):
                 raise InputError(f"the output {out} is the input {src}; refusing to "
                                  "overwrite an input (choose another output)")
+
+
+def refuse_output_in_inputs(folder: str | os.PathLike,
+                            inputs: Iterable[str | os.PathLike]) -> None:
+    """Raise :class:`InputError` if the output ``folder`` is one of the input folders
+    (a folder of records is expanded to the files it holds, not its subfolders): its
+    outputs would sit among the records and be read as records by the next command given
+    that folder."""
+    out = Path(folder)
+    try:
+        out_real = out.resolve()
+    except (OSError, ValueError):
+        return
+    for src in (Path(p) for p in inputs):
+        if not src.is_dir():
+            continue
+        try:
+            src_real = src.resolve()
+        except (OSError, ValueError):
+            continue
+        if out_real == src_real:
+            raise InputError(f"the output folder {out} is the input folder {src}: its "
+                             "outputs would be read as records next time (choose another "
+                             "output folder, e.g. a subfolder)")
 
 
 def refuse_existing(path: str | os.PathLike, *, force: bool) -> Path:
