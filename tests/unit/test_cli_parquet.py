@@ -43,3 +43,27 @@ def test_an_existing_parquet_is_not_replaced_without_force(day, tmp_path, capsys
     assert "summary.parquet" in err and "--force" in err and "\n" not in err
     assert (out / "summary.parquet").read_text() == "precious"
     assert not (out / "summary.csv").exists()
+
+
+def test_a_resume_keeps_the_parquet_summary_up_to_date(day, tmp_path):
+    """A batch weighed with ``--parquet`` on its first two files, resumed on all four
+    without it: summary.parquet holds the four files' rows, as summary.csv does (review
+    of stop 32: it kept the first run's rows)."""
+    import shutil
+
+    records = tmp_path / "traffic"
+    records.mkdir()
+    names = sorted(p.name for p in day.traffic[0].parent.iterdir())
+    for name in names[:2]:
+        shutil.copy(day.traffic[0].parent / name, records / name)
+    out = tmp_path / "out"
+    argv = ["weigh", str(day.scenario), str(records), "--calibration-records",
+            str(day.calibration[0].parent), "-o", str(out)]
+    assert main([*argv, "--parquet"]) == 0
+    for name in names[2:]:
+        shutil.copy(day.traffic[0].parent / name, records / name)
+    assert main([*argv, "--resume"]) == 0
+    csv_keys = [(r.record, r.vehicle) for r in read_summary(out / "summary.csv")]
+    assert len({k[0] for k in csv_keys}) == len(names) == 4
+    assert [(r.record, r.vehicle) for r in read_summary_parquet(out / "summary.parquet")] \
+        == csv_keys

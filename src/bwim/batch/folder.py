@@ -69,7 +69,9 @@ class BatchFolder:
         :func:`bwim.site.correct_drift`); the manifest keeps the rows as they came.
     parquet : bool
         Also write the final summary as ``summary.parquet`` beside it
-        (:mod:`bwim.io.summary_parquet`; refused like the summary when it exists).
+        (:mod:`bwim.io.summary_parquet`; refused like the summary when it exists).  A
+        resume of a batch that wrote one keeps it up to date without being asked (a stale
+        Parquet summary beside the CSV one would disagree with it).
     """
 
     save_every = 1.0
@@ -80,7 +82,9 @@ class BatchFolder:
                  parquet: bool = False) -> None:
         self.folder = Path(folder)
         self.summary = Path(summary) if summary is not None else self.folder / "summary.csv"
-        self.parquet = self.summary.with_suffix(".parquet") if parquet else None
+        earlier = (resume and (self.folder / MANIFEST_NAME).exists()
+                   and self.summary.with_suffix(".parquet").exists())
+        self.parquet = self.summary.with_suffix(".parquet") if parquet or earlier else None
         if self.parquet is not None:
             require_pyarrow()
         if not resume or not (self.folder / MANIFEST_NAME).exists():
