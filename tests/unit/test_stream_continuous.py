@@ -185,3 +185,38 @@ def test_an_event_the_recording_may_have_cut_is_not_weighed(day, tmp_path, capsy
     assert [r["n_axles"] for r in mine] == ["6"]
     assert mine[0]["status"] == "refused" and not mine[0]["gvw_kN"]
     assert "open_at_end" in mine[0]["flags"] and "may go on beyond it" in mine[0]["reason"]
+
+
+def test_a_long_file_that_breaks_off_fails_alone(day, tmp_path, capsys):
+    """Two long files, the second stopped mid-write (its first 60 % and a broken last
+    line, as a logger killed while writing leaves it): the batch goes on (exit 1: a
+    record failed); the first file's events are weighed as alone, and the second file
+    has one failed row that names the line (review of stop 32: the whole batch ended
+    with exit 2 and no summary, leaving the events folder behind).  The events of the
+    blocks read before a broken line are kept (here none: this file is shorter than one
+    block of bwim.stream.chunks.ROWS rows)."""
+    import csv
+
+    from bwim.cli import main
+
+    site, cont = day["site"], day["cont"]
+    lines = cont.path.read_text(encoding="utf-8").splitlines(keepends=True)
+    folder = tmp_path / "long"
+    folder.mkdir()
+    good = folder / "a_good.txt"
+    good.write_text("".join(lines), encoding="utf-8")
+    broken = folder / "b_broken.txt"
+    keep = int(0.6 * len(lines))
+    broken.write_text("".join(lines[:keep]) + "12.5\t0.3\n", encoding="utf-8")
+    out = tmp_path / "out"
+    code = main(["weigh", str(site.scenario), str(folder), "--calibration-records",
+                 str(site.calibration[0].parent), "-o", str(out), "--continuous"])
+    assert code == 1, capsys.readouterr().err
+    rows = list(csv.DictReader(open(out / "summary.csv")))
+    failed = [r for r in rows if r["status"] == "failed"]
+    assert [r["record"] for r in failed] == ["b_broken.txt"]
+    assert f"line {keep + 1}" in failed[0]["reason"], failed[0]["reason"]
+    assert "cutting stopped after" in failed[0]["reason"]
+    assert sorted({r["record"] for r in rows if r["record"].startswith("a_good")}) == \
+        [f"a_good.txt#{k}" for k in range(1, 5)]
+    assert any(r["gvw_kN"] for r in rows if r["record"].startswith("a_good"))

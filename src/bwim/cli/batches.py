@@ -55,6 +55,20 @@ def _read(scenario):
     return record_reader(scenario)
 
 
+class _CutOrRead:
+    """The batch's reader for ``weigh --continuous``: a long file whose cutting failed
+    gives its reason (its row fails, the batch goes on), an event file is read."""
+
+    def __init__(self, read, failed: dict[str, str]):
+        self.read, self.failed = read, dict(failed)
+
+    def __call__(self, path):
+        why = self.failed.get(str(path))
+        if why is not None:
+            raise InputError(why)
+        return self.read(path)
+
+
 def _run_batch(folder, items, run, desc: str):
     """Run a batch into its folder with a progress display; its report."""
     from bwim.batch import run_into
@@ -324,9 +338,11 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path, batch) -> int:
                          "calibration truck)")
     paths = record_paths(args.records, any_suffix=True)
     cut_open: dict[str, tuple[str, ...]] = {}  # events the recording's start or end cut
+    cut_failed: dict[str, str] = {}  # long files whose cutting failed: why
     items = ([Item(name=display_name(p), source=p) for p in paths] if not args.continuous
              else _continuous_items(paths, scenario, folder / EVENTS, resume=args.resume,
-                                    cut_open=cut_open))
+                                    cut_open=cut_open, cut_failed=cut_failed))
+    read = _CutOrRead(_read(scenario), cut_failed) if cut_failed else _read(scenario)
     bridge = options = None
     if args.bridge:
         from bwim.scenario import load_model
@@ -353,7 +369,7 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path, batch) -> int:
     batch.gauge_names = tuple(c.name for c in site.lines.channels)
     executor = executor_for(args.jobs, args.scheduler)
     report = _run_batch(batch, items,
-                        lambda todo: weigh_events(todo, site, read=_read(scenario),
+                        lambda todo: weigh_events(todo, site, read=read,
                                                   bridge=bridge, identify_options=options,
                                                   executor=executor, keep=False), "weighing")
     print(f"{len(items)} event(s){_done_before(report)} in {report.elapsed:.1f} s: "
@@ -403,13 +419,17 @@ def _open_refused(row, flags: tuple[str, ...] | None):
 
 
 def _continuous_items(paths: Sequence[Path], scenario, events: Path, *, resume: bool,
-                      cut_open: dict[str, tuple[str, ...]] | None = None) -> list:
+                      cut_open: dict[str, tuple[str, ...]] | None = None,
+                      cut_failed: dict[str, str] | None = None) -> list:
     """Each long logger file cut into events (:func:`bwim.stream.cut_file`, default
     trigger), each event written to ``events/FILE#k.h5`` (k from 1) and named ``FILE#k``;
     with ``resume`` an event file already written is kept as it is.  ``cut_open`` gets
     the names of the events the recording's start or end may have cut, with those
-    flags."""
+    flags.  A long file whose cutting fails (a bad line: a logger stopped mid-write)
+    keeps the events cut before it and is itself an item named after the file, whose
+    reason ``cut_failed`` gets (its row fails; the batch goes on)."""
     from bwim.batch import Item
+    from bwim.batch.events import BATCH_ERRORS, reason_of
     from bwim.io import write_record
     from bwim.scenario import build_logger_format, build_sensors
     from bwim.stream import cut_file
@@ -419,14 +439,23 @@ def _continuous_items(paths: Sequence[Path], scenario, events: Path, *, resume: 
     items = []
     for p in paths:
         n = 0
-        for n, ev in enumerate(cut_file(p, fmt, sensors=sensors), start=1):
-            name = f"{display_name(p)}#{n}"
-            target = events / f"{name}.h5"
-            if cut_open is not None and any(f in _OPEN for f in ev.flags):
-                cut_open[name] = tuple(f for f in ev.flags if f in _OPEN)
-            if not (resume and target.exists()):
-                write_record(ev.record, target)
-            items.append(Item(name=name, source=target))
+        try:
+            for n, ev in enumerate(cut_file(p, fmt, sensors=sensors), start=1):
+                name = f"{display_name(p)}#{n}"
+                target = events / f"{name}.h5"
+                if cut_open is not None and any(f in _OPEN for f in ev.flags):
+                    cut_open[name] = tuple(f for f in ev.flags if f in _OPEN)
+                if not (resume and target.exists()):
+                    write_record(ev.record, target)
+                items.append(Item(name=name, source=target))
+        except BATCH_ERRORS as exc:
+            if cut_failed is None:
+                raise
+            why = f"cutting stopped after {n} event(s): {reason_of(exc)}"
+            cut_failed[str(p)] = why
+            items.append(Item(name=display_name(p), source=p))
+            print(f"{display_name(p)}: {why}")
+            continue
         print(f"{display_name(p)}: {n} event(s) cut")
     if not items:
         raise InputError("no event found in the continuous recording(s)")
