@@ -265,3 +265,16 @@ def test_pool_workers_die_with_their_parent(tmp_path):
     finally:
         if proc.poll() is None:
             proc.kill()
+
+
+@pytest.mark.parametrize(("option", "value"), [("--gvw-limit", "-5"), ("--axle-limit", "nan")])
+def test_a_negative_overload_limit_is_named_in_its_own_unit(tmp_path, capsys, option, value):
+    """``bwim report --gvw-limit -5``: one line in kN, the option's unit (review of stop
+    32: "got -5000.0", the value in N), exit 2, no report written."""
+    summary = tmp_path / "summary.csv"
+    summary.write_text("record,status,reason\ne1.txt,failed,unreadable\n", encoding="utf-8")
+    out = tmp_path / "report.html"
+    code = main(["report", str(summary), option, value, "-o", str(out)])
+    one_line_error(code, capsys.readouterr().err, f"{option} must be a load in kN",
+                   f"got {value}")
+    assert not out.exists()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 
 from bwim.cli.common import (
@@ -43,6 +44,9 @@ def _limits(args: argparse.Namespace):
     for key, attr in (("gvw", "gvw_limit"), ("axle", "axle_limit")):
         value = getattr(args, attr, None)
         if value is not None:
+            if not (math.isfinite(value) and value >= 0.0):  # in the option's kN
+                raise InputError(f"--{attr.replace('_', '-')} must be a load in kN, 0 or "
+                                 f"more (0 switches it off), got {value:g}")
             given[key] = None if float(value) == 0.0 else float(value) * 1000.0
     return OverloadLimits(**given)
 
