@@ -220,3 +220,41 @@ def test_a_long_file_that_breaks_off_fails_alone(day, tmp_path, capsys):
     assert sorted({r["record"] for r in rows if r["record"].startswith("a_good")}) == \
         [f"a_good.txt#{k}" for k in range(1, 5)]
     assert any(r["gvw_kN"] for r in rows if r["record"].startswith("a_good"))
+
+
+def test_a_resume_follows_the_long_file_as_it_is_now(day, tmp_path, capsys):
+    """``--resume`` after the long file changed (review of stop 32: the first run's event
+    files were kept whatever the file now held): (a) the file first cut short inside the
+    lane-1 truck's event, then written whole: the summary is a fresh run's on the whole
+    file (the truck weighed, not its first run's refused part); (b) the file then cut
+    before the truck's event: that event's and the next one's rows and event files go."""
+    import csv
+
+    from bwim.cli import main
+
+    site, cont = day["site"], day["cont"]
+    lines = cont.path.read_text(encoding="utf-8").splitlines(keepends=True)
+    first = next(k for k, line in enumerate(lines) if line[:1].isdigit() or line[:1] == "-")
+    ev = day["events"][2]
+    long = tmp_path / "long" / cont.path.name
+    long.parent.mkdir()
+
+    def run(n_lines, out, *extra):
+        long.write_text("".join(lines[:n_lines]), encoding="utf-8")
+        code = main(["weigh", str(site.scenario), str(long), "--calibration-records",
+                     str(site.calibration[0].parent), "-o", str(out), "--continuous",
+                     *extra])
+        assert code == 0, capsys.readouterr().err
+        return [(r["record"], r["vehicle"], r["status"], r["gvw_kN"])
+                for r in csv.DictReader(open(out / "summary.csv"))]
+
+    cut = first + ev.start_index + round(0.8 * (ev.stop_index - ev.start_index))
+    short = run(cut, tmp_path / "out")
+    assert [r[2] for r in short if r[0].endswith("#3")] == ["refused"]
+    resumed = run(len(lines), tmp_path / "out", "--resume")
+    fresh = run(len(lines), tmp_path / "fresh")
+    assert resumed == fresh and any(r[3] for r in resumed if r[0].endswith("#3"))
+    before = run(first + ev.start_index - 1, tmp_path / "out", "--resume")
+    assert sorted({r[0] for r in before}) == [f"{cont.path.name}#{k}" for k in (1, 2)]
+    assert sorted(p.name for p in (tmp_path / "out" / "events").iterdir()) == \
+        [f"{cont.path.name}#{k}.h5" for k in (1, 2)]

@@ -114,6 +114,14 @@ class BatchFolder:
         rows = tuple(from_cells(c) for c in entry["rows"])
         return rows or None
 
+    def forget(self, sources: Sequence[Path]) -> None:
+        """Drop what the manifest holds of these inputs (files that no longer exist: a
+        long recording's events that a new cut of it does not hold); their rows go."""
+        gone = {str(Path(p).resolve()) for p in sources}
+        for key in [k for k, e in self.manifest.entries.items()
+                    if str(Path(e["source"]).resolve()) in gone]:
+            del self.manifest.entries[key]
+
     def order(self, sources: Sequence[Path]) -> None:
         """The inputs of this run, in the summary's order."""
         self._order = [Path(p) for p in sources]

@@ -339,9 +339,11 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path, batch) -> int:
     paths = record_paths(args.records, any_suffix=True)
     cut_open: dict[str, tuple[str, ...]] = {}  # events the recording's start or end cut
     cut_failed: dict[str, str] = {}  # long files whose cutting failed: why
+    stale: list[Path] = []  # event files of an earlier cut that the long files no longer hold
     items = ([Item(name=display_name(p), source=p) for p in paths] if not args.continuous
              else _continuous_items(paths, scenario, folder / EVENTS, resume=args.resume,
-                                    cut_open=cut_open, cut_failed=cut_failed))
+                                    cut_open=cut_open, cut_failed=cut_failed, stale=stale))
+    batch.forget(stale)
     read = _CutOrRead(_read(scenario), cut_failed) if cut_failed else _read(scenario)
     bridge = options = None
     if args.bridge:
@@ -418,16 +420,37 @@ def _open_refused(row, flags: tuple[str, ...] | None):
                        "be whole", *flags)
 
 
+def _same_event(path: Path, record) -> bool:
+    """Whether the event file ``path`` holds ``record`` (times, readings, channels,
+    clock): a resume keeps it (and its weighing) only then."""
+    import numpy as np
+
+    from bwim.errors import BwimError
+    from bwim.io import read_record
+
+    try:
+        old = read_record(path)
+    except (BwimError, OSError, ValueError):
+        return False
+    return (old.clock == record.clock and old.data.shape == record.data.shape
+            and [x.name for x in old.sensors] == [x.name for x in record.sensors]
+            and np.array_equal(old.time, record.time)
+            and np.array_equal(old.data, record.data, equal_nan=True))
+
+
 def _continuous_items(paths: Sequence[Path], scenario, events: Path, *, resume: bool,
                       cut_open: dict[str, tuple[str, ...]] | None = None,
-                      cut_failed: dict[str, str] | None = None) -> list:
+                      cut_failed: dict[str, str] | None = None,
+                      stale: list[Path] | None = None) -> list:
     """Each long logger file cut into events (:func:`bwim.stream.cut_file`, default
     trigger), each event written to ``events/FILE#k.h5`` (k from 1) and named ``FILE#k``;
-    with ``resume`` an event file already written is kept as it is.  ``cut_open`` gets
-    the names of the events the recording's start or end may have cut, with those
-    flags.  A long file whose cutting fails (a bad line: a logger stopped mid-write)
-    keeps the events cut before it and is itself an item named after the file, whose
-    reason ``cut_failed`` gets (its row fails; the batch goes on)."""
+    with ``resume`` an event file that holds the same event is kept as it is (another is
+    written over: the long file changed), and the event files of a long file cut whole
+    beyond its events now are deleted and listed in ``stale`` (their rows are dropped).
+    ``cut_open`` gets the names of the events the recording's start or end may have
+    cut, with those flags.  A long file whose cutting fails (a bad line: a logger stopped
+    mid-write) keeps the events cut before it and is itself an item named after the
+    file, whose reason ``cut_failed`` gets (its row fails; the batch goes on)."""
     from bwim.batch import Item
     from bwim.batch.events import BATCH_ERRORS, reason_of
     from bwim.io import write_record
@@ -445,7 +468,7 @@ def _continuous_items(paths: Sequence[Path], scenario, events: Path, *, resume: 
                 target = events / f"{name}.h5"
                 if cut_open is not None and any(f in _OPEN for f in ev.flags):
                     cut_open[name] = tuple(f for f in ev.flags if f in _OPEN)
-                if not (resume and target.exists()):
+                if not (resume and target.exists() and _same_event(target, ev.record)):
                     write_record(ev.record, target)
                 items.append(Item(name=name, source=target))
         except BATCH_ERRORS as exc:
@@ -456,6 +479,14 @@ def _continuous_items(paths: Sequence[Path], scenario, events: Path, *, resume: 
             items.append(Item(name=display_name(p), source=p))
             print(f"{display_name(p)}: {why}")
             continue
+        prefix = f"{display_name(p)}#"
+        for q in sorted(events.iterdir()):  # events of an earlier cut of this file, gone
+            k = q.name[len(prefix):-len(".h5")] if q.name.startswith(prefix) \
+                and q.name.endswith(".h5") else ""
+            if k.isdigit() and int(k) > n:
+                q.unlink()
+                if stale is not None:
+                    stale.append(q)
         print(f"{display_name(p)}: {n} event(s) cut")
     if not items:
         raise InputError("no event found in the continuous recording(s)")
