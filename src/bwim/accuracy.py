@@ -50,7 +50,11 @@ Contract
   the largest class value).  Criteria with too few values (as above) are not assessed and
   are listed as skipped.
 * :func:`assess` matches summary rows (WIM, :class:`bwim.summary.SummaryRow`: no file is
-  needed) to reference rows (static) by record name (and vehicle, see :func:`assess`),
+  needed) to reference rows (static) by record name (and vehicle), or, for a reference
+  that gives a clock time instead of a record (a continuous recording's events are
+  named by the trigger, not known beforehand), by time: the one summary row within
+  ``time_tolerance`` s of it (in its lane when given; among several, those of its axle
+  count), else none (see :func:`assess`),
   splits each vehicle's axles into single axles and groups with the REFERENCE spacings
   (consecutive axles closer than ``group_spacing``, :func:`bwim.wim.group_axles`) and
   classifies the four criteria.  Weights are in N (SI); only their ratios matter.
@@ -61,6 +65,8 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from datetime import datetime
+from datetime import time as dtime
 
 import numpy as np
 from scipy import optimize, stats
@@ -78,6 +84,7 @@ __all__ = [
     "TOLERANCES",
     "AccuracyResult",
         "CriterionResult",
+    "ReferenceMatch",
     "ReferenceRow",
     "SummaryRow",
     "assess",
@@ -85,6 +92,7 @@ __all__ = [
     "classify",
     "classify_statistics",
     "confidence_level",
+    "match_references",
     "min_confidence",
     "relative_errors",
 ]
@@ -311,6 +319,10 @@ class CriterionResult:
     pi: float
 
     @property
+    def _who(self) -> str:
+        return f"record {self.record}" if self.record else f"the vehicle at {self.label}"
+
+    @property
     def label(self) -> str:
         """The criterion as printed ("gross weight", …)."""
         return CRITERIA[self.name]
@@ -390,7 +402,7 @@ def _count(name: str, value) -> int:
 
 def _record_name(value) -> str:
     if not isinstance(value, str) or not value.strip():
-        raise InputError(f"record must be a non-empty name, got {value!r}")
+        raise InputError(f"record must be a non-empty name (or give the time), got {value!r}")
     return value.strip()
 
 
@@ -401,7 +413,8 @@ class ReferenceRow:
     Attributes
     ----------
     record : str
-        The record (event file) in which the vehicle crossed.
+        The record (event file) in which the vehicle crossed; empty when ``time`` says
+        when it crossed instead.
     gvw : float
         Static gross vehicle weight, N (> 0).
     axle_weights : tuple of float
@@ -417,29 +430,48 @@ class ReferenceRow:
         record's one vehicle (see :func:`assess`).
     lane : int or None
         The vehicle's lane, when known (it picks the vehicle of a record with several).
+    time : datetime, time or None
+        When the vehicle crossed (the site's local time, naive, as the summary's ``time``:
+        a date and time, or a time of day); with an empty ``record`` the vehicle is
+        matched by it (see :func:`assess`).
     """
 
-    record: str
+    record: str = ""
     gvw: float
     axle_weights: tuple[float, ...] = ()
     axle_spacings: tuple[float, ...] = ()
     speed: float | None = None
     vehicle: int | None = None
     lane: int | None = None
+    time: datetime | dtime | None = None
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
-        set_(self, "record", _record_name(self.record))
+        if self.time is not None:
+            if not isinstance(self.time, datetime | dtime):
+                raise InputError(f"time must be a datetime or a time, got {self.time!r}")
+            if self.time.tzinfo is not None:
+                raise InputError(f"time must be the site's local time without a UTC offset "
+                                 f"(as the summary's), got {self.time.isoformat()}")
+        if self.time is None or (isinstance(self.record, str) and self.record.strip()):
+            set_(self, "record", _record_name(self.record))
+        elif not isinstance(self.record, str):
+            raise InputError(f"record must be a name, got {self.record!r}")
+        else:
+            set_(self, "record", "")
+            if self.vehicle is not None:
+                raise InputError(f"vehicle {self.vehicle} needs a record (a vehicle matched "
+                                 "by time has none)")
         set_(self, "gvw", require_positive("gvw", self.gvw))
         set_(self, "axle_weights", _float_tuple("axle_weights", self.axle_weights,
                                                 positive=True))
         set_(self, "axle_spacings", _float_tuple("axle_spacings", self.axle_spacings,
                                                  positive=True))
         if not self.axle_weights and self.axle_spacings:
-            raise InputError(f"record {self.record}: axle spacings without axle weights")
+            raise InputError(f"{self._who}: axle spacings without axle weights")
         if self.axle_spacings and len(self.axle_spacings) != len(self.axle_weights) - 1:
             raise InputError(
-                f"record {self.record}: {len(self.axle_weights)} axle weights need "
+                f"{self._who}: {len(self.axle_weights)} axle weights need "
                 f"{len(self.axle_weights) - 1} axle spacings, got {len(self.axle_spacings)}")
         if self.speed is not None:
             set_(self, "speed", require_finite("speed", self.speed))
@@ -452,6 +484,18 @@ class ReferenceRow:
     def n_axles(self) -> int | None:
         """Axles (None when only the gross weight is known)."""
         return len(self.axle_weights) or None
+
+    @property
+    def _who(self) -> str:
+        return f"record {self.record}" if self.record else f"the vehicle at {self.label}"
+
+    @property
+    def label(self) -> str:
+        """How the notes name it: ``RECORD`` (``RECORD#VEHICLE``), or its time (and lane)
+        when it has no record."""
+        if self.record:
+            return self.record if self.vehicle is None else f"{self.record}#{self.vehicle}"
+        return _time_text(self.time) + ("" if self.lane is None else f" lane {self.lane}")
 
 
 # --- result ----------------------------------------------------------------------------------
@@ -480,7 +524,12 @@ class AccuracyResult:
     missing : tuple of str
         Reference vehicles present in the summary without a gross weight (not weighed).
     unmatched : tuple of str
-        Reference records absent from the summary.
+        Reference records absent from the summary (vehicles given by time: no summary row
+        within the time tolerance).
+    ambiguous : tuple of str
+        Reference vehicles given by time that more than one summary row could be (within
+        the time tolerance, in the lane and of the axle count given), or that share their
+        one row with another reference: not matched, not assessed.
     axle_mismatch : tuple of str
         Weighed vehicles whose axle count (or axle weights) disagree with the reference:
         in the gross-weight criterion, excluded from the axle criteria.
@@ -503,6 +552,7 @@ class AccuracyResult:
     axle_mismatch: tuple[str, ...]
     n_unreferenced: int
     group_spacing: float
+    ambiguous: tuple[str, ...] = ()
 
     @property
     def n_missing(self) -> int:
@@ -545,6 +595,8 @@ class AccuracyResult:
         notes = [f"{self.n_vehicles} of {self.n_reference} reference vehicles weighed"]
         for what, names in (("not weighed", self.missing),
                             ("absent from the summary", self.unmatched),
+                            ("matched by time to more than one vehicle (give the lane, or "
+                             "a smaller time tolerance): not assessed", self.ambiguous),
                             ("axle count differs (axle criteria exclude them)",
                              self.axle_mismatch)):
             if names:
@@ -559,8 +611,23 @@ class AccuracyResult:
         return "\n".join([self.table().render(), *self.notes()])
 
 
-def _label(key: tuple[str, int | None]) -> str:
-    return key[0] if key[1] is None else f"{key[0]}#{key[1]}"
+def _time_text(t: datetime | dtime | None) -> str:
+    if t is None:
+        return ""
+    return t.isoformat(timespec="seconds" if t.microsecond == 0 else "milliseconds")
+
+
+def _seconds_apart(a: datetime | dtime, b: datetime | dtime) -> float:
+    """|a − b| in s: as instants when both have a date, else as times of day (the
+    shorter way round midnight)."""
+    if isinstance(a, datetime) and isinstance(b, datetime):
+        return abs((a - b).total_seconds())
+
+    def of_day(t: datetime | dtime) -> float:
+        return 3600.0 * t.hour + 60.0 * t.minute + t.second + 1e-6 * t.microsecond
+
+    d = abs(of_day(a) - of_day(b)) % 86400.0
+    return min(d, 86400.0 - d)
 
 
 def _references(rows: Sequence[ReferenceRow]) -> dict[tuple[str, int | None], ReferenceRow]:
@@ -568,8 +635,10 @@ def _references(rows: Sequence[ReferenceRow]) -> dict[tuple[str, int | None], Re
     for r in rows:
         if not isinstance(r, ReferenceRow):
             raise InputError(f"reference rows must be ReferenceRow, got {type(r).__name__}")
-        key = (r.record, r.vehicle)
+        key = (r.record, r.vehicle) if r.record else ("", r.label)
         if key in out:
+            if not r.record:
+                raise InputError(f"reference rows name the vehicle at {r.label} twice")
             which = "" if r.vehicle is None else f" vehicle {r.vehicle}"
             raise InputError(f"reference rows name record {r.record!r}{which} twice")
         out[key] = r
@@ -603,9 +672,84 @@ def _match(ref: ReferenceRow, rows: list[SummaryRow] | None) -> SummaryRow | Non
     return next((r for r in rows if r.weighed), rows[0])
 
 
+def _by_time(ref: ReferenceRow, rows: Sequence[SummaryRow], tolerance: float
+             ) -> list[SummaryRow]:
+    """The summary rows a reference given by time may be (see :func:`assess`)."""
+    near = [r for r in rows if r.time is not None
+            and (ref.lane is None or r.lane == ref.lane)
+            and _seconds_apart(r.time, ref.time) <= tolerance]
+    if len(near) > 1 and ref.n_axles is not None:
+        return [r for r in near if r.n_axles == ref.n_axles] or near
+    return near
+
+
+def _matches(summary: dict[str, list[SummaryRow]], reference: dict, tolerance: float
+             ) -> tuple[dict, list]:
+    """Each reference's summary row (None: unmatched) and the keys of those given by time
+    that are ambiguous."""
+    timed = [r for rows in summary.values() for r in rows if r.time is not None]
+    found: dict = {}
+    ambiguous: list = []
+    claims: dict[tuple[str, int], int] = {}
+    for key, ref in reference.items():
+        if ref.record:
+            found[key] = _match(ref, summary.get(ref.record))
+            continue
+        near = _by_time(ref, timed, tolerance)
+        found[key] = near[0] if len(near) == 1 else None
+        if len(near) > 1:
+            ambiguous.append(key)
+        elif near:
+            claims[near[0].key] = claims.get(near[0].key, 0) + 1
+    for key, ref in reference.items():  # one row, two references given by time
+        row = found[key]
+        if not ref.record and row is not None and claims[row.key] > 1:
+            found[key] = None
+            ambiguous.append(key)
+    return found, ambiguous
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class ReferenceMatch:
+    """A reference vehicle and its summary row (see :func:`assess`).
+
+    Attributes
+    ----------
+    reference : ReferenceRow
+    row : SummaryRow or None
+        None: no summary row is it (``ambiguous``: more than one could be).
+    ambiguous : bool
+        A reference given by time that more than one summary row could be, or whose one
+        row another reference given by time also takes.
+    """
+
+    reference: ReferenceRow
+    row: SummaryRow | None
+    ambiguous: bool = False
+
+
+def _rows_given(name: str, rows) -> None:
+    if rows is None or isinstance(rows, (str, bytes)) or not hasattr(rows, "__iter__"):
+        raise InputError(f"{name} must be a sequence of rows, got {type(rows).__name__}")
+
+
+def match_references(summary_rows: Sequence[SummaryRow],
+                     reference_rows: Sequence[ReferenceRow], *, time_tolerance: float = 5.0
+                     ) -> tuple[ReferenceMatch, ...]:
+    """Each reference vehicle with its summary row, in the reference's order, by the
+    matching rule of :func:`assess` (the one rule the report's figures use too)."""
+    tolerance = require_positive("time_tolerance", time_tolerance)
+    _rows_given("summary_rows", summary_rows)
+    _rows_given("reference_rows", reference_rows)
+    reference = _references(reference_rows)
+    found, unclear = _matches(_summaries(summary_rows), reference, tolerance)
+    return tuple(ReferenceMatch(reference=ref, row=found[key], ambiguous=key in unclear)
+                 for key, ref in reference.items())
+
+
 def assess(summary_rows: Sequence[SummaryRow], reference_rows: Sequence[ReferenceRow], *,
            repeatability: str = "RR2", environment: str = "I", group_spacing: float = 2.0,
-           strict: bool = False) -> AccuracyResult:
+           strict: bool = False, time_tolerance: float = 5.0) -> AccuracyResult:
     """COST 323 class of a WIM system from its summary and a static reference.
 
     Parameters
@@ -625,13 +769,23 @@ def assess(summary_rows: Sequence[SummaryRow], reference_rows: Sequence[Referenc
         when the reference has none) form a group.
     strict : bool
         If True, a reference record absent from the summary is an InputError (a typo or
-        the wrong summary); if False it is reported in ``unmatched``.
+        the wrong summary), and so is a reference given by time that is ambiguous; if
+        False they are reported in ``unmatched`` and ``ambiguous``.
+    time_tolerance : float
+        s: how far the time of a reference given by time (no record) may lie from its
+        summary row's ``time`` (the vehicle's first axle at the gauges).
 
     Notes
     -----
     Matching: a reference names a record and, optionally, a vehicle of it (the summary's
     ``vehicle``); without one it is the record's only summary row, or among several the
-    one in the reference's lane (when given), a weighed one first.  A summary row without
+    one in the reference's lane (when given), a weighed one first.  A reference without
+    a record gives the time the vehicle crossed instead (a continuous recording's events
+    are named by the trigger): its row is the summary row whose ``time`` lies within
+    ``time_tolerance`` of it (as instants when both have a date, else as times of day),
+    in the reference's lane when given; among several, those of the reference's axle
+    count; still several, or one row that another reference given by time also takes,
+    is ambiguous: not matched, listed in ``ambiguous`` (never a guess).  A summary row without
     a gross weight counts as not weighed (``missing``), never silently dropped.  A weighed
     vehicle whose axle count differs from the reference, or whose axle weights are
     unknown, stays in the gross-weight criterion and is left out of the three axle
@@ -641,15 +795,20 @@ def assess(summary_rows: Sequence[SummaryRow], reference_rows: Sequence[Referenc
     rep = _repeatability(repeatability)
     env = _environment(environment)
     spacing = require_positive("group_spacing", group_spacing)
-    for name, rows in (("summary_rows", summary_rows), ("reference_rows", reference_rows)):
-        if rows is None or isinstance(rows, (str, bytes)) or not hasattr(rows, "__iter__"):
-            raise InputError(f"{name} must be a sequence of rows, got {type(rows).__name__}")
+    tolerance = require_positive("time_tolerance", time_tolerance)
+    _rows_given("summary_rows", summary_rows)
+    _rows_given("reference_rows", reference_rows)
+    summary_rows, reference_rows = list(summary_rows), list(reference_rows)
     summary = _summaries(summary_rows)
-    reference = _references(reference_rows)
-    if not reference:
+    if not reference_rows:
         raise InputError("reference_rows is empty")
-    unmatched = tuple(_label(key) for key, ref in reference.items()
-                      if _match(ref, summary.get(ref.record)) is None)
+    matches = match_references(summary_rows, reference_rows, time_tolerance=tolerance)
+    ambiguous = [m.reference.label for m in matches if m.ambiguous]
+    unmatched = tuple(m.reference.label for m in matches if m.row is None and not m.ambiguous)
+    if strict and ambiguous:
+        shown = ", ".join(ambiguous[:5]) + (", …" if len(ambiguous) > 5 else "")
+        raise InputError(f"{len(ambiguous)} reference vehicle(s) given by time match more "
+                         f"than one summary row within {tolerance:g} s: {shown}")
     if strict and unmatched:
         shown = ", ".join(unmatched[:5]) + (", …" if len(unmatched) > 5 else "")
         raise InputError(f"reference names {len(unmatched)} record(s) absent from the "
@@ -660,9 +819,8 @@ def assess(summary_rows: Sequence[SummaryRow], reference_rows: Sequence[Referenc
     mismatch: list[str] = []
     n_vehicles = 0
     matched: set[tuple[str, int]] = set()
-    for key, ref in reference.items():
-        name = _label(key)
-        row = _match(ref, summary.get(ref.record))
+    for m in matches:
+        ref, name, row = m.reference, m.reference.label, m.row
         if row is None:
             continue
         matched.add(row.key)
@@ -703,8 +861,9 @@ def assess(summary_rows: Sequence[SummaryRow], reference_rows: Sequence[Referenc
         criteria=tuple(results), skipped=tuple(skipped),
         overall_class=None if worst is None else worst.class_name,
         overall_value=math.nan if worst is None else worst.class_value,
-        repeatability=rep, environment=env, n_reference=len(reference),
+        repeatability=rep, environment=env, n_reference=len(matches),
         n_vehicles=n_vehicles, missing=tuple(missing), unmatched=unmatched,
+        ambiguous=tuple(ambiguous),
         axle_mismatch=tuple(mismatch),
         n_unreferenced=sum(1 for rows in summary.values() for r in rows
                            if r.key not in matched),

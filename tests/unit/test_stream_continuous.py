@@ -10,7 +10,7 @@ time-of-day factor would differ by construction; the events' clocks are checked 
 """
 
 import dataclasses
-from datetime import timedelta
+from datetime import datetime, timedelta
 
 import numpy as np
 import pytest
@@ -152,6 +152,33 @@ def test_bwim_weigh_continuous(day, tmp_path, capsys):
     assert main(["weigh", str(site.scenario), str(cont.path), "--calibration-records",
                  str(site.calibration[0].parent), "-o", str(out), "--continuous"]) == 2
     assert "exists (and 2 more of its outputs)" in capsys.readouterr().err  # events/ too
+    # the statically weighed trucks given by the time they crossed (the events' names are
+    # the trigger's): each reference's true first-axle time moved to the long file's clock
+    refs = list(csv.DictReader(open(site.reference)))
+    where = {p.source.name: p for p in cont.placements}
+    ref = tmp_path / "by_time.csv"
+    with open(ref, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["time", "lane", "n_axles", "axle_spacings_m", "axle_weights_kN",
+                    "gvw_kN"])
+        for r in refs:
+            p = where[r["record"]]
+            t = p.clock + (datetime.fromisoformat(r["time"]) - p.original_clock)
+            w.writerow([t.isoformat(), r["lane"], r["n_axles"], r["axle_spacings_m"],
+                        r["axle_weights_kN"], r["gvw_kN"]])
+    capsys.readouterr()
+    assert main(["accuracy", str(out / "summary.csv"), "--reference", str(ref)]) == 0
+    text = capsys.readouterr().out
+    assert f"1 of {len(refs)} reference vehicles weighed" in text
+    assert "absent from the summary" not in text and "more than one vehicle" not in text
+    # the truck matched by time is the row weighed from event #3, as matched by name
+    from bwim.accuracy import match_references
+    from bwim.io import read_reference, read_summary
+
+    matched = [m for m in match_references(read_summary(out / "summary.csv"),
+                                           read_reference(ref)) if m.row and m.row.weighed]
+    assert [(m.row.record, m.row.gvw) for m in matched] == [
+        (weighed[0]["record"], float(weighed[0]["gvw_kN"]) * 1e3)]
 
 
 

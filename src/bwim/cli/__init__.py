@@ -126,6 +126,10 @@ _RECORDS = arg("records", nargs="+", metavar="RECORD")
 _OUTPUT = arg("-o", "--output", "--out")
 _BRIDGE = arg("--bridge", metavar="MODEL.toml")
 _REFERENCE = arg("--reference", metavar="REF.csv")
+_TIME_TOLERANCE = arg("--time-tolerance", type=float, default=5.0, metavar="S",
+                      help="a reference vehicle given by time (no record) is the summary's "
+                      "one vehicle within this many seconds (in its lane when given); "
+                      "default 5")
 _FORCE = arg("--force", action="store_true",
              help="overwrite existing outputs (an input is never overwritten)")
 _PARALLEL = OneOf((arg("--jobs", type=int, default=1,
@@ -268,7 +272,9 @@ COMMANDS: tuple[Command, ...] = (
         "The COST 323 European WIM specification's accuracy class per criterion (gross "
         "weight, group of axles, single axle, axle of a group) and overall, from a weigh "
         "summary and a reference of the same vehicles' static weights (CSV with the columns "
-        "record, n_axles, axle_spacings_m, axle_weights_kN, gvw_kN; lists ';'-separated).\n\n"
+        "record, n_axles, axle_spacings_m, axle_weights_kN, gvw_kN; lists ';'-separated; "
+        "or, instead of record, time: when the vehicle crossed, matched to the summary's "
+        "time within --time-tolerance).\n\n"
         "  bwim accuracy out/summary.csv --reference static_weights.csv",
         (arg("summary", metavar="SUMMARY.csv", help="a summary written by bwim weigh"),
          _REFERENCE.updated(required=True,
@@ -281,7 +287,9 @@ COMMANDS: tuple[Command, ...] = (
              help="environmental conditions: I repeatable (a day or so), II limited "
              "reproducibility, III full (seasons); default I"),
          arg("--strict", action="store_true",
-             help="a reference record absent from the summary is an error"),
+             help="a reference record absent from the summary (or a vehicle given by "
+             "time that more than one row could be) is an error"),
+         _TIME_TOLERANCE,
          _OUTPUT.updated(metavar="TABLE.csv", help="also write the table as CSV"),
          _FORCE)),
     Command(
@@ -306,6 +314,7 @@ COMMANDS: tuple[Command, ...] = (
          _REFERENCE.updated(
              help="static weights of the weighed vehicles: adds the COST 323 accuracy "
              "classes of each weigh summary.csv among the results"),
+         _TIME_TOLERANCE,
          _FORCE)),
     Command(
         "demo", demo_command,

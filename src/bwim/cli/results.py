@@ -23,7 +23,8 @@ def accuracy_command(args: argparse.Namespace) -> int:
     summary = read_summary(args.summary)
     reference = read_reference(args.reference)
     result = assess(summary, reference, repeatability=args.repeatability,
-                    environment=args.environment, strict=args.strict)
+                    environment=args.environment, strict=args.strict,
+                    time_tolerance=_time_tolerance(args))
     print(result.render())
     if args.output:
         target = out_file(args.output, (".csv",), inputs=[args.summary, args.reference],
@@ -32,6 +33,15 @@ def accuracy_command(args: argparse.Namespace) -> int:
         write_csv(target, table.header, table.rows)
         print(f"table: {target}")
     return 0
+
+
+def _time_tolerance(args: argparse.Namespace) -> float:
+    """``--time-tolerance`` (s), refused unless positive and finite."""
+    value = getattr(args, "time_tolerance", 5.0)
+    if not (math.isfinite(value) and value > 0.0):
+        raise InputError(f"--time-tolerance must be a positive number of seconds, got "
+                         f"{value:g}")
+    return float(value)
 
 
 # --- report ----------------------------------------------------------------------------------
@@ -81,6 +91,7 @@ def report_command(args: argparse.Namespace) -> int:
         sections += report.site_sections(
             summary, reference=reference, limits=limits,
             reference_name=Path(args.reference).name if args.reference else "",
+            time_tolerance=_time_tolerance(args),
             runs=runs[0] if runs and k == 0 else None)
     for extra in runs[1:] if summaries else runs:
         sections.append(report.site.runs_section(extra))

@@ -7,7 +7,8 @@ Contract
   starting with ``#`` are skipped; a UTF-8 byte-order mark is ignored; extra columns are
   ignored by the readers.
 * The cell helpers (:func:`number_cell`, :func:`integer_cell`, :func:`numbers_cell`,
-  :func:`axles_cells`, :func:`speed_cell`, :func:`record_name`) turn text into numbers:
+  :func:`axles_cells`, :func:`speed_cell`, :func:`record_name`, :func:`time_cell`) turn
+  text into numbers (and ISO 8601 times: the site's local time, no UTC offset):
   a cell that is empty or ``nan`` means "unknown" where the caller allows it; a list with
   an unknown value is unknown as a whole.
 * Every problem is an :class:`~bwim.errors.InputError` naming the file and, where it has
@@ -20,12 +21,14 @@ from __future__ import annotations
 
 import csv
 import math
+from datetime import datetime
+from datetime import time as dtime
 from pathlib import Path
 
 from bwim.errors import InputError
 
 __all__ = ["CsvTable", "axles_cells", "finite", "integer_cell", "missing", "number_cell",
-           "numbers_cell", "once", "record_name", "speed_cell"]
+           "numbers_cell", "once", "record_name", "speed_cell", "time_cell"]
 
 
 class CsvTable:
@@ -172,3 +175,22 @@ def speed_cell(t: CsvTable, line: int, row: dict[str, str]) -> float | None:
     if "speed_m_s" not in row:
         return None
     return number_cell(t, line, "speed_m_s", row["speed_m_s"], optional=True)
+
+
+def time_cell(t: CsvTable | None, line: int, column: str, text: str
+              ) -> datetime | dtime | None:
+    """An ISO 8601 cell: a date and time (``2015-10-01T09:45:52.576``) or a time of day
+    (``09:45:52.576``), naive (the site's local time, as the loggers' clocks); None when
+    empty.  ``t`` None: the message names the column alone."""
+    if not text:
+        return None
+    where = column if t is None else t.where(line, column)
+    try:
+        value = (datetime.fromisoformat(text) if ("T" in text or "-" in text[:10])
+                 else dtime.fromisoformat(text))
+    except ValueError:
+        raise InputError(f"{where}: {text!r} is not an ISO 8601 time") from None
+    if value.tzinfo is not None:
+        raise InputError(f"{where}: {text!r} has a UTC offset; give the site's local time "
+                         "without one (as the loggers' clocks and the summary)")
+    return value

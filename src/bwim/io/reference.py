@@ -2,13 +2,20 @@
 
 Contract
 --------
-* :func:`read_reference` reads ``record, gvw_kN`` and, for the axle criteria,
+* :func:`read_reference` reads ``record, gvw_kN`` (or ``time, gvw_kN``: see below) and,
+  for the axle criteria,
   ``axle_weights_kN`` with ``n_axles`` and ``axle_spacings_m`` (any of them may be absent
   or empty: without axle weights only the gross weight is assessed; without spacings the
   axles are grouped by the summary's measured spacings).  ``speed_m_s``, ``vehicle`` (the
   summary's vehicle number within the record) and ``lane`` are optional.  Given cells must
   be numbers (lists: numbers) and agree with ``n_axles``.  The layout rules are those of
   :mod:`bwim.io.csvtable`.
+* ``time`` (ISO 8601, the site's local time without a UTC offset, as the summary's: a
+  date and time or a time of day) says when the vehicle crossed; a row whose ``record``
+  is empty (or a file without that column) is matched by it
+  (:func:`bwim.accuracy.assess`: the events of a continuous recording are named by the
+  trigger, ``FILE#k``, not known when the trucks are weighed).  A row needs a record or
+  a time; a vehicle given by time needs no ``vehicle`` and takes none.
 * Weights are converted from kN to N (:class:`~bwim.accuracy.ReferenceRow`); spacings
   stay in m, speeds in m/s.  A record (with its vehicle) named twice is refused.
 """
@@ -28,30 +35,43 @@ from bwim.io.csvtable import (
     once,
     record_name,
     speed_cell,
+    time_cell,
 )
 
 __all__ = ["read_reference"]
 
 _KN = 1000.0
-_COLUMNS = ("record", "gvw_kN")
+_COLUMNS = ("gvw_kN",)
 
 
 def read_reference(path: str | os.PathLike) -> tuple[ReferenceRow, ...]:
     """The statically weighed vehicles of a reference CSV (weights in N)."""
     t = CsvTable(Path(path), _COLUMNS)
+    if "record" not in t.names and "time" not in t.names:
+        raise InputError(f"{t.path}: missing column record (or time: when each vehicle "
+                         f"crossed) (found {', '.join(t.names)})")
     seen: dict = {}
     rows = []
     for k, row in t.rows:
-        name = record_name(t, k, row["record"])
+        when = time_cell(t, k, "time", row.get("time", ""))
+        text = row.get("record", "")
+        name = record_name(t, k, text) if text or when is None else ""
         vehicle = integer_cell(t, k, "vehicle", row.get("vehicle", ""), optional=True)
-        once(t, k, (name, vehicle), f"record {name!r}" + (
-            "" if vehicle is None else f" vehicle {vehicle}"), seen)
-        rows.append(_reference_row(t, k, name, vehicle, row))
+        if name:
+            once(t, k, (name, vehicle), f"record {name!r}" + (
+                "" if vehicle is None else f" vehicle {vehicle}"), seen)
+        elif vehicle is not None:
+            raise InputError(f"{t.where(k, 'vehicle')}: a vehicle number needs a record (a "
+                             "vehicle given by its time has none)")
+        ref = _reference_row(t, k, name, vehicle, row, when)
+        if not name:
+            once(t, k, ("", ref.label), f"the vehicle at {ref.label}", seen)
+        rows.append(ref)
     return tuple(rows)
 
 
 def _reference_row(t: CsvTable, k: int, name: str, vehicle: int | None,
-                   row: dict[str, str]) -> ReferenceRow:
+                   row: dict[str, str], when) -> ReferenceRow:
     full = {c: row.get(c, "") for c in ("n_axles", "axle_weights_kN", "axle_spacings_m")}
     _, weights, spacings = axles_cells(t, k, {**row, **full}, optional=True)
     weights, spacings = weights or (), spacings or ()
@@ -64,4 +84,4 @@ def _reference_row(t: CsvTable, k: int, name: str, vehicle: int | None,
     lane = integer_cell(t, k, "lane", row.get("lane", ""), optional=True)
     return ReferenceRow(record=name, gvw=gvw * _KN, axle_weights=tuple(w * _KN for w in weights),
                         axle_spacings=spacings, speed=speed_cell(t, k, row), vehicle=vehicle,
-                        lane=lane)
+                        lane=lane, time=when)

@@ -43,6 +43,7 @@ from bwim.io.csvtable import (
     once,
     record_name,
     speed_cell,
+    time_cell,
 )
 from bwim.summary import SummaryRow
 
@@ -106,17 +107,6 @@ def to_cells(row: SummaryRow) -> dict[str, str]:
     }
 
 
-def _parse_time(t: CsvTable | None, line: int, text: str) -> datetime | dtime | None:
-    if not text:
-        return None
-    try:
-        return datetime.fromisoformat(text) if ("T" in text or "-" in text[:10]) \
-            else dtime.fromisoformat(text)
-    except ValueError:
-        where = "time" if t is None else t.where(line, "time")
-        raise InputError(f"{where}: {text!r} is not an ISO 8601 time") from None
-
-
 def from_cells(cells: Mapping[str, str], *, table: CsvTable | None = None,
                line: int = 0) -> SummaryRow:
     """A row from its text cells (absent columns are unknown); ``table`` and ``line``
@@ -136,7 +126,7 @@ def from_cells(cells: Mapping[str, str], *, table: CsvTable | None = None,
     try:
         return SummaryRow(
             record=record_name(t, line, row["record"]), vehicle=vehicle or 1,
-            status=row["status"] or None, time=_parse_time(table, line, row["time"]),
+            status=row["status"] or None, time=time_cell(table, line, "time", row["time"]),
             lane=lane, direction=row["direction"], vehicle_class=row["class"],
             n_axles=n_axles, speed=speed_cell(t, line, row), axle_spacings=spacings or (),
             axle_weights=tuple(w * _KN for w in weights or ()),

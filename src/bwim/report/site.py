@@ -17,7 +17,8 @@ Contract
   (no flow per hour), no lane or class, no weighed vehicle, no reference, no runs.
 * :func:`reference_pairs` pairs weighed rows with reference rows by the matching rule of
   :func:`bwim.accuracy.assess` (record and vehicle; a record's one row; else the row in
-  the reference's lane, a weighed one first).
+  the reference's lane, a weighed one first; a reference given by time: the one row
+  within the time tolerance).
 * Weights in kN, speeds in km/h and m/s, lateral positions in the summary's
   ``lateral_unit`` (metres or gauge index: the column header says which).
 """
@@ -209,39 +210,26 @@ def _flags(rows: Sequence[SummaryRow]) -> Section:
     return Section("Flags and reasons", tuple(tables), note=note)
 
 
-def reference_pairs(rows: Sequence[SummaryRow], reference: Sequence
-                    ) -> tuple[tuple[SummaryRow, object], ...]:
-    """(weighed row, reference row) of every reference vehicle the summary weighed (see
-    the module docstring for the matching)."""
-    by_record: dict[str, list[SummaryRow]] = {}
-    for r in rows:
-        by_record.setdefault(r.record, []).append(r)
-    out = []
-    for ref in reference:
-        cand = by_record.get(ref.record)
-        if not cand:
-            continue
-        if ref.vehicle is not None:
-            row = next((r for r in cand if r.vehicle == ref.vehicle), None)
-        elif len(cand) == 1:
-            row = cand[0]
-        else:
-            pool = [r for r in cand if r.lane == ref.lane] if ref.lane is not None else []
-            pool = pool or cand
-            row = next((r for r in pool if r.weighed), pool[0])
-        if row is not None and row.weighed:
-            out.append((row, ref))
-    return tuple(out)
+def reference_pairs(rows: Sequence[SummaryRow], reference: Sequence, *,
+                    time_tolerance: float = 5.0) -> tuple[tuple[SummaryRow, object], ...]:
+    """(weighed row, reference row) of every reference vehicle the summary weighed, by
+    the matching rule of :func:`bwim.accuracy.assess` (:func:`bwim.accuracy.
+    match_references`)."""
+    from bwim.accuracy import match_references
+
+    return tuple((m.row, m.reference) for m in match_references(
+        rows, reference, time_tolerance=time_tolerance) if m.row is not None and m.row.weighed)
 
 
 def _accuracy(rows: Sequence[SummaryRow], reference: Sequence, summary_name: str, name: str,
-              *, repeatability: str, environment: str) -> Section:
+              *, repeatability: str, environment: str, time_tolerance: float) -> Section:
     from bwim.accuracy import assess, relative_errors
     from bwim.plots.accuracy import plot_error_histogram, plot_weighed_vs_reference
 
-    result = assess(rows, reference, repeatability=repeatability, environment=environment)
+    result = assess(rows, reference, repeatability=repeatability, environment=environment,
+                    time_tolerance=time_tolerance)
     notes = [f"{n}." for n in result.notes()]
-    pairs = reference_pairs(rows, reference)
+    pairs = reference_pairs(rows, reference, time_tolerance=time_tolerance)
     figures = []
     if pairs:
         w = np.array([p[0].gvw for p in pairs])
@@ -293,7 +281,7 @@ def runs_section(runs) -> Section:
 def site_sections(summary: TrafficSummary, *, reference: Sequence | None = None,
                   reference_name: str = "the static reference", runs=None,
                   limits: OverloadLimits | None = None, repeatability: str = "RR2",
-                  environment: str = "I") -> list[Section]:
+                  environment: str = "I", time_tolerance: float = 5.0) -> list[Section]:
     """The site report's sections (see the module docstring).
 
     Parameters
@@ -310,6 +298,9 @@ def site_sections(summary: TrafficSummary, *, reference: Sequence | None = None,
         The overload limits (default: the EU's, :class:`OverloadLimits`).
     repeatability, environment : str
         COST 323 test conditions (:func:`bwim.accuracy.assess`).
+    time_tolerance : float
+        s: how far a reference given by time may lie from its vehicle's row
+        (:func:`bwim.accuracy.assess`).
     """
     lim = OverloadLimits() if limits is None else limits
     rows = summary.rows
@@ -319,7 +310,8 @@ def site_sections(summary: TrafficSummary, *, reference: Sequence | None = None,
     extra = []
     if reference is not None:
         extra.append(_accuracy(rows, reference, summary.name, reference_name,
-                               repeatability=repeatability, environment=environment))
+                               repeatability=repeatability, environment=environment,
+                               time_tolerance=time_tolerance))
     else:
         notes.append("No static reference given (--reference): no accuracy section.")
     if runs is not None:
