@@ -161,6 +161,34 @@ def test_drift_section_reaches_the_site_setup(tmp_path):
     assert "\n" not in str(info.value)
 
 
+def test_trigger_section_reaches_the_trigger_settings(tmp_path):
+    """``[trigger]``'s keys reach :class:`bwim.stream.TriggerSettings` (the others keep
+    their defaults; without the section, every default), survive a round trip; a bad key
+    or value, and settings the trigger refuses together (off not below on), are one line
+    naming the section."""
+    from bwim.scenario import build_trigger
+    from bwim.stream import TriggerSettings
+
+    assert build_trigger(scn.load_scenario(_write(tmp_path, SITE))) == TriggerSettings()
+    s = scn.load_scenario(_write(tmp_path, SITE + "[trigger]\non = 8.0\npre = 1.5\n"
+                                 "max_duration = 30\nnoise = 0.4\n"
+                                 'channels = ["s01", "s02"]\n'))
+    assert build_trigger(s) == TriggerSettings(on=8.0, pre=1.5, max_duration=30.0, noise=0.4,
+                                               channels=("s01", "s02"))
+    out = tmp_path / "again.toml"
+    scn.dump_scenario(s, out)
+    assert scn.load_scenario(out) == s
+    for bad, message in (("on = -1", "on"), ("post = -0.5", "post"), ("gap = 2", "gap"),
+                         ('channels = "s01"', "channels")):
+        with pytest.raises(InputError, match=message) as info:
+            scn.load_scenario(_write(tmp_path, SITE + f"[trigger]\n{bad}\n", name="bad.toml"))
+        assert "\n" not in str(info.value)
+    s = scn.load_scenario(_write(tmp_path, SITE + "[trigger]\non = 3\n", name="bad.toml"))
+    with pytest.raises(InputError, match=r"\[trigger\].*off must be below on") as info:
+        build_trigger(s)
+    assert "\n" not in str(info.value)
+
+
 def test_a_pairs_longest_vehicle_is_read_and_checked(tmp_path):
     """``max_length`` in ``[axle_detectors]`` reaches the site's detector lane (25.25 m
     where European Modular System combinations run; 18.75 m without it); zero or less is

@@ -285,3 +285,49 @@ def test_a_resume_follows_the_long_file_as_it_is_now(day, tmp_path, capsys):
     assert sorted({r[0] for r in before}) == [f"{cont.path.name}#{k}" for k in (1, 2)]
     assert sorted(p.name for p in (tmp_path / "out" / "events").iterdir()) == \
         [f"{cont.path.name}#{k}.h5" for k in (1, 2)]
+
+
+def test_an_event_closed_at_max_duration_is_not_weighed(day, tmp_path, capsys):
+    """A step of the gauges' baseline (10 σ of their sum, spread over the 12 gauges: 1.4
+    of a gauge's own σ each) 0.3 s after the lane-1 truck's trigger closed holds the
+    trigger open; with ``[trigger] max_duration = 4`` (and ``baseline = 4``) it is closed
+    4 s later with the flag ``max_duration``, the truck's event with it: its rows are
+    refused with that flag and the reason (the event may end inside a vehicle), although
+    the truck is whole here: its event file weighed alone is weighed.  The event after
+    the step is cut on the new baseline."""
+    import csv
+
+    from bwim.cli import main
+    from bwim.io import read_record
+
+    site, cont = day["site"], day["cont"]
+    lines = cont.path.read_text(encoding="utf-8").splitlines(keepends=True)
+    first = next(k for k, line in enumerate(lines) if line[:1].isdigit() or line[:1] == "-")
+    data = np.array([line.split("\t") for line in lines[first:]], dtype=float)
+    gauges = slice(3, 15)  # s01 … s12 (the scenario's [logger] columns)
+    quiet = data[:round(2.0 * cont.sampling_rate), gauges].sum(axis=1)
+    sigma = 1.4826 * np.median(np.abs(quiet - np.median(quiet)))
+    step_at = day["events"][2].off + 0.3
+    data[data[:, 0] >= step_at, gauges] += 10.0 * sigma / 12
+    long = tmp_path / cont.path.name
+    text = ["\t".join([f"{row[0]:.9f}", *(f"{v:.3f}" for v in row[1:-2]),
+                       *(f"{v:g}" for v in row[-2:])]) + "\n" for row in data]
+    long.write_text("".join(lines[:first] + text), encoding="utf-8")
+    scenario = tmp_path / "scenario.toml"
+    scenario.write_text(site.scenario.read_text(encoding="utf-8")
+                        + "\n[trigger]\nmax_duration = 4.0\nbaseline = 4.0\n", encoding="utf-8")
+    out = tmp_path / "out"
+    code = main(["weigh", str(scenario), str(long), "--calibration-records",
+                 str(site.calibration[0].parent), "-o", str(out), "--continuous"])
+    assert code == 0, capsys.readouterr().err
+    rows = list(csv.DictReader(open(out / "summary.csv")))
+    mine = [r for r in rows if r["record"].endswith("#3")]
+    assert [r["n_axles"] for r in mine] == ["6"]
+    assert mine[0]["status"] == "refused" and not mine[0]["gvw_kN"]
+    assert "max_duration" in mine[0]["flags"].split(";")
+    assert "closed at its max_duration" in mine[0]["reason"]
+    assert not any("max_duration" in r["flags"] for r in rows if not r["record"].endswith("#3"))
+    assert sorted({r["record"] for r in rows}) == [f"{cont.path.name}#{k}" for k in range(1, 5)]
+    # the truck's event file weighed on its own: weighed (only the flag refused it)
+    weighing = weigh_event(read_record(out / "events" / f"{cont.path.name}#3.h5"), day["cal"])
+    assert [v.vehicle.passage.n_axles for v in weighing.vehicles if v.weighed] == [6]

@@ -337,7 +337,7 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path, batch) -> int:
         raise InputError("weighing logger files needs --calibration-records (runs of the "
                          "calibration truck)")
     paths = record_paths(args.records, any_suffix=True)
-    cut_open: dict[str, tuple[str, ...]] = {}  # events the recording's start or end cut
+    cut_open: dict[str, tuple[str, ...]] = {}  # events that may not hold vehicles whole
     cut_failed: dict[str, str] = {}  # long files whose cutting failed: why
     stale: list[Path] = []  # event files of an earlier cut that the long files no longer hold
     items = ([Item(name=display_name(p), source=p) for p in paths] if not args.continuous
@@ -406,18 +406,25 @@ def _print_gauges(batch) -> None:
 EVENTS = "events"
 
 
-#: Stream flags of an event that the recording's start or end may have cut.
-_OPEN = ("open_at_start", "open_at_end")
+#: Stream flags of an event that may not hold its vehicles whole: the recording's start
+#: or end may have cut it, or its trigger was closed at max_duration with the signal up.
+_OPEN = ("open_at_start", "open_at_end", "max_duration")
 
 
 def _open_refused(row, flags: tuple[str, ...] | None):
-    """A weighed row of an event the recording's start or end may have cut, refused (its
-    vehicle may go on beyond the recording: a tractor without its trailer)."""
+    """A weighed row of an event that may not hold its vehicle whole, refused: the
+    recording's start or end may have cut it (a tractor without its trailer), or the
+    trigger was closed at max_duration while the signal was still up (a queue on the
+    span, or a step of the baseline: a vehicle may go on beyond the event)."""
     if not flags or not row.weighed:
         return row
-    return row.refused("the recording begins or ends within this event, so the vehicle may "
-                       "go on beyond it (a tractor without its trailer): its weights cannot "
-                       "be whole", *flags)
+    if "open_at_start" in flags or "open_at_end" in flags:
+        return row.refused("the recording begins or ends within this event, so the vehicle "
+                           "may go on beyond it (a tractor without its trailer): its "
+                           "weights cannot be whole", *flags)
+    return row.refused("the trigger was closed at its max_duration with the signal still "
+                       "up (a queue on the span, or a step of the baseline), so a vehicle "
+                       "may go on beyond this event: its weights cannot be whole", *flags)
 
 
 def _same_event(path: Path, record) -> bool:
@@ -442,28 +449,31 @@ def _continuous_items(paths: Sequence[Path], scenario, events: Path, *, resume: 
                       cut_open: dict[str, tuple[str, ...]] | None = None,
                       cut_failed: dict[str, str] | None = None,
                       stale: list[Path] | None = None) -> list:
-    """Each long logger file cut into events (:func:`bwim.stream.cut_file`, default
-    trigger), each event written to ``events/FILE#k.h5`` (k from 1) and named ``FILE#k``;
-    with ``resume`` an event file that holds the same event is kept as it is (another is
-    written over: the long file changed), and the event files of a long file cut whole
-    beyond its events now are deleted and listed in ``stale`` (their rows are dropped).
-    ``cut_open`` gets the names of the events the recording's start or end may have
-    cut, with those flags.  A long file whose cutting fails (a bad line: a logger stopped
-    mid-write) keeps the events cut before it and is itself an item named after the
-    file, whose reason ``cut_failed`` gets (its row fails; the batch goes on)."""
+    """Each long logger file cut into events (:func:`bwim.stream.cut_file`, the
+    scenario's ``[trigger]``), each event written to ``events/FILE#k.h5`` (k from 1) and
+    named ``FILE#k``; with ``resume`` an event file that holds the same event is kept as
+    it is (another is written over: the long file changed), and the event files of a long
+    file cut whole beyond its events now are deleted and listed in ``stale`` (their rows
+    are dropped).  ``cut_open`` gets the names of the events that may not hold their
+    vehicles whole (the recording's start or end may have cut them, or the trigger closed
+    at max_duration), with those flags.  A long file whose cutting fails (a bad line: a
+    logger stopped mid-write) keeps the events cut before it and is itself an item named
+    after the file, whose reason ``cut_failed`` gets (its row fails; the batch goes
+    on)."""
     from bwim.batch import Item
     from bwim.batch.events import BATCH_ERRORS, reason_of
     from bwim.io import write_record
-    from bwim.scenario import build_logger_format, build_sensors
+    from bwim.scenario import build_logger_format, build_sensors, build_trigger
     from bwim.stream import cut_file
 
     fmt, sensors = build_logger_format(scenario), build_sensors(scenario) or None
+    trigger = build_trigger(scenario)
     events.mkdir(parents=True, exist_ok=True)
     items = []
     for p in paths:
         n = 0
         try:
-            for n, ev in enumerate(cut_file(p, fmt, sensors=sensors), start=1):
+            for n, ev in enumerate(cut_file(p, fmt, trigger, sensors=sensors), start=1):
                 name = f"{display_name(p)}#{n}"
                 target = events / f"{name}.h5"
                 if cut_open is not None and any(f in _OPEN for f in ev.flags):

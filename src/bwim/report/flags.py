@@ -76,6 +76,17 @@ FLAG_TABLE: tuple[tuple[str, tuple[str, ...], str, str], ...] = (
     ("hard", ("negative_force",),
      "moving force identification: an identified axle force is tensile where it is "
      "weighed", "the model, the regularisation"),
+    ("hard", ("open_at_start", "open_at_end"),
+     "bwim weigh --continuous: the long recording begins (ends) within this event, or "
+     "less than the trigger's merge gap before (after) it: the vehicle may go on beyond "
+     "the recording (a tractor without its trailer), so its weights cannot be whole",
+     "the recording's start and end; the long files before and after it"),
+    ("hard", ("max_duration",),
+     "bwim weigh --continuous: the trigger was closed at its max_duration with the "
+     "signal still up (a queue on the span, or a step of the gauges' baseline): a vehicle "
+     "may go on beyond the event",
+     "the trigger's max_duration (docs/streams.md); the gauges' baseline in the long "
+     "file"),
     ("soft", ("outside_calibration_time",),
      "the event's clock time lies outside the span of the calibration runs: the drift "
      "correction there is the nearest run's, not a measured one", ""),

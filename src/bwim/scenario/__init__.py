@@ -110,6 +110,12 @@ Contract
   ``[lines]``
       [``support_lobes`` = false]: the lines keep a lobe beyond their first zeros (a
       slab continuous over its supports).
+  ``[trigger]``
+      how ``bwim weigh --continuous`` cuts long recordings into events
+      (:class:`bwim.stream.TriggerSettings`, docs/streams.md): [``on`` = 6], [``off`` =
+      3] (noise σ), [``pre`` = 0.5], [``post`` = 0.5], [``min_duration`` = 0.1],
+      [``merge_gap`` = 1], [``max_duration`` = 60], [``baseline`` = 10], [``frame`` =
+      0.25] (s), [``noise``: σ of the summed channels], [``channels``: those summed].
 """
 
 
@@ -122,6 +128,7 @@ from bwim.scenario.build import (
     build_road,
     build_sensors,
     build_site_setup,
+    build_trigger,
     build_vehicle,
     load_record,
     record_reader,
@@ -173,6 +180,7 @@ __all__ = [
     "build_road",
     "build_sensors",
     "build_site_setup",
+    "build_trigger",
     "build_vehicle",
     "dump_scenario",
     "load_bridge",

@@ -47,6 +47,7 @@ from bwim.road import RoadProfile
 from bwim.scenario.specs import VEHICLE_TYPES, BridgeSpec, GirderSpec, Scenario
 from bwim.sensors import Sensor, SensorKind
 from bwim.site import DetectorLane, DriftSetup, Lane, SiteSetup
+from bwim.stream.settings import TriggerSettings
 from bwim.vehicles import Vehicle, named
 from bwim.vehicles.types import Truck3D
 
@@ -367,6 +368,17 @@ def build_site_setup(scenario: Scenario) -> SiteSetup:
                          traffic_lanes=tuple(traffic), calibration_lane=cal, drift=drift,
                          support_lobes=scenario.lines is not None
                          and scenario.lines.support_lobes)
+
+
+def build_trigger(scenario: Scenario) -> TriggerSettings:
+    """The trigger of ``bwim weigh --continuous`` (:class:`bwim.stream.TriggerSettings`):
+    the ``[trigger]`` section's keys, the defaults for those left out (and without one)."""
+    spec = scenario.trigger
+    given = {} if spec is None else {
+        f.name: getattr(spec, f.name) for f in dataclasses.fields(spec)
+        if getattr(spec, f.name) is not None}
+    with _context(f"{scenario.source}: [trigger]"):
+        return TriggerSettings(**given)
 
 
 def build_vehicle(scenario: Scenario) -> Vehicle:

@@ -49,6 +49,7 @@ from bwim.scenario.specs import (
     RunSpec,
     Scenario,
     SensorSpec,
+    TriggerSpec,
     VehicleSpec,
 )
 from bwim.vehicles import NAMED_VEHICLES
@@ -58,7 +59,7 @@ __all__ = ["dump_scenario", "load_scenario", "read_toml", "scenario_from_dict",
            "scenario_to_dict"]
 
 _SECTIONS = ("title", "bridge", "sensors", "logger", "axle_detectors", "lanes", "drift",
-             "lines", "vehicle", "road", "run",
+             "lines", "trigger", "vehicle", "road", "run",
              "identify", "calibrate")
 
 
@@ -253,7 +254,7 @@ def scenario_from_dict(
         kw["lanes"] = _parse_lanes(doc["lanes"], src)
     for name, cls in (("run", RunSpec), ("identify", IdentifySpec),
                       ("calibrate", CalibrateSpec), ("drift", DriftSpec),
-                      ("lines", LinesSpec)):
+                      ("lines", LinesSpec), ("trigger", TriggerSpec)):
         if name in doc:
             kw[name] = parse_table(cls, doc[name], At(src, f"[{name}]"))
     return Scenario(**kw, source=src, folder=None if folder is None else Path(folder))
@@ -367,7 +368,7 @@ def scenario_to_dict(scenario: Scenario) -> dict[str, Any]:
         v = scenario.vehicle
         doc["vehicle"] = {"name": v.name} if v.name is not None else {
             "type": v.type, **_plain(v.params)}
-    for name in ("road", "run", "identify", "calibrate", "drift", "lines"):
+    for name in ("road", "run", "identify", "calibrate", "drift", "lines", "trigger"):
         spec = getattr(scenario, name)
         if spec is not None:
             doc[name] = _spec_dict(spec)

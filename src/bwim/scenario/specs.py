@@ -60,8 +60,8 @@ from bwim.vehicles.types import HalfCar, MovingForces, SprungMass, TractorSemitr
 
 __all__ = ["DIRECTIONS", "VEHICLE_TYPES", "AxleDetectorSpec", "BridgeSpec", "CalibrateSpec",
            "ClockTable", "DriftSpec", "GirderSpec", "IdentifySpec", "LaneSpec", "LinesSpec",
-           "LoggerSpec",
-           "RoadSpec", "RunSpec", "Scenario", "SectionSpec", "SensorSpec", "VehicleSpec"]
+           "LoggerSpec", "RoadSpec", "RunSpec", "Scenario", "SectionSpec", "SensorSpec",
+           "TriggerSpec", "VehicleSpec"]
 
 #: Vehicle classes by their scenario ``type``.
 VEHICLE_TYPES: Mapping[str, type] = MappingProxyType({
@@ -325,6 +325,28 @@ class DriftSpec:
 
 
 @dataclass(frozen=True, kw_only=True)
+class TriggerSpec:
+    """The ``[trigger]`` section: how ``bwim weigh --continuous`` cuts a long recording
+    into events (:class:`bwim.stream.TriggerSettings`, docs/streams.md; a key left out
+    keeps its default): the thresholds ``on`` and ``off`` (noise σ), ``pre``, ``post``,
+    ``min_duration``, ``merge_gap``, ``max_duration``, ``baseline`` and ``frame`` (s),
+    ``noise`` (σ of the summed channels, their units; estimated when left out) and
+    ``channels`` (the channels summed; default every strain and deflection channel)."""
+
+    on: float | None = opt(at_least(0.0, strict=True))
+    off: float | None = opt(at_least(0.0, strict=True))
+    pre: float | None = opt(at_least(0.0, strict=False))
+    post: float | None = opt(at_least(0.0, strict=False))
+    min_duration: float | None = opt(at_least(0.0, strict=False))
+    merge_gap: float | None = opt(at_least(0.0, strict=False))
+    max_duration: float | None = opt(at_least(0.0, strict=True))
+    baseline: float | None = opt(at_least(0.0, strict=True))
+    frame: float | None = opt(at_least(0.0, strict=True))
+    noise: float | None = opt(at_least(0.0, strict=True))
+    channels: tuple[str, ...] | None = opt(strings)
+
+
+@dataclass(frozen=True, kw_only=True)
 class LinesSpec:
     """The ``[lines]`` section: how the site's influence lines are found from the
     calibration runs (:class:`bwim.site.SiteSetup`): ``support_lobes`` keeps a lobe of the
@@ -476,6 +498,7 @@ class Scenario:
     lanes: tuple[LaneSpec, ...] = ()
     drift: DriftSpec | None = None
     lines: LinesSpec | None = None
+    trigger: TriggerSpec | None = None
     vehicle: VehicleSpec | None = None
     road: RoadSpec | None = None
     run: RunSpec | None = None

@@ -16,9 +16,9 @@ Contract
 * Flags: ``open_at_start`` (the stream began inside the event, or less than the merge
   gap before its trigger opened), ``open_at_end`` (the stream ended before the trigger
   closed, or less than the merge gap after), ``max_duration`` (a trigger was closed at
-  :attr:`~bwim.stream.settings.TriggerSettings.max_duration`).  An event flagged
-  ``open_*`` may hold part of a vehicle only: ``bwim weigh --continuous`` refuses its
-  rows.
+  :attr:`~bwim.stream.settings.TriggerSettings.max_duration` with the signal still up).
+  An event with any of them may hold part of a vehicle only: ``bwim weigh --continuous``
+  refuses its rows.
 * :class:`EventCut` is a whole record's cut: its events in time order, the settings, the
   number of samples and the sampling rate.
 """
