@@ -258,6 +258,14 @@ class Record:
         if self.clock is not None and not isinstance(self.clock, datetime):
             raise InputError(f"clock must be a datetime, got {type(self.clock).__name__}")
 
+    @property
+    def time_of_day(self) -> bool:
+        """Whether the time column is the clock time of day (s since midnight): the record
+        has no :attr:`clock` and its first sample lies after 0 and within a day (older
+        loggers write the clock so; a record time starts at 0, and a record starting at
+        exactly midnight is taken for one)."""
+        return self.clock is None and 0.0 < float(self.time[0]) < 86400.0
+
     def clock_seconds(self, t: float | None = None) -> float:
         """Clock time of record time ``t`` (default: the first sample), s.
 

@@ -310,7 +310,7 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
         bending=MappingProxyType(_bending(records, setup, kept)),
         time_of_day=_time_of_day(records, cal),
         temperature=_temperature(records, cal, setup),
-        notes=tuple(notes))
+        notes=tuple([*notes, *_clock_note(records, cal)]))
 
 
 def _faulty_gauge_runs(records: Sequence[Record], setup: SiteSetup, cal: _Lines,
@@ -741,6 +741,16 @@ def _used(records: Sequence[Record], cal: _Lines) -> list[tuple[Record, RunFit]]
             if fit is not None and not why and np.isfinite(fit.scale)]
 
 
+def _clock_note(records: Sequence[Record], cal: _Lines) -> list[str]:
+    """A note when runs used cannot be placed in the day (no time-of-day drift)."""
+    used = _used(records, cal)
+    if len(used) < 2 or all(rec.clock is not None or rec.time_of_day for rec, _ in used):
+        return []
+    return ["the calibration runs have no clock (none in their file names or columns, and "
+            "their time columns start at 0): the drift cannot follow the time of day, the "
+            "runs' mean factor is used (give the clock: [logger] clock)"]
+
+
 def _time_of_day(records: Sequence[Record], cal: _Lines) -> TimeOfDayDrift | None:
     used = _used(records, cal)
     if len(used) < 2:
@@ -749,9 +759,12 @@ def _time_of_day(records: Sequence[Record], cal: _Lines) -> TimeOfDayDrift | Non
     if all(c is not None for c in clocks):
         tod = [seconds_of_day(c) for c in clocks]
         dates = tuple(sorted({c.date() for c in clocks}))
-    else:  # no date: the records' own clock of day
+    elif all(rec.clock is None and rec.time_of_day for rec, _ in used):
+        # no date: the time columns are the clock time of day
         tod = [rec.clock_seconds() % 86400.0 for rec, _ in used]
         dates = ()
+    else:  # a run without a clock and a record time: the runs cannot be placed in the day
+        return None
     factors = [fit.scale for _, fit in used]
     return TimeOfDayDrift(trend=ScaleTrend.fit(tod, factors), dates=dates)
 

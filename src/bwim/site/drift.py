@@ -36,7 +36,10 @@ Contract
   (:class:`bwim.wim.ScaleTrend` over seconds since midnight) applied at the event's time
   of day, on any date; on a date other than the calibration's, or outside the runs'
   span of the day, flagged ``outside_calibration_time`` (the last resort: the issue
-  measured it leaves a real site at C(15)).
+  measured it leaves a real site at C(15)).  It needs clocks: runs without one whose
+  time columns are record times (from 0) give no time-of-day drift at all, and an event
+  without one (:attr:`bwim.Record.time_of_day` false) keeps the mean factor, flagged
+  ``no_clock``.
 * ``"trend"``: the runs' factors over absolute clock time (the calibration day only:
   constant, flagged, beyond its span); ``"none"``: the calibration's mean factor.
 * ``"auto"`` (default): temperature when the logger has a temperature channel; else the

@@ -320,8 +320,7 @@ def weigh_event(record: Record, calibration: SiteCalibration, *,
     if identify_options is not None and not isinstance(identify_options, Mapping):
         raise InputError(f"identify_options must be a mapping of identify_forces' options, "
                          f"got {type(identify_options).__name__}")
-    t0 = float(record.time[0])
-    base = {"clock": record.clock, "clock_of_day": record.clock is None and 0.0 < t0 < 86400.0}
+    base = {"clock": record.clock, "clock_of_day": record.time_of_day}
     setup = calibration.setup
     lines = calibration.lines
     span = lines.core_support or lines.support  # a lobe beyond the zeros may be cut
@@ -516,6 +515,9 @@ def _drift_factor(record: Record, passage: Passage, calibration: SiteCalibration
     tod = calibration.time_of_day
     if tod is None:
         return 1.0, "", gap
+    if record.clock is None and not record.time_of_day:
+        # no clock and a record time: the event cannot be placed in the day
+        return 1.0, "", (*gap, "no_clock")
     when = record.clock_at(passage.delay)
     f, outside = tod.factor(when if when is not None
                             else record.clock_seconds(passage.delay))

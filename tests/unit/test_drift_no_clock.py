@@ -1,0 +1,64 @@
+"""The time-of-day drift needs clocks (review of stop 32, finding 6).
+
+Without a clock a record's time column is either the clock time of day (older loggers)
+or a record time from 0.  Runs of the second kind all sat at "midnight": the
+time-of-day drift was fitted over nothing and applied as if measured, and an event
+without a clock was weighed with the first run's factor.  Now (bwim.site.drift's
+contract): runs that cannot be placed in the day give no time-of-day drift, and an event
+that cannot be placed keeps the mean factor, flagged ``no_clock``.  Reference: the same
+runs and event with their clocks (from the small simulated site's file names), and the
+same with the clock written into the time column as the time of day.
+"""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from bwim.site import calibrate_site, weigh_event
+from bwim.site.drift import seconds_of_day
+
+
+def _without_clock(rec, *, time_of_day: bool):
+    """``rec`` without its clock; its time column from 0, or the clock time of day."""
+    t = rec.time - rec.time[0]
+    if time_of_day:
+        t = t + seconds_of_day(rec.clock_at(rec.time[0]))
+    return dataclasses.replace(rec, time=t, clock=None)
+
+
+def test_runs_without_a_clock_give_no_time_of_day_drift(small_site_calibrated):
+    day, scenario, records, site = small_site_calibrated
+    assert site.time_of_day is not None and all(r.clock is not None for r in records)
+    plain = [_without_clock(r, time_of_day=False) for r in records]
+    assert not any(r.time_of_day for r in plain)
+    without = calibrate_site(plain, site.setup)
+    assert without.time_of_day is None
+    assert any("the calibration runs have no clock" in n for n in without.notes)
+    assert not any("no clock" in n for n in site.notes)
+    # the clock written into the time columns: the same trend as from the clocks
+    of_day = [_without_clock(r, time_of_day=True) for r in records]
+    assert all(r.time_of_day for r in of_day)
+    tod = calibrate_site(of_day, site.setup).time_of_day
+    assert tod is not None and tod.dates == ()
+    np.testing.assert_allclose(tod.trend.time, site.time_of_day.trend.time, atol=1e-6)
+    # the runs' fits on a time axis ~8 h from 0 round differently: 3.5e-7 measured
+    np.testing.assert_allclose(tod.trend.factor, site.time_of_day.trend.factor, rtol=1e-6)
+
+
+def test_an_event_without_a_clock_keeps_the_mean_factor_flagged(small_site_truck):
+    site, truck = small_site_truck
+    clocked = weigh_event(truck, site)
+    (v,) = [v for v in clocked.vehicles if v.weighed]
+    assert v.drift_method == "time_of_day" and "no_clock" not in v.flags
+    assert v.drift_factor != pytest.approx(1.0, abs=1e-6)  # a factor of its own
+    plain = weigh_event(_without_clock(truck, time_of_day=False), site)
+    (w,) = [w for w in plain.vehicles if w.weighed]
+    assert (w.drift_method, w.drift_factor) == ("", 1.0) and "no_clock" in w.flags
+    # weights scale with the factor (weights are divided by it): the same weighing
+    assert w.gvw == pytest.approx(v.gvw * v.drift_factor, rel=1e-9)
+    assert plain.to_summary_rows("x")[0].time is None
+    of_day = weigh_event(_without_clock(truck, time_of_day=True), site)
+    (u,) = [u for u in of_day.vehicles if u.weighed]
+    assert u.drift_method == "time_of_day" and "no_clock" not in u.flags
+    assert u.drift_factor == pytest.approx(v.drift_factor, rel=1e-6)
