@@ -28,7 +28,7 @@ def _without_clock(rec, *, time_of_day: bool):
 
 
 def test_runs_without_a_clock_give_no_time_of_day_drift(small_site_calibrated):
-    day, scenario, records, site = small_site_calibrated
+    _, _, records, site = small_site_calibrated
     assert site.time_of_day is not None and all(r.clock is not None for r in records)
     plain = [_without_clock(r, time_of_day=False) for r in records]
     assert not any(r.time_of_day for r in plain)
