@@ -137,5 +137,7 @@ def test_realsite_benchmark_smoke(small_site, capsys):
     assert "Realistic site, seed 4" in out and "axle group off path" in out
     assert "left out by speed" in out and "Speed of bwim weigh" in out
     assert "Where an event's CPU time goes" in out
-    assert 0 < d["t_detect"] < d["t_weigh"]  # detection alone is part of the batch's time
+    # both timed (their ratio on 4 events is the machine's load, not a check: detection
+    # alone, timed after the batch, once took 0.056 s against the batch's 0.052 s)
+    assert d["t_detect"] > 0 and d["t_weigh"] > 0
     assert "A thin traffic date" not in out

@@ -447,8 +447,8 @@ def test_unknown_key_names_key_section_and_allowed_keys(tmp_path):
         scn.load_scenario(p)
     p = write(tmp_path, PLATE + "[runs]\nspeed = 20.0\n")
     with raises(f"{p}: unknown key 'runs' at the top level; allowed keys: title, bridge, "
-                "sensors, logger, axle_detectors, lanes, drift, lines, vehicle, road, run, "
-                "identify, calibrate"):
+                "sensors, logger, axle_detectors, lanes, drift, lines, trigger, vehicle, "
+                "road, run, identify, calibrate"):
         scn.load_scenario(p)
     p = write(tmp_path, PLATE + '[vehicle]\ntype = "sprung_mass"\nmass = 1.0\nstiffnes = 1.0\n')
     with raises(f"{p}: unknown key 'stiffnes' in [vehicle] for type = 'sprung_mass'; allowed "
