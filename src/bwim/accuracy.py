@@ -319,10 +319,6 @@ class CriterionResult:
     pi: float
 
     @property
-    def _who(self) -> str:
-        return f"record {self.record}" if self.record else f"the vehicle at {self.label}"
-
-    @property
     def label(self) -> str:
         """The criterion as printed ("gross weight", …)."""
         return CRITERIA[self.name]
@@ -431,9 +427,10 @@ class ReferenceRow:
     lane : int or None
         The vehicle's lane, when known (it picks the vehicle of a record with several).
     time : datetime, time or None
-        When the vehicle crossed (the site's local time, naive, as the summary's ``time``:
-        a date and time, or a time of day); with an empty ``record`` the vehicle is
-        matched by it (see :func:`assess`).
+        When the vehicle crossed (the site's local time, as the summary's ``time``: a date
+        and time, or a time of day; a UTC offset is dropped, the local time kept as
+        written, as the loggers' clocks are read); with an empty ``record`` the vehicle
+        is matched by it (see :func:`assess`).
     """
 
     record: str = ""
@@ -450,9 +447,8 @@ class ReferenceRow:
         if self.time is not None:
             if not isinstance(self.time, datetime | dtime):
                 raise InputError(f"time must be a datetime or a time, got {self.time!r}")
-            if self.time.tzinfo is not None:
-                raise InputError(f"time must be the site's local time without a UTC offset "
-                                 f"(as the summary's), got {self.time.isoformat()}")
+            if self.time.tzinfo is not None:  # the local time as written (as the clocks)
+                set_(self, "time", self.time.replace(tzinfo=None))
         if self.time is None or (isinstance(self.record, str) and self.record.strip()):
             set_(self, "record", _record_name(self.record))
         elif not isinstance(self.record, str):
@@ -528,8 +524,8 @@ class AccuracyResult:
         within the time tolerance).
     ambiguous : tuple of str
         Reference vehicles given by time that more than one summary row could be (within
-        the time tolerance, in the lane and of the axle count given), or that share their
-        one row with another reference: not matched, not assessed.
+        the time tolerance, in the lane and of the axle count given), or whose one row
+        another reference also takes: not matched, not assessed.
     axle_mismatch : tuple of str
         Weighed vehicles whose axle count (or axle weights) disagree with the reference:
         in the gross-weight criterion, excluded from the axle criteria.
@@ -595,8 +591,9 @@ class AccuracyResult:
         notes = [f"{self.n_vehicles} of {self.n_reference} reference vehicles weighed"]
         for what, names in (("not weighed", self.missing),
                             ("absent from the summary", self.unmatched),
-                            ("matched by time to more than one vehicle (give the lane, or "
-                             "a smaller time tolerance): not assessed", self.ambiguous),
+                            ("given by time, more than one vehicle within the tolerance or "
+                             "one another reference takes (give the lane, or a smaller "
+                             "time tolerance): not assessed", self.ambiguous),
                             ("axle count differs (axle criteria exclude them)",
                              self.axle_mismatch)):
             if names:
@@ -621,7 +618,7 @@ def _seconds_apart(a: datetime | dtime, b: datetime | dtime) -> float:
     """|a − b| in s: as instants when both have a date, else as times of day (the
     shorter way round midnight)."""
     if isinstance(a, datetime) and isinstance(b, datetime):
-        return abs((a - b).total_seconds())
+        return abs((a.replace(tzinfo=None) - b.replace(tzinfo=None)).total_seconds())
 
     def of_day(t: datetime | dtime) -> float:
         return 3600.0 * t.hour + 60.0 * t.minute + t.second + 1e-6 * t.microsecond
@@ -635,7 +632,7 @@ def _references(rows: Sequence[ReferenceRow]) -> dict[tuple[str, int | None], Re
     for r in rows:
         if not isinstance(r, ReferenceRow):
             raise InputError(f"reference rows must be ReferenceRow, got {type(r).__name__}")
-        key = (r.record, r.vehicle) if r.record else ("", r.label)
+        key = (r.record, r.vehicle) if r.record else ("", (r.time, r.lane))
         if key in out:
             if not r.record:
                 raise InputError(f"reference rows name the vehicle at {r.label} twice")
@@ -693,7 +690,9 @@ def _matches(summary: dict[str, list[SummaryRow]], reference: dict, tolerance: f
     claims: dict[tuple[str, int], int] = {}
     for key, ref in reference.items():
         if ref.record:
-            found[key] = _match(ref, summary.get(ref.record))
+            found[key] = row = _match(ref, summary.get(ref.record))
+            if row is not None:
+                claims[row.key] = claims.get(row.key, 0) + 1
             continue
         near = _by_time(ref, timed, tolerance)
         found[key] = near[0] if len(near) == 1 else None
@@ -701,7 +700,7 @@ def _matches(summary: dict[str, list[SummaryRow]], reference: dict, tolerance: f
             ambiguous.append(key)
         elif near:
             claims[near[0].key] = claims.get(near[0].key, 0) + 1
-    for key, ref in reference.items():  # one row, two references given by time
+    for key, ref in reference.items():  # one row, another reference's too
         row = found[key]
         if not ref.record and row is not None and claims[row.key] > 1:
             found[key] = None
@@ -720,7 +719,7 @@ class ReferenceMatch:
         None: no summary row is it (``ambiguous``: more than one could be).
     ambiguous : bool
         A reference given by time that more than one summary row could be, or whose one
-        row another reference given by time also takes.
+        row another reference also takes.
     """
 
     reference: ReferenceRow
@@ -784,8 +783,8 @@ def assess(summary_rows: Sequence[SummaryRow], reference_rows: Sequence[Referenc
     are named by the trigger): its row is the summary row whose ``time`` lies within
     ``time_tolerance`` of it (as instants when both have a date, else as times of day),
     in the reference's lane when given; among several, those of the reference's axle
-    count; still several, or one row that another reference given by time also takes,
-    is ambiguous: not matched, listed in ``ambiguous`` (never a guess).  A summary row without
+    count; still several, or one row that another reference also takes, is ambiguous:
+    not matched, listed in ``ambiguous`` (never a guess).  A summary row without
     a gross weight counts as not weighed (``missing``), never silently dropped.  A weighed
     vehicle whose axle count differs from the reference, or whose axle weights are
     unknown, stays in the gross-weight criterion and is left out of the three axle
@@ -808,11 +807,12 @@ def assess(summary_rows: Sequence[SummaryRow], reference_rows: Sequence[Referenc
     if strict and ambiguous:
         shown = ", ".join(ambiguous[:5]) + (", …" if len(ambiguous) > 5 else "")
         raise InputError(f"{len(ambiguous)} reference vehicle(s) given by time match more "
-                         f"than one summary row within {tolerance:g} s: {shown}")
+                         f"than one summary row within {tolerance:g} s, or one another "
+                         f"reference takes: {shown}")
     if strict and unmatched:
         shown = ", ".join(unmatched[:5]) + (", …" if len(unmatched) > 5 else "")
-        raise InputError(f"reference names {len(unmatched)} record(s) absent from the "
-                         f"summary: {shown}")
+        raise InputError(f"reference names {len(unmatched)} record(s) (or times) absent "
+                         f"from the summary: {shown}")
 
     errors: dict[str, list[float]] = {name: [] for name in CRITERIA}
     missing: list[str] = []

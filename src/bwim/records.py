@@ -220,9 +220,9 @@ class Record:
         How the crossing was simulated (simulated records), or the settings a model of
         it should use.
     clock : datetime or None
-        Wall-clock date and time at record time 0 (naive: the site's local time), None
-        when unknown (then ``time`` itself may be a clock time of day, as some loggers
-        write it).
+        Wall-clock date and time at record time 0 (naive: the site's local time; a UTC
+        offset given is dropped, the time kept as written), None when unknown (then
+        ``time`` itself may be a clock time of day, as some loggers write it).
     """
 
     time: np.ndarray
@@ -257,6 +257,9 @@ class Record:
                              f"{type(self.settings).__name__}")
         if self.clock is not None and not isinstance(self.clock, datetime):
             raise InputError(f"clock must be a datetime, got {type(self.clock).__name__}")
+        if self.clock is not None and self.clock.tzinfo is not None:
+            # naive: the local time as written (a logger's offset, if any, is not a zone)
+            object.__setattr__(self, "clock", self.clock.replace(tzinfo=None))
 
     @property
     def time_of_day(self) -> bool:

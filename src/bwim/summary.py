@@ -20,7 +20,8 @@ Contract
 * ``vehicle`` numbers the vehicles of one record from 1 (in order of arrival); the pair
   ``(record, vehicle)`` is a row's key.  ``time`` is the wall-clock time of the vehicle's
   first axle at the gauges' reference (a :class:`datetime.datetime`, or a
-  :class:`datetime.time` when the logger gives a clock time of day without a date).
+  :class:`datetime.time` when the logger gives a clock time of day without a date),
+  naive: the site's local time (a UTC offset given is dropped, the time as written).
   ``lateral`` is in metres from the right-hand edge when ``lateral_unit == "m"``, a
   dimensionless load centroid in gauge-order units (1 = the first gauge) when
   ``"gauge index"`` (see :mod:`bwim.detect.result`).  ``direction`` is ``"+x"`` or
@@ -185,6 +186,8 @@ class SummaryRow:
         set_(self, "status", _choice("status", status, STATUSES))
         if self.time is not None and not isinstance(self.time, (datetime, dtime)):
             raise InputError(f"time must be a datetime or a time, got {self.time!r}")
+        if self.time is not None and self.time.tzinfo is not None:  # naive, as the clocks
+            set_(self, "time", self.time.replace(tzinfo=None))
         if self.lane is not None and (isinstance(self.lane, bool)
                                       or not isinstance(self.lane, int)):
             raise InputError(f"lane must be an integer, got {self.lane!r}")

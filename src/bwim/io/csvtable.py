@@ -8,7 +8,7 @@ Contract
   ignored by the readers.
 * The cell helpers (:func:`number_cell`, :func:`integer_cell`, :func:`numbers_cell`,
   :func:`axles_cells`, :func:`speed_cell`, :func:`record_name`, :func:`time_cell`) turn
-  text into numbers (and ISO 8601 times: the site's local time, no UTC offset):
+  text into numbers (and ISO 8601 times: the site's local time, an offset dropped):
   a cell that is empty or ``nan`` means "unknown" where the caller allows it; a list with
   an unknown value is unknown as a whole.
 * Every problem is an :class:`~bwim.errors.InputError` naming the file and, where it has
@@ -180,8 +180,9 @@ def speed_cell(t: CsvTable, line: int, row: dict[str, str]) -> float | None:
 def time_cell(t: CsvTable | None, line: int, column: str, text: str
               ) -> datetime | dtime | None:
     """An ISO 8601 cell: a date and time (``2015-10-01T09:45:52.576``) or a time of day
-    (``09:45:52.576``), naive (the site's local time, as the loggers' clocks); None when
-    empty.  ``t`` None: the message names the column alone."""
+    (``09:45:52.576``), naive: the site's local time as written (a UTC offset is dropped,
+    as the loggers' clocks are read); None when empty.  ``t`` None: the message names the
+    column alone."""
     if not text:
         return None
     where = column if t is None else t.where(line, column)
@@ -190,7 +191,4 @@ def time_cell(t: CsvTable | None, line: int, column: str, text: str
                  else dtime.fromisoformat(text))
     except ValueError:
         raise InputError(f"{where}: {text!r} is not an ISO 8601 time") from None
-    if value.tzinfo is not None:
-        raise InputError(f"{where}: {text!r} has a UTC offset; give the site's local time "
-                         "without one (as the loggers' clocks and the summary)")
-    return value
+    return value.replace(tzinfo=None)  # the local time as written, as the clocks are read

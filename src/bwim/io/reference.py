@@ -10,12 +10,14 @@ Contract
   summary's vehicle number within the record) and ``lane`` are optional.  Given cells must
   be numbers (lists: numbers) and agree with ``n_axles``.  The layout rules are those of
   :mod:`bwim.io.csvtable`.
-* ``time`` (ISO 8601, the site's local time without a UTC offset, as the summary's: a
-  date and time or a time of day) says when the vehicle crossed; a row whose ``record``
-  is empty (or a file without that column) is matched by it
-  (:func:`bwim.accuracy.assess`: the events of a continuous recording are named by the
-  trigger, ``FILE#k``, not known when the trucks are weighed).  A row needs a record or
-  a time; a vehicle given by time needs no ``vehicle`` and takes none.
+* ``time`` (ISO 8601, the site's local time as the summary's: a date and time or a time
+  of day; a UTC offset is dropped, the time kept as written) says when the vehicle
+  crossed.  A row whose ``record`` is empty (or a file without that column) is matched
+  by it (:func:`bwim.accuracy.assess`: the events of a continuous recording are named
+  by the trigger, ``FILE#k``, not known when the trucks are weighed); a row with a
+  record is matched by the record and its time is not read.  A row needs a record or a
+  time; a vehicle given by time takes no ``vehicle``, and one time (with its lane) is
+  given once.
 * Weights are converted from kN to N (:class:`~bwim.accuracy.ReferenceRow`); spacings
   stay in m, speeds in m/s.  A record (with its vehicle) named twice is refused.
 """
@@ -53,8 +55,9 @@ def read_reference(path: str | os.PathLike) -> tuple[ReferenceRow, ...]:
     seen: dict = {}
     rows = []
     for k, row in t.rows:
-        when = time_cell(t, k, "time", row.get("time", ""))
         text = row.get("record", "")
+        # a row with a record is matched by it: its time is not read
+        when = None if text else time_cell(t, k, "time", row.get("time", ""))
         name = record_name(t, k, text) if text or when is None else ""
         vehicle = integer_cell(t, k, "vehicle", row.get("vehicle", ""), optional=True)
         if name:
@@ -65,7 +68,11 @@ def read_reference(path: str | os.PathLike) -> tuple[ReferenceRow, ...]:
                              "vehicle given by its time has none)")
         ref = _reference_row(t, k, name, vehicle, row, when)
         if not name:
-            once(t, k, ("", ref.label), f"the vehicle at {ref.label}", seen)
+            key = ("", ref.time, ref.lane)
+            if key in seen:
+                raise InputError(f"{t.where(k, 'time')}: the vehicle at {ref.label} already "
+                                 f"on line {seen[key]}")
+            seen[key] = k
         rows.append(ref)
     return tuple(rows)
 

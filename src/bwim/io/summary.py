@@ -123,21 +123,27 @@ def from_cells(cells: Mapping[str, str], *, table: CsvTable | None = None,
     def opt(column: str) -> float | None:
         return number_cell(t, line, column, row[column], optional=True)
 
+    # the cells' own messages name the file, line and column: read them before the row
+    when = time_cell(table, line, "time", row["time"])
+    name, speed = record_name(t, line, row["record"]), speed_cell(t, line, row)
+    numbers = {c: opt(c) for c in ("lateral", "confidence", "residual", "drift_factor",
+                                   "lambda")}
     try:
         return SummaryRow(
-            record=record_name(t, line, row["record"]), vehicle=vehicle or 1,
-            status=row["status"] or None, time=time_cell(table, line, "time", row["time"]),
+            record=name, vehicle=vehicle or 1,
+            status=row["status"] or None, time=when,
             lane=lane, direction=row["direction"], vehicle_class=row["class"],
-            n_axles=n_axles, speed=speed_cell(t, line, row), axle_spacings=spacings or (),
+            n_axles=n_axles, speed=speed, axle_spacings=spacings or (),
             axle_weights=tuple(w * _KN for w in weights or ()),
             gvw=None if gvw is None else gvw * _KN,
             group_weights=tuple(w * _KN for w in groups or ()),
             flags=tuple(f.strip() for f in row["flags"].split(";") if f.strip()),
-            lateral=opt("lateral"), lateral_unit=row["lateral_unit"],
+            lateral=numbers["lateral"], lateral_unit=row["lateral_unit"],
             group_laterals=paths or (),
-            confidence=opt("confidence"), residual=opt("residual"), quality=row["quality"],
-            method=row["method"], drift_factor=opt("drift_factor"),
-            drift_method=row["drift_method"], lam=opt("lambda"), reason=row["reason"])
+            confidence=numbers["confidence"], residual=numbers["residual"],
+            quality=row["quality"], method=row["method"],
+            drift_factor=numbers["drift_factor"], drift_method=row["drift_method"],
+            lam=numbers["lambda"], reason=row["reason"])
     except InputError as exc:
         where = "" if table is None else f"{table.path}: line {line}: "
         raise InputError(f"{where}{exc}") from None

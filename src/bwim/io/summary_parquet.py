@@ -28,6 +28,7 @@ from typing import Any
 
 from bwim.errors import InputError
 from bwim.io.atomic import atomic_output
+from bwim.io.csvtable import time_cell
 from bwim.io.summary import COLUMNS
 from bwim.summary import SummaryRow
 
@@ -138,8 +139,10 @@ def read_summary_parquet(path: str | os.PathLike) -> tuple[SummaryRow, ...]:
     for k in range(table.num_rows):
         time = cols["time"][k]
         if isinstance(time, str):
-            time = (dtime.fromisoformat(time) if "T" not in time and len(time) <= 15
-                    else datetime.fromisoformat(time))
+            try:
+                time = time_cell(None, k, "time", time)
+            except InputError as exc:
+                raise InputError(f"{path}: row {k + 1}: {exc}") from None
         gvw = cols["gvw_kN"][k]
         rows.append(SummaryRow(
             record=cols["record"][k], vehicle=cols["vehicle"][k], status=cols["status"][k],

@@ -26,6 +26,7 @@ from datetime import time as dtime
 from pathlib import Path
 
 from bwim.errors import InputError
+from bwim.io.csvtable import time_cell
 
 __all__ = ["CalibrationRun", "CalibrationRuns", "is_runs_table", "read_calibration_runs"]
 
@@ -124,9 +125,8 @@ def read_calibration_runs(path: str | os.PathLike) -> CalibrationRuns:
         if not text:
             return None
         try:
-            return (datetime.fromisoformat(text) if ("T" in text or "-" in text[:10])
-                    else dtime.fromisoformat(text))
-        except ValueError:
+            return time_cell(None, line, "time", text)
+        except InputError:
             raise InputError(f"{p}: line {line}: column time: {text!r} is not an ISO 8601 "
                              "time") from None
 
