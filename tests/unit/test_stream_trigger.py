@@ -8,6 +8,7 @@ crossings are checked to 10 ms.  The trigger's own windows are then exact in sam
 ``pre`` before the opening, ``post`` after the closing.
 """
 
+import dataclasses
 import itertools
 import math
 from datetime import datetime, timedelta
@@ -158,8 +159,19 @@ def test_the_clock_of_each_event():
     assert ev.clock == clock + timedelta(seconds=ev.start)
     assert ev.record.clock_at(ev.on - ev.start) == clock + timedelta(seconds=ev.on)
     np.testing.assert_array_equal(ev.record.data, rec.data[ev.start_index:ev.stop_index])
+    # without a clock: a record time from 0 (the stream's is one) starts at 0 again, as
+    # an event file of a clockless logger (it cannot be placed in the day: no_clock) ...
     clockless = cut_events(_record(20.0, [(9.0, 1.0, 100.0)])).events[0]
-    assert clockless.record.clock is None and clockless.record.time[0] == clockless.start
+    assert clockless.record.clock is None and clockless.start > 8.0
+    assert clockless.record.time[0] == 0.0 and not clockless.record.time_of_day
+    np.testing.assert_allclose(clockless.record.time,
+                               rec.time[clockless.start_index:clockless.stop_index]
+                               - clockless.start, atol=1e-9)
+    # ... and a clock time of day (a stream from 10:00) stays the stream's own
+    morning = _record(20.0, [(9.0, 1.0, 100.0)])
+    morning = dataclasses.replace(morning, time=morning.time + 36000.0)
+    ev = cut_events(morning).events[0]
+    assert ev.record.time[0] == ev.start > 36008.0 and ev.record.time_of_day
 
 
 def test_the_stream_split_anywhere_gives_the_same_events():

@@ -98,7 +98,8 @@ FLAG_TABLE: tuple[tuple[str, tuple[str, ...], str, str], ...] = (
      "reading (every sample a gap): the time-of-day drift was used instead", ""),
     ("soft", ("no_clock",),
      "the event has no clock (none in its file name or columns) and its time column "
-     "starts at 0, so it cannot be placed in the day: the time-of-day drift correction "
+     "is not the clock time of day (it does not start within the day, after 0 s), so it "
+     "cannot be placed in the day: the time-of-day drift correction "
      "was not applied, the calibration's mean factor was used", ""),
     ("soft", ("drift_traffic_thin",),
      'the day-by-day drift from the traffic ([drift] method = "traffic") had too few '

@@ -759,9 +759,11 @@ def _time_of_day(records: Sequence[Record], cal: _Lines) -> TimeOfDayDrift | Non
     if all(c is not None for c in clocks):
         tod = [seconds_of_day(c) for c in clocks]
         dates = tuple(sorted({c.date() for c in clocks}))
-    elif all(rec.clock is None and rec.time_of_day for rec, _ in used):
-        # no date: the time columns are the clock time of day
-        tod = [rec.clock_seconds() % 86400.0 for rec, _ in used]
+    elif all(c is not None or rec.time_of_day for c, (rec, _) in zip(clocks, used,
+                                                                     strict=True)):
+        # some (or all) without a date: their time columns are the clock time of day
+        tod = [seconds_of_day(c) if c is not None else rec.clock_seconds() % 86400.0
+               for c, (rec, _) in zip(clocks, used, strict=True)]
         dates = ()
     else:  # a run without a clock and a record time: the runs cannot be placed in the day
         return None

@@ -320,6 +320,8 @@ class _Trigger:
         if clock is not None:
             clock = t.clock_at(float(time[0]))
             time = time - time[0]
+        elif not t.time_of_day:  # a record time, not a clock: from 0, as an event file
+            time = time - time[0]
         record = dataclasses.replace(t, time=time, data=data, passages=(), truths=(),
                                      clock=clock)
         self.out.append(StreamEvent(
