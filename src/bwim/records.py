@@ -37,11 +37,14 @@ import numpy as np
 from bwim.errors import InputError, require_axis, require_columns, require_finite, require_positive
 from bwim.sensors import Sensor, SensorKind
 
-__all__ = ["AxleLayout", "Passage", "Record", "SimulationSettings", "Truth", "VBIConvergence",
-           "axle_offsets", "noise_sigma", "record_list"]
+__all__ = ["RECORD_TIME_SPAN", "AxleLayout", "Passage", "Record", "SimulationSettings", "Truth",
+           "VBIConvergence", "axle_offsets", "noise_sigma", "record_list"]
 
 
 _EPOCH = datetime(1970, 1, 1)
+#: s: a record without a clock whose time column starts earlier is a record time (from 0
+#: or a sample step), not the clock time of day (:attr:`Record.time_of_day`).
+RECORD_TIME_SPAN = 60.0
 
 
 def axle_offsets(spacings: np.ndarray) -> np.ndarray:
@@ -264,10 +267,11 @@ class Record:
     @property
     def time_of_day(self) -> bool:
         """Whether the time column is the clock time of day (s since midnight): the record
-        has no :attr:`clock` and its first sample lies after 0 and within a day (older
-        loggers write the clock so; a record time starts at 0, and a record starting at
-        exactly midnight is taken for one)."""
-        return self.clock is None and 0.0 < float(self.time[0]) < 86400.0
+        has no :attr:`clock` and its first sample lies within the day, after its first
+        :data:`RECORD_TIME_SPAN` s (older loggers write the clock so; a record time starts
+        at 0 or a sample step, and a record in the first minute after midnight is taken
+        for one: placed in no day rather than placed wrongly)."""
+        return self.clock is None and RECORD_TIME_SPAN <= float(self.time[0]) < 86400.0
 
     def clock_seconds(self, t: float | None = None) -> float:
         """Clock time of record time ``t`` (default: the first sample), s.

@@ -151,7 +151,14 @@ def test_bwim_weigh_continuous(day, tmp_path, capsys):
     assert weighed[0]["time"].startswith(ev.clock.isoformat()[:16])
     assert main(["weigh", str(site.scenario), str(cont.path), "--calibration-records",
                  str(site.calibration[0].parent), "-o", str(out), "--continuous"]) == 2
-    assert "exists (and 2 more of its outputs)" in capsys.readouterr().err  # events/ too
+    assert "exists (and 3 more of its outputs)" in capsys.readouterr().err  # events/ too
+    # events.csv: each event's place in its long file (the trigger's own numbers)
+    index = list(csv.DictReader(open(out / "events.csv")))
+    assert [r["event"] for r in index] == names
+    for r, e in zip(index, day["events"], strict=True):
+        assert r["long_file"] == cont.path.name and r["flags"] == ""
+        assert abs(float(r["start_s"]) - e.start) < 1e-6 and abs(float(r["off_s"]) - e.off) < 1e-6
+        assert r["clock"] == e.clock.isoformat(timespec="milliseconds")
     # the statically weighed trucks given by the time they crossed (the events' names are
     # the trigger's): each reference's true first-axle time moved to the long file's clock
     refs = list(csv.DictReader(open(site.reference)))

@@ -167,6 +167,12 @@ def test_the_clock_of_each_event():
     np.testing.assert_allclose(clockless.record.time,
                                rec.time[clockless.start_index:clockless.stop_index]
                                - clockless.start, atol=1e-9)
+    # (also when the logger counts from one sample step, or from 59 s: RECORD_TIME_SPAN)
+    for t0 in (1.0 / FS, 59.0):
+        late = _record(20.0, [(9.0, 1.0, 100.0)])
+        late = dataclasses.replace(late, time=late.time + t0)
+        ev = cut_events(late).events[0]
+        assert ev.record.time[0] == 0.0 and not ev.record.time_of_day
     # ... and a clock time of day (a stream from 10:00) stays the stream's own
     morning = _record(20.0, [(9.0, 1.0, 100.0)])
     morning = dataclasses.replace(morning, time=morning.time + 36000.0)

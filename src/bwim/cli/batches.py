@@ -229,8 +229,10 @@ def _print_drift(site, fit) -> None:
         print(f"drift: temperature (factor {t.intercept:.3f} {t.slope:+.4f}/°C about "
               f"{t.reference:.1f} °C, the runs' residual {t.residual:.3f})")
     elif method in ("auto", "traffic", "time_of_day") and site.time_of_day is not None:
-        print("drift: the calibration runs' factor over the time of day (vehicles on other "
-              "dates are flagged outside_calibration_time)")
+        print("drift: the calibration runs' factor over the time of day " + (
+            "(vehicles on other dates are flagged outside_calibration_time)"
+            if site.time_of_day.dates else "(some runs have no date: vehicles on other "
+            "dates cannot be told apart and are not flagged)"))
         if method != "time_of_day":
             print("note: " + _traffic_unused(site.setup.drift))
     else:
@@ -469,13 +471,14 @@ def _continuous_items(paths: Sequence[Path], scenario, events: Path, *, resume: 
     fmt, sensors = build_logger_format(scenario), build_sensors(scenario) or None
     trigger = build_trigger(scenario)
     events.mkdir(parents=True, exist_ok=True)
-    items = []
+    items, index = [], []
     for p in paths:
         n = 0
         try:
             for n, ev in enumerate(cut_file(p, fmt, trigger, sensors=sensors), start=1):
                 name = f"{display_name(p)}#{n}"
                 target = events / f"{name}.h5"
+                index.append(_index_row(name, p, ev))
                 if cut_open is not None and any(f in _OPEN for f in ev.flags):
                     cut_open[name] = tuple(f for f in ev.flags if f in _OPEN)
                 if not (resume and target.exists() and _same_event(target, ev.record)):
@@ -498,9 +501,24 @@ def _continuous_items(paths: Sequence[Path], scenario, events: Path, *, resume: 
                 if stale is not None:
                     stale.append(q)
         print(f"{display_name(p)}: {n} event(s) cut")
+    write_csv(events.parent / EVENT_INDEX, _INDEX_HEADER, index)
     if not items:
         raise InputError("no event found in the continuous recording(s)")
     return items
+
+
+#: File beside the summary of ``weigh --continuous``: each event's place in its long file.
+EVENT_INDEX = "events.csv"
+_INDEX_HEADER = ("event", "long_file", "start_s", "stop_s", "on_s", "off_s", "clock",
+                 "peak_sigma", "flags")
+
+
+def _index_row(name: str, path: Path, ev) -> tuple:
+    """An event's row of :data:`EVENT_INDEX`: times on its long file's time axis, s."""
+    clock = ev.clock
+    return (name, display_name(path), f"{ev.start:.6f}", f"{ev.stop:.6f}", f"{ev.on:.6f}",
+            f"{ev.off:.6f}", "" if clock is None else clock.isoformat(timespec="milliseconds"),
+            f"{ev.peak:.1f}", ";".join(ev.flags))
 
 
 def weigh_command(args: argparse.Namespace) -> int:
@@ -523,7 +541,8 @@ def weigh_command(args: argparse.Namespace) -> int:
     folder = out_folder(args.output)  # created once the inputs are known to exist
     if site:
         outputs = [folder / "calibration_runs.csv", folder / "influence_lines.h5",
-                   *([folder / EVENTS] if args.continuous and not args.resume else [])]
+                   *([folder / EVENTS, folder / EVENT_INDEX]
+                     if args.continuous and not args.resume else [])]
     else:  # each record's weights, and the line unless it is given
         outputs = [*(folder / f"{stem}_static.h5" for stem in unique_stems(paths)),
                    *([] if args.influence else [folder / "influence_line.h5"])]

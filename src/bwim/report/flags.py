@@ -98,7 +98,8 @@ FLAG_TABLE: tuple[tuple[str, tuple[str, ...], str, str], ...] = (
      "reading (every sample a gap): the time-of-day drift was used instead", ""),
     ("soft", ("no_clock",),
      "the event has no clock (none in its file name or columns) and its time column "
-     "is not the clock time of day (it does not start within the day, after 0 s), so it "
+     "is not the clock time of day (it starts within a minute of 0 s, as a record time "
+     "does, or beyond the day), so it "
      "cannot be placed in the day: the time-of-day drift correction "
      "was not applied, the calibration's mean factor was used", ""),
     ("soft", ("drift_traffic_thin",),
