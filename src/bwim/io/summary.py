@@ -124,7 +124,7 @@ def from_cells(cells: Mapping[str, str], *, table: CsvTable | None = None,
         return number_cell(t, line, column, row[column], optional=True)
 
     # the cells' own messages name the file, line and column: read them before the row
-    when = time_cell(table, line, "time", row["time"])
+    when = time_cell(t, line, "time", row["time"])
     name, speed = record_name(t, line, row["record"]), speed_cell(t, line, row)
     numbers = {c: opt(c) for c in ("lateral", "confidence", "residual", "drift_factor",
                                    "lambda")}
