@@ -1,7 +1,7 @@
 """Write a simulated B-WIM test day to a folder (see README.md beside this script).
 
 Run: ``python examples/test_day/make_test_day.py OUT_DIR [--site NAME] [--seed N] [--small]
-[--wim-grade] [--n-traffic N] [--temperature]``
+[--wim-grade] [--n-traffic N] [--temperature] [--continuous]``
 
 Progress goes to stderr (a line every few seconds: events done / total, elapsed, ETA).
 """
@@ -10,7 +10,7 @@ import argparse
 import sys
 import time
 
-from bwim.synthetic import SITE_NAMES, make_test_day
+from bwim.synthetic import SITE_NAMES, make_continuous, make_test_day
 from bwim.synthetic.testday import WIM_GRADE_ROUGHNESS
 
 SMALL = {
@@ -54,6 +54,10 @@ def main(argv=None) -> None:
                         help="traffic events (of the traffic date for short-span-4-lane)")
     parser.add_argument("--temperature", action="store_true",
                         help="write a deck-temperature column temp_C (short-span-4-lane)")
+    parser.add_argument("--continuous", action="store_true",
+                        help="also the traffic as one continuous recording in OUT_DIR/long, "
+                        "and its reference by time, OUT_DIR/reference_by_time.csv "
+                        "(short-span-4-lane)")
     args = parser.parse_args(argv)
     kw = dict(SMALL[args.site]) if args.small else {}
     if args.wim_grade:
@@ -80,6 +84,11 @@ def main(argv=None) -> None:
           f"{max(factors):.3f}")
     print(f"weigh it: bwim weigh {day.scenario} {day.out_dir}/traffic/*.txt "
           f"--calibration-records {day.out_dir}/calibration/*.txt -o OUT")
+    if args.continuous:
+        long = make_continuous(day.out_dir, day.out_dir / "long",
+                               reference=day.out_dir / "reference_by_time.csv")
+        print(f"continuous: {long.path} ({long.duration:.0f} s, {len(long.placements)} "
+              f"events), reference by time {long.reference}; weigh it with --continuous")
 
 
 if __name__ == "__main__":

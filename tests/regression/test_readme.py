@@ -49,9 +49,9 @@ def _steps(text: str) -> list[tuple[str, str]]:
 
 
 def test_the_walk_through_is_what_the_test_runs():
-    """The parser finds the section's six commands and its Python block."""
+    """The parser finds the section's eight commands and its Python block."""
     steps = _steps(_section("A real installation"))
-    assert [kind for kind, _ in steps] == ["sh"] * 6 + ["python"]
+    assert [kind for kind, _ in steps] == ["sh"] * 8 + ["python"]
     assert steps[0][1].startswith("python examples/test_day/make_test_day.py")
 
 
@@ -99,6 +99,18 @@ def test_the_real_installation_walk_through_runs(tmp_path):
     assert "accepted = true" in (tmp_path / "site-model.toml").read_text()
     mfi = (tmp_path / "site-out-mfi" / "summary.csv").read_text().splitlines()
     assert any(",weighed," in line and ",mfi," in line for line in mfi)
+    # the same traffic as one long file, assessed by time: the same reference vehicles
+    # found and weighed as from the event files (the README's claim)
+    from bwim.accuracy import assess
+    from bwim.io import read_reference, read_summary
+
+    files = assess(read_summary(tmp_path / "site-out" / "summary.csv"),
+                   read_reference(tmp_path / "site-day" / "reference.csv"))
+    long = assess(read_summary(tmp_path / "site-out-long" / "summary.csv"),
+                  read_reference(tmp_path / "site-day" / "reference_by_time.csv"))
+    assert long.n_vehicles == files.n_vehicles >= 1 and long.n_reference == files.n_reference
+    assert len(long.missing) == len(files.missing) and long.unmatched == long.ambiguous == ()
+    assert (tmp_path / "site-out-long" / "events.csv").read_text().count("\n") == 13
 
 
 def _bwim_lines() -> list[str]:

@@ -15,6 +15,7 @@ from datetime import datetime, timedelta
 import numpy as np
 import pytest
 
+from bwim.errors import InputError
 from bwim.io import read_logger
 from bwim.scenario import (
     build_logger_format,
@@ -32,7 +33,7 @@ from bwim.synthetic import make_continuous
 def day(tmp_path_factory, small_site):
     root = tmp_path_factory.mktemp("continuous")
     site = small_site
-    cont = make_continuous(site.out_dir, root / "long", seed=1)
+    cont = make_continuous(site.out_dir, root / "long", seed=1, reference=root / "ref.csv")
     sc = load_scenario(site.scenario)
     setup = dataclasses.replace(build_site_setup(sc), drift=DriftSetup(method="none"))
     cal = calibrate_site([load_record(p, sc) for p in site.calibration], setup)
@@ -173,6 +174,16 @@ def test_bwim_weigh_continuous(day, tmp_path, capsys):
             t = p.clock + (datetime.fromisoformat(r["time"]) - p.original_clock)
             w.writerow([t.isoformat(), r["lane"], r["n_axles"], r["axle_spacings_m"],
                         r["axle_weights_kN"], r["gvw_kN"]])
+    # make_continuous(reference=...) writes the same rows (its columns as the site's)
+    written = list(csv.DictReader(open(cont.reference)))
+    mine = list(csv.DictReader(open(ref)))
+    assert len(written) == len(mine) == len(refs) and "record" not in written[0]
+    for a, b in zip(written, mine, strict=True):
+        assert abs((datetime.fromisoformat(a["time"])
+                    - datetime.fromisoformat(b["time"])).total_seconds()) < 1e-6
+        assert all(a[c] == b[c] for c in b if c != "time")
+    with pytest.raises(InputError, match="must not be in out_dir"):
+        make_continuous(site.out_dir, tmp_path / "x", reference=tmp_path / "x" / "r.csv")
     capsys.readouterr()
     assert main(["accuracy", str(out / "summary.csv"), "--reference", str(ref)]) == 0
     text = capsys.readouterr().out

@@ -26,6 +26,11 @@ sampling rate), with quiet gaps between them:
   values of the first event's first row.
 * Gaps are drawn uniformly in ``gap`` (s) before the first event, between events and
   after the last; every random draw comes from ``seed``.
+* With ``reference``, the site's statically weighed vehicles of those events
+  (``reference.csv``) are written there **by time**, as an operator would give them for
+  a long recording whose events the trigger names (:func:`bwim.accuracy.assess`): each
+  row's ``time`` moved to the long file's clock (its time less its file's clock, plus
+  the file's place), ``record`` left out, the other columns as they are.
 """
 
 from __future__ import annotations
@@ -73,6 +78,7 @@ class ContinuousRecording:
     sampling_rate: float
     n_samples: int
     placements: tuple[Placement, ...]
+    reference: Path | None = None  #: the reference by time, when asked for
 
     @property
     def duration(self) -> float:
@@ -85,8 +91,8 @@ def _stamp(moment: datetime) -> str:
 
 def make_continuous(site: str | os.PathLike, out_dir: str | os.PathLike, *,
                     folder: str = "traffic", gap: tuple[float, float] = (3.0, 8.0),
-                    drift: float = 0.5, seed: int = 0,
-                    name: str = "continuous") -> ContinuousRecording:
+                    drift: float = 0.5, seed: int = 0, name: str = "continuous",
+                    reference: str | os.PathLike | None = None) -> ContinuousRecording:
     """Write the event files of ``site/folder`` as one continuous logger file in
     ``out_dir`` (see the module docstring).
 
@@ -107,6 +113,9 @@ def make_continuous(site: str | os.PathLike, out_dir: str | os.PathLike, *,
         Seed of the gaps, slopes and noise.
     name : str
         Start of the long file's name.
+    reference : path, optional
+        Where to write the site's reference of these events by time (a CSV file; not in
+        ``out_dir``, whose files are the recordings).
     """
     from bwim.scenario import build_logger_format, load_scenario
 
@@ -124,6 +133,9 @@ def make_continuous(site: str | os.PathLike, out_dir: str | os.PathLike, *,
         raise InputError(f"drift must be >= 0 noise σ per minute, got {drift!r}")
     if not isinstance(name, str) or not name or "/" in name:
         raise InputError(f"name must be a file-name start, got {name!r}")
+    if reference is not None and Path(reference).resolve().parent == Path(out_dir).resolve():
+        raise InputError(f"reference must not be in out_dir ({out_dir}): its files are read "
+                         "as recordings")
     fmt = build_logger_format(load_scenario(root / "scenario.toml"))
     fs = fmt.sampling_rate
     files = []
@@ -199,5 +211,31 @@ def make_continuous(site: str | os.PathLike, out_dir: str | os.PathLike, *,
                 source=files[i][1], start_index=k, n_samples=e.shape[0], start=k / fs,
                 clock=clock + timedelta(seconds=k / fs), original_clock=files[i][0]))
             block(e.shape[0], values, f)
+    ref = None if reference is None else _reference_by_time(root, Path(reference),
+                                                            placements)
     return ContinuousRecording(path=path, clock=clock, sampling_rate=fs, n_samples=k,
-                               placements=tuple(placements))
+                               placements=tuple(placements), reference=ref)
+
+
+def _reference_by_time(root: Path, target: Path, placements: list[Placement]) -> Path:
+    """The site's reference rows of the placed events, by their time in the long file."""
+    import csv
+
+    source = root / "reference.csv"
+    with open(source, newline="", encoding="utf-8") as f:
+        rows = list(csv.DictReader(f))
+    if rows and "time" not in rows[0]:
+        raise InputError(f"{source}: no time column: the reference cannot be given by time")
+    where = {p.source.name: p for p in placements}
+    columns = [c for c in (rows[0] if rows else ()) if c != "record"]
+    with atomic_open(target, newline="") as f:
+        w = csv.writer(f, lineterminator="\n")
+        w.writerow(columns)
+        for r in rows:
+            p = where.get(r["record"])
+            if p is None:
+                continue
+            t = p.clock + (datetime.fromisoformat(r["time"]) - p.original_clock)
+            w.writerow([t.isoformat(timespec="microseconds") if c == "time" else r[c]
+                        for c in columns])
+    return target
