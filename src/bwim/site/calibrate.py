@@ -747,8 +747,9 @@ def _clock_note(records: Sequence[Record], cal: _Lines) -> list[str]:
     if len(used) < 2 or all(rec.clock is not None or rec.time_of_day for rec, _ in used):
         return []
     return ["the calibration runs have no clock (none in their file names or columns, and "
-            "their time columns start at 0): the drift cannot follow the time of day, the "
-            "runs' mean factor is used (give the clock: [logger] clock)"]
+            "their time columns are record times, starting within a minute of 0): the "
+            "drift cannot follow the time of day, the runs' mean factor is used (give the "
+            "clock: [logger] clock)"]
 
 
 def _time_of_day(records: Sequence[Record], cal: _Lines) -> TimeOfDayDrift | None:

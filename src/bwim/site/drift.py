@@ -37,9 +37,10 @@ Contract
   of day, on any date; on a date other than the calibration's, or outside the runs'
   span of the day, flagged ``outside_calibration_time`` (the last resort: the issue
   measured it leaves a real site at C(15)).  It needs clocks: runs without one whose
-  time columns are record times (from 0) give no time-of-day drift at all, and an event
-  without one (:attr:`bwim.Record.time_of_day` false) keeps the mean factor, flagged
-  ``no_clock``.
+  time columns are record times (from 0: :data:`bwim.records.RECORD_TIME_SPAN`) give
+  no time-of-day drift at all, and an event without one (:attr:`bwim.Record.time_of_day`
+  false) keeps the mean factor, flagged ``no_clock``.  Runs some of which have only a
+  clock time of day have no dates: vehicles on other dates are then not flagged.
 * ``"trend"``: the runs' factors over absolute clock time (the calibration day only:
   constant, flagged, beyond its span); ``"none"``: the calibration's mean factor.
 * ``"auto"`` (default): temperature when the logger has a temperature channel; else the
