@@ -208,3 +208,21 @@ def test_read_reference_refuses_bad_times(tmp_path, text, message):
     p.write_text(text, encoding="utf-8")
     with pytest.raises(InputError, match=message):
         read_reference(p)
+
+
+@pytest.mark.parametrize("value", ["0", "-1", "nan", "inf"])
+def test_the_time_tolerance_option_is_a_positive_number_of_seconds(tmp_path, capsys, value):
+    from bwim.cli import main
+
+    summary, ref = tmp_path / "summary.csv", tmp_path / "ref.csv"
+    summary.write_text("record,n_axles,axle_spacings_m,axle_weights_kN,gvw_kN,time\n"
+                       "a.txt,2,3.0,100;200,300,2026-07-20T08:00:00\n", encoding="utf-8")
+    ref.write_text("time,gvw_kN\n2026-07-20T08:00:01,310\n", encoding="utf-8")
+    assert main(["accuracy", str(summary), "--reference", str(ref),
+                 "--time-tolerance", value]) == 2
+    err = capsys.readouterr().err
+    assert "--time-tolerance must be a positive number of seconds" in err
+    assert err.count("\n") == 1
+    assert main(["accuracy", str(summary), "--reference", str(ref),
+                 "--time-tolerance", "2"]) == 0
+    assert "1 of 1 reference vehicles weighed" in capsys.readouterr().out
