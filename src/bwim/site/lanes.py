@@ -16,10 +16,12 @@ Contract
   by a pair other than the calibration lane's, or a vehicle whose lateral position (m)
   lies clearly in a lane of the other direction (beyond three quarters of the way from
   the pair's ``y`` to that lane's centre) while a pair of that direction saw a vehicle
-  at the same time (and the trace has its speed, or fits the pair's learned response
-  poorly), is a trace of that vehicle and is left to its lane's
-  detectors (without such a vehicle it is a vehicle of its own, whose lateral position
-  another vehicle on the span pulled aside); a vehicle that two pairs of one direction both report
+  at the same time (and the trace has its speed without a layout of its own, or fits the
+  pair's learned response poorly), is a trace of that vehicle and is left to its lane's
+  detectors (a layout of its own: as many axles, a spacing off by more than
+  :data:`ECHO_SPACING` in either order); without such a vehicle it is a vehicle of its
+  own, whose lateral position another vehicle on the span pulled aside.  A vehicle that
+  two pairs of one direction both report
   (its windows on the span overlap) is kept once, from the pair of its own lane (the
   one whose ``y`` is nearer the vehicle's lateral position in metres, else the one that
   saw it with the higher confidence).  A vehicle whose lateral position (m) lies nearer
@@ -74,8 +76,8 @@ from bwim.records import Passage, Record
 from bwim.site.bending import DetectorBending
 from bwim.site.setup import MAX_WHEELBASE, DetectorLane, SiteSetup
 
-__all__ = ["MAX_WHEELBASE", "MIN_HEADWAY", "MIN_OVERHANGS", "EventDetection", "LaneVehicle",
-           "detect_lanes", "split_long", "too_long"]
+__all__ = ["ECHO_SPACING", "MAX_WHEELBASE", "MIN_HEADWAY", "MIN_OVERHANGS", "EventDetection",
+           "LaneVehicle", "detect_lanes", "is_echo", "split_long", "too_long"]
 
 #: What one lane's detection may raise without ending the event's detection.
 _ERRORS = (BwimError, ArithmeticError, ValueError, np.linalg.LinAlgError)
@@ -214,7 +216,7 @@ def detect_lanes(record: Record, setup: SiteSetup, *,
             notes.append(f"lane {pair.lane}: a {v.n_axles}-axle trace of the span's bending "
                          "(a vehicle in another lane), not a vehicle of its own")
             continue
-        if _echo(v, pair, setup, seen):
+        if is_echo(v, pair, setup, seen):
             notes.append(f"lane {pair.lane}: a {v.n_axles}-axle trace of a vehicle in a "
                          "lane the other way, left to that lane's detectors")
             continue
@@ -320,18 +322,24 @@ _SAME_SPEED = 0.03
 #: to be a vehicle of its own (an echo's axles reach the pair's detectors in the wrong
 #: order, and fit only in part).
 _ECHO_CONFIDENCE = 0.9
+#: m: a trace read with that confidence and as many axles as the other way's vehicle,
+#: but a spacing off that vehicle's (in either order) by more than this, is not its echo:
+#: it is a vehicle of its own whose lateral position the other pulled across (about 2.5
+#: times the detection's 95th-percentile spacing error on the realistic site, 0.15-0.16 m).
+ECHO_SPACING = 0.4
 
 
-def _echo(v: VehicleDetection, pair: DetectorLane, setup: SiteSetup,
+def is_echo(v: VehicleDetection, pair: DetectorLane, setup: SiteSetup,
           seen: Sequence[tuple[DetectorLane, VehicleDetection]]) -> bool:
     """Whether a vehicle a pair reports is a trace of a vehicle the other way: a single
     axle found by a pair other than the calibration lane's, or a vehicle whose lateral
     position (m) lies clearly in a lane of the other direction (beyond three quarters of
     the way from the pair's y to that lane's centre) while a pair of that direction saw
     a vehicle there at the same time, and the trace either has that vehicle's speed
-    (within :data:`_SAME_SPEED`) or fits the pair's response poorly (confidence below
-    :data:`_ECHO_CONFIDENCE`).  Otherwise the trace is a vehicle of its own whose lateral
-    position another vehicle on the span pulled aside."""
+    (within :data:`_SAME_SPEED`) without a layout of its own (:func:`_another_layout`)
+    or fits the pair's response poorly (confidence below :data:`_ECHO_CONFIDENCE`).
+    Otherwise the trace is a vehicle of its own whose lateral position another vehicle
+    on the span pulled aside."""
     if v.n_axles < 2 and pair.lane != setup.calibration_lane:
         return True
     if pair.y is None or v.lateral_unit != "m" or not np.isfinite(v.lateral):
@@ -344,9 +352,21 @@ def _echo(v: VehicleDetection, pair: DetectorLane, setup: SiteSetup,
         return False
     return any(other.direction != pair.direction and windows_overlap(v.window, w.window)
                and (v.confidence < _ECHO_CONFIDENCE
-                    or abs(abs(w.passage.speed) - abs(v.passage.speed))
-                    <= _SAME_SPEED * abs(v.passage.speed))
+                    or (abs(abs(w.passage.speed) - abs(v.passage.speed))
+                        <= _SAME_SPEED * abs(v.passage.speed)
+                        and not _another_layout(v, w)))
                for other, w in seen)
+
+
+def _another_layout(v: VehicleDetection, w: VehicleDetection) -> bool:
+    """Whether ``v``, read as confidently as a vehicle, has ``w``'s axle count but not its
+    spacings (in either order: an echo may read the axles the other way round): a
+    vehicle of its own, not ``w``'s echo."""
+    a, b = v.passage.axle_spacings, w.passage.axle_spacings
+    if a.size != b.size or a.size == 0:
+        return False
+    return bool(np.abs(a - b).max() > ECHO_SPACING
+                and np.abs(a - b[::-1]).max() > ECHO_SPACING)
 
 
 def _deduplicated(found: list[LaneVehicle], setup: SiteSetup) -> list[LaneVehicle]:
