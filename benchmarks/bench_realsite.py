@@ -45,10 +45,14 @@ vehicle, of which :mod:`bwim.site.bending` leaves out most, and the day's speed 
 :mod:`bwim.site.speeds`, most of the rest: those it left out where no vehicle of their
 direction was, those in an event with a vehicle of their direction in another lane (a lane
 without detectors: the row's lane, speed and axles were not that vehicle's, but it was
-counted), and those that match a true vehicle of their event), the calibration runs with
-another vehicle rejected, and the weighing rate. Targets (issue 20): every axle count
-right, spacings within 0.1 m, speed within 0.5 %, GVW A(5) and every criterion B+(7),
-multiple presence flagged in at least 95 % of the events that have it.
+counted), and those that match a true vehicle of their event), the vehicles of the
+calibration truck's direction in events with a lane-1 truck beside one the other way
+(counted up to their true number, and that number: a lane-1 truck whose lateral position
+the other pulled across must not be taken for its echo, :func:`bwim.site.lanes.is_echo`),
+the calibration runs with another vehicle rejected, and the weighing rate. Targets
+(issue 20): every axle count right, spacings within 0.1 m, speed within 0.5 %, GVW A(5)
+and every criterion B+(7), multiple presence flagged in at least 95 % of the events that
+have it.
 
 A thin traffic date (the real installation's: its traffic date holds the 15 statically
 weighed trucks and no other traffic): 15 lane-1 trucks of 5 or 6 axles drawn 40 times
@@ -271,7 +275,7 @@ def weigh_day(day: Path, seed: int, support_lobes: bool | None = None) -> dict:
             "following": following,
             "outliers": (len(outliers) - outliers_alone, outliers_alone),
             "off_path": (len(off_path) - off_path_alone, off_path_alone),
-            "traces": traces,
+            "traces": traces, "beside": _beside_the_other_way(default, truth),
             "runs": (sum(1 for k in with_other if site.reasons[k]), len(with_other),
                      sum(1 for k in range(len(runs)) if k not in with_other
                          and not site.reasons[k]), len(runs) - len(with_other)),
@@ -394,6 +398,29 @@ def _other_direction(rows: list[SummaryRow], truth: dict[str, list[dict]]
     return matched, true, phantom
 
 
+def _beside_the_other_way(rows: list[SummaryRow], truth: dict[str, list[dict]]
+                          ) -> tuple[int, int]:
+    """Vehicles of the calibration truck's direction in the traffic events that hold a
+    lane-1 truck and a vehicle the other way (a heavy one pulls a lane-1 truck's lateral
+    position across: its echo or a vehicle of its own, :func:`bwim.site.lanes.is_echo`):
+    rows counted up to the true number, and the true number."""
+    rows_by: dict[str, int] = {}
+    for r in rows:
+        if r.direction == "+x":
+            rows_by[r.record] = rows_by.get(r.record, 0) + 1
+    counted = true = 0
+    for name, vehicles in truth.items():
+        if vehicles[0]["kind"] == "calibration":
+            continue
+        plus = sum(1 for v in vehicles if v["direction"] == "+x")
+        if not (any(v["direction"] == "+x" and v["lane"] == "1" for v in vehicles)
+                and any(v["direction"] == "-x" for v in vehicles)):
+            continue
+        counted += min(plus, rows_by.get(name, 0))
+        true += plus
+    return counted, true
+
+
 def cell(res, name: str) -> str:
     """One COST 323 criterion of ``res`` as "mean ± sd class" (%), or "-"."""
     c = next((c for c in res.criteria if c.name == name), None)
@@ -443,6 +470,7 @@ def print_days(days: list[dict], what: str = "") -> None:
                  "lateral outliers: two vehicles / one alone",
                  "axle group off path: two vehicles / one alone",
                  "other way: counted / true / phantom",
+                 "lane-1 trucks beside one the other way: counted / true",
                  "left out by speed: no vehicle / another lane's / a vehicle",
                  "runs with another vehicle rejected", "clean runs used", "day ready in"],
                 [[d["seed"], f"{d['count']}/{d['n_ref']} (all)", f"{d['refused_disagree']} (0)",
@@ -453,6 +481,7 @@ def print_days(days: list[dict], what: str = "") -> None:
                   f"{d['outliers'][0]} / {d['outliers'][1]}",
                   f"{d['off_path'][0]} / {d['off_path'][1]}",
                   "{} / {} / {}".format(*d["counted"]),
+                  "{} / {}".format(*d["beside"]),
                   "{} / {} / {}".format(*d["traces"]),
                   f"{d['runs'][0]}/{d['runs'][1]}", f"{d['runs'][2]}/{d['runs'][3]}",
                   f"{d.get('day', 0.0):.0f} s"] for d in days])

@@ -136,6 +136,8 @@ def test_realsite_benchmark_smoke(small_site, capsys):
     out = capsys.readouterr().out
     assert "Realistic site, seed 4" in out and "axle group off path" in out
     assert "left out by speed" in out and "Speed of bwim weigh" in out
+    assert "lane-1 trucks beside one the other way" in out
+    assert 0 <= d["beside"][0] <= d["beside"][1]
     assert "Where an event's CPU time goes" in out
     # both timed (their ratio on 4 events is the machine's load, not a check: detection
     # alone, timed after the batch, once took 0.056 s against the batch's 0.052 s)
