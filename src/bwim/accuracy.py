@@ -69,7 +69,6 @@ from datetime import datetime
 from datetime import time as dtime
 
 import numpy as np
-from scipy import optimize, stats
 
 from bwim.errors import InputError, require_choice, require_finite, require_positive
 from bwim.summary import SummaryRow
@@ -225,6 +224,8 @@ def relative_errors(measured, reference) -> np.ndarray:
 
 
 def _t975(n: int) -> float:
+    from scipy import stats  # here: importing scipy.stats takes most of a second
+
     return float(stats.t.ppf(0.975, n - 1))
 
 
@@ -237,6 +238,8 @@ def min_confidence(n: int, repeatability: str = "RR2", environment: str = "I") -
     n = _sample_size(n)
     u = REPEATABILITIES[_repeatability(repeatability)]
     k = ENVIRONMENTS[_environment(environment)]
+    from scipy import stats
+
     return float(2.0 * stats.norm.cdf(u / k - _t975(n) / math.sqrt(n)) - 1.0)
 
 
@@ -259,6 +262,8 @@ def confidence_level(delta: float, mean: float, std: float, n: int) -> float:
     s = require_finite("std", std)
     if d < 0.0 or s < 0.0:
         raise InputError(f"delta and std must be non-negative, got {d:g} and {s:g}")
+    from scipy import stats
+
     c = _t975(n) / math.sqrt(n)
     dof = n - 1
     return float(1.0 - stats.t.sf(_ratio(d - m, s) - c, dof)
@@ -278,6 +283,8 @@ def _delta_min(mean: float, std: float, n: int, pi0: float) -> float:
         hi *= 2.0
         if hi > _E_MAX:
             raise InputError(f"errors too large to classify (mean {mean:g} %, std {std:g} %)")
+    from scipy import optimize
+
     return float(optimize.brentq(gap, 0.0, hi, xtol=1e-10, rtol=1e-12))
 
 
