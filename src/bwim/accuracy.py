@@ -71,6 +71,7 @@ from datetime import time as dtime
 import numpy as np
 
 from bwim.errors import InputError, require_choice, require_finite, require_positive
+from bwim.records import seconds_of_day
 from bwim.summary import SummaryRow
 from bwim.tables import Table
 from bwim.wim.moses import group_axles
@@ -625,12 +626,8 @@ def _seconds_apart(a: datetime | dtime, b: datetime | dtime) -> float:
     """|a − b| in s: as instants when both have a date, else as times of day (the
     shorter way round midnight)."""
     if isinstance(a, datetime) and isinstance(b, datetime):
-        return abs((a.replace(tzinfo=None) - b.replace(tzinfo=None)).total_seconds())
-
-    def of_day(t: datetime | dtime) -> float:
-        return 3600.0 * t.hour + 60.0 * t.minute + t.second + 1e-6 * t.microsecond
-
-    d = abs(of_day(a) - of_day(b)) % 86400.0
+        return abs((a - b).total_seconds())  # both naive (SummaryRow, ReferenceRow)
+    d = abs(seconds_of_day(a) - seconds_of_day(b)) % 86400.0
     return min(d, 86400.0 - d)
 
 

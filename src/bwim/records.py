@@ -31,6 +31,7 @@ import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from datetime import datetime
+from datetime import time as dtime
 
 import numpy as np
 
@@ -38,13 +39,18 @@ from bwim.errors import InputError, require_axis, require_columns, require_finit
 from bwim.sensors import Sensor, SensorKind
 
 __all__ = ["RECORD_TIME_SPAN", "AxleLayout", "Passage", "Record", "SimulationSettings", "Truth",
-           "VBIConvergence", "axle_offsets", "noise_sigma", "record_list"]
+           "VBIConvergence", "axle_offsets", "noise_sigma", "record_list", "seconds_of_day"]
 
 
 _EPOCH = datetime(1970, 1, 1)
 #: s: a record without a clock whose time column starts earlier is a record time (from 0
 #: or a sample step), not the clock time of day (:attr:`Record.time_of_day`).
 RECORD_TIME_SPAN = 60.0
+
+
+def seconds_of_day(t: datetime | dtime) -> float:
+    """Seconds since midnight of a clock time (a datetime's, or a time of day)."""
+    return t.hour * 3600.0 + t.minute * 60.0 + t.second + t.microsecond * 1e-6
 
 
 def axle_offsets(spacings: np.ndarray) -> np.ndarray:
@@ -283,7 +289,7 @@ class Record:
         t = float(self.time[0]) if t is None else float(t)
         if self.clock is None:
             return t
-        return (self.clock.replace(tzinfo=None) - _EPOCH).total_seconds() + t
+        return (self.clock - _EPOCH).total_seconds() + t  # naive: __post_init__
 
     def clock_at(self, t: float | None = None) -> datetime | None:
         """The wall-clock date and time of record time ``t`` (default: the first sample);

@@ -58,12 +58,12 @@ from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass
 from datetime import date, datetime
-from datetime import time as dtime
 
 import numpy as np
 
 from bwim.errors import InputError
 from bwim.plausibility import Limits, quality_of, weight_flags
+from bwim.records import seconds_of_day
 from bwim.summary import SummaryRow
 from bwim.wim.scale_trend import ScaleTrend
 
@@ -120,11 +120,6 @@ class DriftSetup:
                 or self.min_reference < 3:
             raise InputError(f"min_reference must be an integer >= 3, got "
                              f"{self.min_reference!r}")
-
-
-def seconds_of_day(t: datetime | dtime) -> float:
-    """Seconds since midnight of a clock time (a datetime's, or a time of day)."""
-    return t.hour * 3600.0 + t.minute * 60.0 + t.second + t.microsecond * 1e-6
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)

@@ -316,12 +316,9 @@ class _Trigger:
         time = self.time[a - self.buf0:e - self.buf0].copy()
         data = self.data[a - self.buf0:e - self.buf0].copy()
         t = self.template
-        clock = t.clock
-        if clock is not None:
-            clock = t.clock_at(float(time[0]))
-            time = time - time[0]
-        elif not t.time_of_day:  # a record time, not a clock: from 0, as an event file
-            time = time - time[0]
+        clock = None if t.clock is None else t.clock_at(float(time[0]))
+        if clock is not None or not t.time_of_day:  # from 0, as an event file (without a
+            time = time - time[0]                   # clock: a record time, not a clock)
         record = dataclasses.replace(t, time=time, data=data, passages=(), truths=(),
                                      clock=clock)
         self.out.append(StreamEvent(
