@@ -39,6 +39,7 @@ HARD_FLAGS = (
     "lateral_outlier",       # lateral position an outlier of its lane's day (bwim.site.wander)
     "unconfirmed_gauge_fault",  # a gauge the day finds healthy disagreed (another vehicle)
     "group_off_path",        # an axle group off the vehicle's wheel path (bwim.site.wheelpath)
+    "split_across_records",  # the vehicle goes on in another record (bwim.site.split)
 )
 #: Flags that call for a look but keep the weights (quality "warning").
 SOFT_FLAGS = (

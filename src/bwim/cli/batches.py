@@ -318,6 +318,14 @@ def _print_speeds(check) -> None:
               f"around them (beyond {check.limit:g} σ: traces of another vehicle)")
 
 
+def _print_split(check) -> None:
+    """One line when vehicles were found split across two records."""
+    if check.pairs:
+        print(f"{len(check.pairs)} vehicle(s) split across two records (a file closed "
+              "between a truck's axles, or two files holding the same axles): "
+              f"{len(check.refused)} weighed part(s) refused, split_across_records")
+
+
 def _print_weighed(report, title: str) -> None:
     rows = report.rows
     shown = [(r.record, r.vehicle, r.n_axles or "",
@@ -385,6 +393,7 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path, batch) -> int:
         _print_wander(days[0].wander)
         _print_paths(days[0].paths)
         _print_speeds(days[0].speeds)
+        _print_split(days[0].split)
     _print_weighed(report, "Static weights (moving force identification with the FE "
                    "model):" if bridge else "Static weights (multi-run influence lines, "
                    "gauges combined):")

@@ -29,9 +29,11 @@ Contract
   other groups (an axle of a vehicle beside it weighed as this one's).
 * :mod:`bwim.site.speeds`: a counted vehicle whose speed its lane's traffic around it
   does not drive (a trace of another vehicle), left out.
+* :mod:`bwim.site.split`: a vehicle split across two records (a logger file closed
+  between a truck and its trailer), refused.
 * :mod:`bwim.site.day`: :func:`finish_day`, the day-level steps (unconfirmed gauge faults,
-  the lanes' lateral check, the axle groups' check, the counted vehicles' speeds, then
-  the traffic's drift) on a batch's rows
+  the lanes' lateral check, the axle groups' check, the counted vehicles' speeds, the
+  vehicles split across records, then the traffic's drift) on a batch's rows
   (:class:`DayResult`).
 """
 
@@ -48,6 +50,7 @@ from bwim.site.health import GaugeFault, GaugeHealth, check_gauges
 from bwim.site.model import ModelRun, SiteModel, calibrate_site_model
 from bwim.site.setup import DETECTION_METHODS, DetectorLane, Lane, SiteSetup
 from bwim.site.speeds import SpeedCheck, drop_speed_outliers
+from bwim.site.split import SplitCheck, refuse_split_vehicles
 from bwim.site.unconfirmed import FaultCheck, refuse_unconfirmed_faults
 from bwim.site.wander import LaneWander, WanderCheck, refuse_lateral_outliers
 from bwim.site.wheelpath import PathCheck, refuse_off_path
@@ -72,6 +75,7 @@ __all__ = [
     "SiteModel",
     "SiteSetup",
     "SpeedCheck",
+    "SplitCheck",
     "TrafficDrift",
     "VehicleWeighing",
     "WanderCheck",
@@ -83,6 +87,7 @@ __all__ = [
     "finish_day",
     "refuse_lateral_outliers",
     "refuse_off_path",
+    "refuse_split_vehicles",
     "refuse_unconfirmed_faults",
     "weigh_event",
 ]

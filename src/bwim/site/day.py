@@ -19,13 +19,19 @@ Contract
      vehicle not weighed whose speed is far from its lane's traffic around it in time
      is a trace of another vehicle (the span's bending, another truck's axles), and is
      left out of the rows;
-  5. the traffic's own drift correction where the setup asks for it
+  5. the vehicles split across two records (:func:`bwim.site.split.refuse_split_vehicles`):
+     two vehicles of one lane and direction from two records, the rear one's first axle
+     closer to the front one's last than two vehicles following each other can be, are
+     parts of one vehicle (a logger file closed between a truck and its trailer): a
+     weighed part is refused (``split_across_records``); after step 4, so that a trace
+     it left out does not make a vehicle's neighbour;
+  6. the traffic's own drift correction where the setup asks for it
      (:func:`correct_drift`), on the rows the steps before kept weighed.
 
   It returns a :class:`DayResult` (the rows, in order, less those step 4 left out, and
   what each step measured).
   ``bwim weigh`` runs it on the final summary; the benchmarks run it the same way.
-* :func:`correct_drift` alone is the fifth step.
+* :func:`correct_drift` alone is the sixth step.
 """
 
 from __future__ import annotations
@@ -36,6 +42,7 @@ from dataclasses import dataclass
 from bwim.site.calibrate import SiteCalibration
 from bwim.site.drift import TrafficDrift, apply_traffic_drift, traffic_drift
 from bwim.site.speeds import SpeedCheck, drop_speed_outliers
+from bwim.site.split import SplitCheck, refuse_split_vehicles
 from bwim.site.unconfirmed import FaultCheck, refuse_unconfirmed_faults
 from bwim.site.wander import WanderCheck, refuse_lateral_outliers
 from bwim.site.wheelpath import PathCheck, refuse_off_path
@@ -62,6 +69,8 @@ class DayResult:
         its vehicle's path.
     speeds : SpeedCheck
         The counted vehicles left out as traces (speed outliers of their lane).
+    split : SplitCheck
+        The vehicles found split across two records, and the rows refused for it.
     drift : TrafficDrift or None
         The traffic's drift fit; None when the traffic method was not applied.
     """
@@ -71,12 +80,13 @@ class DayResult:
     wander: WanderCheck
     paths: PathCheck
     speeds: SpeedCheck
+    split: SplitCheck
     drift: TrafficDrift | None
 
     def __repr__(self) -> str:
         drift = "none" if self.drift is None else f"traffic ({self.drift.reference_class})"
         return (f"DayResult({len(self.rows)} rows, {self.faults!r}, {self.wander!r}, "
-                f"{self.paths!r}, {self.speeds!r}, drift {drift})")
+                f"{self.paths!r}, {self.speeds!r}, {self.split!r}, drift {drift})")
 
 
 def correct_drift(rows: Sequence[SummaryRow], calibration: SiteCalibration
@@ -103,6 +113,7 @@ def finish_day(rows: Sequence[SummaryRow], calibration: SiteCalibration) -> DayR
     wander = refuse_lateral_outliers(faults.rows)
     paths = refuse_off_path(wander.rows)
     speeds = drop_speed_outliers(paths.rows)
-    out, fit = correct_drift(speeds.rows, calibration)
+    split = refuse_split_vehicles(speeds.rows)
+    out, fit = correct_drift(split.rows, calibration)
     return DayResult(rows=tuple(out), faults=faults, wander=wander, paths=paths,
-                     speeds=speeds, drift=fit)
+                     speeds=speeds, split=split, drift=fit)
