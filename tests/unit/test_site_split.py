@@ -20,10 +20,10 @@ from datetime import time as dtime
 import pytest
 
 from bwim.cli import main
+from bwim.io.summary import read_summary
 from bwim.site import finish_day
 from bwim.site.lanes import MIN_HEADWAY, MIN_OVERHANGS
 from bwim.site.split import FLAG_SPLIT, refuse_split_vehicles
-from bwim.io.summary import read_summary
 from bwim.summary import SummaryRow
 
 T0 = datetime(2026, 4, 17, 15, 41, 34, 611000)

@@ -33,6 +33,7 @@ Contract
 from __future__ import annotations
 
 import dataclasses
+import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass
 from datetime import datetime
@@ -103,7 +104,7 @@ def refuse_split_vehicles(rows: Sequence[SummaryRow]) -> SplitCheck:
     pairs, judged = [], 0
     for stream in streams.values():
         stream.sort()
-        for (t0, a), (t1, b) in zip(stream, stream[1:], strict=False):
+        for (t0, a), (t1, b) in itertools.pairwise(stream):
             front, rear = rows[a], rows[b]
             if front.record == rear.record:
                 continue
