@@ -69,3 +69,21 @@ def test_an_event_without_a_clock_keeps_the_mean_factor_flagged(small_site_truck
     (u,) = [u for u in of_day.vehicles if u.weighed]
     assert u.drift_method == "time_of_day" and "no_clock" not in u.flags
     assert u.drift_factor == pytest.approx(v.drift_factor, rel=1e-6)
+
+
+def test_a_vehicle_past_midnight_in_a_time_of_day_record(small_site_truck):
+    """A record in clock time of day that starts just before midnight (half the time its
+    truck takes to reach the detectors): its truck passes after midnight, at the record's
+    time less 86400 s (the next day's clock), not at no time (the summary's time; the
+    clocked truck's time of day is the reference)."""
+    site, truck = small_site_truck
+    clocked = weigh_event(truck, site).to_summary_rows("x")
+    (ref,) = [r for r in clocked if r.weighed]
+    offset = seconds_of_day(ref.time) - seconds_of_day(truck.clock_at(truck.time[0]))
+    rec = _without_clock(truck, time_of_day=True)
+    start = 86400.0 - 0.5 * offset
+    late = weigh_event(dataclasses.replace(rec, time=rec.time - rec.time[0] + start),
+                       site).to_summary_rows("x")
+    (row,) = [r for r in late if r.weighed]
+    assert offset > 0.1
+    assert seconds_of_day(row.time) == pytest.approx(0.5 * offset, abs=1e-3)

@@ -178,6 +178,17 @@ def test_the_clock_of_each_event():
     morning = dataclasses.replace(morning, time=morning.time + 36000.0)
     ev = cut_events(morning).events[0]
     assert ev.record.time[0] == ev.start > 36008.0 and ev.record.time_of_day
+    # ... also past midnight, where the stream counts on (86400 s and more): the event
+    # holds that day's clock time of day, as the logger's event file would (a stream
+    # from 23:59:50, an event 80 s on: 70 s after midnight, past the first minute that a
+    # record time may take)
+    night = _record(100.0, [(80.0, 1.0, 100.0)])
+    night = dataclasses.replace(night, time=night.time + 86390.0)
+    ev = cut_events(night).events[0]
+    assert ev.start > 86460.0 and ev.record.time_of_day
+    np.testing.assert_allclose(ev.record.time,
+                               night.time[ev.start_index:ev.stop_index] - 86400.0, atol=1e-9)
+    assert ev.record.time[0] == pytest.approx(ev.start - 86400.0, abs=1e-9)
 
 
 def test_the_stream_split_anywhere_gives_the_same_events():

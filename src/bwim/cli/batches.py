@@ -169,9 +169,9 @@ def _run_time(rec) -> str:
     clock = rec.clock_at()
     if clock is not None:
         return clock.isoformat(timespec="milliseconds")
-    t0 = float(rec.time[0])
-    if 0.0 < t0 < 86400.0:
-        return (datetime.min + timedelta(seconds=t0)).time().isoformat(timespec="milliseconds")
+    if rec.time_of_day:
+        return (datetime.min + timedelta(seconds=float(rec.time[0]))).time().isoformat(
+            timespec="milliseconds")
     return ""
 
 

@@ -248,11 +248,12 @@ class EventWeighing:
 
     def time_at(self, t: float) -> datetime | dtime | None:
         """Wall-clock time of record time ``t`` (s): a datetime with the record's clock, a
-        time of day when the record's axis is one, else None."""
+        time of day when the record's axis is one (past midnight: the next day's), else
+        None."""
         if self.clock is not None:
             return self.clock + timedelta(seconds=float(t))
-        if self.clock_of_day and 0.0 <= t < 86400.0:
-            return (datetime.min + timedelta(seconds=float(t))).time()
+        if self.clock_of_day and t >= 0.0:
+            return (datetime.min + timedelta(seconds=float(t) % 86400.0)).time()
         return None
 
     def to_summary_row(self, record: str) -> SummaryRow:

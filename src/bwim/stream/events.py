@@ -13,8 +13,11 @@ Contract
   With a clock, its time starts at 0 at its first sample and its ``clock`` is the clock of
   that sample (as a logger that writes one file per event: the clock time of every sample
   is the stream's); without one, its time is the stream's own when that is the clock time
-  of day (:attr:`bwim.Record.time_of_day` of the stream's first piece), else it starts
-  at 0 too (a record time says nothing of the day; ``start`` places it in the stream).
+  of day (:attr:`bwim.Record.time_of_day` of the stream's first piece; an event that
+  starts after midnight, where the stream counts on past 86400 s, has that day's clock
+  time of day, as its logger's event file would: the stream's less 86400 s per day
+  passed), else it starts at 0 too (a record time says nothing of the day; ``start``
+  places it in the stream).
 * Flags: ``open_at_start`` (the stream began inside the event, or less than the merge
   gap before its trigger opened), ``open_at_end`` (the stream ended before the trigger
   closed, or less than the merge gap after), ``max_duration`` (a trigger was closed at

@@ -42,6 +42,7 @@ Contract
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections import deque
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
@@ -57,6 +58,7 @@ from bwim.stream.settings import TriggerSettings
 __all__ = ["cut_events", "cut_stream"]
 
 _MAD = 1.4826  #: σ of a normal distribution per median absolute deviation
+_DAY = 86400.0  #: s in a day
 
 
 @dataclass
@@ -319,6 +321,9 @@ class _Trigger:
         clock = None if t.clock is None else t.clock_at(float(time[0]))
         if clock is not None or not t.time_of_day:  # from 0, as an event file (without a
             time = time - time[0]                   # clock: a record time, not a clock)
+        elif time[0] >= _DAY:  # a clock time of day counted on past midnight: the clock
+            time = time - _DAY * math.floor(time[0] / _DAY)  # time of that day, as its
+            # logger's event file would hold it
         record = dataclasses.replace(t, time=time, data=data, passages=(), truths=(),
                                      clock=clock)
         self.out.append(StreamEvent(
