@@ -39,7 +39,8 @@ from bwim.errors import InputError, require_axis, require_columns, require_finit
 from bwim.sensors import Sensor, SensorKind
 
 __all__ = ["RECORD_TIME_SPAN", "AxleLayout", "Passage", "Record", "SimulationSettings", "Truth",
-           "VBIConvergence", "axle_offsets", "noise_sigma", "record_list", "seconds_of_day"]
+           "VBIConvergence", "axle_offsets", "local_seconds", "noise_sigma", "record_list",
+           "seconds_of_day"]
 
 
 _EPOCH = datetime(1970, 1, 1)
@@ -51,6 +52,15 @@ RECORD_TIME_SPAN = 60.0
 def seconds_of_day(t: datetime | dtime) -> float:
     """Seconds since midnight of a clock time (a datetime's, or a time of day)."""
     return t.hour * 3600.0 + t.minute * 60.0 + t.second + t.microsecond * 1e-6
+
+
+def local_seconds(t: datetime) -> float:
+    """Seconds since 1970-01-01 00:00 of a clock's own (naive: the site's local) time: the
+    wall-clock arithmetic of the site, whatever the time zone of the machine (a naive
+    datetime's ``timestamp()`` reads it in that zone: an hour lost or gained on the
+    nights the clocks change); an aware datetime's offset is dropped, as bwim's clocks
+    drop it."""
+    return (t.replace(tzinfo=None) - _EPOCH).total_seconds()
 
 
 def axle_offsets(spacings: np.ndarray) -> np.ndarray:
@@ -289,7 +299,7 @@ class Record:
         t = float(self.time[0]) if t is None else float(t)
         if self.clock is None:
             return t
-        return (self.clock - _EPOCH).total_seconds() + t  # naive: __post_init__
+        return local_seconds(self.clock) + t
 
     def clock_at(self, t: float | None = None) -> datetime | None:
         """The wall-clock date and time of record time ``t`` (default: the first sample);

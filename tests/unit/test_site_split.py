@@ -195,3 +195,27 @@ def test_parts_measured_at_two_speeds_are_judged_at_their_mean():
     for dt, split in ((0.605, True), (0.615, False)):
         rear = _row("b.txt", last + timedelta(seconds=dt), TRAILER, speed=24.0)
         assert bool(refuse_split_vehicles([front, rear]).pairs) == split, dt
+
+
+@pytest.fixture
+def summer_time_zone(monkeypatch):
+    """The process in a time zone whose clocks change (Europe/Ljubljana: 2024-03-31 02:00
+    → 03:00); the zone restored after."""
+    import time
+
+    monkeypatch.setenv("TZ", "Europe/Ljubljana")
+    time.tzset()
+    yield
+    monkeypatch.undo()
+    time.tzset()
+
+
+def test_the_clocks_are_the_sites_whatever_the_machines_zone(summer_time_zone):
+    """Clocks are naive site time: a truck at 02:59:59.5 and its trailer in the next
+    file at 03:00:00.2 are 0.7 s apart whatever zone bwim runs in (read as the machine's
+    local time, naive clocks were an hour apart on the night the clocks change)."""
+    front = _row("a.txt", datetime(2024, 3, 31, 2, 59, 59, 500000), TRUCK, 20.0)
+    rear = _row("b.txt", datetime(2024, 3, 31, 3, 0, 0, 200000), TRAILER, 20.0)
+    # gap: (0.7 s - 12.21 m / 20 m/s) × 20 m/s = 1.79 m
+    check = refuse_split_vehicles([front, rear])
+    assert len(check.pairs) == 1 and check.pairs[0][2] == pytest.approx(1.79, abs=1e-6)

@@ -70,12 +70,21 @@ Contract
       is no time column], [``scale`` = 1: logger units to strain, one number or one per
       channel], [``decimal`` = "."], [``skip_lines`` = 0].  Record files are then read
       with :func:`bwim.io.read_logger` whatever their extension.
-  ``[axle_detectors]``
+  ``[axle_detectors]`` or ``[[axle_detectors]]`` (one table per lane with detectors)
       ``channels`` = [first, second] (logger channels, in the order traffic meets them),
-      ``distance`` (m), [``position`` = 0: the first detector's x in the influence-line
-      frame], [``max_spacing``: the largest axle spacing within one vehicle, m],
-      [``max_length`` = 18.75: the longest vehicle's spread from first to last axle, m;
-      25.25 where European Modular System combinations run].
+      ``distance`` (m), [``lane``: its number, default the table's place],
+      [``direction`` = "+x": "-x" for traffic the other way], [``y``: the pair's (the
+      lane's centre line's) transverse position, m], [``calibration``: true in the
+      calibration truck's lane's table, default the first], [``position`` = 0: the first
+      detector's x in the influence-line frame], [``max_spacing``: the largest axle
+      spacing within one vehicle, m], [``max_length`` = 18.75: the longest vehicle's
+      spread from first to last axle, m; 25.25 where European Modular System
+      combinations run].
+  ``[[lanes]]``
+      a traffic lane (with or without detectors) by its centre line: ``number``, ``y``
+      (m), [``direction`` = "+x"]; a vehicle whose lateral position (m) lies nearer it
+      than its own pair's lane is given its number (:mod:`bwim.site.lanes`).  A lane
+      with detectors must travel as its ``[[axle_detectors]]`` table says.
   ``[vehicle]``
       ``axle_loads`` (static, N) with ``axle_spacings`` (m): a calibration truck known by
       its weights only (a :class:`bwim.MovingForces`); or

@@ -54,6 +54,7 @@ from bwim.scenario.checks import (
     subtable,
     tables,
 )
+from bwim.scenario.checks import number as finite_number  # LaneSpec has a field "number"
 from bwim.sensors import SensorKind
 from bwim.vehicles import NAMED_VEHICLES
 from bwim.vehicles.types import HalfCar, MovingForces, SprungMass, TractorSemitrailer, Truck3D
@@ -302,7 +303,7 @@ class LaneSpec:
     centre line's ``y`` (m) and the ``direction``."""
 
     number: int = req(int_from(1))
-    y: float = req(number)
+    y: float = req(finite_number)  # not ``number``: the field above shadows it here
     direction: str = opt(choice(*DIRECTIONS), "+x")
 
 

@@ -25,7 +25,9 @@ Contract
   (its windows on the span overlap) is kept once, from the pair of its own lane (the
   one whose ``y`` is nearer the vehicle's lateral position in metres, else the one that
   saw it with the higher confidence).  A vehicle whose lateral position (m) lies nearer
-  another lane of its direction (``SiteSetup.lane_of``) is given that lane's number.
+  another lane of its direction (``SiteSetup.lane_of``) is given that lane's number;
+  the vehicles of a pair whose own lane has no known centre line (no ``y``, no traffic
+  lane of its number) keep the pair's number.
 * **The span's bending read as a vehicle**: with ``bending`` (what each pair other than
   the calibration lane's reads of the span's bending, learned from the calibration runs:
   :mod:`bwim.site.bending`), a vehicle whose pair's largest reading over its time on the
@@ -220,7 +222,9 @@ def detect_lanes(record: Record, setup: SiteSetup, *,
             notes.append(f"lane {pair.lane}: a {v.n_axles}-axle trace of a vehicle in a "
                          "lane the other way, left to that lane's detectors")
             continue
-        if v.lateral_unit == "m" and np.isfinite(v.lateral):
+        if (v.lateral_unit == "m" and np.isfinite(v.lateral)
+                and pair.lane in setup.centres(pair.direction)):
+            # nearer another lane's centre than its own; without its own, it stays
             lane = setup.lane_of(v.lateral, pair.direction) or lane
         found.append(LaneVehicle(vehicle=v, lane=lane, direction=pair.direction,
                                  pair=pair.lane, window=v.window,

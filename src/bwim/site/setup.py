@@ -213,6 +213,14 @@ class SiteSetup:
         for k, ln in enumerate(traffic):
             if not isinstance(ln, Lane):
                 raise InputError(f"traffic_lanes[{k}] must be a Lane, got {type(ln).__name__}")
+        numbers = [ln.number for ln in traffic]
+        if len(set(numbers)) < len(numbers):
+            raise InputError(f"a lane appears twice in traffic_lanes: {numbers}")
+        pairs = {ln.lane: ln.direction for ln in self.lanes}
+        for ln in traffic:
+            if pairs.get(ln.number, ln.direction) != ln.direction:
+                raise InputError(f"lane {ln.number} travels {ln.direction} in traffic_lanes "
+                                 f"but {pairs[ln.number]} at its axle detectors")
         object.__setattr__(self, "traffic_lanes", traffic)
         if self.max_spacing is not None:
             object.__setattr__(self, "max_spacing",

@@ -37,7 +37,7 @@ import numpy as np
 
 from bwim.detect.signals import robust_sigma
 from bwim.errors import InputError
-from bwim.site.drift import seconds_of_day
+from bwim.records import local_seconds, seconds_of_day
 from bwim.site.wander import MIN_VEHICLES
 from bwim.summary import SummaryRow
 
@@ -80,8 +80,7 @@ class SpeedCheck:
 
 def _seconds(t: datetime | time) -> float:
     if isinstance(t, datetime):
-        return t.timestamp() if t.tzinfo is not None else (
-            t - datetime(1970, 1, 1)).total_seconds()
+        return local_seconds(t)
     return seconds_of_day(t)
 
 

@@ -39,7 +39,7 @@ from dataclasses import dataclass
 from datetime import datetime
 from datetime import time as dtime
 
-from bwim.records import seconds_of_day
+from bwim.records import local_seconds, seconds_of_day
 from bwim.site.lanes import MIN_HEADWAY, MIN_OVERHANGS
 from bwim.summary import SummaryRow
 
@@ -81,7 +81,7 @@ def _clock(row: SummaryRow) -> tuple[str, float] | None:
     """The row's kind of clock and its time on it (s), or None without one."""
     t = row.time
     if isinstance(t, datetime):
-        return "datetime", t.timestamp()
+        return "datetime", local_seconds(t)
     if isinstance(t, dtime):
         return "time of day", seconds_of_day(t)
     return None

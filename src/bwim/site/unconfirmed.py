@@ -11,8 +11,9 @@ the weights.
 Contract
 --------
 * :func:`refuse_unconfirmed_faults` orders a batch's rows weighed (``status ==
-  "weighed"``) by clock time (rows without one keep their place in the batch, after
-  those with one).  A weighed row flagged ``gauge_fault:NAME`` is **confirmed** when that
+  "weighed"``) by clock time (the site's wall clock: dated rows first, then rows with a
+  clock time of day, then rows without one in their place in the batch).  A weighed row
+  flagged ``gauge_fault:NAME`` is **confirmed** when that
   gauge is flagged in at least ``confirm`` (:data:`CONFIRM`, most) of the
   ``neighbours`` (:data:`NEIGHBOURS`) weighed rows nearest it in that order, itself
   included (the first or last ``neighbours`` rows at the ends of the day): a gauge that
@@ -38,7 +39,7 @@ from datetime import time as dtime
 import numpy as np
 
 from bwim.errors import InputError
-from bwim.site.drift import seconds_of_day
+from bwim.records import local_seconds, seconds_of_day
 from bwim.summary import SummaryRow
 
 __all__ = ["CONFIRM", "FLAG_UNCONFIRMED", "NEIGHBOURS", "FaultCheck",
@@ -92,10 +93,10 @@ def _order_key(item: tuple[int, SummaryRow]) -> tuple:
     k, row = item
     t = row.time
     if isinstance(t, datetime):
-        return (0, t.timestamp(), k)
-    if isinstance(t, dtime):
-        return (0, seconds_of_day(t), k)
-    return (1, 0.0, k)
+        return (0, local_seconds(t), k)
+    if isinstance(t, dtime):  # another clock: not mixed with dated rows
+        return (1, seconds_of_day(t), k)
+    return (2, 0.0, k)
 
 
 def refuse_unconfirmed_faults(rows: Sequence[SummaryRow], *, confirm: float = CONFIRM,

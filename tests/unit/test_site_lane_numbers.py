@@ -1,0 +1,67 @@
+"""Lanes without detectors, by their centre line (a review of stop 33): the scenario's
+``[[lanes]]`` tables reach the site setup, and a detector pair whose own centre line is
+unknown keeps its vehicles' lane number (a vehicle is given another lane only when it
+lies nearer that lane's centre than its own; without its own there is nothing to be
+nearer than).  Reference: the same calibration without the traffic lanes (equivalence:
+lanes without detectors only name vehicles found elsewhere), and the declared numbers.
+
+Data: the shared small realistic site (tests/conftest.py, ``small_site``: an FE plate with
+vehicle dynamics, gauge noise, offsets and drift).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+
+from bwim.errors import InputError
+from bwim.scenario import build_site_setup, load_scenario, scenario_from_dict
+from bwim.site import calibrate_site, weigh_event
+from bwim.site.setup import DetectorLane, Lane, SiteSetup
+
+LANES = (Lane(number=2, y=7.9, direction="+x"), Lane(number=4, y=13.35, direction="-x"))
+
+
+def test_lanes_tables_reach_the_site_setup(small_site, tmp_path):
+    """[[lanes]] (it raised a TypeError: the field ``number`` shadowed its checker)."""
+    doc = {"lanes": [{"number": 2, "y": 7.9}, {"number": 4, "y": 13.35, "direction": "-x"}]}
+    assert scenario_from_dict(doc).lanes[1].y == 13.35
+    text = small_site.scenario.read_text() + "".join(
+        f'\n[[lanes]]\nnumber = {ln.number}\ny = {ln.y}\ndirection = "{ln.direction}"\n'
+        for ln in LANES)
+    path = tmp_path / "with_lanes.toml"
+    path.write_text(text)
+    setup = build_site_setup(load_scenario(path))
+    assert setup.traffic_lanes == LANES
+    assert setup.lane_of(13.0, "-x") == 4 and setup.lane_of(7.5, "+x") == 2
+    with pytest.raises(InputError, match=r"\[\[lanes\]\] entry 2 y: expected a number"):
+        scenario_from_dict({"lanes": [{"number": 2, "y": 7.9}, {"number": 4, "y": "x"}]})
+
+
+def test_a_traffic_lane_must_agree_with_the_detectors():
+    pair = DetectorLane(channels=("a", "b"), distance=3.0, lane=1, direction="+x")
+    kw = dict(calibration_loads=[50e3, 100e3], calibration_spacings=[4.0], lanes=[pair])
+    with pytest.raises(InputError, match="lane 1 travels -x in traffic_lanes but \\+x at "
+                                         "its axle detectors"):
+        SiteSetup(**kw, traffic_lanes=[Lane(number=1, y=3.0, direction="-x")])
+    with pytest.raises(InputError, match="a lane appears twice in traffic_lanes"):
+        SiteSetup(**kw, traffic_lanes=[Lane(number=2, y=3.0), Lane(number=2, y=6.0)])
+    SiteSetup(**kw, traffic_lanes=[Lane(number=1, y=3.0)])  # its centre line: fine
+
+
+def test_a_pair_without_a_centre_line_keeps_its_vehicles(small_site_calibrated,
+                                                         small_site_truck):
+    """The pairs' y removed, lanes 2 and 4 declared by their centres: every calibration
+    run used without them is used with them (it was none: each run's truck was renamed
+    lane 2, the nearest centre known), and the lane-1 truck is weighed in lane 1."""
+    _, _, records, site = small_site_calibrated
+    _, truck = small_site_truck
+    base = site.setup
+    lanes = [dataclasses.replace(ln, y=None) for ln in base.lanes]
+    setup = dataclasses.replace(base, lanes=lanes)
+    without = calibrate_site(records, setup)
+    with_lanes = calibrate_site(records, dataclasses.replace(setup, traffic_lanes=LANES))
+    assert with_lanes.n_used == without.n_used > 0
+    rows = weigh_event(truck, with_lanes).to_summary_rows("truck")
+    assert [r.lane for r in rows if r.weighed] == [1]
