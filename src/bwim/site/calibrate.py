@@ -118,7 +118,6 @@ from bwim.site.setup import SiteSetup
 from bwim.wim import MultiRunCalibration, Weighing, calibrate_lines, weigh
 from bwim.wim.influence_line import read_channels
 from bwim.wim.multirun import RunFit
-from bwim.wim.scale_trend import ScaleTrend
 
 __all__ = ["MIN_AXLE_LOAD", "MIN_TRUCK_AXLES", "MIN_TRUCK_WEIGHT", "REVERSED_FIT",
            "REVERSED_SAME", "RUN_DRIFT", "RUN_SCALE_RANGE", "SPACING_BIAS", "SPACING_TOLERANCE",
@@ -768,8 +767,7 @@ def _time_of_day(records: Sequence[Record], cal: _Lines) -> TimeOfDayDrift | Non
         dates = ()
     else:  # a run without a clock and a record time: the runs cannot be placed in the day
         return None
-    factors = [fit.scale for _, fit in used]
-    return TimeOfDayDrift(trend=ScaleTrend.fit(tod, factors), dates=dates)
+    return TimeOfDayDrift.fit(tod, [fit.scale for _, fit in used], dates)
 
 
 def temperature_channel(record: Record, setup: SiteSetup) -> str | None:

@@ -33,9 +33,12 @@ Contract
   reference vehicles is too thin: its vehicles fall back to the next source, flagged
   ``drift_traffic_thin``.
 * ``"time_of_day"``: the calibration runs' factors over the time of day
-  (:class:`bwim.wim.ScaleTrend` over seconds since midnight) applied at the event's time
-  of day, on any date; on a date other than the calibration's, or outside the runs'
-  span of the day, flagged ``outside_calibration_time`` (the last resort: the issue
+  (:class:`bwim.wim.ScaleTrend` over seconds since midnight; runs that straddle
+  midnight, a night calibration, over seconds since :attr:`TimeOfDayDrift.origin`, the
+  middle of the longest gap between their times of day, so that their span stays
+  whole) applied at the event's time of day, on any date; on a date other than the
+  calibration's, or outside the runs' span of the day, flagged
+  ``outside_calibration_time`` (the last resort: the issue
   measured it leaves a real site at C(15)).  It needs clocks: runs without one whose
   time columns are record times (from 0: :data:`bwim.records.RECORD_TIME_SPAN`) give
   no time-of-day drift at all, and an event without one (:attr:`bwim.Record.time_of_day`
@@ -122,6 +125,14 @@ class DriftSetup:
                              f"{self.min_reference!r}")
 
 
+_DAY = 86400.0  #: s in a day
+
+
+def _on_axis(time_of_day: float, origin: float) -> float:
+    t = float(time_of_day) % _DAY
+    return t + _DAY if t < origin else t
+
+
 @dataclass(frozen=True, kw_only=True, eq=False)
 class TimeOfDayDrift:
     """The calibration runs' factors over the time of day (see the module docstring).
@@ -129,22 +140,48 @@ class TimeOfDayDrift:
     Attributes
     ----------
     trend : ScaleTrend
-        Over seconds since midnight.
+        Over the time of day on the drift's axis (:meth:`axis`: seconds since midnight,
+        unless the runs straddle it).
     dates : tuple of date
         The calibration runs' dates (empty when their clock has no date).
+    origin : float
+        Where the axis's day starts, s since midnight: 0, or for runs that straddle
+        midnight the middle of the longest gap between their times of day (an event
+        in that gap takes the factor of the runs' nearer end).
     """
 
     trend: ScaleTrend
     dates: tuple[date, ...]
+    origin: float = 0.0
+
+    @classmethod
+    def fit(cls, times_of_day: Sequence[float], factors: Sequence[float],
+            dates: tuple[date, ...] = ()) -> TimeOfDayDrift:
+        """The trend of the runs' ``factors`` over their ``times_of_day`` (s since
+        midnight), on an axis that keeps their span whole."""
+        tod = np.sort(np.mod(np.asarray(times_of_day, dtype=float), _DAY))
+        origin = 0.0
+        if tod.size >= 2:
+            gaps = np.diff(np.concatenate([tod, [tod[0] + _DAY]]))
+            k = int(gaps.argmax())
+            if k < tod.size - 1:  # the longest gap is inside the day: the runs straddle
+                origin = float(tod[k] + 0.5 * gaps[k])  # midnight
+        axis = [_on_axis(t, origin) for t in times_of_day]
+        return cls(trend=ScaleTrend.fit(axis, factors), dates=dates, origin=origin)
+
+    def axis(self, time_of_day: float) -> float:
+        """A time of day (s since midnight) on the trend's axis: from :attr:`origin` to
+        origin + 86400 s."""
+        return _on_axis(time_of_day, self.origin)
 
     def factor(self, when: datetime | float) -> tuple[float, bool]:
         """The factor at a clock (a datetime, or seconds of day) and whether that is
         outside the calibration: another date, or beyond the runs' span of the day."""
         if isinstance(when, datetime):
-            tod = seconds_of_day(when)
+            tod = self.axis(seconds_of_day(when))
             other_day = bool(self.dates) and when.date() not in self.dates
         else:
-            tod, other_day = float(when) % 86400.0, False
+            tod, other_day = self.axis(float(when)), False
         return float(self.trend(tod)), other_day or not self.trend.covers(tod)
 
 
@@ -245,8 +282,8 @@ def traffic_drift(rows: Sequence[SummaryRow], setup: DriftSetup, *,
     cannot: no reference class, or no nominal value.
 
     ``calibration`` is the runs' time-of-day trend with their dates, and
-    ``calibration_span`` their clock span (s of day) within which a calibration date's
-    traffic gives the nominal value."""
+    ``calibration_span`` their clock span (s, on its :meth:`~TimeOfDayDrift.axis`)
+    within which a calibration date's traffic gives the nominal value."""
     cls = setup.reference_class or _reference_class(rows)
     if cls is None:
         return None
@@ -255,9 +292,9 @@ def traffic_drift(rows: Sequence[SummaryRow], setup: DriftSetup, *,
     nominal, source = None, ""
     if calibration is not None and calibration.dates:
         lo, hi = calibration_span or calibration.trend.span
-        base = [s / calibration.trend(seconds_of_day(r.time)) for r, s in refs
+        base = [s / calibration.trend(t) for r, s in refs
                 if r.time.date() in calibration.dates
-                and lo <= seconds_of_day(r.time) <= hi]
+                and lo <= (t := calibration.axis(seconds_of_day(r.time))) <= hi]
         if len(base) >= setup.min_reference:
             # the mean, as the trends are local means (a median would bias every factor
             # by the steering loads' skew), of the ratios within the outlier limit
