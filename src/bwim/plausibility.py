@@ -40,6 +40,10 @@ HARD_FLAGS = (
     "unconfirmed_gauge_fault",  # a gauge the day finds healthy disagreed (another vehicle)
     "group_off_path",        # an axle group off the vehicle's wheel path (bwim.site.wheelpath)
     "split_across_records",  # the vehicle goes on in another record (bwim.site.split)
+    "negative_force",        # MFI: an axle's force tensile where it is weighed
+    "open_at_start",         # a long recording begins within the event (bwim.stream)
+    "open_at_end",           # ... or ends within it: the vehicle may go on beyond it
+    "max_duration",          # the trigger closed at its max_duration with the signal up
 )
 #: Flags that call for a look but keep the weights (quality "warning").
 SOFT_FLAGS = (

@@ -37,6 +37,7 @@ from datetime import datetime
 from datetime import time as dtime
 
 from bwim.errors import InputError
+from bwim.plausibility import HARD_FLAGS
 
 __all__ = ["DIRECTIONS", "LATERAL_UNITS", "METHODS", "QUALITIES", "STATUSES", "SummaryRow",
            "failed_row"]
@@ -213,9 +214,11 @@ class SummaryRow:
         if self.status == "weighed":
             if self.gvw is None:
                 raise InputError(f"{self.record}: a weighed row needs its gross weight")
-            if self.quality == "reject":
+            hard = [f for f in self.flags if f in HARD_FLAGS]
+            if self.quality == "reject" or hard:
                 raise InputError(f"{self.record}: a weighing of quality 'reject' is not a "
-                                 "weight; its row must be refused with the reason")
+                                 "weight; its row must be refused with the reason"
+                                 + (f" (hard flags: {', '.join(hard)})" if hard else ""))
             if self.reason:
                 raise InputError(f"{self.record}: a weighed row has no reason, got "
                                  f"{self.reason!r}")

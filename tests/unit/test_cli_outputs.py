@@ -191,3 +191,40 @@ def test_a_record_result_file_never_replaces_an_input(beam, tmp_path, capsys):
                  str(a), "-o", str(tmp_path), "--force"])
     one_line_error(code, capsys.readouterr().err, "is the input", "a_static.h5")
     assert Path(other).read_bytes() == before
+
+
+def test_a_resume_refuses_a_record_of_the_same_name_from_another_file(day, weighed,
+                                                                      tmp_path, capsys):
+    """A copy of one of the day's files, from another folder, given to --resume: the
+    summary would hold two rows of one record (review of stop 33: both were weighed, and
+    bwim report and accuracy then refused the summary). Refused, one line, nothing
+    changed."""
+    import shutil
+
+    out = _copy(weighed, tmp_path / "out")
+    before = (out / "summary.csv").read_text()
+    moved = tmp_path / "moved"
+    moved.mkdir()
+    shutil.copy2(day.traffic[0], moved / day.traffic[0].name)
+    code = main(_weigh_argv(day, [moved], out, "--resume"))
+    one_line_error(code, capsys.readouterr().err, "already holds record",
+                   day.traffic[0].name)
+    assert (out / "summary.csv").read_text() == before
+
+
+@pytest.mark.parametrize("entry", [
+    {"source": "a.txt"},                                  # no rows
+    {"source": "a.txt", "rows": 5},
+    {"rows": []},                                         # no source
+    "an entry",
+    {"source": "a.txt", "rows": [{"vehicle": "1"}]},      # a row without its record
+])
+def test_a_damaged_manifest_is_one_line(day, weighed, tmp_path, capsys, entry):
+    import json
+
+    out = _copy(weighed, tmp_path / "out")
+    data = json.loads((out / MANIFEST_NAME).read_text())
+    data["entries"]["x"] = entry
+    (out / MANIFEST_NAME).write_text(json.dumps(data))
+    code = main(_weigh_argv(day, [day.traffic[0]], out, "--resume"))
+    one_line_error(code, capsys.readouterr().err, "damaged manifest")

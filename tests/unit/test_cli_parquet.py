@@ -67,3 +67,22 @@ def test_a_resume_keeps_the_parquet_summary_up_to_date(day, tmp_path):
     assert len({k[0] for k in csv_keys}) == len(names) == 4
     assert [(r.record, r.vehicle) for r in read_summary_parquet(out / "summary.parquet")] \
         == csv_keys
+
+
+def test_force_without_parquet_leaves_no_stale_parquet(day, tmp_path, capsys):
+    """A run with --parquet, then a fresh run with --force but no --parquet on one file:
+    the earlier run's summary.parquet goes (review of stop 33: it stayed, 7 rows beside a
+    summary of 1); without --force the new run is refused for it."""
+    out = tmp_path / "out"
+    assert main(_argv(day, out, "--parquet")) == 0
+    one = ["weigh", str(day.scenario), str(day.traffic[0]), "--calibration-records",
+           str(day.calibration[0].parent), "-o", str(out)]
+    assert main([*one, "--force"]) == 0
+    assert not (out / "summary.parquet").exists()
+    assert {r.record for r in read_summary(out / "summary.csv")} == {day.traffic[0].name}
+    assert main(_argv(day, out, "--parquet", "--force")) == 0
+    for f in out.iterdir():  # an earlier run's summary.parquet alone
+        if f.name != "summary.parquet":
+            f.unlink()
+    capsys.readouterr()
+    assert main(one) == 2 and "summary.parquet" in capsys.readouterr().err

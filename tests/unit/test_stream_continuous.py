@@ -230,6 +230,24 @@ def test_an_event_the_recording_may_have_cut_is_not_weighed(day, tmp_path, capsy
     assert [r["n_axles"] for r in mine] == ["6"]
     assert mine[0]["status"] == "refused" and not mine[0]["gvw_kN"]
     assert "open_at_end" in mine[0]["flags"] and "may go on beyond it" in mine[0]["reason"]
+    # the rest of the recording, the logger's next long file, weighed with --resume
+    # alone: the refusal stays (review of stop 33: the first file's flags were known only
+    # while it was given again, and the truck came back weighed from the manifest)
+    from datetime import timedelta
+
+    t_cut = float(lines[first + cut].split()[0])
+    clock = cont.clock + timedelta(seconds=t_cut)
+    rest = tmp_path / "next" / (f"continuous_{clock:%Y-%m-%d-%H-%M-%S}-"
+                                f"{clock.microsecond // 1000:03d}.txt")
+    rest.parent.mkdir()
+    rest.write_text("".join(lines[:first] + lines[first + cut:]), encoding="utf-8")
+    code = main(["weigh", str(site.scenario), str(rest), "--calibration-records",
+                 str(site.calibration[0].parent), "-o", str(out), "--continuous",
+                 "--resume"])
+    assert code == 0, capsys.readouterr().err
+    again = {(r["record"], r["vehicle"]): r for r in csv.DictReader(open(out / "summary.csv"))}
+    assert any(k[0].startswith(rest.name) for k in again)
+    assert again[(mine[0]["record"], "1")]["status"] == "refused"
 
 
 def test_a_long_file_that_breaks_off_fails_alone(day, tmp_path, capsys):
@@ -349,3 +367,84 @@ def test_an_event_closed_at_max_duration_is_not_weighed(day, tmp_path, capsys):
     # the truck's event file weighed on its own: weighed (only the flag refused it)
     weighing = weigh_event(read_record(out / "events" / f"{cont.path.name}#3.h5"), day["cal"])
     assert [v.vehicle.passage.n_axles for v in weighing.vehicles if v.weighed] == [6]
+
+
+def _weigh_continuous(site, source, out, *extra):
+    from bwim.cli import main
+
+    return main(["weigh", str(site.scenario), str(source), "--calibration-records",
+                 str(site.calibration[0].parent), "-o", str(out), "--continuous", *extra])
+
+
+def test_bad_calibration_runs_end_with_no_event_file_written(day, tmp_path, capsys):
+    """The calibration is checked before the long files are cut (review of stop 33: the
+    events folder and events.csv were left behind, and a rerun was refused for them)."""
+    bad = tmp_path / "badcal"
+    bad.mkdir()
+    (bad / "x.txt").write_text("not a logger file\n")
+    out = tmp_path / "out"
+    from bwim.cli import main
+
+    code = main(["weigh", str(day["site"].scenario), str(day["cont"].path),
+                 "--calibration-records", str(bad), "-o", str(out), "--continuous"])
+    assert code == 2 and "no calibration run could be read" in capsys.readouterr().err
+    assert not (out / "events").exists() and not (out / "events.csv").exists()
+
+
+def test_a_repaired_long_file_loses_its_failed_row(day, tmp_path, capsys):
+    """A long file broken off (a bad last line) fails; repaired, a --resume cuts and
+    weighs it and its failed row goes (review of stop 33: it stayed, 'failed' beside
+    its events)."""
+    import csv
+
+    site, cont = day["site"], day["cont"]
+    lines = cont.path.read_text(encoding="utf-8").splitlines(keepends=True)
+    long = tmp_path / "long" / cont.path.name
+    long.parent.mkdir()
+    long.write_text("".join(lines[:int(0.6 * len(lines))]) + "12.5\t0.3\n", encoding="utf-8")
+    out = tmp_path / "out"
+    assert _weigh_continuous(site, long, out) == 1
+    long.write_text("".join(lines), encoding="utf-8")
+    assert _weigh_continuous(site, long, out, "--resume") == 0, capsys.readouterr().err
+    rows = list(csv.DictReader(open(out / "summary.csv")))
+    assert not [r for r in rows if r["status"] == "failed"]
+    assert sorted({r["record"] for r in rows}) == [f"{cont.path.name}#{k}" for k in range(1, 5)]
+
+
+def test_a_resume_with_nothing_to_resume_replaces_no_event_file(day, tmp_path, capsys):
+    """A folder without manifest.json has nothing to resume: its events.csv and event
+    files are refused as without --resume (review of stop 33: they were replaced and
+    deleted); an input folder as the output's events folder is refused even with
+    --force (its records would be written over and read again as records)."""
+    site, cont = day["site"], day["cont"]
+    out = tmp_path / "out"
+    (out / "events").mkdir(parents=True)
+    mine = out / "events" / f"{cont.path.name}#7.h5"
+    mine.write_bytes(b"my own file")
+    (out / "events.csv").write_text("my own table\n")
+    assert _weigh_continuous(site, cont.path, out, "--resume") == 2
+    assert "exists" in capsys.readouterr().err
+    assert mine.read_bytes() == b"my own file"
+    assert (out / "events.csv").read_text() == "my own table\n"
+    inputs = tmp_path / "ev" / "events"
+    inputs.mkdir(parents=True)
+    import shutil
+
+    shutil.copy(cont.path, inputs / cont.path.name)
+    assert _weigh_continuous(site, inputs, tmp_path / "ev", "--force") == 2
+    assert "is the input folder" in capsys.readouterr().err
+    assert sorted(p.name for p in inputs.iterdir()) == [cont.path.name]
+
+
+def test_trigger_channels_are_checked_against_the_logger_columns(day, tmp_path, capsys):
+    text = day["site"].scenario.read_text() + '\n[trigger]\nchannels = ["nope"]\n'
+    scenario = tmp_path / "scenario.toml"
+    scenario.write_text(text)
+    from bwim.cli import main
+
+    code = main(["weigh", str(scenario), str(day["cont"].path), "--calibration-records",
+                 str(day["site"].calibration[0].parent), "-o", str(tmp_path / "out"),
+                 "--continuous"])
+    err = capsys.readouterr().err
+    assert code == 2 and "[trigger] channels: no logger channel 'nope'" in err
+    assert len(err.strip().splitlines()) == 1

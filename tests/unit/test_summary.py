@@ -99,6 +99,28 @@ def test_identification_rows_refuse_implausible_weights():
     assert row.gvw is None and row.axle_weights == () and "negative" in row.reason
 
 
+def test_a_tensile_identified_force_refuses_the_vehicle():
+    """``negative_force`` is a hard flag (docs/flags.md): an identification with an
+    axle's force 20 kN tensile where it is weighed (as an under-regularised one gives)
+    is refused, not written with its weights (it was: quality 'warning')."""
+    ident = _beam_identification()
+    f = ident.axle_forces.copy()
+    inside = np.flatnonzero((ident.time >= ident.axle_windows[0, 0])
+                            & (ident.time <= ident.axle_windows[0, 1]))
+    f[inside[inside.size // 2], 0] = -20e3
+    [row] = dataclasses.replace(ident, axle_forces=f).to_summary_rows("beam.h5")
+    assert row.status == "refused" and row.quality == "reject" and row.gvw is None
+    assert "negative_force" in row.flags
+
+
+@pytest.mark.parametrize("flag", ["negative_force", "open_at_end", "split_across_records",
+                                  "residual_high"])
+def test_a_weighed_row_cannot_carry_a_hard_flag(flag):
+    """The schema itself refuses a weight beside a hard flag, whatever its quality says."""
+    with pytest.raises(InputError, match=f"hard flags: {flag}"):
+        SummaryRow(record="a", gvw=300e3, quality="warning", flags=(flag,))
+
+
 def test_static_weights_rows_refuse_a_rejected_weighing():
     ident = _beam_identification()
     passage = ident.passages[0]

@@ -7,7 +7,15 @@ Contract
   failed, and the result file written for it; :class:`bwim.io.outputs.Manifest`) and
   ``summary.csv`` (:mod:`bwim.io.summary`) rewritten from it, both atomically, at most
   every :attr:`BatchFolder.save_every` seconds (or 20 times the last save's duration)
-  and when the batch ends, also on an interrupt.
+  and when the batch ends, also on an interrupt.  With a day-level ``finalize`` the
+  periodic saves write the manifest only: the summary is written when the batch ends,
+  through ``finalize``, and never holds rows that it has not judged (an interrupt
+  during ``finalize``, or a killed process, leaves the summary of the last whole run, or
+  none; ``--resume`` goes on from the manifest).
+* **Names**: the summary names each input by its item's name; an input whose name is
+  already the record of another file's rows in the folder (a resume given a copy from
+  another folder) is refused (:class:`~bwim.errors.InputError`, nothing processed): the
+  summary would hold two rows of one record.
 * **The resume rule** (both commands): with ``resume``, an input is skipped when the
   manifest holds it unchanged, its rows are not ``"failed"`` and its result file (if any)
   still exists; every other input is processed again, so a failed record is retried
@@ -71,7 +79,8 @@ class BatchFolder:
         Also write the final summary as ``summary.parquet`` beside it
         (:mod:`bwim.io.summary_parquet`; refused like the summary when it exists).  A
         resume of a batch that wrote one keeps it up to date without being asked (a stale
-        Parquet summary beside the CSV one would disagree with it).
+        Parquet summary beside the CSV one would disagree with it); a fresh start refuses
+        an existing one without ``force``, with it deletes it when not writing one.
     """
 
     save_every = 1.0
@@ -91,8 +100,9 @@ class BatchFolder:
             # nothing to resume: an existing summary is another run's (no manifest of it)
             refuse_existing(self.summary, force=force)
             refuse_existing(self.folder / MANIFEST_NAME, force=force)
-            if self.parquet is not None:
-                refuse_existing(self.parquet, force=force)
+            old = refuse_existing(self.summary.with_suffix(".parquet"), force=force)
+            if self.parquet is None and (old.exists() or old.is_symlink()):
+                old.unlink()  # (--force) another run's: it would disagree with the summary
         self.manifest = Manifest(self.folder, fresh=not resume)
         if resume and self.manifest.entries and self.manifest.meta != meta:
             raise InputError(f"{self.folder} holds the results of another batch (another "
@@ -121,6 +131,20 @@ class BatchFolder:
         for key in [k for k, e in self.manifest.entries.items()
                     if str(Path(e["source"]).resolve()) in gone]:
             del self.manifest.entries[key]
+
+    def check_names(self, items: Sequence[Item]) -> None:
+        """Refuse an item whose name is already the record of another input's rows in
+        the folder (see the module docstring)."""
+        owner: dict[str, str] = {}
+        for entry in self.manifest.entries.values():
+            for cells in entry["rows"]:
+                owner.setdefault(cells["record"], entry["source"])
+        for it in items:
+            other = owner.get(it.name)
+            if other is not None and not _same_file(other, it.source):
+                raise InputError(f"{it.source}: the summary in {self.folder} already holds "
+                                 f"record {it.name!r} from {other}: rename one, or weigh "
+                                 "it into another folder")
 
     def order(self, sources: Sequence[Path]) -> None:
         """The inputs of this run, in the summary's order."""
@@ -166,6 +190,10 @@ class BatchFolder:
         runs on the final save only (it needs every row)."""
         t = time.perf_counter()
         self.manifest.save()
+        if not final and self.finalize is not None:  # rows not yet judged by the day
+            self._last = time.perf_counter()
+            self._cost = self._last - t
+            return
         rows = self.rows() if final else self.raw_rows()
         write_summary(self.summary, rows)
         if final and self.parquet is not None:
@@ -179,6 +207,10 @@ class BatchFolder:
     def maybe_save(self) -> None:
         if time.perf_counter() - self._last >= max(self.save_every, 20 * self._cost):
             self.save()
+
+
+def _same_file(a: str | Path, b: str | Path) -> bool:
+    return Path(a).resolve() == Path(b).resolve()
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -220,6 +252,7 @@ def run_into(folder: BatchFolder, items: Sequence[Item],
     """
     t0 = time.perf_counter()
     sources = [Path(it.source) for it in items]
+    folder.check_names(items)
     folder.order(sources)
     todo = [it for it, src in zip(items, sources, strict=True) if folder.done(src) is None]
     skipped = len(items) - len(todo)

@@ -5,6 +5,7 @@ with outputs, progress and tables."""
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 from collections.abc import Sequence
 from datetime import datetime, timedelta
@@ -176,7 +177,9 @@ def _run_time(rec) -> str:
 
 
 def _calibrate_site(paths: Sequence[Path], scenario, folder: Path):
-    """Lines from the calibration truck's logger events; a table of the runs."""
+    """Lines from the calibration truck's logger events, and a function that writes
+    their outputs (the table of the runs, the lines) into ``folder`` and prints the
+    table: called once the rest of the input is known good (nothing is written before)."""
     from bwim.io import write_influence_line
     from bwim.scenario import build_site_setup, load_record
     from bwim.site import calibrate_site
@@ -209,11 +212,14 @@ def _calibrate_site(paths: Sequence[Path], scenario, folder: Path):
                      reason or "used"))
     rows += [(name, "", "", "", "", "", f"unreadable: {msg}") for name, msg in unread]
     header = ("run", "time", "speed (m/s)", "lateral", "scale", "residual", "status")
-    write_csv(folder / "calibration_runs.csv", header, rows)
-    print(Table(f"Calibration runs ({site.n_used} of {len(paths)} used):", header,
-                rows).render())
-    write_influence_line(site.lines.line_at(), folder / "influence_lines.h5")
-    return site
+
+    def write() -> None:
+        write_csv(folder / "calibration_runs.csv", header, rows)
+        print(Table(f"Calibration runs ({site.n_used} of {len(paths)} used):", header,
+                    rows).render())
+        write_influence_line(site.lines.line_at(), folder / "influence_lines.h5")
+
+    return site, write
 
 
 def _print_drift(site, fit) -> None:
@@ -347,14 +353,6 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path, batch) -> int:
         raise InputError("weighing logger files needs --calibration-records (runs of the "
                          "calibration truck)")
     paths = record_paths(args.records, any_suffix=True)
-    cut_open: dict[str, tuple[str, ...]] = {}  # events that may not hold vehicles whole
-    cut_failed: dict[str, str] = {}  # long files whose cutting failed: why
-    stale: list[Path] = []  # event files of an earlier cut that the long files no longer hold
-    items = ([Item(name=display_name(p), source=p) for p in paths] if not args.continuous
-             else _continuous_items(paths, scenario, folder / EVENTS, resume=args.resume,
-                                    cut_open=cut_open, cut_failed=cut_failed, stale=stale))
-    batch.forget(stale)
-    read = _CutOrRead(_read(scenario), cut_failed) if cut_failed else _read(scenario)
     bridge = options = None
     if args.bridge:
         from bwim.scenario import load_model
@@ -365,25 +363,45 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path, batch) -> int:
             raise InputError(f"{args.bridge}: the model is not accepted ({bridge.reason}): "
                              "bwim does not weigh with it")
         options = scenario.identify.kwargs() if scenario.identify is not None else {}
-    site = _calibrate_site(record_paths(args.calibration_records, any_suffix=True),
-                           scenario, folder)
+    # the calibration before any output: bad runs end with nothing written
+    site, write_calibration = _calibrate_site(
+        record_paths(args.calibration_records, any_suffix=True), scenario, folder)
+    cut_open: dict[str, tuple[str, ...]] = {}  # events that may not hold vehicles whole
+    cut_failed: dict[str, str] = {}  # long files whose cutting failed: why
+    stale: list[Path] = []  # event files of an earlier cut that the long files no longer hold
+    if args.continuous:
+        items = _continuous_items(paths, scenario, folder / EVENTS, resume=args.resume,
+                                  cut_open=cut_open, cut_failed=cut_failed, stale=stale)
+    else:
+        items = [Item(name=display_name(p), source=p) for p in paths]
+    batch.check_names(items)
+    # a long file cut whole now: its failed row of an earlier run goes (it is repaired)
+    batch.forget([*stale, *(p for p in paths if args.continuous and str(p) not in cut_failed)])
+    read = _CutOrRead(_read(scenario), cut_failed) if cut_failed else _read(scenario)
+    write_calibration()
     days: list = []
 
     def finalize(rows):  # the lanes' spread and the traffic's drift need the whole day
         from bwim.site import finish_day
 
-        day = finish_day([_open_refused(r, cut_open.get(r.record)) for r in rows], site)
+        day = finish_day(rows, site)
         days[:] = [day]
         return list(day.rows)
+
+    def weigh(todo):
+        # an event that may not hold its vehicles whole is refused as it is weighed, so
+        # that the manifest keeps the refusal (a --resume without its long file keeps it)
+        for o in weigh_events(todo, site, read=read, bridge=bridge,
+                              identify_options=options, executor=executor, keep=False):
+            flags = cut_open.get(o.name)
+            yield o if not flags else dataclasses.replace(
+                o, rows=tuple(_open_refused(r, flags) for r in o.rows))
 
     batch.finalize = finalize
     batch.gauge_table = folder / GAUGE_HEALTH_NAME
     batch.gauge_names = tuple(c.name for c in site.lines.channels)
     executor = executor_for(args.jobs, args.scheduler)
-    report = _run_batch(batch, items,
-                        lambda todo: weigh_events(todo, site, read=read,
-                                                  bridge=bridge, identify_options=options,
-                                                  executor=executor, keep=False), "weighing")
+    report = _run_batch(batch, items, weigh, "weighing")
     print(f"{len(items)} event(s){_done_before(report)} in {report.elapsed:.1f} s: "
           f"{report.count('weighed')} vehicle(s) weighed, {report.count('refused')} not "
           f"weighed (flagged), {report.count('failed')} record(s) failed")
@@ -546,12 +564,15 @@ def weigh_command(args: argparse.Namespace) -> int:
     if args.continuous and not site:
         raise InputError("--continuous cuts logger files: the scenario needs a [logger] "
                          "section")
-    refuse_output_in_inputs(args.output, [*args.records, *(args.calibration_records or [])])
+    inputs = [*args.records, *(args.calibration_records or [])]
+    refuse_output_in_inputs(args.output, inputs)
+    if args.continuous:  # the event files' folder is an output folder too
+        refuse_output_in_inputs(Path(args.output) / EVENTS, inputs)
     folder = out_folder(args.output)  # created once the inputs are known to exist
-    if site:
+    if site:  # a resume keeps (and follows) the event files; a fresh run replaces none
         outputs = [folder / "calibration_runs.csv", folder / "influence_lines.h5",
                    *([folder / EVENTS, folder / EVENT_INDEX]
-                     if args.continuous and not args.resume else [])]
+                     if args.continuous and _fresh(args, folder) else [])]
     else:  # each record's weights, and the line unless it is given
         outputs = [*(folder / f"{stem}_static.h5" for stem in unique_stems(paths)),
                    *([] if args.influence else [folder / "influence_line.h5"])]

@@ -187,6 +187,12 @@ class Manifest:
                 meta = data.get("batch", {})
                 if not isinstance(entries, dict) or not isinstance(meta, dict):
                     raise TypeError
+                for e in entries.values():  # each entry as record() writes it
+                    if not (isinstance(e, dict) and isinstance(e.get("source"), str)
+                            and isinstance(e.get("rows"), list)
+                            and all(isinstance(c, dict) and isinstance(c.get("record"), str)
+                                    for c in e["rows"])):
+                        raise TypeError
             except (OSError, ValueError, KeyError, TypeError):
                 raise InputError(f"{self.path}: damaged manifest; remove it (or use "
                                  "--force) to start the batch afresh") from None

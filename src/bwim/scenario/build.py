@@ -378,7 +378,14 @@ def build_trigger(scenario: Scenario) -> TriggerSettings:
         f.name: getattr(spec, f.name) for f in dataclasses.fields(spec)
         if getattr(spec, f.name) is not None}
     with _context(f"{scenario.source}: [trigger]"):
-        return TriggerSettings(**given)
+        settings = TriggerSettings(**given)
+    if settings.channels is not None and scenario.logger is not None:
+        known = set(build_logger_format(scenario).channels)
+        unknown = [c for c in settings.channels if c not in known]
+        if unknown:
+            raise InputError(f"{scenario.source}: [trigger] channels: no logger channel "
+                             f"{unknown[0]!r} in [logger] columns")
+    return settings
 
 
 def build_vehicle(scenario: Scenario) -> Vehicle:
