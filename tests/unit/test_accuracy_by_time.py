@@ -109,6 +109,12 @@ def test_times_with_a_utc_offset_are_read_as_written(tmp_path):
                  "a.txt,2,3.0,100;200,300,2026-07-20T08:00:00.000+02:00\n", encoding="utf-8")
     (r,) = read_summary(p)
     assert r.time == T0
+    # a time of day with an offset, either sign (a '-' after the time is no date's)
+    from bwim.io.csvtable import time_cell
+
+    for text in ("08:00:00+02:00", "08:00:00-02:00", "08:00:00.000-05:30"):
+        assert time_cell(None, 2, "time", text) == dtime(8, 0, 0)
+    assert time_cell(None, 2, "time", "20260720T080000") == T0
 
 
 def test_times_of_day_compare_round_midnight_and_with_dates():

@@ -82,7 +82,7 @@ def test_a_record_name_of_another_file_is_refused(tmp_path):
     folder = BatchFolder(out, meta={}, resume=False, force=False)
     run_into(folder, [Item(name="r.txt", source=a)], lambda todo: iter([_outcome(0, "r.txt")]))
     again = BatchFolder(out, meta={}, resume=True, force=False)
-    with pytest.raises(InputError, match="already holds record 'r.txt' from"):
+    with pytest.raises(InputError, match=r"already holds record 'r\.txt' from"):
         run_into(again, [Item(name="r.txt", source=b)], lambda todo: iter(()))
     same = BatchFolder(out, meta={}, resume=True, force=False)  # the same file: a resume
     assert run_into(same, [Item(name="r.txt", source=a)], lambda todo: iter(())

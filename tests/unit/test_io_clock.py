@@ -252,3 +252,37 @@ def test_logger_clock_without_a_file():
     assert logger_clock(None, "a.txt", first, last) is None
     assert logger_clock(None, "2015-10-01-12-00-00.txt", first, last) == \
         datetime(2015, 10, 1, 12)
+
+
+@pytest.mark.parametrize(("name", "first_row", "expected"), [
+    # the trigger at 00:00:00.2 on 2 Oct, 0.5 s of pre-trigger from 1 Oct 23:59:59.7
+    ("ev_2015-10-02-00-00-00-200.txt", 86400.0 - 0.3, datetime(2015, 10, 1, 23, 59, 59, 700000)),
+    # the mirror: named 1 Oct 23:59:59.9, its first row 2 Oct 00:00:00.1
+    ("ev_2015-10-01-23-59-59-900.txt", 0.1, datetime(2015, 10, 2, 0, 0, 0, 100000)),
+    ("ev_2015-10-01-12-00-00-000.txt", 43199.5, datetime(2015, 10, 1, 11, 59, 59, 500000)),
+])
+@pytest.mark.parametrize("column", ["clock", "time"])
+def test_a_time_of_day_takes_the_names_date_nearest_its_time(tmp_path, name, first_row,
+                                                            expected, column):
+    """A clock time of day in a column (or the time column itself) takes its date from
+    the file name: the date that puts it within 12 h of the name's own time (review of
+    stop 33: a file named just after midnight whose pre-trigger began before it landed a
+    day late, and the mirror case a day early)."""
+    from bwim.io import LoggerFormat, read_logger
+    from bwim.io.clock import ClockSpec
+
+    t = np.arange(20) * 0.1
+    path = tmp_path / name
+    with open(path, "w") as f:
+        f.write("time,clock,s1\n")
+        for tk in t:
+            c = (first_row + tk) % 86400.0
+            h, r = divmod(c, 3600.0)
+            m, s = divmod(r, 60.0)
+            # the time column in clock time counts on past midnight (it must increase)
+            tcol = f"{first_row + tk:.3f}" if column == "time" else f"{tk:.3f}"
+            f.write(f"{tcol},{int(h):02d}:{int(m):02d}:{s:06.3f},0.0\n")
+    fmt = LoggerFormat(columns=("time", "clock", "s1") if column == "clock"
+                       else ("time", "-", "s1"), clock=ClockSpec(column=column))
+    rec = read_logger(path, fmt)
+    assert abs((rec.clock_at(rec.time[0]) - expected).total_seconds()) < 1e-6

@@ -44,7 +44,9 @@ Contract
     above but full match).  A time of day takes its date from ``date_column`` (ISO
     ``YYYY-MM-DD`` or, with ``format``, the text ``"DATE TIME"`` joined by one space),
     else from the file name (``pattern``, or the default forms unless ``from_name`` is
-    False); no date anywhere is an error.  ``column="time"`` says the time column itself
+    False: the name's date, or the day before or after, whichever puts the first row
+    within 12 h of the name's own time of day, as a file named just after midnight may
+    begin before it); no date anywhere is an error.  ``column="time"`` says the time column itself
     is the time of day (s since midnight): only the date is looked for.  Only the first
     and the last data rows' clock fields are read (text columns need no numbers): the
     first gives the clock, the last checks that the column runs with the record's time
@@ -429,7 +431,8 @@ def logger_clock(spec: ClockSpec | None, path: str | Path, first: ClockRow, last
         if spec.date_column is None:
             if name_date is None:
                 raise InputError(no_date)
-            return _midnight(name_date)
+            midnight = _midnight(name_date)
+            return midnight + _day_shift(midnight + timedelta(seconds=first.time), stamp)
         try:
             return _midnight(_parse_date(first.fields.get(spec.date_column, "")))
         except _Bad as exc:
@@ -444,14 +447,26 @@ def logger_clock(spec: ClockSpec | None, path: str | Path, first: ClockRow, last
         except _Bad as exc:
             raise InputError(f"{p}: line {row.line}, column {spec.column!r}: {exc}") from None
     c0, c1 = clocks
-    end = c1.value
-    if c1.day_less and end < c0.value:
+    start, end = c0.value, c1.value
+    if c0.day_less:  # the name's date: the one nearer the name's own time (a file named
+        shift = _day_shift(start, stamp)  # 00:00:00.2 whose first row is 23:59:59.7)
+        start, end = start + shift, end + shift
+    if c1.day_less and end < start:
         end += timedelta(days=1)                    # the time of day wrapped past midnight
-    span_clock = (end - c0.value).total_seconds()
+    span_clock = (end - start).total_seconds()
     span_time = last.time - first.time
     allowed = max(c0.resolution, c1.resolution) + tolerance * abs(span_time) + 1e-6
     if abs(span_clock - span_time) > allowed:
         raise InputError(f"{p}: the clock column {spec.column!r} runs {span_clock:g} s from "
                          f"line {first.line} to line {last.line}, but the record's time "
                          f"{span_time:g} s (not a clock of these samples?)")
-    return c0.value - timedelta(seconds=first.time)
+    return start - timedelta(seconds=first.time)
+
+
+def _day_shift(value: datetime, stamp: NameStamp | None) -> timedelta:
+    """Whole days that bring a clock given the file name's date within 12 h of the name's
+    own time (none when the name has no time of day)."""
+    if stamp is None or not stamp.has_time:
+        return timedelta(0)
+    days = round((stamp.instant - value).total_seconds() / 86400.0)
+    return timedelta(days=days)

@@ -21,11 +21,14 @@ from __future__ import annotations
 
 import csv
 import math
+import re
 from datetime import datetime
 from datetime import time as dtime
 from pathlib import Path
 
 from bwim.errors import InputError
+
+_DATE = re.compile(r"\d{4}-\d{2}-\d{2}|\d{8}")  # a cell's leading date
 
 __all__ = ["CsvTable", "axles_cells", "finite", "integer_cell", "missing", "number_cell",
            "numbers_cell", "once", "record_name", "speed_cell", "time_cell"]
@@ -187,7 +190,8 @@ def time_cell(t: CsvTable | None, line: int, column: str, text: str
         return None
     where = column if t is None else t.where(line, column)
     try:
-        value = (datetime.fromisoformat(text) if ("T" in text or "-" in text[:10])
+        # a date leads (YYYY-MM-DD, YYYYMMDD): not the '-' of a time's UTC offset
+        value = (datetime.fromisoformat(text) if ("T" in text or _DATE.match(text))
                  else dtime.fromisoformat(text))
     except ValueError:
         raise InputError(f"{where}: {text!r} is not an ISO 8601 time") from None
