@@ -286,3 +286,19 @@ def test_a_time_of_day_takes_the_names_date_nearest_its_time(tmp_path, name, fir
                        else ("time", "-", "s1"), clock=ClockSpec(column=column))
     rec = read_logger(path, fmt)
     assert abs((rec.clock_at(rec.time[0]) - expected).total_seconds()) < 1e-6
+
+
+def test_a_compact_hhmmss_clock_is_not_taken_for_seconds():
+    """'083000' in a clock column: 08:30:00 written HHMMSS, or 83000 s (23:03:20)
+    zero-padded: refused with the format that reads the first (review of stop 33: it was
+    read as 23:03:20 without a word); given that format, it is 08:30:00."""
+    first = ClockRow(line=3, time=0.0, fields={"c": "083000"})
+    last = ClockRow(line=12, time=1.0, fields={"c": "083001"})
+    with pytest.raises(InputError, match="reads as HHMMSS or as seconds since midnight"):
+        logger_clock(ClockSpec(column="c"), "ev_2015-10-01-08-30-00-000.txt", first, last)
+    assert logger_clock(ClockSpec(column="c", format="%H%M%S"), "ev_2015-10-01-08-30-00-000.txt",
+                        first, last) == datetime(2015, 10, 1, 8, 30)
+    plain = [ClockRow(line=3, time=0.0, fields={"c": "30600"}),
+             ClockRow(line=12, time=1.0, fields={"c": "30601"})]  # 08:30:00 in s
+    assert logger_clock(ClockSpec(column="c"), "ev_2015-10-01-08-30-00-000.txt", *plain) == \
+        datetime(2015, 10, 1, 8, 30)

@@ -39,7 +39,8 @@ Contract
     named).
   - **a column** (``column="clock"``): the column (named in ``LoggerFormat.columns``; not a
     channel) holds the clock of each row: a number (s since midnight, the format's decimal
-    mark), ISO 8601 text with date and time (``2015-10-01T09:45:52.576``, ``2015-10-01
+    mark; six digits with a leading zero, ``083000``, are refused: HHMMSS or padded
+    seconds, the ``format`` says which), ISO 8601 text with date and time (``2015-10-01T09:45:52.576``, ``2015-10-01
     09:45:52``), a time of day (``09:45:52.576``), or text in ``format`` (strptime, as
     above but full match).  A time of day takes its date from ``date_column`` (ISO
     ``YYYY-MM-DD`` or, with ``format``, the text ``"DATE TIME"`` joined by one space),
@@ -90,6 +91,9 @@ _BASIC = re.compile(
     r"(?<!\d)(?P<Y>\d{4})(?P<m>\d{2})(?P<d>\d{2})[T_-](?P<H>\d{2})(?P<M>\d{2})(?P<S>\d{2})"
     r"(?:[.,](?P<f>\d{1,9}))?(?!\d)")
 _NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?", re.ASCII)
+#: Six digits with a leading zero (and maybe a fraction): a compact HHMMSS clock as likely
+#: as seconds since midnight written zero-padded.
+_COMPACT = re.compile(r"0\d{5}(?:\.\d*)?", re.ASCII)
 _FRACTION = re.compile(r"[.,](\d+)")
 
 
@@ -310,6 +314,9 @@ def _time_of_day(text: str, decimal: str) -> float | None:
     """Seconds since midnight of a number or a time text; None if it is neither."""
     s = text.replace(",", ".") if decimal == "," else text
     if _NUMBER.fullmatch(s):
+        if _COMPACT.fullmatch(s):  # 083000: HHMMSS, or seconds padded? it cannot tell
+            raise _Bad(f"{text!r} reads as HHMMSS or as seconds since midnight: set the "
+                       "clock's format (\"%H%M%S\") for the first")
         v = float(s)
         if not (math.isfinite(v) and 0.0 <= v < 86400.0):
             raise _Bad(f"{text!r} is not a time of day (s since midnight, 0 to 86400)")
