@@ -74,11 +74,11 @@ FLAG_TABLE: tuple[tuple[str, tuple[str, ...], str, str], ...] = (
      "the spread printed by bwim weigh; the group_laterals column; another vehicle in "
      "the record"),
     ("hard", ("split_across_records",),
-     "the vehicle's axles follow (lead) those of a vehicle of its lane and direction in "
-     "another record closer than two vehicles following each other can, 2.4 m + 0.5 s "
-     "× speed between axles (bwim.site.split): the logger closed one file between the "
-     "axles of one vehicle, or two files hold the same axles; each part looks whole, so "
-     "neither is weighed",
+     "the vehicle's first (last) axle follows (leads) the axles of a vehicle of its lane "
+     "and direction in another record closer than two vehicles following each other can, "
+     "2.4 m + 0.5 s × speed between axles (bwim.site.split): the logger closed one file "
+     "between the axles of one vehicle (a truck and its drawbar trailer on a short span) "
+     "or two files hold the same axles; each part looks whole, so neither is weighed",
      "the logger's post-trigger; the two records' clocks"),
     ("hard", ("negative_force",),
      "moving force identification: an identified axle force is tensile where it is "
