@@ -599,9 +599,9 @@ class AccuracyResult:
         notes = [f"{self.n_vehicles} of {self.n_reference} reference vehicles weighed"]
         for what, names in (("not weighed", self.missing),
                             ("absent from the summary", self.unmatched),
-                            ("given by time, more than one vehicle within the tolerance or "
-                             "one another reference takes (give the lane, or a smaller "
-                             "time tolerance): not assessed", self.ambiguous),
+                            ("more than one vehicle they may be, or one another reference "
+                             "takes (give the lane, the vehicle, or a smaller time "
+                             "tolerance): not assessed", self.ambiguous),
                             ("axle count differs (axle criteria exclude them)",
                              self.axle_mismatch)):
             if names:
@@ -660,17 +660,19 @@ def _summaries(rows: Sequence[SummaryRow]) -> dict[str, list[SummaryRow]]:
     return out
 
 
-def _match(ref: ReferenceRow, rows: list[SummaryRow] | None) -> SummaryRow | None:
-    """The summary row of a reference vehicle (see :func:`assess`)."""
+def _match(ref: ReferenceRow, rows: list[SummaryRow] | None) -> list[SummaryRow]:
+    """The summary rows of its record a reference vehicle may be (see :func:`assess`):
+    its vehicle's when it names one; else those in its lane (rows without a lane
+    included), and among several those of its axle count."""
     if not rows:
-        return None
+        return []
     if ref.vehicle is not None:
-        return next((r for r in rows if r.vehicle == ref.vehicle), None)
-    if len(rows) == 1:
-        return rows[0]
+        return [r for r in rows if r.vehicle == ref.vehicle][:1]
     if ref.lane is not None:
-        rows = [r for r in rows if r.lane == ref.lane] or rows
-    return next((r for r in rows if r.weighed), rows[0])
+        rows = [r for r in rows if r.lane is None or r.lane == ref.lane]
+    if len(rows) > 1 and ref.n_axles is not None:
+        return [r for r in rows if r.n_axles == ref.n_axles] or rows
+    return rows
 
 
 def _by_time(ref: ReferenceRow, rows: Sequence[SummaryRow], tolerance: float
@@ -692,21 +694,21 @@ def _matches(summary: dict[str, list[SummaryRow]], reference: dict, tolerance: f
     found: dict = {}
     ambiguous: list = []
     claims: dict[tuple[str, int], int] = {}
+    named: dict[tuple[str, int], int] = {}  # the claims of references by record
     for key, ref in reference.items():
-        if ref.record:
-            found[key] = row = _match(ref, summary.get(ref.record))
-            if row is not None:
-                claims[row.key] = claims.get(row.key, 0) + 1
-            continue
-        near = _by_time(ref, timed, tolerance)
+        near = (_match(ref, summary.get(ref.record)) if ref.record
+                else _by_time(ref, timed, tolerance))
         found[key] = near[0] if len(near) == 1 else None
         if len(near) > 1:
             ambiguous.append(key)
         elif near:
             claims[near[0].key] = claims.get(near[0].key, 0) + 1
-    for key, ref in reference.items():  # one row, another reference's too
-        row = found[key]
-        if not ref.record and row is not None and claims[row.key] > 1:
+            if ref.record:
+                named[near[0].key] = named.get(near[0].key, 0) + 1
+    for key, ref in reference.items():  # one row, another reference's too: a record
+        row = found[key]  # keeps it against references by time, not against another
+        if row is not None and (named.get(row.key, 0) if ref.record
+                                else claims[row.key]) > 1:
             found[key] = None
             ambiguous.append(key)
     return found, ambiguous
@@ -722,8 +724,8 @@ class ReferenceMatch:
     row : SummaryRow or None
         None: no summary row is it (``ambiguous``: more than one could be).
     ambiguous : bool
-        A reference given by time that more than one summary row could be, or whose one
-        row another reference also takes.
+        A reference that more than one summary row could be, or whose one row another
+        reference also takes.
     """
 
     reference: ReferenceRow
@@ -781,14 +783,15 @@ def assess(summary_rows: Sequence[SummaryRow], reference_rows: Sequence[Referenc
     Notes
     -----
     Matching: a reference names a record and, optionally, a vehicle of it (the summary's
-    ``vehicle``); without one it is the record's only summary row, or among several the
-    one in the reference's lane (when given), a weighed one first.  A reference without
-    a record gives the time the vehicle crossed instead (a continuous recording's events
-    are named by the trigger): its row is the summary row whose ``time`` lies within
-    ``time_tolerance`` of it (as instants when both have a date, else as times of day),
-    in the reference's lane when given; among several, those of the reference's axle
-    count; still several, or one row that another reference also takes, is ambiguous:
-    not matched, listed in ``ambiguous`` (never a guess).  A summary row without
+    ``vehicle``); without one it is the record's summary row in the reference's lane
+    (when given; rows without a lane count as in it), among several the one of the
+    reference's axle count.  A reference without a record gives the time the vehicle
+    crossed instead (a continuous recording's events are named by the trigger): its row
+    is the summary row whose ``time`` lies within ``time_tolerance`` of it (as instants
+    when both have a date, else as times of day), in the reference's lane when given;
+    among several, those of the reference's axle count.  Still several, or one row that
+    another reference also takes, is ambiguous: not matched, listed in ``ambiguous``
+    (never a guess: a refused truck beside a weighed car is not the car).  A summary row without
     a gross weight counts as not weighed (``missing``), never silently dropped.  A weighed
     vehicle whose axle count differs from the reference, or whose axle weights are
     unknown, stays in the gross-weight criterion and is left out of the three axle
@@ -810,9 +813,9 @@ def assess(summary_rows: Sequence[SummaryRow], reference_rows: Sequence[Referenc
     unmatched = tuple(m.reference.label for m in matches if m.row is None and not m.ambiguous)
     if strict and ambiguous:
         shown = ", ".join(ambiguous[:5]) + (", …" if len(ambiguous) > 5 else "")
-        raise InputError(f"{len(ambiguous)} reference vehicle(s) given by time match more "
-                         f"than one summary row within {tolerance:g} s, or one another "
-                         f"reference takes: {shown}")
+        raise InputError(f"{len(ambiguous)} reference vehicle(s) match more than one "
+                         f"summary row (by record, or by time within {tolerance:g} s), or "
+                         f"one another reference takes: {shown}")
     if strict and unmatched:
         shown = ", ".join(unmatched[:5]) + (", …" if len(unmatched) > 5 else "")
         raise InputError(f"reference names {len(unmatched)} record(s) (or times) absent "

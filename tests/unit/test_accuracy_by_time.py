@@ -66,7 +66,8 @@ def test_the_lane_then_the_axle_count_tell_near_vehicles_apart_else_ambiguous():
     result = assess(rows, [_ref(T0 + timedelta(seconds=1), lane=1)])
     assert result.ambiguous == ("2026-07-20T08:00:01 lane 1",) and result.unmatched == ()
     assert any("more than one vehicle" in n for n in result.notes())
-    with pytest.raises(InputError, match="match more than one summary row within 5 s"):
+    with pytest.raises(InputError, match=r"more than one summary row \(by record, or by "
+                                         r"time within 5 s\)"):
         assess(rows, [_ref(T0 + timedelta(seconds=1), lane=1)], strict=True)
 
 

@@ -40,19 +40,19 @@ Contract
   - **a column** (``column="clock"``): the column (named in ``LoggerFormat.columns``; not a
     channel) holds the clock of each row: a number (s since midnight, the format's decimal
     mark; six digits with a leading zero, ``083000``, are refused: HHMMSS or padded
-    seconds, the ``format`` says which), ISO 8601 text with date and time (``2015-10-01T09:45:52.576``, ``2015-10-01
-    09:45:52``), a time of day (``09:45:52.576``), or text in ``format`` (strptime, as
-    above but full match).  A time of day takes its date from ``date_column`` (ISO
-    ``YYYY-MM-DD`` or, with ``format``, the text ``"DATE TIME"`` joined by one space),
-    else from the file name (``pattern``, or the default forms unless ``from_name`` is
-    False: the name's date, or the day before or after, whichever puts the first row
-    within 12 h of the name's own time of day, as a file named just after midnight may
-    begin before it); no date anywhere is an error.  ``column="time"`` says the time column itself
-    is the time of day (s since midnight): only the date is looked for.  Only the first
-    and the last data rows' clock fields are read (text columns need no numbers): the
-    first gives the clock, the last checks that the column runs with the record's time
-    (within its own resolution plus ``tolerance`` × the duration; a time of day that
-    wraps past midnight goes on to the next day).
+    seconds, the ``format`` says which), ISO 8601 text with date and time
+    (``2015-10-01T09:45:52.576``, ``2015-10-01 09:45:52``), a time of day
+    (``09:45:52.576``), or text in ``format`` (strptime, as above but full match). A time
+    of day takes its date from ``date_column`` (ISO ``YYYY-MM-DD`` or, with ``format``, the
+    text ``"DATE TIME"`` joined by one space), else from the file name (``pattern``, or the
+    default forms unless ``from_name`` is False: the name's date, or the day before or
+    after, whichever puts the first row within 12 h of the name's own time of day, as a
+    file named just after midnight may begin before it); no date anywhere is an error.
+    ``column="time"`` says the time column itself is the time of day (s since midnight):
+    only the date is looked for. Only the first and the last data rows' clock fields are
+    read (text columns need no numbers): the first gives the clock, the last checks that
+    the column runs with the record's time (within its own resolution plus ``tolerance`` ×
+    the duration; a time of day that wraps past midnight goes on to the next day).
   - **none** (``ClockSpec(from_name=False)``): no clock.
 
 * Every refusal is an :class:`~bwim.errors.InputError` with a one-line message that starts

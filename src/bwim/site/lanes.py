@@ -7,11 +7,13 @@ Contract
   there are: :mod:`bwim.detect.pursuit`) and returns an :class:`EventDetection`: every
   vehicle found, in order of arrival, as a :class:`LaneVehicle` with its lane number and
   direction.
-* Frames.  A +x lane's passages are in the lines' frame (its first detector at its
-  ``position``).  A −x lane's vehicles move the other way: their passages are in the
-  mirrored frame ``x' = −x`` (axle i at ``x' = v (t − delay) − a_i``, the first detector
-  at ``x' = −position``), where the span is ``(−x_end, −x_start)``; their windows on the
-  span are clock times, comparable across lanes.
+* Frames.  The lines' frame is the calibration truck's: it travels +x there, whichever
+  way the bridge's own x runs (a calibration lane declared ``"-x"`` included).  A lane
+  that travels like the calibration lane has its passages in that frame (its first
+  detector at its ``position``).  A lane that travels the other way: its passages are in
+  the mirrored frame ``x' = −x`` (axle i at ``x' = v (t − delay) − a_i``, the first
+  detector at ``x' = −position``), where the span is ``(−x_end, −x_start)``; their
+  windows on the span are clock times, comparable across lanes.
 * A lane pair's detectors also feel vehicles of other lanes, weakly: a single axle found
   by a pair other than the calibration lane's, or a vehicle whose lateral position (m)
   lies clearly in a lane of the other direction (beyond three quarters of the way from
@@ -149,11 +151,15 @@ class EventDetection:
                             | {f for v in self.vehicles for f in v.vehicle.flags}))
 
 
-def _frame(pair: DetectorLane, span: tuple[float, float] | None
+def _frame(pair: DetectorLane, span: tuple[float, float] | None, setup: SiteSetup
            ) -> tuple[float, tuple[float, float] | None]:
-    """Position and span of a lane's detection in its own frame."""
+    """Position and span of a lane's detection in its own frame: the lines' frame (the
+    calibration truck's: it travels +x there, whichever way the bridge's x runs) for a
+    lane that travels like the calibration lane, mirrored for one that travels the other
+    way."""
     pos = float(pair.position or 0.0)
-    if pair.sign > 0:
+    cal = setup.calibration_pair
+    if cal is None or pair.direction == cal.direction:
         return pos, span
     return -pos, None if span is None else (-span[1], -span[0])
 
@@ -181,7 +187,7 @@ def detect_lanes(record: Record, setup: SiteSetup, *,
     for pair in setup.lanes:
         if lanes is not None and pair.lane not in lanes:
             continue
-        position, lane_span = _frame(pair, span)
+        position, lane_span = _frame(pair, span, setup)
         options = {} if pair.max_spacing is None else {"max_axle_spacing": pair.max_spacing}
         try:
             det = detect_axles(record, pair.channels, pair.distance, position=position,

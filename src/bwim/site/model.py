@@ -293,6 +293,12 @@ def calibrate_site_model(
                          "made from")
     if gains not in GAIN_MODES:
         raise InputError(f"gains must be one of {GAIN_MODES}, got {gains!r}")
+    cal_pair = calibration.setup.calibration_pair
+    if cal_pair is not None and cal_pair.direction != "+x":
+        raise InputError("an FE model is calibrated with the truck travelling the bridge's "
+                         "+x, but the calibration lane travels -x: give the scenario's x "
+                         "from the other end of the bridge (every x as length - x), so "
+                         "that the calibration lane travels +x")
     if not isinstance(tolerance, (int, float)) or not 0 < float(tolerance) < 1:
         raise InputError(f"tolerance must be a fraction in (0, 1), got {tolerance!r}")
     if track_width is not None and not isinstance(track_width, (int, float)):
