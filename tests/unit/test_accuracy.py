@@ -30,6 +30,7 @@ References
   Φ((δ − m)/s) + Φ((δ + m)/s) − 1 for X ~ N(m, s²); for m = 0, 2Φ(δ/s) − 1.
 """
 
+import dataclasses
 import math
 
 import numpy as np
@@ -325,6 +326,39 @@ def test_assess_reports_what_it_leaves_out():
     for needle in ("1 not weighed: ev003.csv", "1 absent from the summary: ev005.csv",
                    "ev004.csv", "1 summary records without a reference"):
         assert needle in text
+
+
+def test_a_refused_truck_is_not_matched_to_the_car_beside_it():
+    """A record with the reference truck refused (5 axles, lane 1) and a car weighed
+    (2 axles, lane 3): the reference by record is the truck's row, not weighed, whether
+    it gives its lane or not (review of stop 33: the car's 15 kN were assessed against
+    the truck's static weight); a lane none of the record's rows is in matches nothing
+    (no fall-back to another lane)."""
+    truck = SummaryRow(record="r.txt", vehicle=1, status="refused", n_axles=5, lane=1,
+                       reason="multiple presence")
+    car = SummaryRow(record="r.txt", vehicle=2, gvw=15e3, axle_weights=(7e3, 8e3),
+                     n_axles=2, lane=3, axle_spacings=(2.6,))
+    ref = _ref("r.txt", TRUCK5)
+    for given in (ref, dataclasses.replace(ref, lane=1)):
+        r = assess([truck, car], [given])
+        assert r.missing == ("r.txt",) and r.n_vehicles == 0, given
+    r = assess([truck, car], [dataclasses.replace(ref, lane=2)])
+    assert r.unmatched and r.n_vehicles == 0
+    # two rows of its axle count and no lane to tell them: ambiguous, not a guess
+    other = dataclasses.replace(car, n_axles=5, axle_weights=TRUCK5["axle_weights"],
+                                gvw=sum(TRUCK5["axle_weights"]), axle_spacings=())
+    r = assess([truck, other], [ref])
+    assert r.ambiguous and r.n_vehicles == 0
+
+
+def test_one_row_named_by_two_references_is_counted_once():
+    """The same truck given twice (its record alone, and its record and vehicle 1): both
+    are ambiguous, not two vehicles of one row (review of stop 33: A(5) from two copies
+    of one vehicle)."""
+    row = _wim("r.txt", TRUCK5, (1.0,) * 5)
+    refs = [_ref("r.txt", TRUCK5), dataclasses.replace(_ref("r.txt", TRUCK5), vehicle=1)]
+    r = assess([row], refs)
+    assert r.n_vehicles == 0 and len(r.ambiguous) == 2
 
 
 def test_overall_class_is_the_worst_criterion():
