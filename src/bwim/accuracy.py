@@ -592,6 +592,8 @@ class AccuracyResult:
                              f"{c.delta:g}", f"{100 * c.pi:.1f}"))
         title = (f"COST 323 accuracy: overall class {self.overall_class or 'none'} "
                  f"(test {self.repeatability}, environment {self.environment})")
+        if self.skipped and self.overall_class:  # a class of some criteria only: say so
+            title += ", of " + ", ".join(CRITERIA[c.name] for c in self.criteria) + " only"
         return Table(title=title, header=header, rows=tuple(rows))
 
     def notes(self) -> tuple[str, ...]:

@@ -284,6 +284,7 @@ def test_assess_splits_axles_with_the_reference_spacings():
     assert result.overall_class == worst.class_name
     assert result.overall_value == max(c.class_value for c in result.criteria)
     assert result.n_vehicles == 6 and result.n_missing == 0 and result.skipped == ()
+    assert result.table().title.endswith("(test RR2, environment I)")  # every criterion
 
     split = assess(wim, ref, group_spacing=1.0)  # no group: every axle single
     assert split.skipped == ("group_of_axles", "axle_of_group")
@@ -392,6 +393,9 @@ def test_assess_without_axle_groups_skips_them():
     assert r.skipped == ("group_of_axles", "axle_of_group")
     assert [c.name for c in r.criteria] == ["gross_weight", "single_axle"]
     assert r.table().rows[1][1] == "too few"
+    # the overall class says which criteria it is of (review of stop 33: a class of the
+    # axles alone read as the system's)
+    assert r.table().title.endswith(", of gross weight, single axle only")
 
 
 # --- CSV readers ---------------------------------------------------------------------------
