@@ -14,9 +14,11 @@ Contract
   two vehicles on the bridge, an implausible fit) or ``"failed"`` (the record could not be
   read or processed: ``reason`` says why; a batch retries such records on resume).
 * **A refused or doubtful weight is never a weight**: a row that is not ``"weighed"``
-  carries no axle, group or gross weight, and a ``"weighed"`` row has a gross weight, no
-  reason and a quality other than ``"reject"``.  The constructor refuses anything else, so
-  no writer can emit one.
+  carries no axle, group or gross weight, and a ``"weighed"`` row has a positive gross
+  weight, no negative axle or group weight, no reason, a quality other than ``"reject"``
+  and no hard flag (:data:`bwim.plausibility.HARD_FLAGS`).  With ``n_axles``, a row's
+  axle weights (when any) are ``n_axles`` and its spacings ``n_axles − 1``.  The
+  constructor refuses anything else, so no writer can emit one.
 * ``vehicle`` numbers the vehicles of one record from 1 (in order of arrival); the pair
   ``(record, vehicle)`` is a row's key.  ``time`` is the wall-clock time of the vehicle's
   first axle at the gauges' reference (a :class:`datetime.datetime`, or a
@@ -201,7 +203,16 @@ class SummaryRow:
             set_(self, name, _floats(name, getattr(self, name)))
         for name in ("speed", "lateral", "confidence", "residual", "drift_factor", "lam"):
             set_(self, name, _optional_float(name, getattr(self, name)))
+        if isinstance(self.flags, str):
+            raise InputError(f"flags must be a sequence of flags, got the text {self.flags!r}")
         set_(self, "flags", tuple(str(f) for f in self.flags))
+        if self.n_axles is not None:  # one weight per axle, one spacing between two
+            for name, n in (("axle_weights", self.n_axles),
+                            ("axle_spacings", self.n_axles - 1)):
+                values = getattr(self, name)
+                if values and len(values) != n:
+                    raise InputError(f"{self.record}: {len(values)} {name} for "
+                                     f"n_axles = {self.n_axles}")
         set_(self, "lateral_unit", _choice("lateral_unit", self.lateral_unit, LATERAL_UNITS))
         set_(self, "quality", _choice("quality", self.quality, QUALITIES))
         set_(self, "method", _choice("method", self.method, METHODS))
@@ -214,6 +225,9 @@ class SummaryRow:
         if self.status == "weighed":
             if self.gvw is None:
                 raise InputError(f"{self.record}: a weighed row needs its gross weight")
+            if self.gvw <= 0 or any(w < 0 for w in (*self.axle_weights, *self.group_weights)):
+                raise InputError(f"{self.record}: a weighed row's weights are positive "
+                                 f"(gvw {self.gvw!r})")
             hard = [f for f in self.flags if f in HARD_FLAGS]
             if self.quality == "reject" or hard:
                 raise InputError(f"{self.record}: a weighing of quality 'reject' is not a "

@@ -34,6 +34,17 @@ def test_a_row_that_is_not_weighed_carries_no_weight():
         SummaryRow(record="a", status="failed")
     assert SummaryRow(record="a").reason == "not weighed"
     assert failed_row("a.txt", "unreadable").status == "failed"
+    # review of stop 33: what the CSV reader refuses, the schema refuses too
+    with pytest.raises(InputError, match="weights are positive"):
+        SummaryRow(record="a", status="weighed", gvw=-5e3, axle_weights=(-5e3,))
+    with pytest.raises(InputError, match="weights are positive"):
+        SummaryRow(record="a", gvw=300e3, axle_weights=(310e3, -10e3))
+    with pytest.raises(InputError, match="flags must be a sequence of flags"):
+        SummaryRow(record="a", flags="multiple_presence")
+    with pytest.raises(InputError, match="1 axle_spacings for n_axles = 3"):
+        SummaryRow(record="a", n_axles=3, axle_spacings=(4.0,))
+    with pytest.raises(InputError, match="3 axle_weights for n_axles = 2"):
+        SummaryRow(record="a", gvw=3e5, n_axles=2, axle_weights=(1e5,) * 3)
 
 
 def test_the_file_has_one_column_list_and_round_trips(tmp_path):
