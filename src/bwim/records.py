@@ -28,7 +28,7 @@ Contract
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from datetime import datetime
 from datetime import time as dtime
@@ -39,8 +39,9 @@ from bwim.errors import InputError, require_axis, require_columns, require_finit
 from bwim.sensors import Sensor, SensorKind
 
 __all__ = ["RECORD_TIME_SPAN", "AxleLayout", "Passage", "Record", "SimulationSettings", "Truth",
-           "VBIConvergence", "axle_offsets", "local_seconds", "noise_sigma", "record_list",
-           "seconds_of_day"]
+           "VBIConvergence", "axle_offsets", "clock_key", "day_origin", "local_seconds",
+           "noise_sigma",
+           "record_list", "seconds_of_day"]
 
 
 _EPOCH = datetime(1970, 1, 1)
@@ -52,6 +53,33 @@ RECORD_TIME_SPAN = 60.0
 def seconds_of_day(t: datetime | dtime) -> float:
     """Seconds since midnight of a clock time (a datetime's, or a time of day)."""
     return t.hour * 3600.0 + t.minute * 60.0 + t.second + t.microsecond * 1e-6
+
+
+def day_origin(times_of_day: Sequence[float]) -> float:
+    """Where a day that holds ``times_of_day`` (s since midnight) best starts, s since
+    midnight: 0 when they do not straddle midnight, else the middle of the longest gap
+    between them (times from 23:20 to 01:00: 12:10), so that they run in order from it."""
+    tod = np.sort(np.mod(np.asarray(times_of_day, dtype=float), 86400.0))
+    if tod.size < 2:
+        return 0.0
+    gaps = np.diff(np.concatenate([tod, [tod[0] + 86400.0]]))
+    k = int(gaps.argmax())
+    return 0.0 if k == tod.size - 1 else float(tod[k] + 0.5 * gaps[k])
+
+
+def clock_key(times: Sequence[datetime | dtime]) -> Callable[[datetime | dtime], tuple]:
+    """A sort key of clock times: dated ones first, by instant; then times of day from
+    where the day of those among ``times`` starts (:func:`day_origin`: a night from 23:50
+    to 00:20 runs in order)."""
+    origin = day_origin([seconds_of_day(t) for t in times if not isinstance(t, datetime)])
+
+    def key(t: datetime | dtime) -> tuple:
+        if isinstance(t, datetime):
+            return (0, local_seconds(t))
+        s = seconds_of_day(t)
+        return (1, s + 86400.0 if s < origin else s)
+
+    return key
 
 
 def local_seconds(t: datetime) -> float:

@@ -55,3 +55,19 @@ def test_runs_within_one_day_keep_seconds_since_midnight():
     direct = ScaleTrend.fit([8 * H, 12 * H, 16 * H], [1.0, 0.9, 1.0])
     for t in (7 * H, 10 * H, 13.5 * H, 20 * H):
         assert day.factor(t) == (float(direct(t)), not direct.covers(t))
+
+
+def test_clock_times_sort_from_where_their_day_starts():
+    """bwim.records.day_origin / clock_key (the report's period and flow per hour):
+    23:50, 00:10 run in that order; dated clocks come first, by instant."""
+    from datetime import time
+
+    from bwim.records import clock_key, day_origin
+
+    assert day_origin([8 * H, 12 * H, 16 * H]) == 0.0
+    # 00:10 and 23:50: the longest gap 00:10-23:50, its middle 12:00
+    assert day_origin([23 * H + 3000.0, 600.0]) == pytest.approx(12 * H)
+    times = [time(0, 10), datetime(2015, 10, 2, 1, 0), time(23, 50),
+             datetime(2015, 10, 1, 23, 0)]
+    assert sorted(times, key=clock_key(times)) == [
+        datetime(2015, 10, 1, 23, 0), datetime(2015, 10, 2, 1, 0), time(23, 50), time(0, 10)]

@@ -154,6 +154,12 @@ def test_hourly_counts_follow_the_clock():
             SummaryRow(record="c.csv", time=time(21, 0))]
     labels, weighed, other = hourly_counts(rows)
     assert labels == ["21:00", "22:00", "23:00"] and other.tolist() == [1, 0, 1]
+    # ... across midnight: from 23:50 to 00:20 is two hours, not the day's 24 (review of
+    # stop 33: 00:00-23:00 with 22 empty hours between)
+    rows = [SummaryRow(record=f"{k}.csv", time=t)
+            for k, t in enumerate((time(23, 50), time(0, 10), time(0, 20)))]
+    labels, weighed, other = hourly_counts(rows)
+    assert labels == ["23:00", "00:00"] and other.tolist() == [1, 2]
     # several dates: labels carry the date
     rows = [row(23, 30), SummaryRow(record="n.csv", time=datetime(2015, 10, 2, 0, 15))]
     assert hourly_counts(rows)[0] == ["2015-10-01 23:00", "2015-10-02 00:00"]

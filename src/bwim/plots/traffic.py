@@ -21,6 +21,7 @@ import numpy as np
 
 from bwim.conventions import KILONEWTON
 from bwim.plots import axes
+from bwim.records import day_origin, seconds_of_day
 
 __all__ = ["hourly_counts", "plot_axle_load_spectrum", "plot_counts", "plot_gvw_histogram",
            "plot_hourly_flow", "plot_speed_distribution", "seen"]
@@ -169,10 +170,13 @@ def hourly_counts(rows: Sequence) -> tuple[list[str], np.ndarray, np.ndarray]:
         labels = [h.strftime(fmt) for h in hours]
         index = {h: k for k, h in enumerate(hours)}
         slot = [index[s] for s in stamps]
-    else:  # clock times of day (a datetime among them counts by its clock hour)
-        hrs = [r.time.hour for r in vs]
+    else:  # clock times of day (a datetime among them counts by its clock hour), from
+        # where their day starts (a night from 23:50 to 00:20 is three hours, not 24)
+        tod = [seconds_of_day(r.time) for r in vs]
+        origin = day_origin(tod)
+        hrs = [int((s + 86400.0 if s < origin else s) // 3600.0) for s in tod]
         lo, hi = min(hrs), max(hrs)
-        labels = [f"{h:02d}:00" for h in range(lo, hi + 1)]
+        labels = [f"{h % 24:02d}:00" for h in range(lo, hi + 1)]
         slot = [h - lo for h in hrs]
     weighed = np.zeros(len(labels), int)
     other = np.zeros(len(labels), int)

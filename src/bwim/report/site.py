@@ -32,6 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from bwim.conventions import KILONEWTON
+from bwim.records import clock_key
 from bwim.report.flags import FLAG_GROUPS, explain
 from bwim.report.overloads import OverloadLimits, overloads
 from bwim.report.page import Section
@@ -97,7 +98,8 @@ def _overview(summary: TrafficSummary, notes: list[str], n_over: int) -> Section
     vs = [r for r in rows if r.status != "failed"]
     weighed = [r for r in rows if r.weighed]
     gvw = np.array([r.gvw for r in weighed])
-    times = sorted((r.time for r in vs if r.time is not None), key=str)
+    times = [r.time for r in vs if r.time is not None]
+    times.sort(key=clock_key(times))
     lanes = sorted({r.lane for r in vs if r.lane is not None})
     classes = Counter(r.vehicle_class for r in weighed if r.vehicle_class)
     items = [

@@ -66,7 +66,7 @@ import numpy as np
 
 from bwim.errors import InputError
 from bwim.plausibility import Limits, quality_of, weight_flags
-from bwim.records import seconds_of_day
+from bwim.records import day_origin, seconds_of_day
 from bwim.summary import SummaryRow
 from bwim.wim.scale_trend import ScaleTrend
 
@@ -159,13 +159,7 @@ class TimeOfDayDrift:
             dates: tuple[date, ...] = ()) -> TimeOfDayDrift:
         """The trend of the runs' ``factors`` over their ``times_of_day`` (s since
         midnight), on an axis that keeps their span whole."""
-        tod = np.sort(np.mod(np.asarray(times_of_day, dtype=float), _DAY))
-        origin = 0.0
-        if tod.size >= 2:
-            gaps = np.diff(np.concatenate([tod, [tod[0] + _DAY]]))
-            k = int(gaps.argmax())
-            if k < tod.size - 1:  # the longest gap is inside the day: the runs straddle
-                origin = float(tod[k] + 0.5 * gaps[k])  # midnight
+        origin = day_origin(times_of_day)
         axis = [_on_axis(t, origin) for t in times_of_day]
         return cls(trend=ScaleTrend.fit(axis, factors), dates=dates, origin=origin)
 
