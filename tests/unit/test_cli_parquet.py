@@ -86,3 +86,18 @@ def test_force_without_parquet_leaves_no_stale_parquet(day, tmp_path, capsys):
             f.unlink()
     capsys.readouterr()
     assert main(one) == 2 and "summary.parquet" in capsys.readouterr().err
+
+
+def test_mixed_clocks_keep_their_microseconds(tmp_path):
+    """Dated clocks and clock times of day in one summary are stored as ISO text: to the
+    microsecond, as the contract says (review of stop 33: cut at milliseconds)."""
+    from datetime import datetime, time
+
+    from bwim.io.summary_parquet import write_summary_parquet
+    from bwim.summary import SummaryRow
+
+    rows = [SummaryRow(record="a", time=datetime(2026, 1, 1, 9, 0, 0, 123456)),
+            SummaryRow(record="b", time=time(9, 0, 0, 654321))]
+    write_summary_parquet(tmp_path / "s.parquet", rows)
+    assert [r.time for r in read_summary_parquet(tmp_path / "s.parquet")] == \
+        [r.time for r in rows]

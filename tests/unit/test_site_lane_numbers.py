@@ -65,3 +65,18 @@ def test_a_pair_without_a_centre_line_keeps_its_vehicles(small_site_calibrated,
     assert with_lanes.n_used == without.n_used > 0
     rows = weigh_event(truck, with_lanes).to_summary_rows("truck")
     assert [r.lane for r in rows if r.weighed] == [1]
+
+
+def test_the_wrong_calibration_lane_says_so(small_site_calibrated, tmp_path):
+    """The lane-3 pair marked as the calibration lane, the truck having driven lane 1:
+    refused, and the message says which lane's detectors were taught and what to mark
+    (review of stop 33: it spoke of the detectors' distance only)."""
+    day, _, records, _ = small_site_calibrated
+    text = day.scenario.read_text().replace('lane = 3\n', 'lane = 3\ncalibration = true\n', 1)
+    path = tmp_path / "scenario.toml"
+    path.write_text(text)
+    setup = build_site_setup(load_scenario(path))
+    assert setup.calibration_lane == 3
+    with pytest.raises(InputError, match=r"lane 3's detectors \(ad4, ad3\), the calibration "
+                                         r"lane: .*mark that lane's pair \(calibration = true"):
+        calibrate_site(records, setup)

@@ -738,7 +738,8 @@ def learn_responses(records: Sequence[Record], detectors: Sequence[str], distanc
         raise InputError(
             f"the axle detectors' distance of {dist:g} m contradicts the calibration runs' "
             f"known axle spacings: they give {dist + offset:.2f} m (the speeds from the "
-            "spacing of the truck's separate axles against those from the detectors' lag)")
+            "spacing of the truck's separate axles against those from the detectors' lag): "
+            "a wrong distance, or the truck drove another lane than these detectors'")
     taus = np.array([np.nan if r is None else r.tau for r in runs])
     speeds = np.array([np.nan if r is None else r.v for r in runs])
     for k in range(len(recs)):

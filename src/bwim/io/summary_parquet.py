@@ -108,7 +108,7 @@ def write_summary_parquet(path: str | os.PathLike, rows: Iterable[SummaryRow]) -
     types["flags"] = pa.list_(pa.string())
     types["time"] = _time_type(pa, data["time"])
     if types["time"] == pa.string():
-        data["time"] = [None if t is None else t.isoformat(timespec="milliseconds")
+        data["time"] = [None if t is None else t.isoformat(timespec="microseconds")
                         for t in data["time"]]
     schema = pa.schema([(name, types[name]) for name in COLUMNS],
                        metadata={"bwim.columns_version": VERSION})

@@ -565,6 +565,11 @@ def _responses(records: Sequence[Record], setup: SiteSetup, notes: list[str],
                                   setup.calibration_spacings,
                                   loads=setup.calibration_loads)
     except InputError as exc:
+        if "another lane" in str(exc) and len(setup.lanes) > 1:
+            raise InputError(f"lane {pair.lane}'s detectors ({', '.join(pair.channels)}), "
+                             f"the calibration lane: {exc}; if the truck drove another "
+                             "lane, mark that lane's pair (calibration = true in its "
+                             "[[axle_detectors]] table)") from None
         if setup.detection == "learned" or "distance" in str(exc):
             raise
         notes.append(f"detection by separate peaks: the runs did not teach the detectors' "
