@@ -40,8 +40,7 @@ from bwim.sensors import Sensor, SensorKind
 
 __all__ = ["RECORD_TIME_SPAN", "AxleLayout", "Passage", "Record", "SimulationSettings", "Truth",
            "VBIConvergence", "axle_offsets", "clock_key", "day_origin", "local_seconds",
-           "noise_sigma",
-           "record_list", "seconds_of_day"]
+           "noise_sigma", "record_list", "seconds_of_day"]
 
 
 _EPOCH = datetime(1970, 1, 1)
