@@ -33,7 +33,7 @@ import numpy as np
 from bwim.errors import InputError
 from bwim.limits import check_memory
 
-__all__ = ["check_time", "decimal_resolution", "open_regular", "read_numeric_csv"]
+__all__ = ["check_time", "decimal_resolution", "open_regular", "read_numeric_csv", "rounding"]
 
 
 #: Longest line (characters) a numeric CSV file may have: 64 Ki characters hold thousands
@@ -212,7 +212,8 @@ def check_time(
         dropped sample.  None: only the increase is checked.
     resolution : float
         How finely the file writes time, s (one unit in its last written decimal): steps
-        of rounded times differ by up to this much on a perfectly uniform clock.
+        of rounded times differ by up to this much on a perfectly uniform clock (by no
+        more than 99 % of the steps differ from the median, when that is less).
 
     Raises
     ------
@@ -230,6 +231,7 @@ def check_time(
     h = float(np.median(dt))
     if tolerance is None:
         return h
+    resolution = rounding(t, resolution)
     gap = np.flatnonzero(dt > 1.5 * h + resolution)
     if gap.size:
         k = int(gap[0]) + 1
@@ -243,6 +245,18 @@ def check_time(
                          f"the median step {h:g} s by more than {tolerance:.3g} of it "
                          "(non-uniform sampling)")
     return h
+
+
+def rounding(time: np.ndarray, resolution: float) -> float:
+    """How far rounding may move a step of ``time`` (s) written to ``resolution``: up to
+    the resolution, or as much as 99 % of the steps show when that is less (a clock whose
+    steps the written decimals hold exactly: 100 Hz written to 2 decimals steps 0.01 s
+    every time, and a step of 0.02 s is a dropped sample), plus the floats' own error."""
+    t = np.asarray(time, dtype=float)
+    dt = np.diff(t)
+    h = float(np.median(dt))
+    return (min(resolution, float(np.quantile(np.abs(dt - h), 0.99)))
+            + 1e-9 * float(np.max(np.abs(t))))
 
 
 def decimal_resolution(time: np.ndarray, *, max_decimals: int = 12) -> float:

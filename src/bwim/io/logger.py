@@ -10,17 +10,18 @@ Contract
   that order, with a :class:`~bwim.SensorKind` from ``kinds`` (default ``strain_x``; axle
   detectors are ``axle_detector``).
 * :func:`read_logger` returns a :class:`~bwim.Record` with ``passages = ()``: ``time`` is
-  the time column **as written** (s, not shifted: a clock time of day stays one), or
-  ``k / sampling_rate`` (k = 0, 1, ...) without a time column; ``data`` (n_t, n_channels)
-  is the file's numbers times ``scale`` (logger units to strain; the default 1.0 keeps the
-  file's units, which is right for data already in strain and for influence-line weighing,
-  which works on uncalibrated units); ``sensors`` are one :class:`~bwim.Sensor` per
-  channel, the caller's (by name) when given, else ``Sensor(name=..., kind=...)`` without
-  a position; ``clock`` is the wall-clock date and time at record time 0
-  (:func:`bwim.io.clock.logger_clock`): by default from a timestamp in the file name
-  (``2015-10-01-09-45-52-576``, ``20151001_094552``, ISO 8601), None when the name has
-  none; ``LoggerFormat.clock`` sets a name pattern, a clock column or a date and time
-  column pair instead (see :mod:`bwim.io.clock`).
+  the time column **as written** (s, not shifted: a clock time of day stays one; written
+  more coarsely than :data:`COARSE_TIME` of its step and rounded unevenly, the uniform
+  clock it was rounded from, by least squares), or ``k / sampling_rate`` (k = 0, 1, ...)
+  without a time column; ``data`` (n_t, n_channels) is the file's numbers times ``scale``
+  (logger units to strain; the default 1.0 keeps the file's units, which is right for data
+  already in strain and for influence-line weighing, which works on uncalibrated units);
+  ``sensors`` are one :class:`~bwim.Sensor` per channel, the caller's (by name) when given,
+  else ``Sensor(name=..., kind=...)`` without a position; ``clock`` is the wall-clock date
+  and time at record time 0 (:func:`bwim.io.clock.logger_clock`): by default from a
+  timestamp in the file name (``2015-10-01-09-45-52-576``, ``20151001_094552``, ISO 8601),
+  None when the name has none; ``LoggerFormat.clock`` sets a name pattern, a clock column
+  or a date and time column pair instead (see :mod:`bwim.io.clock`).
 * Text layout.  Any file extension.  UTF-8, a byte-order mark ignored; LF, CRLF or CR line
   endings; blank lines and lines whose first non-blank character is ``#`` are skipped
   anywhere (no comment after data on a line); ``skip_lines`` raw lines are dropped first
@@ -50,7 +51,8 @@ Contract
   ``min_samples`` or more than ``max_samples`` rows; time that goes back or repeats, a
   dropped sample (a step over 1.5 x the median step) or jitter (a step
   off the median by more than ``time_tolerance`` of it, plus one unit of the file's last
-  written time decimal); a time column that disagrees with ``sampling_rate``; a clipped
+  written time decimal, or less when the steps show less rounding: 100 Hz written to 2
+  decimals steps exactly 0.01 s); a time column that disagrees with ``sampling_rate``; a clipped
   channel (see :func:`read_logger`); a clock that cannot be read (see
   :mod:`bwim.io.clock`).  A problem of the text (lines, fields, numbers, the row count) is
   reported at the first line that has one, before the checks of the whole record (time,
@@ -80,7 +82,7 @@ from typing import TextIO
 import numpy as np
 
 from bwim.errors import InputError, parse_enum, require_positive
-from bwim.io._csv import check_time, open_regular
+from bwim.io._csv import check_time, open_regular, rounding
 from bwim.io.clock import ClockRow, ClockSpec, logger_clock
 from bwim.limits import check_memory
 from bwim.records import Record
@@ -94,6 +96,10 @@ DELIMITERS = (";", "\t", ",", " ")
 SKIP = "-"
 TIME = "time"
 MiB = 2**20
+#: A time column written more coarsely than this share of its step (600 Hz to 4 decimals:
+#: 0.06) is taken for a uniform clock rounded: the record's times are the least-squares
+#: line through it (its median step would be a rounded step, up to 2 % off the rate).
+COARSE_TIME = 1e-3
 #: Logger files larger than this (bytes) are refused from their size, before reading.
 MAX_LOGGER_BYTES = 256 * MiB
 
@@ -492,7 +498,15 @@ def read_logger(
     else:
         h = check_time(time, lines, where=p, tolerance=float(time_tolerance),
                        resolution=resolution)
+        if resolution > COARSE_TIME * h and np.ptp(np.diff(time)) > 1e-9 * h:
+            # times written coarsely and rounded unevenly: the uniform clock they
+            # were rounded from (least squares), whose step is the rate's (the median of
+            # the rounded steps is one of them: up to 2 % off)
+            k = np.arange(n_t, dtype=float)
+            h = float(np.polyfit(k, time, 1)[0])
+            time = (time.mean() - h * k.mean()) + h * k
         fs = fmt.sampling_rate
+        resolution = rounding(time, resolution)
         if fs is not None and abs(h - 1.0 / fs) > time_tolerance * h + resolution:
             raise InputError(f"{p}: the time column steps {h:g} s ({1.0 / h:g} Hz) but "
                              f"sampling_rate is {fs:g} Hz")

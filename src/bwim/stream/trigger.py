@@ -128,6 +128,8 @@ class _Trigger:
         self.template = record
         self.fs = record.sampling_rate
         self.step = 1.0 / self.fs
+        # the largest difference of a step from the step within the records
+        self.jitter = _jitter(record.time, self.step)
         fs = self.fs
         self.frame = max(2, round(s.frame * fs))
         self.n_frames = max(1, round(s.baseline / s.frame))
@@ -151,7 +153,11 @@ class _Trigger:
             raise InputError(f"the stream's records must share one clock: got {record.clock} "
                              f"after {t.clock}")
         expected = self.last_time + self.step
-        if abs(float(record.time[0]) - expected) > 0.01 * self.step + 1e-9 * abs(expected):
+        # a time column written rounded steps unevenly within each record: the step
+        # between two records may be off by as much (and 1 % of a step otherwise)
+        self.jitter = max(self.jitter, _jitter(record.time, self.step))
+        allowed = max(0.01 * self.step, self.jitter) + 1e-9 * abs(expected)
+        if abs(float(record.time[0]) - expected) > allowed:
             raise InputError(f"the stream's records must follow each other one sample step "
                              f"({self.step:g} s) apart: a record starts at "
                              f"{float(record.time[0]):.9g} s after one that ended at "
@@ -332,6 +338,11 @@ class _Trigger:
             baseline=run.baseline, noise=run.noise, flags=run.flags, record=record))
         self.count += 1
         self.last_stop = e
+
+
+def _jitter(time: np.ndarray, step: float) -> float:
+    """The largest difference of a record's steps from ``step``, s."""
+    return float(np.max(np.abs(np.diff(time) - step))) if time.size > 1 else 0.0
 
 
 def cut_stream(records: Iterable[Record], settings: TriggerSettings | None = None
