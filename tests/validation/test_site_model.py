@@ -129,6 +129,24 @@ def test_model_file_round_trip(fitted, tmp_path):
     # a plain bridge file is a bridge
     save_bridge(model.bridge, tmp_path / "bridge.toml")
     assert not isinstance(load_model(tmp_path / "bridge.toml"), SiteModel)
+    # a file that says what its self-check does not, or holds an impossible value, is
+    # refused in one line (review of stop 33: accepted = "false" loaded as accepted)
+    import re
+
+    text = path.read_text()
+    assert model.accepted and "accepted = true" in text
+    first = re.search(r"gvw_error = (\S+)", text).group(0)
+    for changed, words in (
+            (text.replace("accepted = true", 'accepted = "false"'), "true or false"),
+            (text.replace(first, "gvw_error = 0.5", 1), "self-check does not accept"),
+            (re.sub(r"tolerance = \S+", "tolerance = 5.0", text, count=1), "tolerance must"),
+            (re.sub(r"\norigin = \S+", "\norigin = nan", text, count=1), "origin must"),
+            (re.sub(r"model_error = \S+", "model_error = -5.0", text, count=1),
+             "model_error must not be negative")):
+        bad = tmp_path / "bad.toml"
+        bad.write_text(changed)
+        with pytest.raises(InputError, match=words):
+            load_model(bad)
 
 
 def test_a_dead_gauge_is_left_out_of_the_mfi_weighing(fitted):

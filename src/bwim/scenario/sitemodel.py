@@ -16,6 +16,7 @@ Contract
 
 from __future__ import annotations
 
+import math
 import os
 from typing import Any
 
@@ -77,22 +78,69 @@ def load_model(path: str | os.PathLike) -> SiteModel | Bridge:
         raise InputError(f"{src}: allowed keys are {', '.join(_KEYS)}")
     try:
         channels = [str(c) for c in table["channels"]]
-        gains = [float(g) for g in table["gains"]]
-        if len(channels) != len(gains) or any(not g > 0 for g in gains):
+        gains = [_number(g, "a gain", src, 0.0) for g in table["gains"]]
+        if len(channels) != len(gains):
             raise InputError(f"{src}: one positive gain per channel is needed")
-        runs = tuple(ModelRun(index=int(r["index"]) - 1, explained=float(r["explained"]),
+        runs = tuple(ModelRun(index=_at_least_one(r["index"], src) - 1,
+                              explained=float(r["explained"]),
                               gvw_error=float(r["gvw_error"]), reason=str(r.get("reason", "")))
                      for r in table.get("runs", ()))
         track = table.get("track_width")
         error = table.get("model_error")
         truck = table.get("truck_weight")
-        return SiteModel(bridge=bridge, gains=dict(zip(channels, gains, strict=True)),
-                         origin=float(table["origin"]), lateral=float(table["lateral"]),
-                         track_width=None if track is None else float(track),
-                         tolerance=float(table["tolerance"]),
-                         accepted=bool(table["accepted"]), reason=str(table.get("reason", "")),
-                         weighing_scale=float(table.get("weighing_scale", 1.0)),
-                         model_error=None if error is None else float(error),
-                         truck_weight=None if truck is None else float(truck), runs=runs)
+        model = SiteModel(
+            bridge=bridge, gains=dict(zip(channels, gains, strict=True)),
+            origin=_number(table["origin"], "origin", src),
+            lateral=_number(table["lateral"], "lateral", src),
+            track_width=None if track is None else _number(track, "track_width", src, 0.0),
+            tolerance=_number(table["tolerance"], "tolerance", src, 0.0, 1.0),
+            accepted=_boolean(table["accepted"], "accepted", src),
+            reason=str(table.get("reason", "")),
+            weighing_scale=_number(table.get("weighing_scale", 1.0), "weighing_scale", src,
+                                   0.0),
+            model_error=None if error is None else _not_negative(error, "model_error", src),
+            truck_weight=None if truck is None else _number(truck, "truck_weight", src, 0.0),
+            runs=runs)
+    except InputError:
+        raise
     except (KeyError, TypeError, ValueError) as exc:
         raise InputError(f"{src}: missing or mistyped value ({exc})") from None
+    if model.accepted:  # what the self-check says, not the flag alone
+        bad = next((r for r in model.runs if r.reason or not abs(r.gvw_error)
+                    <= model.tolerance), None)
+        if model.reason or not model.runs or bad is not None:
+            why = (model.reason or "no run checked" if bad is None else
+                   f"run {bad.index + 1}: {bad.reason or f'GVW error {bad.gvw_error:+.3f}'}")
+            raise InputError(f"{src}: accepted = true, but its self-check does not accept "
+                             f"it ({why}, tolerance {model.tolerance:g})")
+    return model
+
+
+def _number(v: Any, name: str, src: str, above: float | None = None,
+            below: float | None = None) -> float:
+    """A finite number of the table (strictly above ``above``, below ``below``)."""
+    if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v) \
+            or (above is not None and not v > above) or (below is not None and not v < below):
+        bounds = "".join([f", above {above:g}" if above is not None else "",
+                          f", below {below:g}" if below is not None else ""])
+        raise InputError(f"{src}: {name} must be a finite number{bounds}, got {v!r}")
+    return float(v)
+
+
+def _not_negative(v: Any, name: str, src: str) -> float:
+    x = _number(v, name, src)
+    if x < 0:
+        raise InputError(f"{src}: {name} must not be negative, got {v!r}")
+    return x
+
+
+def _boolean(v: Any, name: str, src: str) -> bool:
+    if not isinstance(v, bool):
+        raise InputError(f"{src}: {name} must be true or false, got {v!r}")
+    return v
+
+
+def _at_least_one(v: Any, src: str) -> int:
+    if isinstance(v, bool) or not isinstance(v, int) or v < 1:
+        raise InputError(f"{src}: a run's index counts from 1, got {v!r}")
+    return v
