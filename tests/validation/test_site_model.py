@@ -27,7 +27,7 @@ from bwim.scenario import (
     save_bridge,
     save_site_model,
 )
-from bwim.site import SiteModel, calibrate_site_model, weigh_event
+from bwim.site import DriftSetup, SiteModel, calibrate_site_model, weigh_event
 from bwim.site.model import RESIDUAL_FACTOR, noise_share
 from bwim.synthetic.layout import SHORT_SPAN_4_LANE
 
@@ -110,6 +110,45 @@ def test_traffic_weighed_by_the_model(fitted):
         # its axle groups' positions are measured for the day's check, as with the lines
         (row,) = [x for x in ev.to_summary_rows(r["record"]) if x.weighed]
         assert row.method == "mfi" and len(row.group_laterals) == len(row.vehicle_class)
+
+
+def _lane1_truck(fitted):
+    day, scenario, _, _, _ = fitted
+    with open(day.reference, newline="") as f:
+        ref = next(r for r in csv.DictReader(f) if r["lane"] == "1")
+    return load_record(day.out_dir / "traffic" / ref["record"], scenario)
+
+
+def test_mfi_refuses_a_vehicle_beyond_the_runs_lateral_reach(fitted):
+    """The lateral reach applies to MFI as to the lines (review of stop 33: an unseen
+    truck beside the weighed one, which pulls its lateral position 1.06 m from the runs',
+    was weighed +126 % by MFI).  Here the runs' mean lateral position is moved 1.5 m: the
+    same truck, weighed above, is refused with the reason."""
+    _, _, _, site, model = fitted
+    line = site.lines.line
+    lines = dataclasses.replace(site.lines, line=dataclasses.replace(line, lane=line.lane + 1.5))
+    ev = weigh_event(_lane1_truck(fitted), dataclasses.replace(site, lines=lines),
+                     bridge=model)
+    (v,) = [v for v in ev.vehicles if v.lane == 1]
+    assert not v.weighed and "from the calibration runs'" in v.reason
+
+
+def test_mfi_applies_the_runs_trend_when_asked(fitted):
+    """``[drift] method = "trend"``: MFI divides by the runs' scale trend at the record's
+    clock, as the lines do (review of stop 33: it divided by 1 and wrote "trend"): the
+    factor is the trend's, and the weights are the factor-1 weighing's over it."""
+    _, _, _, site, model = fitted
+    truck = _lane1_truck(fitted)
+    trend = dataclasses.replace(site, setup=dataclasses.replace(
+        site.setup, drift=DriftSetup(method="trend")))
+    none = dataclasses.replace(site, setup=dataclasses.replace(
+        site.setup, drift=DriftSetup(method="none")))
+    a = next(v for v in weigh_event(truck, trend, bridge=model).vehicles if v.weighed)
+    b = next(v for v in weigh_event(truck, none, bridge=model).vehicles if v.weighed)
+    expected = float(site.lines.scale_trend(truck.clock_seconds()))
+    assert a.drift_method == "trend" and a.drift_factor == pytest.approx(expected, rel=1e-12)
+    assert abs(expected - 1.0) > 0.01  # a factor of its own, not 1
+    assert a.gvw == pytest.approx(b.gvw / expected, rel=1e-6)
 
 
 def test_model_file_round_trip(fitted, tmp_path):

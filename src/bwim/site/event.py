@@ -26,11 +26,13 @@ Contract
     gauge is left out and named (``gauge_fault:NAME``, quality ``warning``); too few
     healthy gauges refuse it, and so does a gauge that disagrees while a vehicle of the
     other direction is on the span;
-  - a vehicle the lines would weigh whose lateral position (in metres, from the gauges'
-    y) lies more than :data:`LATERAL_REACH` from the calibration runs' mean is refused
-    (unless one faulty gauge, left out, moved it): it is in another lane than the runs
-    (a lane without detectors, seen by this lane's pair) or another vehicle beside it
-    pulls the strain's centre away, and the lines are not calibrated there;
+  - a vehicle whose lateral position (in metres, from the gauges' y) lies more than
+    :data:`LATERAL_REACH` from the calibration runs' mean is refused (unless one faulty
+    gauge, left out, moved it), by the lines or by MFI: it is in another lane than the
+    runs (a lane without detectors, seen by this lane's pair) or another vehicle beside
+    it pulls the strain's centre away, and the weighing is not calibrated there (an
+    unseen truck beside a weighed one is in its readings: MFI weighed such a pair +126 %,
+    its relative residual lowered by the larger signal);
   - it is then weighed (:func:`bwim.wim.weigh`: gauges combined by generalised
     least squares, axle groups as groups); one with a vehicle of the other direction on
     the span at the same time is weighed and flagged ``multiple_presence`` (the fit's
@@ -437,16 +439,21 @@ def _vehicle(record: Record, ev: EventDetection, k: int, calibration: SiteCalibr
         return refused(health.reason, flags=(*flags, *health.flags))
     # one faulty gauge moves the detected lateral position; its weighing leaves it out
     one_fault = len({f.gauge for f in health.faults}) == 1
-    if not mfi and not one_fault and v.lateral_unit == "m":
-        centre = calibration.lines.lateral_center
+    if not one_fault and v.lateral_unit == "m":  # MFI too: a vehicle beside it no
+        centre = calibration.lines.lateral_center  # detector saw is in its readings
         y = float(v.passage.lane)
         if abs(y - centre) > LATERAL_REACH:
             return refused(f"its lateral position {y:.2f} m lies {abs(y - centre):.2f} m from "
                            f"the calibration runs' {centre:.2f} m: another lane than the "
-                           "runs', or a vehicle beside it no detector saw; the lines are "
+                           "runs', or a vehicle beside it no detector saw; the weighing is "
                            "not calibrated there", flags=(*flags, *health.flags))
     if mfi:  # the gauges the lines found faulty are left out of the MFI too
         faulty = {f.gauge for f in health.faults}
+        if method == "trend":  # the lines apply the runs' trend themselves; MFI here
+            trend, when = calibration.lines.scale_trend, record.clock_seconds()
+            factor = float(trend(when))
+            drift_flags = (*drift_flags,
+                           *(() if trend.covers(when) else ("outside_calibration_time",)))
         out = _weigh_mfi(record, lv, (*flags, *health.flags), model, options, factor,
                          method, drift_flags, faulty)
         if not out.weighed:
