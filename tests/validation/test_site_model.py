@@ -311,3 +311,41 @@ def test_the_mesh_correction_on_the_sites_runs(fitted):
         1.0, abs=0.1)
     assert 1.0 < fine.weighing_scale < model.weighing_scale
     assert lane1_truck_error(day, scenario, site, fine) == pytest.approx(0.0, abs=0.10)
+
+
+def test_a_model_weighs_only_with_the_runs_and_gauges_it_was_made_from(fitted, tmp_path,
+                                                                        capsys):
+    """``bwim calibrate`` records the runs (name and content digest) and the gauges
+    (name and position) a model was made from; ``bwim weigh --bridge`` refuses other runs
+    (the logger's scale changed: the model weighed the truck +24 %) or another scenario's
+    gauges (a gauge's x moved: +14 %), in one line, before anything is written (review of
+    stop 33: both were weighed)."""
+    import shutil
+
+    from bwim.cli import main
+    from bwim.cli.common import refuse_other_provenance, site_provenance
+
+    day, scenario, _, _, model = fitted
+    runs = sorted(day.out_dir.joinpath("calibration").iterdir())
+    made = dataclasses.replace(model, provenance=site_provenance(runs, scenario))
+    path = tmp_path / "model.toml"
+    save_site_model(made, path)
+    assert load_model(path).provenance == made.provenance
+    refuse_other_provenance(load_model(path), runs, scenario)  # its own: no refusal
+    other = tmp_path / "calibration"
+    shutil.copytree(day.out_dir / "calibration", other)
+    first = sorted(other.iterdir())[0]
+    lines = first.read_text().splitlines(keepends=True)
+    first.write_text("".join(lines[:-1]))  # one sample less: another file
+    moved = tmp_path / "scenario.toml"
+    moved.write_text(day.scenario.read_text().replace("x = 3.0", "x = 2.0", 1))
+    for scen, cal, words in ((day.scenario, other, f"it was made with 'run {first.name}"),
+                             (moved, day.out_dir / "calibration", "'gauge s01 x=3.0")):
+        out = tmp_path / "out"
+        code = main(["weigh", str(scen), str(day.out_dir / "traffic"),
+                     "--calibration-records", str(cal), "--bridge", str(path),
+                     "-o", str(out)])
+        err = capsys.readouterr().err.strip().splitlines()
+        assert code == 2 and len(err) == 1 and words in err[0], err
+        assert "calibrated from other calibration runs or gauges" in err[0]
+        assert not out.exists() or not any(out.iterdir())

@@ -22,6 +22,7 @@ from bwim.cli.common import (
     out_folder,
     record_paths,
     refuse_existing_outputs,
+    refuse_other_provenance,
     unique_stems,
     write_csv,
 )
@@ -362,6 +363,11 @@ def _weigh_site(args: argparse.Namespace, scenario, folder: Path, batch) -> int:
         if isinstance(bridge, SiteModel) and not bridge.accepted:
             raise InputError(f"{args.bridge}: the model is not accepted ({bridge.reason}): "
                              "bwim does not weigh with it")
+        try:  # a model weighs with the runs and gauges it was calibrated from
+            refuse_other_provenance(bridge, record_paths(args.calibration_records,
+                                                         any_suffix=True), scenario)
+        except InputError as exc:
+            raise InputError(f"{args.bridge}: {exc}") from None
         options = scenario.identify.kwargs() if scenario.identify is not None else {}
     # the calibration before any output: bad runs end with nothing written
     site, write_calibration = _calibrate_site(

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import hashlib
 import os
 import stat
 import sys
@@ -16,7 +17,8 @@ from bwim.errors import InputError
 
 __all__ = ["RECORD_SUFFIXES", "CalibrationProgress", "Progress", "bar", "bridge_of", "check_jobs",
            "display_name", "load_records", "locked", "out_file", "out_folder", "quiet",
-           "record_paths", "refuse_existing_outputs", "regular_file", "unique_stems", "write_csv"]
+           "record_paths", "refuse_existing_outputs", "refuse_other_provenance",
+           "regular_file", "site_provenance", "unique_stems", "write_csv"]
 
 RECORD_SUFFIXES = (".h5", ".hdf5", ".hdf", ".csv", ".txt")
 
@@ -246,3 +248,38 @@ class CalibrationProgress:
     def close(self) -> None:
         if self.bar is not None:
             self.bar.close()
+
+
+def site_provenance(calibration: Sequence[Path], scenario) -> tuple[str, ...]:
+    """What a site model is made from (:attr:`bwim.site.SiteModel.provenance`): each
+    calibration run's file by name and content digest, in name order, and each gauge of
+    the scenario by name and position."""
+    from bwim.scenario import build_sensors
+
+    runs = []
+    for p in sorted(calibration, key=lambda q: q.name):
+        digest = hashlib.sha256()
+        with open(p, "rb") as f:
+            for block in iter(lambda: f.read(1 << 20), b""):
+                digest.update(block)
+        runs.append(f"run {p.name} sha256:{digest.hexdigest()[:16]}")
+    gauges = [f"gauge {g.name} x={g.x!r} y={g.y!r}" for g in build_sensors(scenario)
+              if g.kind.is_structural]
+    return (*runs, *gauges)
+
+
+def refuse_other_provenance(model, calibration: Sequence[Path], scenario) -> None:
+    """Refuse a site model made from other calibration runs or gauges than these (one
+    line naming the first difference); a model without a record passes."""
+    made = tuple(getattr(model, "provenance", ()))
+    if not made:
+        return
+    now = site_provenance(calibration, scenario)
+    if now != made:
+        missing = [x for x in made if x not in now]
+        extra = [x for x in now if x not in made]
+        first = (f"it was made with {missing[0]!r}" if missing else
+                 f"it was not made with {extra[0]!r}")
+        raise InputError(f"the site model was calibrated from other calibration runs or "
+                         f"gauges than these ({first}): calibrate it again "
+                         "(bwim calibrate), or give its own runs and scenario")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 import time
 from collections.abc import Sequence
@@ -20,6 +21,7 @@ from bwim.cli.common import (
     out_folder,
     record_paths,
     refuse_existing_outputs,
+    site_provenance,
 )
 from bwim.errors import InputError
 from bwim.tables import Table, format_kn, format_kn_each, format_pct, param_values
@@ -166,6 +168,7 @@ def _site_model(args: argparse.Namespace, scenario, paths, out: Path) -> int:
                                  track_width=args.track_width, identify_options=options,
                                  mesh_correction=int(mc) if mc.isdigit() else mc,
                                  joints=tuple(joints))
+    model = dataclasses.replace(model, provenance=site_provenance(paths, scenario))
     save_site_model(model, out, title=f"calibrated from {site.n_used} run(s) of "
                     f"{scenario.title or scenario.source}")
     fit = model.fit

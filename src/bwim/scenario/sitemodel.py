@@ -6,8 +6,9 @@ Contract
   :func:`~bwim.scenario.save_bridge` writes it (exact parameters), and a ``[site_model]``
   table: ``channels`` and their ``gains`` (logger units per unit strain), ``origin`` and
   ``lateral`` (m), ``track_width`` (m), ``tolerance``, ``accepted`` and ``reason``,
-  ``weighing_scale``, ``model_error`` and ``truck_weight`` (N), and the
-  self-check's ``runs`` (``index`` from 1, ``explained``, ``gvw_error``, ``reason``).
+  ``weighing_scale``, ``model_error`` and ``truck_weight`` (N), ``provenance`` (what it
+  was made from: :attr:`~bwim.site.SiteModel.provenance`), and the self-check's ``runs``
+  (``index`` from 1, ``explained``, ``gvw_error``, ``reason``).
   Floats are written with :func:`repr`: a saved model reads back bit for bit.
 * :func:`load_site_model` reads it back (``fit`` is None: the fit's details stay with the
   run that made it).  :func:`load_model` reads either such a file (a ``SiteModel``) or any
@@ -33,7 +34,7 @@ from bwim.site.model import ModelRun, SiteModel
 __all__ = ["load_model", "load_site_model", "save_site_model"]
 
 _KEYS = ("channels", "gains", "origin", "lateral", "track_width", "tolerance", "accepted",
-         "reason", "weighing_scale", "model_error", "truck_weight", "runs")
+         "reason", "weighing_scale", "model_error", "truck_weight", "provenance", "runs")
 
 
 def save_site_model(model: SiteModel, path: str | os.PathLike, *, title: str = "") -> None:
@@ -47,6 +48,7 @@ def save_site_model(model: SiteModel, path: str | os.PathLike, *, title: str = "
         "reason": model.reason, "weighing_scale": float(model.weighing_scale),
         "model_error": None if model.model_error is None else float(model.model_error),
         "truck_weight": None if model.truck_weight is None else float(model.truck_weight),
+        "provenance": list(model.provenance),
         "runs": [{"index": r.index + 1, "explained": float(r.explained),
                   "gvw_error": float(r.gvw_error), "reason": r.reason} for r in model.runs],
     }
@@ -100,7 +102,7 @@ def load_model(path: str | os.PathLike) -> SiteModel | Bridge:
                                    0.0),
             model_error=None if error is None else _not_negative(error, "model_error", src),
             truck_weight=None if truck is None else _number(truck, "truck_weight", src, 0.0),
-            runs=runs)
+            provenance=tuple(str(x) for x in table.get("provenance", ())), runs=runs)
     except InputError:
         raise
     except (KeyError, TypeError, ValueError) as exc:

@@ -141,6 +141,11 @@ class SiteModel:
         residual beyond what their noise explains (None: not measured).
     truck_weight : float or None
         The calibration truck's declared GVW, N (the weight ``model_error`` belongs to).
+    provenance : tuple of str
+        What the model was made from, as ``bwim calibrate`` records it: each calibration
+        run's file (name and content digest) and each gauge's name and position; a
+        weighing with other runs or gauges is refused (``bwim weigh --bridge``).  Empty:
+        not recorded (a model made in Python).
     """
 
     bridge: Bridge
@@ -156,6 +161,7 @@ class SiteModel:
     weighing_scale: float = 1.0
     model_error: float | None = None
     truck_weight: float | None = None
+    provenance: tuple[str, ...] = ()
 
     @classmethod
     def of_bridge(cls, bridge: Bridge) -> SiteModel:
