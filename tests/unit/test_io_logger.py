@@ -506,3 +506,18 @@ def test_a_dropped_sample_of_a_clock_written_to_its_step(tmp_path, rate, decimal
         read_logger(dropped, f)
     with pytest.raises(InputError, match="but sampling_rate is"):
         read_logger(whole, LoggerFormat(columns=("time", "s01"), sampling_rate=rate / 2))
+
+
+def test_a_dot_between_digits_in_a_decimal_comma_file_is_refused(tmp_path):
+    """decimal = ",": '1.234' is 1234 written with a thousands separator there, not 1.234
+    (review of stop 33: read as 1.234 silently); refused with that hint, on the
+    vectorised path and line by line alike."""
+    p = tmp_path / "c.csv"
+    f = LoggerFormat(columns=("time", "s01"), decimal=",")
+    rows = "".join(f"{k / 100:.2f};{(k % 7) / 4:.2f}\n".replace(".", ",") for k in range(200))
+    p.write_text(rows.replace("0,50\n", "1.234\n", 1))
+    with pytest.raises(InputError, match=r"'1\.234' is not a number \(a '\.' with decimal "
+                                         r"= ',': a thousands separator\?\)"):
+        read_logger(p, f)
+    p.write_text(rows)
+    assert read_logger(p, f).time.size == 200

@@ -34,7 +34,8 @@ Contract
   delimiter is allowed: one empty field past the last column is dropped.  A field may be
   enclosed in double quotes (no delimiter or quote inside).  Numbers are decimal ASCII
   (``1``, ``-2.5``, ``.5``, ``3e-06``); with ``decimal=","`` the decimal mark is a comma,
-  which needs a ``;``, tab or whitespace delimiter (auto-detection then never picks ``,``).
+  which needs a ``;``, tab or whitespace delimiter (auto-detection then never picks
+  ``,``), and a ``.`` between digits is refused (a thousands separator: ``1.234``).
   Every number is read to the nearest double, exactly as ``float`` reads it.
 * Refused with an :class:`~bwim.errors.InputError` whose one-line message starts with the
   file and names the line (and column) where there is one: a missing, unreadable, non-UTF-8
@@ -115,6 +116,7 @@ _WORK_PER_CHAR = 32
 _TIME_TEMPORARIES = 4
 
 _NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?", re.ASCII)
+_GROUPED = re.compile(r"\d\.\d", re.ASCII)  #: a '.' between digits (decimal comma files)
 _NON_FINITE = {"nan": "NaN", "inf": "infinite", "infinity": "infinite"}
 
 
@@ -338,8 +340,17 @@ def _detect_delimiter(text: str, n: int, decimal: str, where: Path, line: int) -
                      f"{n} columns of the format")
 
 
+def _point(s: str, comma: bool) -> str:
+    """A field with a decimal comma as Python reads it; with a comma as the mark, a '.'
+    between digits may be a thousands separator ('1.234' is 1234 there, not 1.234), so
+    the field is left unreadable."""
+    if not comma:
+        return s
+    return "?" if _GROUPED.search(s) else s.replace(",", ".")
+
+
 def _is_number(s: str, decimal: str) -> bool:
-    return _NUMBER.fullmatch(s.replace(",", ".") if decimal == "," else s) is not None
+    return _NUMBER.fullmatch(_point(s, decimal == ",")) is not None
 
 
 def _is_gap(s: str) -> bool:
@@ -356,6 +367,8 @@ def _bad_field(s: str, decimal: str) -> str:
     shown = s if len(s) <= 20 else s[:20] + "..."
     if decimal == "." and "," in s and _NUMBER.fullmatch(s.replace(",", ".")):
         return f'{shown!r} is not a number (a decimal comma? set decimal = ",")'
+    if decimal == "," and _GROUPED.search(s):
+        return f"{shown!r} is not a number (a '.' with decimal = ',': a thousands separator?)"
     return f"{shown!r} is not a number"
 
 
@@ -645,7 +658,7 @@ def _plain_numbers(a: np.ndarray, fs: np.ndarray, fe: np.ndarray, comma: bool) -
     d = b - np.uint8(48)
     digit = d < 10
     digit &= inside
-    mark = (b == 46) | (b == 44) if comma else b == 46
+    mark = b == 44 if comma else b == 46
     mark &= inside
     sign = (b == 45) | (b == 43)
     sign &= inside
@@ -896,8 +909,7 @@ class _Parser:
         nums = _plain_numbers(a, fs, fe, self.comma)
         for i in np.flatnonzero(~nums.ok).tolist():
             s = _clean(b[fs[i]:fe[i]].decode())
-            if self.comma:
-                s = s.replace(",", ".")
+            s = _point(s, self.comma)
             if _NUMBER.fullmatch(s) is None:
                 return None
             v = float(s)
@@ -926,10 +938,8 @@ class _Parser:
             if self.rows.n + len(numbers) >= self.max_samples:
                 raise InputError(f"{p}: more than max_samples = {self.max_samples} data rows")
             for j in self.numeric:
-                s = fields[j]
-                if comma:
-                    s = s.replace(",", ".")
-                if j in self.gaps and _is_gap(s):
+                s = _point(fields[j], comma)
+                if j in self.gaps and _is_gap(fields[j]):
                     buf.append(math.nan)
                     continue
                 if _NUMBER.fullmatch(s) is None:
