@@ -521,3 +521,17 @@ def test_a_dot_between_digits_in_a_decimal_comma_file_is_refused(tmp_path):
         read_logger(p, f)
     p.write_text(rows)
     assert read_logger(p, f).time.size == 200
+
+
+def test_a_header_of_numbers_and_a_first_row_of_nan(tmp_path):
+    """Header detection (review of stop 33): channels named by numbers ('101;102') are a
+    header when they are the columns' own names (they were read as the first sample);
+    a first row of NaN (a sensor warming up) is data, refused as NaN (it was taken for a
+    header and dropped: every sample one step early)."""
+    p = tmp_path / "h.csv"
+    p.write_text("101;102\n" + "".join(f"{k};{k * 2}\n" for k in range(10)))
+    r = read_logger(p, LoggerFormat(columns=("101", "102"), sampling_rate=100.0))
+    assert r.data[0].tolist() == [0.0, 0.0] and r.time.size == 10
+    p.write_text("NaN;NaN\n" + "".join(f"{k};{k * 2}\n" for k in range(10)))
+    with pytest.raises(InputError, match=r"line 1 .*column 'a': NaN sample"):
+        read_logger(p, LoggerFormat(columns=("a", "b"), sampling_rate=100.0))

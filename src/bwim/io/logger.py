@@ -28,8 +28,10 @@ Contract
   (a logger's preamble).  The delimiter is ``,``, ``;``, tab or whitespace (``" "``: any
   run of spaces and tabs); auto-detected as the first of ``;``, tab, ``,``, whitespace
   that splits the first content line into ``len(columns)`` fields.  The header (one row
-  of names, at most) is auto-detected: a first content row none of whose channel and time
-  fields is a number is a header, one with numbers is data, a mix is refused.  A header
+  of names, at most) is auto-detected: a first content row that holds the columns' own
+  names (numbers or not), or none of whose channel and time fields is a number (a row of
+  NaN excepted: data, refused as such), is a header, one with numbers is data, a mix is
+  refused.  A header
   must have ``len(columns)`` fields; its names need not equal ``columns``.  A trailing
   delimiter is allowed: one empty field past the last column is dropped.  A field may be
   enclosed in double quotes (no delimiter or quote inside).  Numbers are decimal ASCII
@@ -788,10 +790,14 @@ class _Parser:
         if fmt.header is not None:
             return fmt.header
         fields = [_clean(s) for s in raw]
+        named = [f for f, c in zip(fields, fmt.columns, strict=True) if c != SKIP]
+        if named == [c for c in fmt.columns if c != SKIP]:
+            return True  # the columns' own names, numbers or not ("101", "102")
         numbers = [_is_number(fields[j], fmt.decimal) or (j in self.gaps and _is_gap(fields[j]))
                    for j in self.numeric]
-        if not any(numbers):
-            return True
+        if not any(numbers) and not all(fields[j].lower().lstrip("+-") in _NON_FINITE
+                                        for j in self.numeric):
+            return True  # (a row of NaN is a logger's first samples, not a header)
         if not all(numbers):
             j = self.numeric[numbers.index(False)]
             raise InputError(
