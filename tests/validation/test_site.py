@@ -242,9 +242,10 @@ def test_resume_keeps_what_was_weighed(day, tmp_path):
 def test_weighing_by_mfi_with_an_fe_model(day, site):
     """With a bridge model (the site's slab on a 0.75 m mesh: coarser than the 0.5 m data
     mesh, gauges as points where the data average a load spread, gauge gains unknown),
-    each detected truck is weighed by MFI: GVW within 12 % of the truth (measured
-    −2.6 … +7.9 % on this day: the model is not calibrated to the data).  Without gauge
-    positions MFI is refused with its reason, not attempted."""
+    each detected truck within the calibration runs' lateral reach is weighed by MFI: GVW
+    within 12 % of the truth (measured −2.6 … +7.9 % on this day: the model is not
+    calibrated to the data), and each beyond it is refused.  Without gauge positions MFI
+    is refused with its reason, not attempted."""
     from bwim.scenario import read_toml, scenario_from_dict
     from bwim.synthetic import site as layout
 
@@ -259,16 +260,23 @@ def test_weighing_by_mfi_with_an_fe_model(day, site):
     placed_cal = calibrate_site([load_record(p, placed) for p in day.calibration], cal.setup)
     bridge = layout.site_bridge(0.75)
     truth = {r["record"]: r for r in _rows(day.truth)}
-    n = 0
+    weighed, beyond = 0, 0
     for path in day.traffic:
         if truth[path.name]["n_vehicles"] != "1":
             continue
         ev = weigh_event(load_record(path, placed), placed_cal, bridge=bridge,
                          identify_options={"n_modes": 12})
+        if truth[path.name]["lane"] != "1":
+            # a lane-2 truck, 3.7 m from the runs' lane: beyond their lateral reach,
+            # refused by MFI too (its readings cannot tell a truck in another lane from
+            # two beside each other; review of stop 33)
+            assert not ev.weighed and "from the calibration runs'" in ev.reason, ev.reason
+            beyond += 1
+            continue
         assert ev.method == "mfi" and ev.weighed, (path.name, ev.reason)
         assert abs(ev.gvw / 1e3 / float(truth[path.name]["gvw_kN"]) - 1) < 0.12
-        n += 1
-    assert n == 9
+        weighed += 1
+    assert (weighed, beyond) == (6, 3)  # the day's single trucks: 6 in lane 1, 3 in lane 2
     ev = weigh_event(load_record(day.traffic[0], scenario), cal, bridge=bridge)
     assert not ev.weighed and "position" in ev.reason
 
