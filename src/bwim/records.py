@@ -40,7 +40,7 @@ from bwim.sensors import Sensor, SensorKind
 
 __all__ = ["RECORD_TIME_SPAN", "AxleLayout", "Passage", "Record", "SimulationSettings", "Truth",
            "VBIConvergence", "axle_offsets", "clock_key", "day_origin", "local_seconds",
-           "noise_sigma", "record_list", "seconds_of_day"]
+           "noise_sigma", "on_day_axis", "record_list", "seconds_of_day"]
 
 
 _EPOCH = datetime(1970, 1, 1)
@@ -66,6 +66,13 @@ def day_origin(times_of_day: Sequence[float]) -> float:
     return 0.0 if k == tod.size - 1 else float(tod[k] + 0.5 * gaps[k])
 
 
+def on_day_axis(time_of_day: float, origin: float) -> float:
+    """A time of day (s since midnight) on the day that starts at ``origin``
+    (:func:`day_origin`): from ``origin`` to ``origin`` + 86400 s."""
+    t = float(time_of_day) % 86400.0
+    return t + 86400.0 if t < origin else t
+
+
 def clock_key(times: Sequence[datetime | dtime]) -> Callable[[datetime | dtime], tuple]:
     """A sort key of clock times: dated ones first, by instant; then times of day from
     where the day of those among ``times`` starts (:func:`day_origin`: a night from 23:50
@@ -75,8 +82,7 @@ def clock_key(times: Sequence[datetime | dtime]) -> Callable[[datetime | dtime],
     def key(t: datetime | dtime) -> tuple:
         if isinstance(t, datetime):
             return (0, local_seconds(t))
-        s = seconds_of_day(t)
-        return (1, s + 86400.0 if s < origin else s)
+        return (1, on_day_axis(seconds_of_day(t), origin))
 
     return key
 

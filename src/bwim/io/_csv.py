@@ -231,7 +231,7 @@ def check_time(
     h = float(np.median(dt))
     if tolerance is None:
         return h
-    resolution = rounding(t, resolution)
+    resolution = _allowance(dt, h, t, resolution)
     gap = np.flatnonzero(dt > 1.5 * h + resolution)
     if gap.size:
         k = int(gap[0]) + 1
@@ -254,7 +254,11 @@ def rounding(time: np.ndarray, resolution: float) -> float:
     every time, and a step of 0.02 s is a dropped sample), plus the floats' own error."""
     t = np.asarray(time, dtype=float)
     dt = np.diff(t)
-    h = float(np.median(dt))
+    return _allowance(dt, float(np.median(dt)), t, resolution)
+
+
+def _allowance(dt: np.ndarray, h: float, t: np.ndarray, resolution: float) -> float:
+    """:func:`rounding` from the steps ``dt`` and their median ``h`` already made."""
     return (min(resolution, float(np.quantile(np.abs(dt - h), 0.99)))
             + 1e-9 * float(np.max(np.abs(t))))
 

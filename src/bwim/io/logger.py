@@ -521,8 +521,8 @@ def read_logger(
             h = float(np.polyfit(k, time, 1)[0])
             time = (time.mean() - h * k.mean()) + h * k
         fs = fmt.sampling_rate
-        resolution = rounding(time, resolution)
-        if fs is not None and abs(h - 1.0 / fs) > time_tolerance * h + resolution:
+        off = 0.0 if fs is None else abs(h - 1.0 / fs) - time_tolerance * h
+        if off > 0.0 and off > rounding(time, resolution):  # (only then: its cost)
             raise InputError(f"{p}: the time column steps {h:g} s ({1.0 / h:g} Hz) but "
                              f"sampling_rate is {fs:g} Hz")
     if clip_run is not None:

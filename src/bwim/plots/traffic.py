@@ -21,7 +21,7 @@ import numpy as np
 
 from bwim.conventions import KILONEWTON
 from bwim.plots import axes
-from bwim.records import day_origin, seconds_of_day
+from bwim.records import day_origin, on_day_axis, seconds_of_day
 
 __all__ = ["hourly_counts", "plot_axle_load_spectrum", "plot_counts", "plot_gvw_histogram",
            "plot_hourly_flow", "plot_speed_distribution", "seen"]
@@ -174,7 +174,7 @@ def hourly_counts(rows: Sequence) -> tuple[list[str], np.ndarray, np.ndarray]:
         # where their day starts (a night from 23:50 to 00:20 is three hours, not 24)
         tod = [seconds_of_day(r.time) for r in vs]
         origin = day_origin(tod)
-        hrs = [int((s + 86400.0 if s < origin else s) // 3600.0) for s in tod]
+        hrs = [int(on_day_axis(s, origin) // 3600.0) for s in tod]
         lo, hi = min(hrs), max(hrs)
         labels = [f"{h % 24:02d}:00" for h in range(lo, hi + 1)]
         slot = [h - lo for h in hrs]

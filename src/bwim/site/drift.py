@@ -66,7 +66,7 @@ import numpy as np
 
 from bwim.errors import InputError
 from bwim.plausibility import Limits, quality_of, weight_flags
-from bwim.records import day_origin, seconds_of_day
+from bwim.records import day_origin, on_day_axis, seconds_of_day
 from bwim.summary import SummaryRow
 from bwim.wim.scale_trend import ScaleTrend
 
@@ -125,14 +125,6 @@ class DriftSetup:
                              f"{self.min_reference!r}")
 
 
-_DAY = 86400.0  #: s in a day
-
-
-def _on_axis(time_of_day: float, origin: float) -> float:
-    t = float(time_of_day) % _DAY
-    return t + _DAY if t < origin else t
-
-
 @dataclass(frozen=True, kw_only=True, eq=False)
 class TimeOfDayDrift:
     """The calibration runs' factors over the time of day (see the module docstring).
@@ -160,13 +152,13 @@ class TimeOfDayDrift:
         """The trend of the runs' ``factors`` over their ``times_of_day`` (s since
         midnight), on an axis that keeps their span whole."""
         origin = day_origin(times_of_day)
-        axis = [_on_axis(t, origin) for t in times_of_day]
+        axis = [on_day_axis(t, origin) for t in times_of_day]
         return cls(trend=ScaleTrend.fit(axis, factors), dates=dates, origin=origin)
 
     def axis(self, time_of_day: float) -> float:
         """A time of day (s since midnight) on the trend's axis: from :attr:`origin` to
         origin + 86400 s."""
-        return _on_axis(time_of_day, self.origin)
+        return on_day_axis(time_of_day, self.origin)
 
     def factor(self, when: datetime | float) -> tuple[float, bool]:
         """The factor at a clock (a datetime, or seconds of day) and whether that is
