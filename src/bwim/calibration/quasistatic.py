@@ -96,7 +96,7 @@ from bwim.records import Record
 from bwim.vehicles import Vehicle
 
 __all__ = ["FREE_FALSE_ALARM", "MassFit", "QuasiStaticCalibration", "calibrate_quasistatic",
-           "fit_mass", "moving_force_columns"]
+           "fit_mass", "moving_force_columns", "oscillator_filter"]
 
 #: Default cut-off as a fraction of the starting model's first natural frequency.
 DEFAULT_CUTOFF_FRACTION = 0.6
@@ -263,6 +263,31 @@ class _Record:
         return b.ravel(), A
 
 
+def oscillator_filter(omega: float, zeta: float, fs: float) -> tuple[np.ndarray, np.ndarray]:
+    """Digital filter ``(b, a)`` (``a[0] = 1``) of a modal coordinate's response to its
+    force, ``H(s) = 1 / (s² + 2ζω s + ω²)``, by the bilinear transform ``s = K (z − 1) /
+    (z + 1)``, ``K = 2 fs``: multiplying through by ``(z + 1)²`` gives, in closed form,
+    ``b ∝ (1, 2, 1)`` and ``a ∝ (K² + 2ζωK + ω², 2 (ω² − K²), K² − 2ζωK + ω²)``
+    (Oppenheim & Schafer, *Discrete-Time Signal Processing*, 3rd ed., § 7.2; what
+    ``scipy.signal.bilinear`` gives by polynomial arithmetic, to rounding).  ``omega``
+    rad/s, ``fs`` Hz."""
+    K = 2.0 * fs
+    c = 2.0 * zeta * omega * K
+    a0 = K * K + c + omega * omega
+    b = np.array([1.0, 2.0, 1.0]) / a0
+    a = np.array([1.0, 2.0 * (omega * omega - K * K) / a0, (K * K - c + omega * omega) / a0])
+    return b, a
+
+
+def _group_sum(values: np.ndarray, group: np.ndarray, n_groups: int) -> np.ndarray:
+    """``values`` (n_t, n_w, …) summed over the wheels of each group (n_t, n_groups, …),
+    wheel after wheel (the order and numbers of ``np.add.at``, without its slow path)."""
+    out = np.zeros((values.shape[0], n_groups, *values.shape[2:]))
+    for w, g in enumerate(group.tolist()):
+        out[:, g] += values[:, w]
+    return out
+
+
 def moving_force_columns(bridge: Bridge, sensors, x: np.ndarray, y: np.ndarray,
                          P: np.ndarray, group: np.ndarray, fun: np.ndarray, *, fs: float,
                          n_modes: int) -> np.ndarray:
@@ -280,8 +305,7 @@ def moving_force_columns(bridge: Bridge, sensors, x: np.ndarray, y: np.ndarray,
     n_t, n_w = x.shape
     n_groups = fun.shape[1]
     G = ins.at(x.ravel(), y.ravel()).reshape(n_t, n_w, -1) * P[None, :, None]
-    R = np.zeros((n_t, n_groups, G.shape[2]))
-    np.add.at(R, (slice(None), group), G)
+    R = _group_sum(G, group, n_groups)
     cols = R[:, :, None, :] * fun[:, :, :, None]  # (t, g, F, s)
     if n_modes:
         model = bridge.model
@@ -293,13 +317,12 @@ def moving_force_columns(bridge: Bridge, sensors, x: np.ndarray, y: np.ndarray,
             rows = model.point_rows(xs[on], ys[on] if bridge.is_plate else None)
             phi_w[on] = np.einsum("pk,pkm->pm", rows.vals, modes.shapes[rows.dofs])
         phi_w = phi_w.reshape(n_t, n_w, modes.n) * P[None, :, None]
-        fm = np.zeros((n_t, n_groups, modes.n))
-        np.add.at(fm, (slice(None), group), phi_w)
+        fm = _group_sum(phi_w, group, n_groups)
         eps = bridge.sensor_matrix(sensors) @ modes.shapes  # (s, m)
         zeta = bridge.rayleigh.ratio(modes.omega)
         for m in range(modes.n):
             om, z = modes.omega[m], zeta[m]
-            num, den = _signal().bilinear([1.0], [1.0, 2 * z * om, om * om], fs=fs)
+            num, den = oscillator_filter(om, z, fs)
             f = fm[:, :, m, None] * fun  # (t, g, F)
             q = _signal().lfilter(num, den, f, axis=0) - f / om**2
             cols += q[:, :, :, None] * eps[None, None, None, :, m]
