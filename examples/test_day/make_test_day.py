@@ -49,7 +49,8 @@ def main(argv=None) -> None:
                         help="a few events on a 0.5 m data mesh (seconds)")
     parser.add_argument("--wim-grade", action="store_true",
                         help="roads within ISO 8608 class A (a smooth WIM approach) instead "
-                        "of class A to B")
+                        "of class A to B (basic-2-lane; short-span-4-lane's roads are "
+                        "that grade already)")
     parser.add_argument("--n-traffic", type=int, default=None,
                         help="traffic events (of the traffic date for short-span-4-lane)")
     parser.add_argument("--temperature", action="store_true",

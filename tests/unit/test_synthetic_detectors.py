@@ -185,8 +185,10 @@ def test_baseline_dips_between_axle_groups(site):
     slab's global bending).  Between the tractor and the trailer (the largest spacing) of
     the calibration runs and loaded 5-/6-axle trucks: every dip is below zero, and the
     median and the middle half of the dips lie in the facts' range (measured: median
-    −0.38, quartiles −0.47 and −0.34)."""
-    dips = [m["between"] for m in _measure(site) if m["weighed"]]
+    −0.34, quartiles −0.39 and −0.30: the shallow end of the range; 23 % of the dips are
+    shallower than −0.3, and on three of the four bench days the upper quartile is too:
+    docs/realistic_site.md says what deeper dips do to the detection)."""
+    dips = np.array([m["between"] for m in _measure(site) if m["weighed"]])
     assert len(dips) > 20
     assert max(dips) < 0
     assert _iqr_within(dips, -0.6, -0.3)
@@ -195,8 +197,8 @@ def test_baseline_dips_between_axle_groups(site):
 def test_steering_axle_peak_is_small(site):
     """Fact: the steering axle's peak is 0.2–0.55 of the largest (calibration truck and
     loaded 5-/6-axle trucks; empty trucks have relatively heavier steering axles): the
-    median and the middle half of the ratios lie in that range (measured: median 0.38,
-    quartiles 0.31 and 0.46)."""
+    median and the middle half of the ratios lie in that range (measured: median 0.39,
+    quartiles 0.33 and 0.48)."""
     ratios = [m["steer"] for m in _measure(site) if m["weighed"]]
     assert _iqr_within(ratios, 0.2, 0.55)
 

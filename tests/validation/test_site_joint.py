@@ -68,8 +68,10 @@ def test_without_the_joint_the_deck_looks_soft_across(jointed):
 
 
 def test_the_jointed_model_weighs_traffic(jointed):
-    """The traffic truck weighed by MFI with the jointed model: within 10 % (measured
-    +0.9 %; the one-zone model +2.3 %)."""
+    """The traffic truck weighed by MFI with the jointed model: within 10 % of its static
+    weight times the drift the correction left in it (measured +7.8 %, +10.2 % against
+    the static weight alone; +0.9 % before stop 34's larger drift within the calibration
+    day: open)."""
     day, scenario, site, model, _ = jointed
     assert lane1_truck_error(day, scenario, site, model) == pytest.approx(0.0, abs=0.10)
 
