@@ -48,6 +48,7 @@ HARD_FLAGS = (
 #: Flags that call for a look but keep the weights (quality "warning").
 SOFT_FLAGS = (
     "outside_calibration_time",  # clock time outside the calibration runs' span
+    "no_drift",                  # a drift correction asked for, none could be made
     "lateral_extrapolated",      # lateral covariate outside the calibration runs' range
     "ill_conditioned",           # condition number > Limits.condition
 )

@@ -24,9 +24,11 @@ Contract
   first axle at the gauges' reference (a :class:`datetime.datetime`, or a
   :class:`datetime.time` when the logger gives a clock time of day without a date),
   naive: the site's local time (a UTC offset given is dropped, the time as written).
-  ``lateral`` is in metres from the right-hand edge when ``lateral_unit == "m"``, a
-  dimensionless load centroid in gauge-order units (1 = the first gauge) when
-  ``"gauge index"`` (see :mod:`bwim.detect.result`).  ``direction`` is ``"+x"`` or
+  ``lateral`` is the centre of the vehicle's strain across the gauges (not its wheel
+  path: the slab spreads the strain, which pulls the centre toward the gauges' middle;
+  docs/flags.md), in metres from the right-hand edge when ``lateral_unit == "m"``, in
+  gauge-order units (1 = the first gauge) when ``"gauge index"`` (see
+  :mod:`bwim.detect.result`).  ``direction`` is ``"+x"`` or
   ``"-x"`` (the bridge frame, :mod:`bwim.conventions`), ``""`` when unknown.
 """
 

@@ -30,9 +30,12 @@ from bwim.detect.options import DEFAULT_MAX_AXLE_SPACING, DetectOptions
 from bwim.detect.response import DetectorResponse, LearnedResponses, learn_responses
 from bwim.detect.result import (
     FLAG_COUNT_MISMATCH,
+    FLAG_DETECTOR_FAULT,
+    FLAG_DETECTOR_SPIKE,
     FLAG_MULTIPLE_PRESENCE,
     FLAG_NO_AXLES,
     FLAG_SINGLE_AXLE,
+    FLAG_SPEED_RANGE,
     FLAG_SPEED_VARIES,
     FLAG_STRAIN_ONLY,
     FLAG_TRUNCATED,
@@ -46,9 +49,12 @@ from bwim.detect.truck import detect_known_truck
 __all__ = [
     "DEFAULT_MAX_AXLE_SPACING",
     "FLAG_COUNT_MISMATCH",
+    "FLAG_DETECTOR_FAULT",
+    "FLAG_DETECTOR_SPIKE",
     "FLAG_MULTIPLE_PRESENCE",
     "FLAG_NO_AXLES",
     "FLAG_SINGLE_AXLE",
+    "FLAG_SPEED_RANGE",
     "FLAG_SPEED_VARIES",
     "FLAG_STRAIN_ONLY",
     "FLAG_TRUNCATED",

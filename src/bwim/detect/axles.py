@@ -40,6 +40,7 @@ spacings measured at each detector (0.1 m is the spacing accuracy aimed at), and
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from typing import Any
 
@@ -50,7 +51,7 @@ from bwim.errors import InputError, require_finite, require_instance, require_po
 from bwim.records import Record
 
 from .assemble import VehicleEstimate, assemble_detection
-from .faults import detector_faults
+from .faults import diagnose
 from .lateral import section_gauges
 from .options import DetectOptions
 from .presence import resolve_span
@@ -58,15 +59,29 @@ from .pursuit import pursue_axles
 from .response import LearnedResponses
 from .result import (
     FLAG_COUNT_MISMATCH,
+    FLAG_DETECTOR_FAULT,
+    FLAG_DETECTOR_SPIKE,
     FLAG_NO_AXLES,
     FLAG_SINGLE_AXLE,
+    FLAG_SPEED_RANGE,
     FLAG_SPEED_VARIES,
+    FLAG_TRUNCATED,
     Detection,
 )
-from .signals import channel_data, parabolic_vertex, remove_baseline, robust_sigma
+from .signals import (
+    channel_data,
+    despike,
+    parabolic_vertex,
+    remove_baseline,
+    robust_sigma,
+)
 
-__all__ = ["detect_axles"]
+__all__ = ["SPIKE_WIDTH", "detect_axles"]
 
+#: Learned detection takes spikes out of the detectors' readings when its narrowest
+#: response, at the top of the speed range, is at least this many samples wide at half
+#: height (a one- or two-sample spike is then no axle; bwim.detect.signals.despike).
+SPIKE_WIDTH = 6.0
 #: Detector matching tolerance: ± this many samples plus ``_TOL_REL`` × the lag.
 _TOL_SAMPLES = 2.0
 _TOL_REL = 0.01
@@ -376,6 +391,15 @@ def _detect_learned(record: Record, detectors: Sequence[str], distance: float,
                          f"apart, not {distance:g} m")
     method = "learned responses"
     y = channel_data(record, detectors)
+    # a spike cannot be an axle where the narrowest response at the top speed is wider
+    # than SPIKE_WIDTH samples: take spikes out first (their energy would otherwise set
+    # the vehicle's residual level, and with it every axle group's count)
+    fs = 1.0 / float(np.median(np.diff(record.time))) if record.time.size > 1 else 0.0
+    width = min(r.fwhm for r in responses.responses) / opts.speed_range[1] * fs
+    spiked = False
+    if width >= SPIKE_WIDTH:
+        cleaned = despike(y)
+        y, spiked = cleaned.values, cleaned.any
     g = None
     if responses.gauges:
         names = {s.name for s in record.sensors}
@@ -389,16 +413,37 @@ def _detect_learned(record: Record, detectors: Sequence[str], distance: float,
                              max_axle_spacing=opts.max_axle_spacing,
                              snr_threshold=snr_threshold, min_height=max(min_height, 0.1),
                              gauges=g)
+    diagnosis = diagnose(y, responses)
+    fault = diagnosis.message
     if not estimates:
-        fault = detector_faults(y, responses)
-        return Detection(flags=(FLAG_NO_AXLES,), method=method,
+        return Detection(flags=(FLAG_NO_AXLES,), method=method, fault=fault,
                          message=f"no axle found: nothing on {detectors[0]} and "
                          f"{detectors[1]} fits their learned responses above "
                          f"{snr_threshold:g} noise standard deviations"
                          + (f"; {fault}" if fault else ""))
-    return assemble_detection(
-        record, estimates, method=method, position=position, span=span, gauges=gauges,
+    lo, hi = opts.speed_range
+    marked = []
+    for e in estimates:  # what the pursuit's own tests do not see
+        extra = [FLAG_SINGLE_AXLE] if len(e.times) == 1 else []
+        if not lo <= e.speed <= hi:  # a refinement may leave the range
+            extra.append(FLAG_SPEED_RANGE)
+        if spiked:
+            extra.append(FLAG_DETECTOR_SPIKE)
+        marked.append(dataclasses.replace(e, flags=(*e.flags, *extra)) if extra else e)
+    det = assemble_detection(
+        record, marked, method=method, position=position, span=span, gauges=gauges,
         lateral_threshold=opts.lateral_threshold, unexplained_fraction=opts.unexplained_fraction)
+    # axles found in both detectors' responses: only a gain change can still hide behind
+    # them (a record cut with a vehicle on it has no level at rest to judge by)
+    if diagnosis.kind != "gain" or any(FLAG_TRUNCATED in v.flags for v in det.vehicles):
+        return det
+    # one detector off in gain: the axles it still matches are not the vehicle's layout
+    vehicles = tuple(dataclasses.replace(v, flags=(*v.flags, FLAG_DETECTOR_FAULT))
+                     for v in det.vehicles)
+    return dataclasses.replace(
+        det, vehicles=vehicles, fault=fault,
+        flags=tuple(sorted({*det.flags, FLAG_DETECTOR_FAULT})),
+        message="; ".join(m for m in (det.message, fault) if m))
 
 
 def _count_note(detectors: Sequence[str], n1: int, n2: int, orphans: int) -> list[str]:

@@ -1,4 +1,4 @@
-"""Which axle detector of a pair is faulty, from one record where the pair found no axle.
+"""Which axle detector of a pair is faulty, from one record's readings of the pair.
 
 Contract
 --------
@@ -14,19 +14,23 @@ Contract
   When exactly one does, the other is named: **reversed** when its dip is the size of
   the first's peak (within :data:`GAIN_FACTOR`) and larger than its own peak; **reads
   nothing** (dead, disconnected or only noise) when neither excursion reaches
-  :data:`NOTHING` of the first's peak.  When both see it and their peaks differ by more
-  than :data:`GAIN_FACTOR` from the learned ratio, both are named (one of them changed
-  gain: one record cannot tell which).  Otherwise nothing is said ("").
+  :data:`NOTHING` of the first's peak.  When their peaks differ by more than
+  :data:`GAIN_FACTOR` from the learned ratio (both see it, or the other reads it, not
+  reversed, too weakly to be seen), both are named (one of them changed gain: one record
+  cannot tell which).  Otherwise nothing is said ("").
 * The result is one line for a detection's message.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from .response import LearnedResponses
 
-__all__ = ["GAIN_FACTOR", "NOTHING", "REST_SHARE", "SEEN", "detector_faults"]
+__all__ = ["GAIN_FACTOR", "NOTHING", "REST_SHARE", "SEEN", "DetectorFault", "detector_faults",
+           "diagnose"]
 
 #: Share of the record (from its start) whose median is a channel's level at rest.
 REST_SHARE = 0.1
@@ -39,12 +43,27 @@ NOTHING = 0.25
 GAIN_FACTOR = 2.0
 
 
+@dataclass(frozen=True)
+class DetectorFault:
+    """What one record's readings say of the pair (:func:`diagnose`): ``kind`` is
+    ``"gain"``, ``"reversed"``, ``"nothing"`` or "" (nothing said), ``message`` the
+    sentence naming the detector(s) ("" when nothing is said)."""
+
+    kind: str = ""
+    message: str = ""
+
+
 def detector_faults(y: np.ndarray, learned: LearnedResponses) -> str:
     """What the readings say of a faulty detector of the pair (see the module contract):
     a sentence naming it by its channel, or "" when they do not say."""
+    return diagnose(y, learned).message
+
+
+def diagnose(y: np.ndarray, learned: LearnedResponses) -> DetectorFault:
+    """:func:`detector_faults` with the fault's kind."""
     y = np.asarray(y, dtype=float)
     if y.ndim != 2 or y.shape[1] != 2 or y.shape[0] < 2:
-        return ""
+        return DetectorFault()
     rest = np.median(y[:max(1, int(REST_SHARE * y.shape[0]))], axis=0)
     names = learned.channels
     scale = np.array([1.0, learned.gain_ratio])
@@ -53,21 +72,31 @@ def detector_faults(y: np.ndarray, learned: LearnedResponses) -> str:
     level = np.array([max(r.level, 1e-300) for r in learned.responses])
     peak = up / scale  # in the first detector's units
     sees = (up >= SEEN * level) & (up > down)
+
+    def gain(ratio: float) -> DetectorFault:
+        return DetectorFault(kind="gain", message=(
+            f"{names[1]} reads the vehicle {ratio:.2g} × {names[0]} in their learned gain "
+            f"ratio: {names[0]} or {names[1]} has changed gain"))
+
     if sees.all():
         ratio = peak[1] / peak[0]
         if ratio > GAIN_FACTOR or ratio < 1.0 / GAIN_FACTOR:
-            return (f"{names[1]} reads the vehicle {ratio:.2g} × {names[0]} in their learned "
-                    f"gain ratio: {names[0]} or {names[1]} has changed gain")
-        return ""
+            return gain(ratio)
+        return DetectorFault()
     if not sees.any():
-        return ""
+        return DetectorFault()
     d = int(np.flatnonzero(sees)[0])  # the detector that sees it
     o = 1 - d
     dip = down[o] / scale[o]
     if down[o] > up[o] and peak[d] / GAIN_FACTOR <= dip <= peak[d] * GAIN_FACTOR:
-        return (f"{names[o]} reads the vehicle {names[d]} sees reversed (its peaks have "
-                "the opposite sign of its learned response)")
+        return DetectorFault(kind="reversed", message=(
+            f"{names[o]} reads the vehicle {names[d]} sees reversed (its peaks have the "
+            "opposite sign of its learned response)"))
     if max(up[o], down[o]) / scale[o] < NOTHING * peak[d]:
-        return (f"{names[o]} reads nothing of the vehicle {names[d]} sees (dead, "
-                "disconnected or only noise)")
-    return ""
+        return DetectorFault(kind="nothing", message=(
+            f"{names[o]} reads nothing of the vehicle {names[d]} sees (dead, disconnected "
+            "or only noise)"))
+    if up[o] > down[o] and up[o] / scale[o] < peak[d] / GAIN_FACTOR:
+        # it reads the vehicle, too weakly to be seen, in the learned gain ratio
+        return gain(float(peak[1] / peak[0]))
+    return DetectorFault()

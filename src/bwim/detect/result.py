@@ -31,6 +31,12 @@ from bwim.records import Passage, Record
 
 #: The two axle detectors saw different numbers of axles (a missed or spurious peak).
 FLAG_COUNT_MISMATCH = "axle_count_mismatch"
+#: The pair's readings say one of its detectors is faulty (changed gain, reversed, reads
+#: nothing): the layout it gives cannot be trusted (bwim.detect.faults).
+FLAG_DETECTOR_FAULT = "detector_fault"
+#: Isolated spikes (one or two samples far off their neighbours) were taken out of a
+#: detector's readings before the detection (bwim.detect.signals.despike).
+FLAG_DETECTOR_SPIKE = "detector_spike"
 #: Two vehicles were on the instrumented span at the same time.
 FLAG_MULTIPLE_PRESENCE = "multiple_presence"
 #: No axle was found (record level).
@@ -39,6 +45,8 @@ FLAG_NO_AXLES = "no_axles"
 FLAG_SINGLE_AXLE = "single_axle"
 #: The per-axle speeds of one vehicle differ by more than the stated tolerance.
 FLAG_SPEED_VARIES = "speed_varies"
+#: The vehicle's fitted speed lies outside the detection's speed range.
+FLAG_SPEED_RANGE = "speed_out_of_range"
 #: Found from the strain gauges alone (no axle detectors): lower confidence.
 FLAG_STRAIN_ONLY = "strain_only"
 #: The vehicle's time on the span starts before or ends after the record.
@@ -145,12 +153,17 @@ class Detection:
         One line: why nothing was found, or what the flags mean here; "" if all is well.
     method : str
         ``"axle detectors"`` or ``"strain"``.
+    fault : str
+        One line naming a faulty axle detector of the pair when its readings show one
+        (:func:`bwim.detect.faults.detector_faults`; its vehicles then carry
+        ``"detector_fault"``), else "".
     """
 
     vehicles: tuple[VehicleDetection, ...] = ()
     flags: tuple[str, ...] = ()
     message: str = ""
     method: str = ""
+    fault: str = ""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "vehicles", tuple(self.vehicles))

@@ -30,12 +30,18 @@ Contract
   faster for wide kernels; given several ``(σ, weight)`` it returns their weighted sum
   from the same FFT (a band-pass as one filter).
 
+* :func:`despike` replaces isolated spikes (one or two samples standing more than
+  :data:`SPIKE_SIGMAS` robust deviations, and more than :data:`SPIKE_SHARE` of the
+  channel's range, off the median of their five-sample neighbourhood) by that median;
+  only for signals whose narrowest pulse is much wider than a spike (the caller checks).
+
 Arrays are 1-D in samples unless stated; times in s, distances in m.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.fft
@@ -44,8 +50,9 @@ from scipy.ndimage import median_filter
 from bwim.records import Record
 from bwim.sensors import Sensor
 
-__all__ = ["channel_data", "column_medians", "gaussian_average", "gaussian_kernel",
-           "last_axis_sum", "median", "parabolic_vertex",
+__all__ = ["SPIKE_SHARE", "SPIKE_SIGMAS", "Despiked", "channel_data", "column_medians",
+           "despike", "gaussian_average", "gaussian_kernel", "last_axis_sum", "median",
+           "parabolic_vertex",
            "remove_baseline", "robust_sigma", "split_vehicles"]
 
 #: Gaussian kernels reach this many standard deviations (scipy.ndimage's default).
@@ -53,6 +60,42 @@ TRUNCATE = 4.0
 
 #: Normalised MAD: 1 / Φ⁻¹(3/4), so that robust_sigma of Gaussian noise is its σ.
 MAD_TO_SIGMA = 1.482602218505602
+#: A spike stands this many robust deviations off its five-sample median ...
+SPIKE_SIGMAS = 12.0
+#: ... and this share of the range of the channel's five-sample medians.
+SPIKE_SHARE = 0.1
+
+
+@dataclass(frozen=True, eq=False)
+class Despiked:
+    """:func:`despike`'s result: the readings with the spikes replaced, (n_t, k), and
+    where they were (bool, the same shape)."""
+
+    values: np.ndarray
+    spikes: np.ndarray
+
+    @property
+    def any(self) -> bool:
+        return bool(self.spikes.any())
+
+
+def despike(y: np.ndarray) -> Despiked:
+    """``y`` (n_t, k) with isolated spikes replaced by the median of their five-sample
+    neighbourhood (see the module docstring).  A smooth pulse moves off that median by
+    its curvature only (under 2 % of its height for a pulse 12 samples wide at half
+    height); a one- or two-sample spike by its own height.  The deviations' robust σ is
+    each channel's noise."""
+    y = np.asarray(y, dtype=float)
+    if y.ndim != 2 or y.shape[0] < 5:
+        return Despiked(values=y, spikes=np.zeros(y.shape, dtype=bool))
+    med = median_filter(y, size=(5, 1), mode="nearest")
+    dev = y - med
+    sigma = MAD_TO_SIGMA * np.median(np.abs(dev - np.median(dev, axis=0)), axis=0)
+    span = np.ptp(med, axis=0)
+    spikes = (np.abs(dev) > SPIKE_SIGMAS * sigma) & (np.abs(dev) > SPIKE_SHARE * span)
+    if not spikes.any():
+        return Despiked(values=y, spikes=spikes)
+    return Despiked(values=np.where(spikes, med, y), spikes=spikes)
 
 
 def median(values: np.ndarray) -> float:

@@ -95,11 +95,13 @@ FLAG_TABLE: tuple[tuple[str, tuple[str, ...], str, str], ...] = (
      "the trigger's max_duration (docs/streams.md); the gauges' baseline in the long "
      "file"),
     ("soft", ("outside_calibration_time",),
-     "the event's clock time lies outside the span of the calibration runs: the drift "
-     "correction there is the nearest run's, not a measured one", ""),
+     "the event's clock time lies outside the span of the calibration runs (with the "
+     "traffic method, before the date's first reference vehicle or after its last): the "
+     "drift correction there is the nearest measured one's, not a measured one", ""),
     ("soft", ("temperature_extrapolated",),
-     "the event's deck temperature lies outside the range of the calibration runs' "
-     "temperatures: the temperature drift there is extrapolated", ""),
+     "the event's deck temperature lies beyond the range of the calibration runs' "
+     "temperatures by more than a quarter of that range: the temperature drift there is "
+     "extrapolated", ""),
     ("soft", ("temperature_missing",),
      "the temperature drift was asked for but the event's temperature channel has no "
      "reading (every sample a gap): the time-of-day drift was used instead", ""),
@@ -109,6 +111,11 @@ FLAG_TABLE: tuple[tuple[str, tuple[str, ...], str, str], ...] = (
      "does, or beyond the day), so it "
      "cannot be placed in the day: the time-of-day drift correction "
      "was not applied, the calibration's mean factor was used", ""),
+    ("soft", ("no_drift",),
+     "a drift correction was asked for but none could be made for this vehicle: the "
+     "calibration runs give no drift over the day (they have no clocks, or too few to fit "
+     "one) and no temperature or traffic reference applied: the calibration's mean factor "
+     "was used", ""),
     ("soft", ("drift_traffic_thin",),
      'the day-by-day drift from the traffic ([drift] method = "traffic") had too few '
      "weighed vehicles on this date to measure the day's factor: the calibration's factor "
@@ -133,9 +140,22 @@ FLAG_TABLE: tuple[tuple[str, tuple[str, ...], str, str], ...] = (
      "one vehicle (each detected vehicle gets its own refused row)", ""),
     ("detection", ("axle_count_mismatch",),
      "the two axle detectors saw different numbers of axles", ""),
+    ("detection", ("detector_fault",),
+     "the pair's readings show one of its axle detectors faulty (changed gain, reversed, "
+     "or reading nothing of what the other sees; bwim.detect.faults): the axles it still "
+     "matches are not the vehicle's layout, and the vehicle is refused with the detector "
+     "named", ""),
+    ("detection", ("detector_spike",),
+     "isolated spikes (one or two samples far off their neighbours) were taken out of an "
+     "axle detector's readings before the detection (its responses are much wider than a "
+     "spike); the vehicle is weighed", ""),
     ("detection", ("no_axles",), "no axle was found in the record", ""),
     ("detection", ("single_axle",),
-     'a "vehicle" of one axle (an isolated peak, or a vehicle split by a long gap)', ""),
+     'a "vehicle" of one axle (an isolated peak, or a vehicle split by a long gap): '
+     "refused by the site chain", ""),
+    ("detection", ("speed_out_of_range",),
+     "the vehicle's fitted speed lies outside the detection's speed range: its axles are "
+     "not trusted, and the vehicle is refused", ""),
     ("detection", ("speed_varies",),
      "the per-axle speeds of one vehicle differ by more than the tolerance", ""),
     ("detection", ("strain_only",),

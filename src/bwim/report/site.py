@@ -63,7 +63,7 @@ def _time(t) -> str:
 def _lateral_header(rows: Sequence[SummaryRow]) -> str:
     units = {r.lateral_unit for r in rows if r.lateral is not None}
     if units == {"m"}:
-        return "lateral (m from right edge)"
+        return "strain centre across (m from right edge)"
     if units == {"gauge index"}:
         return "lateral (gauge index)"
     return "lateral"

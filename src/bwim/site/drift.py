@@ -24,7 +24,10 @@ Contract
   payload.  Its weighed value, divided by a nominal value, tracks the factor: a robust
   local-linear trend over the day's clock time (:class:`bwim.wim.ScaleTrend`, bandwidth
   by cross-validation among :data:`TRAFFIC_BANDWIDTHS`, after dropping ratios beyond
-  :data:`OUTLIER` robust standard deviations of the day's median), one trend per date.
+  :data:`OUTLIER` robust standard deviations of their local median, within
+  :data:`LOCAL_WINDOW` in time: the day's drift is larger than their scatter), one
+  trend per date; a vehicle before the date's first kept reference vehicle or after its
+  last gets the trend's end value, flagged ``outside_calibration_time``.
   The nominal value is learned while the calibration holds: the mean reference steering
   axle (within the same outlier limit; a mean, as the trends are local means: a median
   would shift every factor by the loads' skew) of vehicles weighed on a calibration date
@@ -70,8 +73,8 @@ from bwim.records import day_origin, on_day_axis, seconds_of_day
 from bwim.summary import SummaryRow
 from bwim.wim.scale_trend import ScaleTrend
 
-__all__ = ["DRIFT_METHODS", "DriftSetup", "TemperatureDrift", "TimeOfDayDrift",
-           "TrafficDrift", "traffic_drift"]
+__all__ = ["DRIFT_METHODS", "LOCAL_WINDOW", "NEIGHBOURS", "DriftSetup", "TemperatureDrift",
+           "TimeOfDayDrift", "TrafficDrift", "traffic_drift"]
 
 #: Sources of the drift factor (see the module docstring).
 DRIFT_METHODS = ("auto", "traffic", "temperature", "time_of_day", "trend", "none")
@@ -82,6 +85,11 @@ OUTLIER = 4.0
 #: hour to four hours: a deck's temperature, and the factor with it, changes over hours,
 #: while the reference vehicles are many and each scatters by its own dynamics.
 TRAFFIC_BANDWIDTHS = tuple(h * 3600.0 for h in (0.5, 1.0, 1.5, 2.0, 3.0, 4.0))
+#: s: a reference vehicle's ratio is an outlier against the median of the reference
+#: vehicles within this time of it (the drift over it is small against their scatter) ...
+LOCAL_WINDOW = 3600.0
+#: ... or of this many nearest it in time, where fewer are within it.
+NEIGHBOURS = 7
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -248,6 +256,31 @@ def _keep(values: np.ndarray) -> np.ndarray:
     return np.abs(values - med) <= OUTLIER * rsd
 
 
+def _keep_about_trend(t: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Which of the day's ratios ``q`` at clock times ``t`` (s) lie within :data:`OUTLIER`
+    robust standard deviations of their local median: of the ratios within
+    :data:`LOCAL_WINDOW` of each in time, or of its :data:`NEIGHBOURS` nearest in time
+    where fewer are that near (the day's drift moves the ratios by more than their
+    scatter: against the day's one median, a busy morning would make a thinner
+    afternoon's ratios outliers)."""
+    order = np.argsort(t, kind="stable")
+    ts, qs = t[order], q[order]
+    n = ts.size
+    lo = np.searchsorted(ts, ts - LOCAL_WINDOW, side="left")
+    hi = np.searchsorted(ts, ts + LOCAL_WINDOW, side="right")
+    local = np.empty(n)
+    for i in range(n):
+        a, b = int(lo[i]), int(hi[i])
+        if b - a < min(NEIGHBOURS, n):  # thin here: the nearest in time instead
+            near = np.argsort(np.abs(ts - ts[i]), kind="stable")[:NEIGHBOURS]
+            local[i] = np.median(qs[near])
+        else:
+            local[i] = np.median(qs[a:b])
+    keep = np.empty(n, dtype=bool)
+    keep[order] = _keep(qs - local)
+    return keep
+
+
 def _steer(row: SummaryRow) -> float | None:
     """The row's steering axle load as weighed before any drift correction, N."""
     if not row.weighed or not row.axle_weights:
@@ -298,7 +331,7 @@ def traffic_drift(rows: Sequence[SummaryRow], setup: DriftSetup, *,
     for day, pts in by_date.items():
         t = np.array([p[0] for p in pts])
         q = np.array([p[1] for p in pts])
-        keep = _keep(q)
+        keep = _keep_about_trend(t, q)
         counts[day] = int(keep.sum())
         trends[day] = (ScaleTrend.fit(t[keep], q[keep], candidates=TRAFFIC_BANDWIDTHS)
                        if counts[day] >= setup.min_reference
@@ -349,6 +382,12 @@ def apply_traffic_drift(rows: Sequence[SummaryRow], fit: TrafficDrift) -> list[S
             out.append(corrected(r, r.drift_factor or 1.0, r.drift_method or "none",
                                  ("drift_traffic_thin",)))
             continue
-        out.append(corrected(r, float(trend(seconds_of_day(r.time))), "traffic",
-                             drop=("outside_calibration_time",)))
+        when = seconds_of_day(r.time)
+        # beyond the first and last reference vehicle the trend holds its end value: not
+        # measured there (flagged as a time outside the calibration's)
+        inside = trend.covers(when)
+        out.append(corrected(r, float(trend(when)), "traffic",
+                             () if inside else ("outside_calibration_time",),
+                             drop=("outside_calibration_time", "no_drift") if inside
+                             else ("no_drift",)))
     return out

@@ -43,7 +43,7 @@ Contract
   It never raises on a record it can read: every outcome is an :class:`EventWeighing`.
 * **Drift**: each weighed vehicle's weights are divided by the strain-to-load factor of
   the setup's method (:mod:`bwim.site.drift`) at the vehicle's clock time: the
-  calibration runs' temperature regression at the record's mean temperature, the runs'
+  calibration runs' temperature regression at the record's median temperature, the runs'
   trend over the time of day, their trend over absolute time, or 1.  The traffic method
   works on a whole batch's rows afterwards (:func:`bwim.site.correct_drift`); per event
   it starts from the time of day.
@@ -78,7 +78,13 @@ import numpy as np
 from bwim.classify import axle_configuration
 from bwim.detect import Detection, VehicleDetection, detect_from_strain
 from bwim.detect.presence import windows_overlap
-from bwim.detect.result import FLAG_MULTIPLE_PRESENCE, FLAG_TRUNCATED
+from bwim.detect.result import (
+    FLAG_DETECTOR_FAULT,
+    FLAG_MULTIPLE_PRESENCE,
+    FLAG_SINGLE_AXLE,
+    FLAG_SPEED_RANGE,
+    FLAG_TRUNCATED,
+)
 from bwim.errors import BwimError, InputError
 from bwim.fe.bridge import Bridge
 from bwim.mfi import ForceIdentification, identify_forces
@@ -282,8 +288,10 @@ class EventWeighing:
             residual, lam = ident.residual, ident.lam
             own = ident.vehicle_quality[0]
             quality = own if own != "ok" else quality_of(vw.flags)
-        elif w is not None:
-            residual, quality, lam = w.residual, w.quality, None
+        elif w is not None:  # the drift's and the day's flags are the vehicle's, not w's
+            residual, lam = w.residual, None
+            quality = w.quality if w.quality == "reject" else quality_of(
+                (*w.flags, *vw.flags))
         else:
             residual, quality, lam = None, "", None
         return SummaryRow(
@@ -344,8 +352,12 @@ def weigh_event(record: Record, calibration: SiteCalibration, *,
     if not ev.vehicles:
         det = ev.by_lane.get(setup.calibration_lane or 1)
         flags = (det.flags if det is not None else ()) or ("no_axles",)
-        why = (det.message if det is not None and det.message else ev.message) or \
-            "no axle found"
+        said = [(lane, d.message) for lane, d in ev.by_lane.items() if d.message]
+        if len(said) > 1:  # every lane's pair was searched: each says what it found
+            why = "; ".join(f"lane {lane}: {m}" for lane, m in said)
+        else:
+            why = (det.message if det is not None and det.message else ev.message) or \
+                "no axle found"
         return EventWeighing(weighed=False, reason=why, detection=det, flags=flags, **base)
     model = (None if bridge is None else bridge if isinstance(bridge, SiteModel)
              else SiteModel.of_bridge(bridge))
@@ -392,6 +404,22 @@ def _vehicle(record: Record, ev: EventDetection, k: int, calibration: SiteCalibr
     if lv.direction != cal_direction:
         return refused(f"counted, not weighed: no lines for lane {lv.lane} ({lv.direction}): "
                        "the calibration truck drove the other way")
+    # first what makes the detection itself untrustworthy (its windows on the span, and
+    # with them the flags below, come from its speed and axles) ...
+    if FLAG_DETECTOR_FAULT in flags:
+        det = ev.by_lane.get(lv.pair)
+        fault = det.fault if det is not None and det.fault else "one is faulty"
+        return refused(f"a faulty axle detector: {fault}; the axles it still matches are "
+                       "not the vehicle's layout")
+    if FLAG_SPEED_RANGE in flags:
+        return refused(f"its fitted speed {v.passage.speed:.1f} m/s lies outside the "
+                       "detection's speed range: its axles are not a vehicle's to trust")
+    if FLAG_TRUNCATED in flags:  # ... then a record that cuts a vehicle (makes others)
+        return refused("the record starts or ends while the vehicle is on the bridge "
+                       "(truncated): its weights cannot be whole")
+    if FLAG_SINGLE_AXLE in flags:
+        return refused("one axle found: not a whole vehicle (an isolated peak, or a "
+                       "vehicle whose other axles were not found)")
     same_way = [w for j, w in enumerate(ev.vehicles) if j != k and w.direction == lv.direction
                 and w.lane is not None and windows_overlap(w.window, lv.window)]
     if same_way:
@@ -414,9 +442,6 @@ def _vehicle(record: Record, ev: EventDetection, k: int, calibration: SiteCalibr
                        "record, so its axles are not trusted: not weighed")
     if "axle_count_mismatch" in flags:
         return refused("the axle detectors disagree on the number of axles")
-    if FLAG_TRUNCATED in flags:
-        return refused("the record starts or ends while the vehicle is on the bridge "
-                       "(truncated): its weights cannot be whole")
     # the day's drift at this vehicle from the event's whole record (its temperature is
     # the event's: a part of the record may miss the probe's readings) ...
     try:
@@ -501,8 +526,10 @@ def _drift_factor(record: Record, passage: Passage, calibration: SiteCalibration
     setup = calibration.setup
     method = setup.drift.method
     lines = calibration.lines
-    if method == "none" or lines.scale_trend is None:
-        return 1.0, "none" if method == "none" else "", ()
+    if method == "none":
+        return 1.0, "none", ()
+    if lines.scale_trend is None:  # runs without clocks, or too few: no drift at all
+        return 1.0, "", ("no_drift",)
     if method == "trend":
         return 1.0, "trend", ()
     gap: tuple[str, ...] = ()
@@ -521,8 +548,8 @@ def _drift_factor(record: Record, passage: Passage, calibration: SiteCalibration
             raise InputError("the temperature method needs a temperature channel in the "
                              "runs and in the event ([drift] temperature)")
     tod = calibration.time_of_day
-    if tod is None:
-        return 1.0, "", gap
+    if tod is None:  # the runs cannot be placed in the day: no drift to apply
+        return 1.0, "", (*gap, "no_drift")
     if record.clock is None and not record.time_of_day:
         # no clock and a record time: the event cannot be placed in the day
         return 1.0, "", (*gap, "no_clock")
