@@ -5,7 +5,8 @@ only two runs to compare, the calibration is refused.
 Data: the session's small realistic site (three runs of the truck alone, three with a
 lane-3 vehicle), gauge s03 (under the lane) of the first run changed about its first
 sample.  Reference: the clean calibration uses the three runs (measured ratios in a
-clean run within 4 % of the others'; tolerance a factor 1.3)."""
+clean run within 4 % of the others'; tolerance a factor 1.3).  A smaller change needs
+more runs to be seen (tests/validation/test_realistic_site.py)."""
 
 import dataclasses
 

@@ -266,6 +266,12 @@ class LearnedResponses:
     gain_ratio: float = 1.0
     amplitude_spread: float = 0.0
 
+    def __repr__(self) -> str:
+        used = sum(1 for r in self.reasons if not r)
+        return (f"LearnedResponses({self.channels[0]}, {self.channels[1]}: "
+                f"{self.distance:g} m apart, {used} of {len(self.reasons)} runs, gain ratio "
+                f"{self.gain_ratio:.3g}, {len(self.gauges)} bending gauges)")
+
     @property
     def channels(self) -> tuple[str, str]:
         return self.responses[0].channel, self.responses[1].channel

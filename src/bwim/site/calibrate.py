@@ -36,7 +36,7 @@ Contract
      per-run scale factors, their trend, outlier runs rejected with a reason).
   5. **Drift**: the runs' factors over the time of day
      (:class:`~bwim.site.drift.TimeOfDayDrift`, with their dates) and, with a
-     temperature channel (``DriftSetup.temperature``), against the runs' mean temperature
+     temperature channel (``DriftSetup.temperature``), against the runs' median temperatures
      (:class:`~bwim.site.drift.TemperatureDrift`).
 
   Without axle detectors the truck is found from the strain alone
@@ -67,9 +67,11 @@ Contract
     reverse order, and the first lines of each order (before any re-detection pass)
     are compared by the same rule;
 * **A gauge faulty in one run** (reversed, or its gain changed) would corrupt its line
-  for the whole day: after the lines, each used run is weighed with them and each
-  gauge's gain ratio ``⟨m, f⟩ / ⟨f, f⟩`` (its reading against its fitted reading) is
-  compared with the same gauge's median over the runs, where its reading stands
+  for the whole day: after the lines, each gauge's gain ratio ``⟨m, f⟩ / ⟨f, f⟩`` in
+  each used run (its reading, less its mean offset from ``f``, against ``f``, the lines'
+  reading of the truck's known loads at the run's passage and scale; a weighing's free
+  loads would take up part of one gauge's change), over the median of the run's ratios
+  (its own scale), is compared with the same gauge's median over the runs, where its reading stands
   :data:`RUN_GAUGE_SNR` times out of its noise.  A run whose ratio is negative or off by
   more than :data:`~bwim.site.health.GAIN_TOLERANCE` is left out with the gauge named,
   and the lines are fitted again without it.  With only two runs seeing the gauge, a
@@ -88,6 +90,7 @@ Contract
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from datetime import date
@@ -105,7 +108,7 @@ from bwim.detect import (
 )
 from bwim.detect.presence import windows_overlap
 from bwim.detect.response import band_pass, peak_polarity
-from bwim.detect.result import FLAG_MULTIPLE_PRESENCE
+from bwim.detect.result import FLAG_MULTIPLE_PRESENCE, FLAG_TRUNCATED
 from bwim.detect.signals import robust_sigma
 from bwim.errors import BwimError, InputError
 from bwim.records import Passage, Record
@@ -115,9 +118,10 @@ from bwim.site.health import FLAT_NOISE, GAIN_TOLERANCE, check_gauges
 from bwim.site.isolate import own_part
 from bwim.site.lanes import EventDetection, LaneVehicle, detect_lanes
 from bwim.site.setup import SiteSetup
-from bwim.wim import MultiRunCalibration, Weighing, calibrate_lines, weigh
+from bwim.wim import MultiRunCalibration, Weighing, calibrate_lines
 from bwim.wim.influence_line import read_channels
 from bwim.wim.multirun import RunFit
+from bwim.wim.weigh import weighing_model
 
 __all__ = ["MIN_AXLE_LOAD", "MIN_TRUCK_AXLES", "MIN_TRUCK_WEIGHT", "REVERSED_FIT",
            "REVERSED_SAME", "RUN_DRIFT", "RUN_SCALE_RANGE", "SPACING_BIAS", "SPACING_TOLERANCE",
@@ -256,6 +260,7 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
     if bad is not None:
         raise InputError(f"records[{bad}] must be a bwim.Record, got "
                          f"{type(records[bad]).__name__}")
+    _check_distinct(records)
     _check_loads(setup)
     if not setup.lanes:
         if int(strain_passes) < 0:
@@ -327,7 +332,8 @@ def _faulty_gauge_runs(records: Sequence[Record], setup: SiteSetup, cal: _Lines,
         if cal.reasons[k] or fit is None or not np.isfinite(fit.scale):
             continue
         try:
-            w = weigh(records[k], p, lines, combine=setup.combine, scale=fit.scale)
+            model = weighing_model(records[k], p, lines, combine=setup.combine)
+            w = model.weigh(scale=fit.scale)
             health = check_gauges(records[k], p, lines, combine=setup.combine)
         except (BwimError, ArithmeticError, ValueError, np.linalg.LinAlgError):
             continue
@@ -338,13 +344,23 @@ def _faulty_gauge_runs(records: Sequence[Record], setup: SiteSetup, cal: _Lines,
             faulty[k] = f"gauge {clip.gauge} clipped in this run ({clip.detail})"
         trends[k] = _baseline_change(records[k], w, lines) / np.maximum(
             lines.channel_noise, np.finfo(float).tiny)
-        m, f = w.measured, w.fitted
+        # each gauge's gain against the lines under the truck's known loads (a weighing's
+        # free loads would take up part of one gauge's change: ×1.5 read as ×1.2), the
+        # run's own scale taken out by the median over its gauges
+        design = model.design
+        known = np.array([setup.calibration_loads[list(g)].sum()
+                          for g in model.event.groups.groups])
+        pred = fit.scale * np.einsum("kgc,g->kc", design.groups, known)
+        meas = model.readings - (model.readings - pred).mean(axis=0)
+        m, f = meas[design.on], pred[design.on]
         power = (f * f).sum(axis=0)
         a = (m * f).sum(axis=0) / np.maximum(power, np.finfo(float).tiny)
         # the reading's own strength (a line two disagreeing runs cancel is near zero)
         snr = np.sqrt((m * m).sum(axis=0) / m.shape[0]) / np.maximum(
             lines.channel_noise, np.finfo(float).tiny)
-        ratios[k] = np.where(snr >= RUN_GAUGE_SNR, a, np.nan)
+        a = np.where(snr >= RUN_GAUGE_SNR, a, np.nan)
+        mid = np.nanmedian(a) if np.isfinite(a).any() else np.nan
+        ratios[k] = a / mid if np.isfinite(mid) and mid > 0 else a
     runs = list(ratios)
     if len(runs) < 2:
         return faulty
@@ -530,14 +546,36 @@ def _refuse_reversed(declared: float, reversed_: float) -> None:
             "truck's direction of travel, as axle_spacings")
 
 
+def _check_distinct(records: Sequence[Record]) -> None:
+    """Refuse a run given twice (the same readings, or the same clock): one run's lines
+    would count as two (the least two runs then passed with one)."""
+    seen: dict[object, int] = {}
+    for k, rec in enumerate(records):
+        keys = [hashlib.sha1(np.ascontiguousarray(rec.data).tobytes()).hexdigest()]
+        start = rec.clock_at(rec.time[0]) if rec.clock is not None else None
+        if start is not None:  # (events cut from one long file share its clock)
+            keys.append(start)
+        for key in keys:
+            if key in seen:
+                same = "readings" if isinstance(key, str) else f"clock ({key:%Y-%m-%d %H:%M:%S})"
+                raise InputError(f"calibration runs {seen[key] + 1} and {k + 1} are the same "
+                                 f"run (the same {same}): give each run once")
+            seen[key] = k
+
+
 def _check_spacings(events: Sequence[EventDetection], reasons: Sequence[str],
                     setup: SiteSetup) -> None:
     """The declared spacings against the used runs' detected ones (module docstring)."""
     lane = setup.calibration_lane or 1
+    n = len(setup.calibration_spacings)
+    # the truck of each used run: its lane's vehicle with the truck's axle count (another
+    # vehicle may have crossed the lane before or after it)
     detected = np.array([
-        next(w for w in ev.vehicles if w.pair == lane).vehicle.passage.axle_spacings
-        for ev, why in zip(events, reasons, strict=True) if not why])
-    if detected.shape[0] < 2:
+        trucks[0].vehicle.passage.axle_spacings
+        for ev, why in zip(events, reasons, strict=True) if not why
+        and (trucks := [w for w in ev.vehicles if w.pair == lane
+                        and len(w.vehicle.passage.axle_spacings) == n])])
+    if detected.ndim != 2 or detected.shape[0] < 2:
         return
     dev = detected - setup.calibration_spacings
     wrong = [i for i in range(dev.shape[1])
@@ -661,6 +699,19 @@ def _run_reason(ev: EventDetection, setup: SiteSetup, strict: bool = False) -> s
         det = ev.by_lane.get(lane)
         why = det.message if det is not None and det.message else ev.message or "no axles"
         return f"no vehicle detected ({why})"
+    why = _truck_reason(ev, setup, own, strict)
+    # a run refused whose truck the record cuts: that is why (its other flags, a second
+    # vehicle or a wrong axle count, follow from the cut; a truck flagged so but whole
+    # enough to pass the checks is used, as the lines' own fit judges it)
+    if why and any(FLAG_TRUNCATED in v.vehicle.flags for v in own):
+        return "the record starts or ends while the truck is on the bridge (truncated)"
+    return why
+
+
+def _truck_reason(ev: EventDetection, setup: SiteSetup, own: list[LaneVehicle],
+                  strict: bool) -> str:
+    """:func:`_run_reason` once the calibration lane holds a vehicle."""
+    lane = setup.calibration_lane or 1
     truck = _truck(ev, setup, strict)
     if truck is None:
         return f"{len(own)} vehicles detected in lane {lane}, not one calibration truck"
@@ -724,8 +775,8 @@ class _Lines:
 def _site_calibration(records, setup, detections, reasons, passages, kept) -> _Lines:
     if len(kept) < 2:
         shown = "; ".join(f"run {k + 1}: {r}" for k, r in enumerate(reasons) if r)
-        raise InputError(f"only {len(kept)} usable calibration run(s) of {len(records)}: "
-                         f"{shown}")
+        raise InputError(f"only {len(kept)} usable calibration run(s) of {len(records)} "
+                         "(the lines need at least two)" + (f": {shown}" if shown else ""))
     lines = calibrate_lines([records[k] for k in kept], passages, setup.calibration_loads,
                             lateral=setup.lateral,
                             support_lobes=setup.support_lobes)

@@ -147,6 +147,12 @@ class InfluenceLine:
     source: str = ""
     residual: float | None = None
 
+    def __repr__(self) -> str:
+        res = "" if self.residual is None else f", residual {self.residual:.3g}"
+        return (f"InfluenceLine({len(self.channels)} channels × {self.x.size} ordinates, "
+                f"x {self.x[0]:.2f}–{self.x[-1]:.2f} m, lane {self.lane:g} m"
+                f"{', ' + self.source if self.source else ''}{res})")
+
     def __post_init__(self) -> None:
         x = require_axis("influence line x", self.x, "positions")
         channels = tuple(self.channels)

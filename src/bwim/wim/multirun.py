@@ -148,6 +148,12 @@ class RunFit:
     rejected: bool = False
     reason: str = ""
 
+    def __repr__(self) -> str:
+        why = self.reason if len(self.reason) <= 60 else self.reason[:59] + "…"
+        state = f"rejected: {why}" if self.rejected else "used"
+        return (f"RunFit({self.index}: {self.speed:.2f} m/s, lateral {self.lateral:.2f}, "
+                f"scale {self.scale:.4f}, residual {self.residual:.3g}, {state})")
+
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class MultiRunCalibration(OptimizeResult):
@@ -224,6 +230,13 @@ class MultiRunCalibration(OptimizeResult):
     scale_trend: ScaleTrend | None
     time_span: tuple[float, float]
     core_support: tuple[float, float] | None = None
+
+    def __repr__(self) -> str:
+        used = sum(1 for r in self.runs if not r.rejected)
+        return (f"MultiRunCalibration({len(self.line.channels)} channels, {used} of "
+                f"{len(self.runs)} runs, support {self.support[0]:.2f}–"
+                f"{self.support[1]:.2f} m, truck {self.truck_weight / 1e3:.1f} kN, "
+                f"success={self.success})")
 
     @property
     def channels(self) -> tuple[Channel, ...]:
