@@ -96,9 +96,13 @@ def test_calibrate_then_identify_across_invocations(files, capsys):
     code, out, err = _run(["identify", files["three"], files["truck_h5"], files["truck_csv"],
                            "--bridge", model, "-o", res, "--jobs", "2"], capsys)
     assert code == 0, err
+    assert "['" not in out  # the axle weights as "58.3, 109.5", as weigh prints them
     with open(res / "summary.csv", newline="") as f:
         rows = list(csv.DictReader(f))
     assert [r["record"] for r in rows] == ["truck.h5", "truck.csv"]
+    for r in rows:  # each row's weights printed as the summary has them, to 0.1 kN
+        shown = ", ".join(f"{float(w):.1f}" for w in r["axle_weights_kN"].split(";"))
+        assert shown in out, (shown, out)
     truth = read_record(files["truck_h5"]).truth
     for r in rows:
         assert r["status"] == "weighed" and r["method"] == "mfi" and r["class"] == "12"

@@ -61,3 +61,16 @@ def test_accuracy_rejects_unknown_conditions(tmp_path, bad):
     with pytest.raises(SystemExit) as exc:
         main(["accuracy", str(s), "--reference", str(r), *bad])
     assert exc.value.code == 2
+
+
+@pytest.mark.parametrize("name", ["taken.csv", "acc.txt"])
+def test_the_output_is_checked_before_the_work(tmp_path, capsys, name):
+    """An existing output or a suffix it cannot write is refused before anything is
+    printed (docs/cli.md: outputs are checked before the work starts; review of stop 34:
+    the whole table came first, then the refusal)."""
+    s, r = _files(tmp_path, [0.0] * 5)
+    (tmp_path / "taken.csv").write_text("mine\n")
+    assert main(["accuracy", str(s), "--reference", str(r), "-o", str(tmp_path / name)]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and name in captured.err
+    assert (tmp_path / "taken.csv").read_text() == "mine\n"

@@ -135,7 +135,7 @@ def identify_command(args: argparse.Namespace) -> int:
         report = _run_batch(batch, items, lambda todo: identify_records(
             todo, bridge, read=_read(scenario), options=kwargs, executor=executor,
             keep=False), "identifying forces")
-    shown = [(r.record, r.vehicle, format_kn_each(r.axle_weights) if r.weighed else
+    shown = [(r.record, r.vehicle, ", ".join(format_kn_each(r.axle_weights)) if r.weighed else
               r.reason, format_kn(r.gvw) if r.weighed else "",
               "" if r.lam is None else f"{r.lam:.4g}") for r in report.rows]
     print(Table(f"Moving force identification, {len(paths)} record(s){_done_before(report)}, "

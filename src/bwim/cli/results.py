@@ -20,15 +20,17 @@ def accuracy_command(args: argparse.Namespace) -> int:
     from bwim.accuracy import assess
     from bwim.io import read_reference, read_summary
 
+    # the output checked before the work (docs/cli.md): an existing file or a wrong
+    # suffix is refused before anything is printed
+    target = (out_file(args.output, (".csv",), inputs=[args.summary, args.reference],
+                       force=args.force) if args.output else None)
     summary = read_summary(args.summary)
     reference = read_reference(args.reference)
     result = assess(summary, reference, repeatability=args.repeatability,
                     environment=args.environment, strict=args.strict,
                     time_tolerance=_time_tolerance(args))
     print(result.render())
-    if args.output:
-        target = out_file(args.output, (".csv",), inputs=[args.summary, args.reference],
-                           force=args.force)
+    if target is not None:
         table = result.table()
         write_csv(target, table.header, table.rows)
         print(f"table: {target}")
