@@ -36,6 +36,15 @@ at the detection threshold, full at twice it), ``c_match`` = fraction of its axl
 both detectors, ``c_spacing = exp(−½ (d / 0.1 m)²)`` with d the RMS difference of the
 spacings measured at each detector (0.1 m is the spacing accuracy aimed at), and
 ``c_axles = 0.5`` for a one-axle vehicle (1 otherwise).
+
+With learned responses (``responses=``, :mod:`bwim.detect.pursuit`): spikes are first
+taken out of the two channels (:func:`bwim.detect.signals.despike`) when the narrowest
+response at the top speed is :data:`SPIKE_WIDTH` samples wide or more (the vehicles then
+flagged ``detector_spike``); the pursuit's vehicles are flagged ``single_axle`` (one
+axle), ``speed_out_of_range`` (a refined speed outside ``speed_range``) and, when the
+pair's readings show a detector's gain changed (:func:`bwim.detect.faults.diagnose`; a
+record a vehicle is cut in excepted), ``detector_fault``, naming both in
+:attr:`~bwim.detect.result.Detection.fault`.
 """
 
 from __future__ import annotations

@@ -9,6 +9,10 @@ Contract
 
   - a vehicle travelling the other way than the calibration truck is **counted, not
     weighed** (no lines were calibrated for that direction): refused with that reason;
+  - a vehicle whose detection is not to be trusted is refused first, with its reason: a
+    detector of its pair off in gain (``detector_fault``), a fitted speed outside the
+    detection's range (``speed_out_of_range``), a record that cuts it (``truncated``),
+    one axle (``single_axle``);
   - a vehicle that shares the span with another vehicle travelling its way (side by side
     or following) is refused (``multiple_presence``): one record cannot tell their weights
     apart with lines of one vehicle;
