@@ -13,6 +13,7 @@ import numpy as np
 
 from bwim.cli.common import (
     CalibrationProgress,
+    Progress,
     bridge_of,
     check_jobs,
     load_records,
@@ -164,10 +165,14 @@ def _site_model(args: argparse.Namespace, scenario, paths, out: Path) -> int:
     given = scenario.calibrate.mesh_correction if scenario.calibrate is not None else None
     mc = str(args.mesh_correction or ("auto" if given is None else given)).strip().lower()
     joints = range(1, len(scenario.bridge.joints or ()) + 1)  # bwim.fe.joints' zones
-    model = calibrate_site_model(records, site, start, gains=args.gains or "common",
-                                 track_width=args.track_width, identify_options=options,
-                                 mesh_correction=int(mc) if mc.isdigit() else mc,
-                                 joints=tuple(joints))
+    with Progress(1 + site.n_used, "calibrating the model (the fit, then one fold a run)"
+                  ) as bar:
+        bar(0)
+        model = calibrate_site_model(records, site, start, gains=args.gains or "common",
+                                     track_width=args.track_width, identify_options=options,
+                                     mesh_correction=int(mc) if mc.isdigit() else mc,
+                                     joints=tuple(joints),
+                                     progress=lambda done, total: bar(done))
     model = dataclasses.replace(model, provenance=site_provenance(paths, scenario))
     save_site_model(model, out, title=f"calibrated from {site.n_used} run(s) of "
                     f"{scenario.title or scenario.source}")

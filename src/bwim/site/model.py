@@ -57,7 +57,7 @@ Contract
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import partial
 from typing import TYPE_CHECKING, Any
@@ -259,6 +259,7 @@ def calibrate_site_model(
     leave_one_out: bool = True,
     identify_options: Mapping[str, Any] | None = None,
     mesh_correction: int | str = "auto",
+    progress: Callable[[int, int], None] | None = None,
     **fit_options: Any,
 ) -> SiteModel:
     """Calibrate ``start_bridge`` from the site's calibration runs and check it on them.
@@ -284,6 +285,9 @@ def calibrate_site_model(
         ``"auto"`` (default) bisects the start's mesh as often as its mesh check at the
         gauges asks, none when it is fine enough; the model is then the bisected one.
         Each fold of the self-check uses the full fit's number of bisections.
+    progress : callable, optional
+        Called ``progress(done, total)`` after each fit: the full fit, then each run's
+        fold of the self-check (``total`` = 1 + the runs used, 1 without the self-check).
     **fit_options
         Passed to :func:`bwim.calibration.calibrate_logger` (``cutoff``, ``n_basis``...).
     """
@@ -330,8 +334,11 @@ def calibrate_site_model(
                                 lateral=start_lateral, gains=gains, mesh_correction=levels,
                                 **options)
 
+    total = 1 + (len(used) if leave_one_out else 0)
     full = fit(used, start_bridge, origin, 0.0, bool(fit_options.pop("mass", True)),
                mesh_correction)
+    if progress is not None:
+        progress(1, total)
     levels = full.mesh_correction.levels if full.mesh_correction is not None else 0
     # the folds start from the full fit's parameters on the start's mesh
     fitted = start_bridge.with_params(**full.bridge.params)
@@ -352,6 +359,8 @@ def calibrate_site_model(
                        others, records, weigh, setup)
         checks.append(_check(k, float(explained[k]), weigh(records[k], bridge=fold),
                              setup))
+        if progress is not None:
+            progress(1 + len(checks), total)
     reason = _verdict(model, checks, float(tolerance), leave_one_out)
     return dataclasses.replace(model, runs=tuple(checks), accepted=not reason, reason=reason)
 
