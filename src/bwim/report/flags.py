@@ -141,10 +141,10 @@ FLAG_TABLE: tuple[tuple[str, tuple[str, ...], str, str], ...] = (
     ("detection", ("axle_count_mismatch",),
      "the two axle detectors saw different numbers of axles", ""),
     ("detection", ("detector_fault",),
-     "the pair's readings show one of its axle detectors faulty (changed gain, reversed, "
-     "or reading nothing of what the other sees; bwim.detect.faults): the axles it still "
-     "matches are not the vehicle's layout, and the vehicle is refused with the detector "
-     "named", ""),
+     "the pair's readings show that one of its axle detectors changed gain (their peaks "
+     "more than a factor 2 off the learned gain ratio; bwim.detect.faults): the axles it "
+     "still matches are not the vehicle's layout, and the vehicle is refused with both "
+     "detectors named", ""),
     ("detection", ("detector_spike",),
      "isolated spikes (one or two samples far off their neighbours) were taken out of an "
      "axle detector's readings before the detection (its responses are much wider than a "
