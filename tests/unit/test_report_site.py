@@ -285,7 +285,7 @@ def test_report_command_writes_the_site_report_and_refuses_to_overwrite(tmp_path
     assert main(argv) == 0
     page = out.read_text(encoding="utf-8")
     assert sorted(_images(page)) == sorted(TRAFFIC_FIGURES + ACCURACY_FIGURES + RUN_FIGURES)
-    assert "COST 323 accuracy of summary.csv against ref.csv" in page
+    assert f"COST 323 accuracy of {tmp_path.name}/summary.csv against ref.csv" in page
     capsys.readouterr()
     assert main(argv) == 2
     err = capsys.readouterr().err
@@ -295,3 +295,20 @@ def test_report_command_writes_the_site_report_and_refuses_to_overwrite(tmp_path
     assert main(["report", str(tmp_path / "calibration_runs.csv"), "--reference",
                  str(tmp_path / "ref.csv"), "-o", str(tmp_path / "r2.html")]) == 2
     assert "needs a weigh summary.csv" in capsys.readouterr().err
+
+
+def test_two_results_summaries_get_two_titles(tmp_path):
+    """``bwim report results/ static/``: each summary's section is named with its folder
+    (review of stop 34: both were "Site summary: summary.csv")."""
+    from bwim.cli import main
+    from bwim.io.summary import write_summary
+
+    rows, _, _ = _day()
+    for folder in ("mfi", "lines"):
+        (tmp_path / folder).mkdir()
+        write_summary(tmp_path / folder / "summary.csv", rows)
+    out = tmp_path / "two.html"
+    assert main(["report", str(tmp_path / "mfi" / "summary.csv"),
+                 str(tmp_path / "lines" / "summary.csv"), "-o", str(out)]) == 0
+    page = out.read_text(encoding="utf-8")
+    assert "Site summary: mfi/summary.csv" in page and "Site summary: lines/summary.csv" in page

@@ -152,7 +152,10 @@ def test_bwim_weigh_continuous(day, tmp_path, capsys):
     assert weighed[0]["time"].startswith(ev.clock.isoformat()[:16])
     assert main(["weigh", str(site.scenario), str(cont.path), "--calibration-records",
                  str(site.calibration[0].parent), "-o", str(out), "--continuous"]) == 2
-    assert "exists (and 3 more of its outputs)" in capsys.readouterr().err  # events/ too
+    err = capsys.readouterr().err
+    assert "exists (and 3 more of its outputs)" in err  # events/ too
+    # the way on (review of stop 34: a rerun was refused without naming --resume)
+    assert "use --force to overwrite, --resume to go on with what is done there," in err
     # events.csv: each event's place in its long file (the trigger's own numbers)
     index = list(csv.DictReader(open(out / "events.csv")))
     assert [r["event"] for r in index] == names

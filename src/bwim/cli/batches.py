@@ -124,7 +124,8 @@ def identify_command(args: argparse.Namespace) -> int:
     refuse_input_overwrite([summary, *(it.target for it in items)], inputs)
     with locked(folder):
         if _fresh(args, folder):  # no result file of a record replaced without --force
-            refuse_existing_outputs([it.target for it in items], force=args.force)
+            refuse_existing_outputs([it.target for it in items], force=args.force,
+                                    resumable=True)
         scenario = load_scenario(args.scenario)
         bridge = bridge_of(args, scenario)
         batch = BatchFolder(folder, resume=args.resume, force=args.force, summary=summary,
@@ -589,8 +590,8 @@ def weigh_command(args: argparse.Namespace) -> int:
                             *([args.bridge] if args.bridge else [])])
     with locked(folder):
         if _fresh(args, folder):  # no output of a command replaced without --force
-            refuse_existing_outputs(outputs, force=args.force)
-            refuse_existing_outputs(tables, force=args.force)
+            refuse_existing_outputs(outputs, force=args.force, resumable=True)
+            refuse_existing_outputs(tables, force=args.force, resumable=True)
         batch = BatchFolder(folder, resume=args.resume, force=args.force, meta=_meta(
             "weigh", scenario=args.scenario, calibration=sorted(cal, key=str),
             influence=args.influence, bridge=args.bridge), parquet=args.parquet)

@@ -100,16 +100,19 @@ def out_file(path: str | Path, suffixes: Sequence[str] | None = None, *,
     return refuse_existing(p, force=force)
 
 
-def refuse_existing_outputs(paths: Sequence[Path], *, force: bool) -> None:
+def refuse_existing_outputs(paths: Sequence[Path], *, force: bool,
+                            resumable: bool = False) -> None:
     """:class:`InputError` naming the first of ``paths`` that exists (unless ``force``),
-    and how many do: checked before any of them is written."""
+    and how many do: checked before any of them is written; ``resumable``: the command
+    has ``--resume``, which the message offers too."""
     if force:
         return
     there = [p for p in paths if p.exists() or p.is_symlink()]
     if there:
         more = f" (and {len(there) - 1} more of its outputs)" if len(there) > 1 else ""
-        raise InputError(f"{there[0]} exists{more}; use --force to overwrite, or another "
-                         "output folder")
+        again = ", --resume to go on with what is done there," if resumable else ""
+        raise InputError(f"{there[0]} exists{more}; use --force to overwrite{again} or "
+                         "another output folder")
 
 
 def out_folder(path: str | Path) -> Path:

@@ -227,8 +227,9 @@ def _read_csv(path: Path):
     from bwim.report.runs import is_runs_table, read_calibration_runs
     from bwim.report.site import TrafficSummary
 
-    if is_summary(path):
-        return TrafficSummary(name=path.name, rows=read_summary(path))
+    if is_summary(path):  # named with its folder: two results' summaries are told apart
+        name = f"{path.parent.name}/{path.name}" if path.parent.name else path.name
+        return TrafficSummary(name=name, rows=read_summary(path))
     if is_runs_table(path):
         return read_calibration_runs(path)
     return _read_csv_table(path)
