@@ -143,7 +143,7 @@ def test_weigh_command_writes_the_contract_summary(day, tmp_path, capsys):
     assert main(["report", str(out / "summary.csv"), "--reference", str(day.reference),
                  "-o", str(html)]) == 0
     text = html.read_text()
-    assert "COST 323 accuracy of summary.csv" in text and "axle of a group" in text
+    assert f"COST 323 accuracy of {out.name}/summary.csv" in text and "axle of a group" in text
 
 
 # --- the day's COST 323 class, in Python, without a file -----------------------------------
