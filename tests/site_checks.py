@@ -16,11 +16,16 @@ def lane1_truck_error(day, scenario, site, model) -> float:
     differs from the calibration date's at the same clock time); it must be weighed."""
     with open(day.reference, newline="") as f:
         ref = next(r for r in csv.DictReader(f) if r["lane"] == "1")
-    with open(day.truth, newline="") as f:
-        true = next(float(r["strain_factor"]) for r in csv.DictReader(f)
-                    if r["record"] == ref["record"] and r["trigger"] == "true")
     ev = weigh_event(load_record(day.out_dir / "traffic" / ref["record"], scenario), site,
                      bridge=dataclasses.replace(model, accepted=True))
     assert ev.weighed, ev.reason
-    applied = ev.drift_factor or 1.0
-    return ev.gvw / (float(ref["gvw_kN"]) * 1e3 * true / applied) - 1
+    return ev.gvw / (float(ref["gvw_kN"]) * 1e3 * drift_left(day, ref["record"], ev)) - 1
+
+
+def drift_left(day, record: str, ev) -> float:
+    """What the drift correction left in an event's weights: the event's true strain
+    factor (truth.csv, its trigger row) over the factor applied (1 when none was)."""
+    with open(day.truth, newline="") as f:
+        true = next(float(r["strain_factor"]) for r in csv.DictReader(f)
+                    if r["record"] == record and r["trigger"] == "true")
+    return true / (ev.drift_factor or 1.0)

@@ -403,7 +403,7 @@ def _detect_learned(record: Record, detectors: Sequence[str], distance: float,
     # a spike cannot be an axle where the narrowest response at the top speed is wider
     # than SPIKE_WIDTH samples: take spikes out first (their energy would otherwise set
     # the vehicle's residual level, and with it every axle group's count)
-    fs = 1.0 / float(np.median(np.diff(record.time))) if record.time.size > 1 else 0.0
+    fs = record.sampling_rate if record.time.size > 1 else 0.0
     width = min(r.fwhm for r in responses.responses) / opts.speed_range[1] * fs
     spiked = False
     if width >= SPIKE_WIDTH:

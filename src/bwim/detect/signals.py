@@ -90,7 +90,7 @@ def despike(y: np.ndarray) -> Despiked:
         return Despiked(values=y, spikes=np.zeros(y.shape, dtype=bool))
     med = median_filter(y, size=(5, 1), mode="nearest")
     dev = y - med
-    sigma = MAD_TO_SIGMA * np.median(np.abs(dev - np.median(dev, axis=0)), axis=0)
+    sigma = np.array([robust_sigma(dev[:, c]) for c in range(dev.shape[1])])
     span = np.ptp(med, axis=0)
     spikes = (np.abs(dev) > SPIKE_SIGMAS * sigma) & (np.abs(dev) > SPIKE_SHARE * span)
     if not spikes.any():

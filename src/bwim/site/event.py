@@ -292,10 +292,9 @@ class EventWeighing:
             residual, lam = ident.residual, ident.lam
             own = ident.vehicle_quality[0]
             quality = own if own != "ok" else quality_of(vw.flags)
-        elif w is not None:  # the drift's and the day's flags are the vehicle's, not w's
+        elif w is not None:  # the vehicle's flags (w's, the drift's) make its quality
             residual, lam = w.residual, None
-            quality = w.quality if w.quality == "reject" else quality_of(
-                (*w.flags, *vw.flags))
+            quality = w.quality if w.quality == "reject" else quality_of(vw.flags)
         else:
             residual, quality, lam = None, "", None
         return SummaryRow(
