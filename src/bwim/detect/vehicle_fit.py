@@ -363,9 +363,12 @@ def refine(pb: Problem, taus: np.ndarray, v: float, iterations: int = MAX_LM, *,
             if vv <= 0:
                 lam *= 10.0
                 continue
-            trial_sol = Solution(pb, tt, vv, rows, True)
-            c2 = float(trial_sol.res @ trial_sol.res)
-            if c2 < cost:
+            # a step that moves an axle off the window leaves its column zero at a
+            # detector: the fit is degenerate, its misfit not finite, the step rejected
+            with np.errstate(invalid="ignore", over="ignore"):
+                trial_sol = Solution(pb, tt, vv, rows, True)
+                c2 = float(trial_sol.res @ trial_sol.res)
+            if np.isfinite(c2) and c2 < cost:
                 rel = (cost - c2) / max(cost, 1e-300)
                 sol = trial_sol
                 p, r, cost = np.concatenate((tt, [vv])), sol.res, c2
