@@ -69,14 +69,17 @@ def test_a_pair_without_a_centre_line_keeps_its_vehicles(small_site_calibrated,
 
 def test_the_wrong_calibration_lane_says_so(small_site_calibrated, tmp_path):
     """The lane-3 pair marked as the calibration lane, the truck having driven lane 1:
-    refused, and the message says which lane's detectors were taught and what to mark
-    (review of stop 33: it spoke of the detectors' distance only)."""
+    refused, and the message names lane 1's pair as the one to mark (review of stop 33:
+    it spoke of the detectors' distance only).  The lane-3 pair learns a response from
+    the runs' lane-3 vehicles (half the runs hold one, of the truck's kind) and then sees
+    nothing in the other three, where lane 1's pair sees the truck."""
     day, _, records, _ = small_site_calibrated
     text = day.scenario.read_text().replace('lane = 3\n', 'lane = 3\ncalibration = true\n', 1)
     path = tmp_path / "scenario.toml"
     path.write_text(text)
     setup = build_site_setup(load_scenario(path))
     assert setup.calibration_lane == 3
-    with pytest.raises(InputError, match=r"lane 3's detectors \(ad4, ad3\), the calibration "
-                                         r"lane: .*mark that lane's pair \(calibration = true"):
+    with pytest.raises(InputError, match=r"lane 3's detectors .*lane 1's \(ad1, ad2\) saw one: "
+                                         r"if the truck drove lane 1, mark that lane's pair "
+                                         r"\(calibration = true"):
         calibrate_site(records, setup)

@@ -28,16 +28,16 @@ Data: the realistic site (:mod:`bwim.synthetic`, ``short-span-4-lane``, data mes
 gauge noise, drift, WIM-grade roads, docs/realistic_site.md), seed 5, 60 traffic events
 of which 20 hold two vehicles.  The seed was picked because it holds the first case: a
 lane-2 truck of 294 kN beside a lane-1 truck of 361 kN, 0.015 s apart, which the lines
-weigh at about 700 kN with quality ``warning`` (measured: +94 %, lateral position 6.50 m
-against the lane's 5.88 ± 0.13 m, z = 4.8).  The day has 18 lane-1 trucks weighed: the
+weigh at about 650 kN with quality ``warning`` (measured: +82 %, lateral position 6.51 m
+against the lane's 5.88 ± 0.15 m, z = 4.2).  The day has 20 lane-1 rows weighed: the
 check is run with ``min_vehicles=15`` (the default 30 is for a whole day;
 bench_realsite measures the default on four days of 800 trucks).  Measured for the
-second: without the bending the lane-3 pair counts 39 vehicles, 3 of them in events
-that held fewer; with it 36, 2 such (2-3 axles at 6.8-6.9 m/s beside lane-1 trucks at
-25-27 m/s; until stop 34 the simulated drift within the day was smaller and it counted
-1 more: the detectors' bending part drifts with the strain, their local part does not,
-so a larger drift leaves more of the bending beside what the runs taught; the day's speed
-check leaves such traces out).
+second: without the bending the lane-3 pair counts 40 vehicles, 4 of them in events
+that held fewer; with it 36, 2 such (2 axles at 12.5 m/s and 3 at 6.3 m/s beside lane-1
+trucks at 22.8 and 21.3 m/s; until stop 34 the simulated drift within the day was
+smaller and it counted 1 more: the detectors' bending part drifts with the strain, their
+local part does not, so a larger drift leaves more of the bending beside what the runs
+taught; the day's speed check leaves such traces out).
 """
 
 from __future__ import annotations
@@ -191,20 +191,23 @@ def _front(t: dict) -> float:
             - dt.datetime.fromisoformat(t["event_start"])).total_seconds()
 
 
+@pytest.mark.filterwarnings("error::RuntimeWarning")
 def test_two_trucks_abreast_are_never_weighed_as_one_after_the_days_checks(day, day_rows):
     """The day's lane-1 trucks alone (the first 4) each with a lane-2 truck alone (the
     day's 3) added at offsets of its first axle from 0.3 s behind to 0.4 s ahead of
     theirs (72 events; the lane-2 record less its first samples' level, so each gauge
     carries one offset and the noise of both records).  Measured: 6 of the 12 added at
-    the same instant are weighed, at +60 to +96 % with only soft flags (their axles
+    the same instant are weighed, at +52 to +91 % with only soft flags (their axles
     coincide); the others are refused in the event (multiple presence, lateral reach).
     Each such weighing among the day's rows (one pair in a day of traffic) is refused
     by the lanes' lateral check or the axle groups' check (``min_vehicles=15``, as
-    above), but one: +66 %, at z = 3.22 against the lateral limit of 3.5.  Its z is at
-    the mercy of the spread of 20 trucks by the MAD: a 0.02 m change in the lateral
-    positions of two of the day's rows (the following pair, detected again on its own
-    part) moved it from 3.59, refused, to 3.22.  So the test asks that at most one
-    escapes, and only within a tenth of the limit."""
+    above), but one: +52 %, at z = 3.41 against the lateral limit of 3.5 (stop 34: +66 %
+    at 3.22).  Its z is at the mercy of the spread of 20 trucks by the MAD: a 0.02 m
+    change in the lateral positions of two of the day's rows (the following pair,
+    detected again on its own part) once moved it from 3.59, refused, to 3.22.  So the
+    test asks that at most one escapes, and only within a tenth of the limit.  No step
+    of the detection's refinement leaves a numpy warning (a step that moved an axle off
+    its window once gave a degenerate fit: rejected now without computing on it)."""
     d, scenario, site, truth = day
     rows, _ = day_rows
     alone = {lane: [n for n, t in sorted(truth.items()) if len(t) == 1
@@ -248,12 +251,12 @@ def test_two_trucks_abreast_are_never_weighed_as_one_after_the_days_checks(day, 
 def test_a_following_truck_in_the_same_file_is_cut_off_and_each_truck_weighed(day, day_rows):
     """The day's one lane-1 file with a second truck following the first (a body gap
     of 0.6-2 s at their speed, docs/realistic_site.md; never on the 6 m span together):
-    two vehicles of the trucks' axle counts, each weighed (measured: +10.3 % and +4.5 %
+    two vehicles of the trucks' axle counts, each weighed (measured: +0.2 % and -4.9 %
     from its truck's gross weight, within this 60-event day's scatter of lane-1 trucks
-    alone, -18.7 to +14.0 %, drift by the time of day) with no multiple presence, and
-    each row's clock time within 5 ms of its truck's first axle at the first detector
-    (measured 1.8 and 1.3 ms).  Without the cut both are refused (``residual_high``: the other
-    truck's strain read as misfit)."""
+    alone, -27.3 to +10.8 %, drift by the time of day, the lowest at 06:29) with no
+    multiple presence, and each row's clock time within 5 ms of its truck's first axle
+    at the first detector (measured 2.2 and 1.4 ms).  Without the cut both are refused
+    (``residual_high``: the other truck's strain read as misfit)."""
     _, _, _, truth = day
     rows, _ = day_rows
     # the simulation (closed form from truth.csv): every following truck drives at the
@@ -426,9 +429,9 @@ def _following_closely(a, b, truth_a, truth_b, gap):
 
 
 def test_trucks_too_close_to_tell_apart_are_never_weighed_in_parts(day):
-    """The day's first lane-1 2-axle truck with its first lane-1 5-axle truck 6.5, 7 and 8
+    """The day's first lane-1 2-axle truck with its first lane-1 5-axle truck 6.5, 7 and 7.5
     m behind it (rear axle to steering axle) at its speed (22.8 m/s: a 0.2 s gap between
-    the bodies, or one 23-25 m combination of the European Modular System, admitted in
+    the bodies, or one 23.8-24.8 m combination of the European Modular System, admitted in
     some member states): the detection joins the 7 axles (longer than 18.75 m), and no
     spacing leaves room for two vehicles at that speed (2.4 m of overhangs + 0.5 s × 22.8
     m/s = 13.8 m, bwim.site.lanes.split_long), so the whole is refused, neither weighed
@@ -451,7 +454,7 @@ def test_trucks_too_close_to_tell_apart_are_never_weighed_in_parts(day):
     # weights are the readings over the drift factor: b's at a's factor (the joined
     # record's clock is a's)
     total = wa.gvw + wb.gvw * wb.drift_factor / wa.drift_factor
-    for gap in (6.5, 7.0, 8.0):
+    for gap in (6.5, 7.0, 7.5):
         record = _following_closely(a, b, alone[rigid], alone[artic], gap)
         lane1 = [v for v in weigh_event(record, site).vehicles if v.lane == 1]
         assert [v.vehicle.n_axles for v in lane1] == [7]

@@ -21,7 +21,7 @@ from bwim.accuracy import assess
 from bwim.batch import weigh_events
 from bwim.io import read_reference
 from bwim.scenario import build_site_setup, load_record, load_scenario
-from bwim.site import calibrate_site
+from bwim.site import calibrate_site, weigh_event
 from bwim.synthetic import make_test_day
 
 
@@ -60,8 +60,8 @@ def test_runs_with_another_vehicle_rejected_and_the_others_used(site):
 def test_drift_correction_halves_the_traffic_dates_scatter(site):
     """The traffic date's lane-1 reference trucks: the calibration day's factor at the
     same time of day (the default without a temperature channel or traffic enough for the
-    traffic's own drift) against no correction.  GVW error sd measured 6.4 against
-    10.3 % (seed 5) and 3.9 against 10.7 % (seed 6): at least a quarter less is asked.
+    traffic's own drift) against no correction.  GVW error sd measured 6.1 against
+    13.6 % (seed 5) and 6.1 against 16.4 % (seed 6): at least a quarter less is asked.
     Switching the correction off fails this test."""
     day, scenario, cal = site
     reference = [r for r in read_reference(day.reference) if r.lane == 1]
@@ -81,14 +81,31 @@ def test_drift_correction_halves_the_traffic_dates_scatter(site):
     assert np.isfinite(corrected)
 
 
+def _moved_aside(record, k):
+    """``record`` with its strain field moved ``k`` gauges up the section (towards
+    lane 2): gauge j reads what gauge j - k read, the k lowest their own first reading
+    (unloaded).  The axle detectors are untouched: the lane-1 pair still sees the
+    truck."""
+    names = [s.name for s in record.sensors if s.name.startswith("s")]
+    cols = [[s.name for s in record.sensors].index(n) for n in names]
+    data = record.data.copy()
+    for j, c in enumerate(cols):
+        data[:, c] = (record.data[:, cols[j - k]] if j >= k else record.data[0, c])
+    return dataclasses.replace(record, data=data)
+
+
 def test_a_vehicle_outside_the_runs_lateral_reach_is_not_weighed(site):
-    """The lane-1 detectors also see lane 2's trucks (lane 2 has none), and the gauges
-    place them about 1.4 m or more from the calibration runs' mean lateral position,
-    where the lines are not calibrated (on bench_realsite's days they were weighed at
-    +10 … +33 %, and a truck in lane 1 with one beside it in lane 2 at nearly twice its
-    weight).  Each single lane-2 truck is refused with the reason, and no single lane-1
-    truck is (on the benchmark's days they lie within 0.56 m of the runs' mean; 1.0 m is
-    allowed).  Seed 6 has lane-2 trucks seen by the lane-1 pair, seed 5 none."""
+    """A vehicle the lane-1 detectors see while the gauges place it about 1.4 m or more
+    from the calibration runs' mean lateral position, where the lines are not calibrated
+    (on bench_realsite's days lane-2 trucks seen by the lane-1 pair were weighed at +10 …
+    +33 %, and a truck in lane 1 with one beside it in lane 2 at nearly twice its
+    weight), is refused with the reason; no single lane-1 truck is (on the benchmark's
+    days they lie within 0.56 m of the runs' mean; 1.0 m is allowed).  The case is made
+    from each lane-1 truck's own record, its strain field moved three gauges (2.04 m)
+    towards lane 2 (:func:`_moved_aside`; measured 1.70-2.43 m from the runs' mean, the
+    trucks' own -0.35 … +0.39 m, seeds 5 and 6); a lane-2 truck alone is never weighed as a
+    lane-1 one (with the detectors' dips of the real range, stop 35, the lane-1 pair no
+    longer sees seed 6's lane-2 trucks, which it did before)."""
     day, scenario, cal = site
     truth = _truth(day)
     read = partial(load_record, scenario=scenario)
@@ -96,10 +113,16 @@ def test_a_vehicle_outside_the_runs_lateral_reach_is_not_weighed(site):
             if r.lane == 1 and len(truth[r.record]) == 1]
     lane2 = [r for r in rows if truth[r.record][0]["lane"] == "2"]
     lane1 = [r for r in rows if truth[r.record][0]["lane"] == "1"]
-    assert lane1 and (lane2 or day.seed == 5)
-    assert all(not r.weighed and "lateral position" in r.reason for r in lane2), [
-        (r.record, r.reason) for r in lane2]
+    assert len(lane1) >= 10
+    assert all(not r.weighed for r in lane2), [(r.record, r.reason) for r in lane2]
     assert not any("lateral position" in r.reason for r in lane1)
+    weighed = [r.record for r in lane1 if r.weighed]
+    moved = [weigh_event(_moved_aside(read(day.traffic[0].parent / name), 3), cal)
+             for name in weighed]
+    ones = [v for w in moved for v in w.vehicles if v.lane == 1]
+    assert len(ones) == len(weighed)
+    assert all(not v.weighed and "lateral position" in v.reason for v in ones), [
+        v.reason or v.gvw for v in ones if v.weighed or "lateral position" not in v.reason]
 
 
 def test_a_gauge_off_by_a_factor_0_6_in_one_run_leaves_that_run_out(site):

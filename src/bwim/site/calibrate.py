@@ -26,7 +26,9 @@ Contract
      Gauge activity that no detected vehicle explains next to the truck (a
      vehicle in a lane without detectors) rejects the run too.  The span is the lines'
      support, so this takes passes: first the runs with no other vehicle in the record
-     at all give provisional lines, then every run is judged with their support; when
+     at all give provisional lines (what each other pair reads of the span's bending,
+     learned robustly from every run, is no vehicle: :mod:`bwim.site.bending`), then
+     every run is judged with their support; when
      runs were rejected, the calibration lane's responses are learned again from the
      runs kept (another vehicle on the detectors smears the learned shapes) and every
      run is detected and judged again with them.  From the second pass on, what the
@@ -250,7 +252,9 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
     Raises
     ------
     InputError
-        No records, or fewer than two usable runs (the reasons are in the message).
+        No records, or fewer than two usable runs (the reasons are in the message; when
+        the calibration lane's pair saw no vehicle in half the runs or more while another
+        pair saw one in each of them, the message names that pair as the one to mark).
     """
     if records is None or len(records) == 0:
         raise InputError("records: give at least one calibration run")
@@ -268,14 +272,17 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
         return _strain_only(records, setup, int(strain_passes))
     notes: list[str] = []
     responses = _responses(records, setup, notes)
-    # pass 1, the span unknown: runs with no other vehicle anywhere in the record
-    events = [detect_lanes(rec, setup, responses=responses, gauges=gauge_names(rec))
-              for rec in records]
+    # pass 1, the span unknown: runs with no other vehicle anywhere in the record; what
+    # the other pairs read of the span's bending from every run (robustly: a vehicle
+    # crossing a pair now and then is an outlier), a trace of it not a vehicle
+    everywhere = _bending(records, setup, ())
+    events = [detect_lanes(rec, setup, responses=responses, gauges=gauge_names(rec),
+                           bending=everywhere) for rec in records]
     flat = _flat_runs(records)
     reasons, passages, kept = _without(flat, *_truck_runs(events, setup, strict=True))
     if len(kept) >= 2:
         span = _site_calibration(records, setup, [Detection()] * len(records), reasons,
-                                 passages, kept).lines.support
+                                 passages, kept, events).lines.support
         # what the other pairs read of the span's bending, from these runs of the truck
         # alone: a trace of it is not another vehicle
         bending = _bending(records, setup, kept)
@@ -298,7 +305,8 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
         # before or after it in the file is cut off
         records = _own_parts(records, events, setup, kept)
     lane_detections = [e.by_lane.get(setup.calibration_lane, Detection()) for e in events]
-    cal = _site_calibration(records, setup, lane_detections, reasons, passages, kept)
+    cal = _site_calibration(records, setup, lane_detections, reasons, passages, kept,
+                            events)
     faulty = _faulty_gauge_runs(records, setup, cal, passages, kept)
     if faulty:  # a run whose gauge disagrees with the same gauge in the others: out
         reasons = [faulty.get(k, why) for k, why in enumerate(reasons)]
@@ -746,6 +754,25 @@ def _own_parts(records: Sequence[Record], events: Sequence[EventDetection],
     return out
 
 
+def _truck_elsewhere(events: Sequence[EventDetection], setup: SiteSetup) -> str:
+    """When the calibration lane's detector pair saw no vehicle in half the runs or more
+    while another pair saw one in each of them: the truck drove that pair's lane, what to
+    mark ("" otherwise; the pair seeing most of those runs is named)."""
+    lane = setup.calibration_lane or 1
+    missing = [ev for ev in events if not any(v.pair == lane for v in ev.vehicles)]
+    if not events or 2 * len(missing) < len(events):
+        return ""
+    seen = [(sum(any(v.pair == p.lane for v in ev.vehicles) for ev in missing), p)
+            for p in setup.lanes if p.lane != lane]
+    count, pair = max(seen, key=lambda s: s[0], default=(0, None))
+    if pair is None or count < len(missing):
+        return ""
+    return (f"lane {lane}'s detectors saw no vehicle in {len(missing)} of {len(events)} "
+            f"runs, in each of which lane {pair.lane}'s ({', '.join(pair.channels)}) saw "
+            f"one: if the truck drove lane {pair.lane}, mark that lane's pair "
+            "(calibration = true in its [[axle_detectors]] table)")
+
+
 def _truck_runs(events: Sequence[EventDetection], setup: SiteSetup, strict: bool = False):
     """Reasons and passages of the runs: the truck's layout is known exactly, so a usable
     run keeps its detected speed, arrival and lateral position with the truck's
@@ -772,11 +799,14 @@ class _Lines:
     fits: tuple[RunFit | None, ...]
 
 
-def _site_calibration(records, setup, detections, reasons, passages, kept) -> _Lines:
+def _site_calibration(records, setup, detections, reasons, passages, kept,
+                      events: Sequence[EventDetection] = ()) -> _Lines:
     if len(kept) < 2:
         shown = "; ".join(f"run {k + 1}: {r}" for k, r in enumerate(reasons) if r)
+        hint = _truck_elsewhere(events, setup)
         raise InputError(f"only {len(kept)} usable calibration run(s) of {len(records)} "
-                         "(the lines need at least two)" + (f": {shown}" if shown else ""))
+                         "(the lines need at least two)" + (f": {shown}" if shown else "")
+                         + (f"; {hint}" if hint else ""))
     lines = calibrate_lines([records[k] for k in kept], passages, setup.calibration_loads,
                             lateral=setup.lateral,
                             support_lobes=setup.support_lobes)

@@ -33,8 +33,9 @@ Contract
 * **The span's bending read as a vehicle**: with ``bending`` (what each pair other than
   the calibration lane's reads of the span's bending, learned from the calibration runs:
   :mod:`bwim.site.bending`), a vehicle whose pair's largest reading over its time on the
-  span is mostly that bending (:meth:`~bwim.site.bending.DetectorBending.is_trace`) is a
-  trace of a vehicle in another lane (its humps paired across the two detectors in the
+  span (without ``span``: over the whole record) is mostly that bending
+  (:meth:`~bwim.site.bending.DetectorBending.is_trace`) is a trace of a vehicle in
+  another lane (its humps paired across the two detectors in the
   wrong order read as a slow vehicle) and is left out, with a note.  A light vehicle
   that crosses the pair while a heavy one bends the span more than its own axles read
   is left out with it.
@@ -220,7 +221,11 @@ def detect_lanes(record: Record, setup: SiteSetup, *,
             seen.extend((pair, w) for w in parts)
     for pair, v in seen:
         lane = pair.lane
-        if pair.lane in bending and bending[pair.lane].is_trace(record, v.window):
+        # the trace is judged over the vehicle's time on the span; without a span, over
+        # the whole record (a vehicle crossing the pair anywhere in it keeps it)
+        trace_window = v.window if span is not None else (float(record.time[0]),
+                                                          float(record.time[-1]))
+        if pair.lane in bending and bending[pair.lane].is_trace(record, trace_window):
             notes.append(f"lane {pair.lane}: a {v.n_axles}-axle trace of the span's bending "
                          "(a vehicle in another lane), not a vehicle of its own")
             continue

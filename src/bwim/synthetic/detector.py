@@ -68,7 +68,9 @@ class DetectorResponse:
         m, centre distance of the two tyres of a dual pair.
     global_share : float
         Detector units per µε of mid-span soffit strain under the detector's line
-        (subtracted), for a local sensitivity of 1 unit per kN at the kernel's peak.
+        (subtracted), for a local sensitivity of 1 unit per kN at the kernel's peak.  The
+        default puts the dips between axle groups in the middle of the real range
+        (docs/realistic_site.md).
     gain_range : (float, float)
         Range of the gain of the more sensitive detector of a lane.
     pair_ratio : (float, float)
@@ -82,7 +84,7 @@ class DetectorResponse:
     width: float = 1.2
     lateral_sigma: float = 0.65
     dual_spacing: float = 0.35
-    global_share: float = 0.7
+    global_share: float = 0.9
     gain_range: tuple[float, float] = (0.8, 1.25)
     pair_ratio: tuple[float, float] = (3.0, 5.0)
     noise: float = 0.1
