@@ -3,7 +3,7 @@ weighed as a lighter vehicle with fewer axles: the strain of the axle no detecto
 left unexplained and the weighing is refused (``residual_high``), by the lines and by MFI.
 
 Data: the session's small realistic site, its one lane-1 traffic truck (6 axles; the
-lines weigh it +2.3 % with every axle), its two detector channels held at their resting
+lines weigh it +11.8 % with every axle), its two detector channels held at their resting
 level from midway between the last detected axles on (each detector at its own time)."""
 
 import dataclasses

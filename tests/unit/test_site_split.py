@@ -148,8 +148,8 @@ def test_bwim_weigh_refuses_a_truck_whose_axles_go_on_in_the_next_file(
         small_site, tmp_path, gap):
     """The lane-1 truck's file, and the same file again with a clock ``gap`` m of travel
     after its last axle (from the truth: first-axle time, speed, spacings): 5 m, a
-    drawbar trailer's distance, is one vehicle across two files (room at its 22 m/s:
-    about 13 m), and neither part is weighed; 25 m is a truck following another, both
+    drawbar trailer's distance, is one vehicle across two files (room at its 25 m/s:
+    about 15 m), and neither part is weighed; 25 m is a truck following another, both
     weighed. Only the two files are weighed, so the day-level lateral checks do not run
     (fewer than 30 vehicles) and nothing else refuses them."""
     with open(small_site.reference, newline="") as f:
