@@ -435,3 +435,26 @@ def test_pursuit_steps_are_least_squares_and_skip_taken_times():
         omp.accept(tk, tk2, chi, state)
     # greedy picks on merged peaks: near the axles (measured ≤ 0.23 m of travel)
     assert np.abs(np.sort(picked) - taus).max() * v < 0.3
+
+
+def test_the_smallest_spacing_is_sparrows_limit():
+    """Reference: two equal Gaussian peaks of standard deviation σ, ``d`` apart, show a
+    dip at their midpoint (a local minimum of their sum) exactly when d > 2σ, and
+    FWHM = 2σ √(2 ln 2) (closed forms; the sum's second derivative at the midpoint is
+    proportional to d² / 4 − σ²).  The pursuit's smallest spacing is that limit in
+    widths: just beyond it the sum dips, just within it the sum is one peak."""
+    from bwim.detect.pursuit import MIN_SPACING_WIDTH
+
+    sigma = 0.5
+    fwhm = 2.0 * sigma * np.sqrt(2.0 * np.log(2.0))
+    x = np.linspace(-0.05, 0.05, 2001)  # about the midpoint, 50 µm steps
+
+    def two(d):
+        return np.exp(-(x - d / 2) ** 2 / (2 * sigma**2)) + np.exp(-(x + d / 2) ** 2
+                                                                   / (2 * sigma**2))
+
+    limit = MIN_SPACING_WIDTH * fwhm
+    assert limit == pytest.approx(2.0 * sigma, rel=1e-12)
+    below, above = two(limit * (1 - 1e-3)), two(limit * (1 + 1e-3))
+    assert below.argmax() == x.size // 2  # one peak at the midpoint
+    assert above.argmin() == x.size // 2  # a dip at the midpoint

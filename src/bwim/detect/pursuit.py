@@ -51,8 +51,8 @@ Contract
   refined again, then axles closer than the smallest spacing (the weaker goes), below
   the threshold, lower than ``min_height`` or unseen by one detector are dropped one by
   one, refining after each.  The smallest spacing is the larger of ``min_axle_spacing``
-  and :data:`MIN_SPACING_WIDTH` of the responses' width: closer peaks are one axle whose
-  force changed while it passed.
+  and :data:`MIN_SPACING_WIDTH` of the responses' width (Sparrow's limit: closer equal
+  peaks sum to one peak): closer peaks are one axle whose force changed while it passed.
 * Confidence of a vehicle = ``c_snr × c_both``: ``c_snr = clip(√Δ / (2 snr_threshold),
   0.5, 1)`` with ``Δ`` the smallest misfit reduction (level variances) of its axles;
   ``c_both`` the mean over its axles of ``exp(−½ (ln(A_2 / (ρ A_1)) / (2 s))²)``, ``s``
@@ -97,8 +97,12 @@ PURSUIT_SHARE = 0.1
 #: An axle must lower the misfit by this share of what the record's strongest axle did.
 GAIN_SHARE = 0.02
 #: Axles closer than this share of the responses' width (at half height) are one axle
-#: whose force changed while it passed.
-MIN_SPACING_WIDTH = 0.8
+#: whose force changed while it passed: two equal Gaussian responses of standard
+#: deviation σ closer than 2σ = FWHM / √(2 ln 2) ≈ 0.85 FWHM add up to a single peak
+#: with no dip between them (Sparrow's resolution limit), so no fit of their sum tells
+#: them from one axle whose tyre force changed as it crossed (stop 35: at 0.8, two
+#: trucks of the four bench days had a group read with one axle more, about 1 m apart).
+MIN_SPACING_WIDTH = float(1.0 / np.sqrt(2.0 * np.log(2.0)))
 #: A new axle is looked for no closer to one already found than this share of the
 #: smallest spacing (the refinement moves them apart).
 EXCLUDE = 0.5
