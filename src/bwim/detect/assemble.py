@@ -12,7 +12,10 @@ Contract
   the lateral position, 0.0 when no gauge responded).  A vehicle is ``truncated`` when
   its time on the span reaches beyond the record, and the last one also when the gauges
   end the record away from where they started (:func:`ends_loaded`: the record was cut
-  while a vehicle was on the bridge, whose axles beyond the cut no detector saw).
+  while a vehicle was on the bridge, whose axles beyond the cut no detector saw); when
+  every vehicle's time on the span begins after the record's first :data:`END_SPAN` s,
+  only an end on the side the crossing loaded the gauges counts (an end below a quiet
+  start is the gauges' baseline drifting).
 * The quiet level of the gauges is taken outside every vehicle's time on the span (more
   than 50 ms from it) when the span is known and that leaves ≥ 10 % of the record, else
   from the first and last 10 % of the record.  Without a span, the lateral window of each
@@ -51,19 +54,29 @@ END_SPAN = 0.05
 END_SHARE = 0.15
 
 
-def ends_loaded(time: np.ndarray, total: np.ndarray) -> bool:
+def ends_loaded(time: np.ndarray, total: np.ndarray,
+                quiet_start: bool = False) -> bool:
     """Whether the gauges' sum ``total`` ends the record (mean over its last
     :data:`END_SPAN` s) further than :data:`END_SHARE` of its largest excursion from where
     it started (mean over its first :data:`END_SPAN` s): a record cut while a vehicle is
-    on the bridge, at its end or its start."""
+    on the bridge, at its end or its start.  With ``quiet_start`` (no vehicle was on the
+    span when the record started) only an end on the excursion's side counts: a vehicle
+    on the span loads the gauges the way the crossing did, so an end beyond the quiet
+    start on the other side is the gauges' baseline moving (a drift over the record),
+    not a load."""
     t = np.asarray(time, dtype=float)
     y = np.asarray(total, dtype=float)
     n = max(2, round(END_SPAN / median(np.diff(t))))
     if y.size < 4 * n:
         return False
     start, end = float(y[:n].mean()), float(y[-n:].mean())
-    swing = float(np.max(np.abs(y - start)))
-    return swing > 0 and abs(end - start) > END_SHARE * swing
+    dev = y - start
+    k = int(np.argmax(np.abs(dev)))
+    swing = float(abs(dev[k]))
+    change = end - start
+    if quiet_start and change * dev[k] < 0:
+        return False
+    return swing > 0 and abs(change) > END_SHARE * swing
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -148,7 +161,9 @@ def assemble_detection(
         total = channel_data(record, names).sum(axis=1)
         extra = unexplained_activity(t, total, windows, margin=QUIET_MARGIN,
                                      fraction=unexplained_fraction)
-        if ends_loaded(t, total):
+        # the record starts quiet when every vehicle's time on the span begins after
+        # its first END_SPAN s (then only an end on the crossing's side is a load)
+        if ends_loaded(t, total, quiet_start=bool(windows[:, 0].min() > t[0] + END_SPAN)):
             last = int(np.argmax(windows[:, 1]))
             if FLAG_TRUNCATED not in veh_flags[last]:
                 veh_flags[last].append(FLAG_TRUNCATED)
