@@ -52,6 +52,36 @@ def test_a_trace_is_left_out_and_the_traffic_kept(lane3):
     assert all(a is b for a, b in zip(check.rows, lane3, strict=True))
 
 
+def test_a_weighed_truck_whose_only_other_vehicle_was_a_trace_is_alone(lane3):
+    """The trace's record also holds a lane-1 truck, weighed and flagged
+    ``multiple_presence`` because of it (review of stop 35: 14 of the 15 weighed rows so
+    flagged on the four bench days had no second vehicle on the span): with the trace
+    left out it has no other vehicle, so it loses the flag, and its quality follows its
+    remaining flags.  A truck beside a trace and a counted vehicle of its own record
+    keeps it, and so does a row weighed by MFI its quality."""
+    trace = _row(500, 7.0, minutes=60.5)
+    truck = SummaryRow(record=trace.record, vehicle=2, lane=1, direction="+x", n_axles=5,
+                       speed=22.0, time=trace.time, axle_weights=(50e3,) * 5,
+                       group_weights=(50e3, 50e3, 150e3), gvw=250e3, quality="warning",
+                       method="moses", flags=("multiple_presence",))
+    tired = SummaryRow(record=trace.record, vehicle=3, lane=1, direction="+x", n_axles=5,
+                       speed=22.0, time=trace.time, axle_weights=(50e3,) * 5,
+                       group_weights=(50e3, 50e3, 150e3), gvw=250e3, quality="warning",
+                       method="moses", flags=("multiple_presence", "lateral_extrapolated"))
+    check = drop_speed_outliers([*lane3, trace, truck])
+    assert check.dropped == (trace,)
+    alone = check.rows[-1]
+    assert alone.flags == () and alone.quality == "ok" and alone.gvw == truck.gvw
+    soft = drop_speed_outliers([*lane3, trace, tired]).rows[-1]
+    assert soft.flags == ("lateral_extrapolated",) and soft.quality == "warning"
+    beside = _row(502, 22.0, minutes=60.5)  # a counted vehicle of the same record
+    beside = SummaryRow(**{**beside.__dict__, "record": trace.record, "vehicle": 3})
+    kept = drop_speed_outliers([*lane3, trace, truck, beside]).rows
+    assert kept[-2].flags == ("multiple_presence",)
+    mfi = SummaryRow(**{**truck.__dict__, "method": "mfi"})
+    assert drop_speed_outliers([*lane3, trace, mfi]).rows[-1].quality == "warning"
+
+
 def test_the_statistic_is_the_neighbours_median_and_normal_scaled_mad(lane3):
     # a row just inside and one just outside the limit, judged on the 30 rows nearest
     # in time (computed here by hand)

@@ -23,20 +23,30 @@ Contract
   of the rows (it is no vehicle); the others are returned unchanged, in order.  A lane
   and direction with fewer than ``min_vehicles`` (:data:`bwim.site.wander.MIN_VEHICLES`)
   rows with a speed and a time is not judged.
+* A weighed row flagged ``multiple_presence`` whose record holds no other row once the
+  left-out ones are gone loses that flag: the site chain weighs a vehicle with another on
+  the span only when the other travels the other way (:mod:`bwim.site.event`), and here
+  every such other was a trace, no vehicle.  Its quality is made again from its flags
+  (:func:`bwim.plausibility.quality_of`; a row weighed by MFI keeps its quality, which
+  the identification's own may set).
 * Times: a row's ``time`` (datetime, or a clock time of day; rows of the two kinds are
   judged apart, each against its own kind).  Speeds in m/s.
 """
 
 from __future__ import annotations
 
+import dataclasses
+from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass
 from datetime import datetime, time
 
 import numpy as np
 
+from bwim.detect.result import FLAG_MULTIPLE_PRESENCE
 from bwim.detect.signals import robust_sigma
 from bwim.errors import InputError
+from bwim.plausibility import quality_of
 from bwim.records import local_seconds, seconds_of_day
 from bwim.site.wander import MIN_VEHICLES
 from bwim.summary import SummaryRow
@@ -123,6 +133,17 @@ def drop_speed_outliers(rows: Sequence[SummaryRow], *, limit: float = SPEED_Z,
             sigma = max(robust_sigma(v[near]), SIGMA_FLOOR * abs(m))
             if sigma > 0 and abs(v[j] - m) / sigma > limit:
                 drop.add(int(k))
-    kept = tuple(r for k, r in enumerate(rows) if k not in drop)
+    kept = [r for k, r in enumerate(rows) if k not in drop]
     dropped = tuple(rows[k] for k in sorted(drop))
-    return SpeedCheck(rows=kept, dropped=dropped, limit=limit)
+    traced = {r.record for r in dropped}
+    left = Counter(r.record for r in kept)
+    kept = [_alone(r) if (r.record in traced and left[r.record] == 1 and r.weighed
+                          and FLAG_MULTIPLE_PRESENCE in r.flags) else r for r in kept]
+    return SpeedCheck(rows=tuple(kept), dropped=dropped, limit=limit)
+
+
+def _alone(row: SummaryRow) -> SummaryRow:
+    """``row`` without ``multiple_presence`` (its only other vehicles were traces)."""
+    flags = tuple(f for f in row.flags if f != FLAG_MULTIPLE_PRESENCE)
+    quality = row.quality if row.method == "mfi" else quality_of(flags)
+    return dataclasses.replace(row, flags=flags, quality=quality)
