@@ -83,3 +83,26 @@ def test_the_wrong_calibration_lane_says_so(small_site_calibrated, tmp_path):
                                          r"if the truck drove lane 1, mark that lane's pair "
                                          r"\(calibration = true"):
         calibrate_site(records, setup)
+
+
+def test_a_dead_detector_of_the_calibration_pair_is_not_taken_for_another_lane(
+        small_site_calibrated):
+    """The runs with a lane-3 vehicle only, detector ad1 dead (constant) in each, detection
+    by peaks: the lane-1 pair sees no vehicle in any run while the lane-3 pair sees one
+    in each (read as 3, 4 and 7 axles), but the runs' reasons name ad1, and the refusal
+    does not send the operator to mark lane 3 (review of stop 35: it did on a bench day,
+    any vehicle of the other pair counting; now only one of about the truck's axle
+    count, and no run whose calibration pair has a detector silent counts)."""
+    _, _, records, site = small_site_calibrated
+    dirty = [k for k, why in enumerate(site.reasons) if why.startswith("another vehicle")]
+    assert len(dirty) >= 2
+    k = [s.name for s in records[0].sensors].index("ad1")
+    dead = []
+    for j in dirty:
+        data = records[j].data.copy()
+        data[:, k] = data[0, k]
+        dead.append(dataclasses.replace(records[j], data=data))
+    peaks = dataclasses.replace(site.setup, detection="peaks")
+    with pytest.raises(InputError, match="is ad1 working") as err:
+        calibrate_site(dead, peaks)
+    assert "mark that lane's pair" not in str(err.value)

@@ -110,7 +110,7 @@ from bwim.detect import (
 )
 from bwim.detect.presence import windows_overlap
 from bwim.detect.response import band_pass, peak_polarity
-from bwim.detect.result import FLAG_MULTIPLE_PRESENCE, FLAG_TRUNCATED
+from bwim.detect.result import FLAG_COUNT_MISMATCH, FLAG_MULTIPLE_PRESENCE, FLAG_TRUNCATED
 from bwim.detect.signals import robust_sigma
 from bwim.errors import BwimError, InputError
 from bwim.records import Passage, Record
@@ -254,7 +254,8 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
     InputError
         No records, or fewer than two usable runs (the reasons are in the message; when
         the calibration lane's pair saw no vehicle in half the runs or more while another
-        pair saw one in each of them, the message names that pair as the one to mark).
+        pair saw one of about the truck's axle count in each of them, the message names
+        that pair as the one to mark).
     """
     if records is None or len(records) == 0:
         raise InputError("records: give at least one calibration run")
@@ -756,13 +757,22 @@ def _own_parts(records: Sequence[Record], events: Sequence[EventDetection],
 
 def _truck_elsewhere(events: Sequence[EventDetection], setup: SiteSetup) -> str:
     """When the calibration lane's detector pair saw no vehicle in half the runs or more
-    while another pair saw one in each of them: the truck drove that pair's lane, what to
-    mark ("" otherwise; the pair seeing most of those runs is named)."""
+    while another pair saw one of about the truck's axle count (one axle more or less: a
+    pair reading the truck with another pair's responses may merge a group) in each of
+    them, and none of those runs shows one of the calibration pair's detectors silent or
+    off in gain: the truck drove that pair's lane, what to mark ("" otherwise; the pair
+    seeing most of those runs is named)."""
     lane = setup.calibration_lane or 1
+    n_axles = setup.calibration_loads.size
     missing = [ev for ev in events if not any(v.pair == lane for v in ev.vehicles)]
     if not events or 2 * len(missing) < len(events):
         return ""
-    seen = [(sum(any(v.pair == p.lane for v in ev.vehicles) for ev in missing), p)
+    # a detector of the pair silent or off in gain: the runs' reasons name it, no lane
+    if any(det is not None and (FLAG_COUNT_MISMATCH in det.flags or det.fault)
+           for det in (ev.by_lane.get(lane) for ev in missing)):
+        return ""
+    seen = [(sum(any(v.pair == p.lane and abs(v.vehicle.n_axles - n_axles) <= 1
+                     for v in ev.vehicles) for ev in missing), p)
             for p in setup.lanes if p.lane != lane]
     count, pair = max(seen, key=lambda s: s[0], default=(0, None))
     if pair is None or count < len(missing):
