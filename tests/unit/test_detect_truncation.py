@@ -50,6 +50,17 @@ def test_a_cut_after_a_quiet_start_still_ends_loaded(keep):
     assert ends_loaded(t[:n], y[:n], quiet_start=True)
 
 
+@pytest.mark.parametrize("first", [200, 300, 400])
+def test_a_start_inside_a_crossing_is_loaded_even_if_no_vehicle_was_detected_there(first):
+    """The crossing's record from inside it (a vehicle the detection missed, its axles
+    already past the detectors, on the span at the start: the window of what it detected
+    begins later, so it calls the start quiet): the start is moving, not at rest
+    (review of stop 35's own fix: tests/unit/test_detect_adverse.py caught it), so the
+    record still starts loaded."""
+    t, y = _pulse(150, 400, 100, np.random.default_rng(2))
+    assert ends_loaded(t[first:] - t[first], y[first:], quiet_start=True)
+
+
 @pytest.mark.parametrize("sign", [1.0, -1.0])
 def test_a_baseline_ending_below_a_quiet_start_is_no_load(sign):
     """A whole crossing (either polarity) whose baseline drifts linearly to 0.3 of its

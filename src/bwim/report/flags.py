@@ -136,8 +136,11 @@ FLAG_TABLE: tuple[tuple[str, tuple[str, ...], str, str], ...] = (
      "the span, a gauge that disagrees refuses the vehicle instead (its strain cannot be "
      "told from a faulty gauge)", ""),
     ("detection", ("multiple_presence",),
-     "two vehicles were on the instrumented span at once: the event is not weighed as "
-     "one vehicle (each detected vehicle gets its own refused row)", ""),
+     "two vehicles were on the instrumented span at once: they are never weighed as "
+     "one; two travelling the same way (or one beside gauge activity no detector saw) "
+     "are each refused, while a vehicle with one of the other direction on the span is "
+     "weighed and flagged (quality warning; the fit's residual check still refuses a "
+     "weighing the other vehicle spoils; bwim.site.event)", ""),
     ("detection", ("axle_count_mismatch",),
      "the two axle detectors saw different numbers of axles", ""),
     ("detection", ("detector_fault",),
@@ -163,7 +166,9 @@ FLAG_TABLE: tuple[tuple[str, tuple[str, ...], str, str], ...] = (
     ("detection", ("truncated",),
      "the vehicle's time on the span starts before or ends after the record, or the "
      "gauges end the record away from where they started (it was cut with a vehicle on "
-     "the bridge): the vehicle is refused", ""),
+     "the bridge; after a quiet start, only an end on the side the crossing loaded the "
+     "gauges counts: one on the other side is the gauges' baseline drifting): the "
+     "vehicle is refused", ""),
     ("detection", ("unexplained_strain",),
      "strain activity outside the time on the span of every detected vehicle: e.g. a "
      "vehicle in a lane the axle detectors do not cover", ""),
