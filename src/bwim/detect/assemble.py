@@ -57,8 +57,9 @@ END_SHARE = 0.15
 #: A record starts at rest when its gauges' mean over the second :data:`END_SPAN` s lies
 #: within this share of their largest excursion of the mean over the first: a vehicle on
 #: the span moves about a metre in that time at road speed and changes them far more
-#: (stop 35, the four bench days: at most 0.027 for records starting before the first
-#: axle, 0.19-0.58 for a truck's record cut while it crosses).
+#: (measured in stop 35: at most 0.027 on 150 lane-1 records of a bench day and the 12
+#: light trucks the rule below had refused on four, 0.19-0.58 on the small test site's
+#: lane-1 truck's record cut 0.3-0.9 s into it).
 STEADY_SHARE = 0.05
 
 
@@ -171,8 +172,9 @@ def assemble_detection(
         total = channel_data(record, names).sum(axis=1)
         extra = unexplained_activity(t, total, windows, margin=QUIET_MARGIN,
                                      fraction=unexplained_fraction)
-        # the record starts quiet when every vehicle's time on the span begins after
-        # its first END_SPAN s (then only an end on the crossing's side is a load)
+        # no detected vehicle on the span at the start: every vehicle's time on the span
+        # begins after the record's first END_SPAN s (ends_loaded also asks the gauges
+        # to start at rest before only an end on the crossing's side counts as a load)
         if ends_loaded(t, total, quiet_start=bool(windows[:, 0].min() > t[0] + END_SPAN)):
             last = int(np.argmax(windows[:, 1]))
             if FLAG_TRUNCATED not in veh_flags[last]:
