@@ -22,6 +22,7 @@ from bwim.batch import weigh_events
 from bwim.io import read_reference
 from bwim.scenario import build_site_setup, load_record, load_scenario
 from bwim.site import calibrate_site, weigh_event
+from bwim.site.calibrate import gauge_names
 from bwim.synthetic import make_test_day
 
 
@@ -86,8 +87,8 @@ def _moved_aside(record, k):
     lane 2): gauge j reads what gauge j - k read, the k lowest their own first reading
     (unloaded).  The axle detectors are untouched: the lane-1 pair still sees the
     truck."""
-    names = [s.name for s in record.sensors if s.name.startswith("s")]
-    cols = [[s.name for s in record.sensors].index(n) for n in names]
+    all_names = [s.name for s in record.sensors]
+    cols = [all_names.index(n) for n in gauge_names(record)]  # across the deck, in order
     data = record.data.copy()
     for j, c in enumerate(cols):
         data[:, c] = (record.data[:, cols[j - k]] if j >= k else record.data[0, c])
