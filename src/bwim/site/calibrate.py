@@ -26,9 +26,10 @@ Contract
      Gauge activity that no detected vehicle explains next to the truck (a
      vehicle in a lane without detectors) rejects the run too.  The span is the lines'
      support, so this takes passes: first the runs with no other vehicle in the record
-     at all give provisional lines (what each other pair reads of the span's bending,
-     learned robustly from every run, is no vehicle: :mod:`bwim.site.bending`), then
-     every run is judged with their support; when
+     at all give provisional lines (one such run alone: its own lines, one per gauge;
+     what each other pair reads of the span's bending, learned robustly from every run,
+     is no vehicle: :mod:`bwim.site.bending`), then every run is judged with their
+     support; when
      runs were rejected, the calibration lane's responses are learned again from the
      runs kept (another vehicle on the detectors smears the learned shapes) and every
      run is detected and judged again with them.  From the second pass on, what the
@@ -281,9 +282,8 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
                            bending=everywhere) for rec in records]
     flat = _flat_runs(records)
     reasons, passages, kept = _without(flat, *_truck_runs(events, setup, strict=True))
-    if len(kept) >= 2:
-        span = _site_calibration(records, setup, [Detection()] * len(records), reasons,
-                                 passages, kept, events).lines.support
+    span = _first_support(records, setup, reasons, passages, kept, events)
+    if span is not None:
         # what the other pairs read of the span's bending, from these runs of the truck
         # alone: a trace of it is not another vehicle
         bending = _bending(records, setup, kept)
@@ -798,6 +798,27 @@ def _truck_runs(events: Sequence[EventDetection], setup: SiteSetup, strict: bool
                                     track_width=p.track_width))
             kept.append(k)
     return reasons, passages, kept
+
+
+def _first_support(records: Sequence[Record], setup: SiteSetup, reasons: Sequence[str],
+                   passages: Sequence[Passage], kept: Sequence[int],
+                   events: Sequence[EventDetection]) -> tuple[float, float] | None:
+    """The span by which pass 2 judges whether another vehicle shares the bridge with
+    the truck: the support of provisional lines from the runs of pass 1 (the truck alone
+    in the whole record); from its one run when pass 1 kept only one (its lines, one per
+    gauge: one run has one lateral position), so that runs whose other vehicle crossed
+    before or after the truck are not all refused; None when it kept none."""
+    if len(kept) >= 2:
+        return _site_calibration(records, setup, [Detection()] * len(records), reasons,
+                                 passages, kept, events).lines.support
+    if len(kept) == 1:
+        try:
+            return calibrate_lines([records[kept[0]]], list(passages),
+                                   setup.calibration_loads,
+                                   support_lobes=setup.support_lobes).support
+        except (BwimError, ArithmeticError, ValueError, np.linalg.LinAlgError):
+            return None
+    return None
 
 
 # --- 4. lines ------------------------------------------------------------------------------
