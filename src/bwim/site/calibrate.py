@@ -24,7 +24,11 @@ Contract
      layout) does not reject the run: the run is cut to the truck's own part of the
      record (:func:`bwim.site.isolate.own_part`), and every later step uses that part.
      Gauge activity that no detected vehicle explains next to the truck (a
-     vehicle in a lane without detectors) rejects the run too.  The span is the lines'
+     vehicle in a lane without detectors) rejects the run too, and so does a used run
+     whose load's lateral centre moves across the deck while the truck crosses
+     (:func:`load_centre_spread` more than :data:`LOAD_CENTRE_FACTOR` times the used
+     runs' median and :data:`LOAD_CENTRE_MOVE` m more: such a vehicle on the span with
+     the truck part of the time).  The span is the lines'
      support, so this takes passes: first the runs with no other vehicle in the record
      at all give provisional lines (one such run alone: its own lines, one per gauge;
      what each other pair reads of the span's bending, learned robustly from every run,
@@ -126,10 +130,11 @@ from bwim.wim.influence_line import read_channels
 from bwim.wim.multirun import RunFit
 from bwim.wim.weigh import weighing_model
 
-__all__ = ["MIN_AXLE_LOAD", "MIN_TRUCK_AXLES", "MIN_TRUCK_WEIGHT", "REVERSED_FIT",
-           "REVERSED_SAME", "RUN_DRIFT", "RUN_SCALE_RANGE", "SPACING_BIAS", "SPACING_TOLERANCE",
+__all__ = ["LOAD_CENTRE_FACTOR", "LOAD_CENTRE_MOVE", "LOAD_CENTRE_SHARE", "MIN_AXLE_LOAD",
+           "MIN_TRUCK_AXLES", "MIN_TRUCK_WEIGHT", "REVERSED_FIT", "REVERSED_SAME",
+           "RUN_DRIFT", "RUN_SCALE_RANGE", "SPACING_BIAS", "SPACING_TOLERANCE",
            "STRAIN_ONLY_PASSES", "SiteCalibration", "calibrate_site", "gauge_names",
-           "record_temperature", "temperature_channel"]
+           "load_centre_spread", "record_temperature", "temperature_channel"]
 
 #: A calibration run whose detected axle spacings differ from the truck's by more than
 #: this (m) is rejected: the detection, not the truck, is wrong.
@@ -167,6 +172,16 @@ RUN_GAUGE_SNR = 3.0
 #: times its noise at rest before the run is left out as drifting (the clean runs of the
 #: test sites differ by a few times: tests/unit/test_site_run_faults.py states them).
 RUN_DRIFT = 12.0
+
+
+#: The load's lateral centre is followed over the samples whose summed strain exceeds
+#: this share of its largest (the truck on the span, not its approach).
+LOAD_CENTRE_SHARE = 0.3
+#: A used run whose load's lateral centre spreads over more than this many times the used
+#: runs' median spread ...
+LOAD_CENTRE_FACTOR = 2.0
+#: ... and by more than this (m) had another vehicle on the span that no detector saw.
+LOAD_CENTRE_MOVE = 0.5
 
 
 def gauge_names(record: Record) -> list[str]:
@@ -308,6 +323,12 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
     lane_detections = [e.by_lane.get(setup.calibration_lane, Detection()) for e in events]
     cal = _site_calibration(records, setup, lane_detections, reasons, passages, kept,
                             events)
+    moving = _moving_load_runs(records, cal, kept)
+    if moving:  # a run whose load moved across the deck: another vehicle shared the span
+        reasons = [moving.get(k, why) for k, why in enumerate(cal.reasons)]
+        keep = [i for i, k in enumerate(kept) if k not in moving]
+        passages, kept = [passages[i] for i in keep], [kept[i] for i in keep]
+        cal = _site_calibration(records, setup, lane_detections, reasons, passages, kept)
     faulty = _faulty_gauge_runs(records, setup, cal, passages, kept)
     if faulty:  # a run whose gauge disagrees with the same gauge in the others: out
         reasons = [faulty.get(k, why) for k, why in enumerate(reasons)]
@@ -398,6 +419,54 @@ def _faulty_gauge_runs(records: Sequence[Record], setup: SiteSetup, cal: _Lines,
                                   "runs")
     _drifting_runs(names, runs, np.array([trends[k] for k in runs]), faulty)
     return faulty
+
+
+def load_centre_spread(record: Record, lines: MultiRunCalibration,
+                       offsets: np.ndarray) -> float:
+    """How far the load's lateral centre moves while a vehicle crosses, m: the spread
+    (90th less 10th percentile) of ``Σ y_j ε_j / Σ ε_j`` over the samples whose summed
+    strain exceeds :data:`LOAD_CENTRE_SHARE` of its largest, ``ε_j`` each of the lines'
+    channels less its ``offsets``, ``y_j`` its first sensor's ``y``; nan when a ``y`` is
+    unknown or no sample qualifies."""
+    ys = [c.sensors[0].y for c in lines.channels]
+    if any(y is None for y in ys):
+        return float("nan")
+    r = read_channels(record, lines.channels) - np.asarray(offsets, dtype=float)
+    total = r.sum(axis=1)
+    if total.size == 0:
+        return float("nan")
+    peak = total[int(np.argmax(np.abs(total)))]
+    on = total / peak > LOAD_CENTRE_SHARE if peak != 0 else np.zeros(total.size, bool)
+    if np.count_nonzero(on) < 3:
+        return float("nan")
+    centre = (r[on] @ np.asarray(ys, dtype=float)) / total[on]
+    lo, hi = np.percentile(centre, [10.0, 90.0])
+    return float(hi - lo)
+
+
+def _moving_load_runs(records: Sequence[Record], cal: _Lines, kept: Sequence[int]
+                      ) -> dict[int, str]:
+    """Used runs whose load's lateral centre moved across the deck while the truck
+    crossed (:func:`load_centre_spread`) more than :data:`LOAD_CENTRE_FACTOR` times the
+    used runs' median and by :data:`LOAD_CENTRE_MOVE` more: another vehicle, which no
+    detector saw, shared the span with the truck part of the time (one truck alone loads
+    the deck at one lateral position).  ``{run: reason}``; none with fewer than three
+    used runs."""
+    spread = {}
+    for k in kept:
+        fit = cal.fits[k]
+        if cal.reasons[k] or fit is None:
+            continue
+        value = load_centre_spread(records[k], cal.lines, fit.offsets)
+        if np.isfinite(value):
+            spread[k] = value
+    if len(spread) < 3:
+        return {}
+    ref = float(np.median(list(spread.values())))
+    return {k: (f"another vehicle on the bridge: the load's lateral centre moved "
+                f"{value:.2f} m while the truck crossed (the runs' median {ref:.2f} m)")
+            for k, value in spread.items()
+            if value > LOAD_CENTRE_FACTOR * ref and value > ref + LOAD_CENTRE_MOVE}
 
 
 def _drifting_runs(names: Sequence[str], runs: Sequence[int], changes: np.ndarray,
