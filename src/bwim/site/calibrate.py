@@ -325,7 +325,7 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
                             events)
     moving = _moving_load_runs(records, cal, kept)
     if moving:  # a run whose load moved across the deck: another vehicle shared the span
-        reasons = [moving.get(k, why) for k, why in enumerate(cal.reasons)]
+        reasons = [moving.get(k, why) for k, why in enumerate(reasons)]
         keep = [i for i, k in enumerate(kept) if k not in moving]
         passages, kept = [passages[i] for i in keep], [kept[i] for i in keep]
         cal = _site_calibration(records, setup, lane_detections, reasons, passages, kept)
@@ -426,17 +426,19 @@ def load_centre_spread(record: Record, lines: MultiRunCalibration,
     """How far the load's lateral centre moves while a vehicle crosses, m: the spread
     (90th less 10th percentile) of ``Σ y_j ε_j / Σ ε_j`` over the samples whose summed
     strain exceeds :data:`LOAD_CENTRE_SHARE` of its largest, ``ε_j`` each of the lines'
-    channels less its ``offsets``, ``y_j`` its first sensor's ``y``; nan when a ``y`` is
+    channels less its ``offsets``, in the sign of its line (the sum of its ordinates: a
+    gauge that reads a load negative, mounted or wired so or in hogging, counts by its
+    size, not against the others), ``y_j`` its first sensor's ``y``; nan when a ``y`` is
     unknown or no sample qualifies."""
     ys = [c.sensors[0].y for c in lines.channels]
     if any(y is None for y in ys):
         return float("nan")
-    r = read_channels(record, lines.channels) - np.asarray(offsets, dtype=float)
+    sign = np.where(lines.line.ordinates.sum(axis=0) < 0, -1.0, 1.0)
+    r = (read_channels(record, lines.channels) - np.asarray(offsets, dtype=float)) * sign
     total = r.sum(axis=1)
-    if total.size == 0:
+    if total.size == 0 or not total.max() > 0:
         return float("nan")
-    peak = total[int(np.argmax(np.abs(total)))]
-    on = total / peak > LOAD_CENTRE_SHARE if peak != 0 else np.zeros(total.size, bool)
+    on = total > LOAD_CENTRE_SHARE * total.max()
     if np.count_nonzero(on) < 3:
         return float("nan")
     centre = (r[on] @ np.asarray(ys, dtype=float)) / total[on]
