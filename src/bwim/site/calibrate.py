@@ -113,10 +113,10 @@ from bwim.detect import (
     detect_known_truck,
     learn_responses,
 )
-from bwim.detect.presence import windows_overlap
+from bwim.detect.presence import unexplained_activity, windows_overlap
 from bwim.detect.response import band_pass, peak_polarity
 from bwim.detect.result import FLAG_COUNT_MISMATCH, FLAG_MULTIPLE_PRESENCE, FLAG_TRUNCATED
-from bwim.detect.signals import robust_sigma
+from bwim.detect.signals import channel_data, robust_sigma
 from bwim.errors import BwimError, InputError
 from bwim.records import Passage, Record
 from bwim.site.bending import DetectorBending, learn_bending
@@ -817,12 +817,21 @@ def _truck_reason(ev: EventDetection, setup: SiteSetup, own: list[LaneVehicle],
 def _own_parts(records: Sequence[Record], events: Sequence[EventDetection],
                setup: SiteSetup, kept: Sequence[int]) -> list[Record]:
     """``records`` with each run of ``kept`` cut to its truck's own part
-    (:func:`bwim.site.isolate.own_part`: the vehicles before or after it cut off)."""
+    (:func:`bwim.site.isolate.own_part`: the vehicles before or after it cut off, and
+    the gauge activity before or after it that no detected vehicle explains, a vehicle
+    no detector saw: :func:`bwim.detect.presence.unexplained_activity` on the gauges'
+    sum; activity next to the truck has already refused the run)."""
     out = list(records)
     for k in kept:
         truck = _truck(events[k], setup)
-        out[k] = own_part(records[k], truck.window,
-                          [w.window for w in events[k].vehicles if w is not truck])
+        others = [w.window for w in events[k].vehicles if w is not truck]
+        gauges = gauge_names(records[k])
+        if gauges and truck.window is not None:
+            windows = np.array([w for w in (truck.window, *others) if w is not None])
+            total = channel_data(records[k], gauges).sum(axis=1)
+            others += [(float(a), float(b)) for a, b in
+                       unexplained_activity(records[k].time, total, windows)]
+        out[k] = own_part(records[k], truck.window, others)
     return out
 
 
@@ -876,20 +885,33 @@ def _first_support(records: Sequence[Record], setup: SiteSetup, reasons: Sequenc
                    events: Sequence[EventDetection]) -> tuple[float, float] | None:
     """The span by which pass 2 judges whether another vehicle shares the bridge with
     the truck: the support of provisional lines from the runs of pass 1 (the truck alone
-    in the whole record); from its one run when pass 1 kept only one (its lines, one per
-    gauge: one run has one lateral position), so that runs whose other vehicle crossed
-    before or after the truck are not all refused; None when it kept none."""
+    in the whole record, as far as the detectors tell).  When pass 1 kept one run, or
+    the provisional lines cannot be fitted (a vehicle no detector saw before or after the
+    truck in one run: its strain draws the support off every other run's axles), the
+    median of each run's own support (its lines alone, one per gauge: one run has one
+    lateral position), so that runs whose other vehicle crossed before or after the
+    truck are not all refused; None when no run gives one."""
     if len(kept) >= 2:
-        return _site_calibration(records, setup, [Detection()] * len(records), reasons,
-                                 passages, kept, events).lines.support
-    if len(kept) == 1:
         try:
-            return calibrate_lines([records[kept[0]]], list(passages),
-                                   setup.calibration_loads,
-                                   support_lobes=setup.support_lobes).support
-        except (BwimError, ArithmeticError, ValueError, np.linalg.LinAlgError):
-            return None
-    return None
+            return _site_calibration(records, setup, [Detection()] * len(records), reasons,
+                                     passages, kept, events).lines.support
+        except _FIT_ERRORS:
+            pass
+    supports = []
+    for k, p in zip(kept, passages, strict=True):
+        try:
+            supports.append(calibrate_lines([records[k]], [p], setup.calibration_loads,
+                                            support_lobes=setup.support_lobes).support)
+        except _FIT_ERRORS:
+            continue
+    if not supports:
+        return None
+    lo, hi = np.median(np.array(supports, dtype=float), axis=0)
+    return float(lo), float(hi)
+
+
+#: What a provisional fit of the lines may raise without ending the calibration.
+_FIT_ERRORS = (BwimError, ArithmeticError, ValueError, np.linalg.LinAlgError)
 
 
 # --- 4. lines ------------------------------------------------------------------------------
