@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 
 from bwim.scenario import build_site_setup, load_record, load_scenario
+from bwim.sensors import SensorKind
 from bwim.site import calibrate_site
 from bwim.site.calibrate import load_centre_spread
 from bwim.synthetic import make_test_day
@@ -40,7 +41,14 @@ def runs(tmp_path_factory):
     return [load_record(p, scenario) for p in day.calibration], build_site_setup(scenario), alone
 
 
-def test_a_run_with_a_vehicle_no_detector_saw_is_refused(runs):
+@pytest.fixture(scope="module")
+def clean(runs):
+    """The calibration with both detector pairs, the runs as they are."""
+    records, setup, _ = runs
+    return calibrate_site(records, setup)
+
+
+def test_a_run_with_a_vehicle_no_detector_saw_is_refused(runs, clean):
     """With one detector pair, the second run (a 5-axle lane-3 truck on the span with
     the calibration truck) was used: the other runs' factors moved by 4-5 % (0.940
     against 0.897 for the third run).  Now it is refused as another vehicle on the
@@ -50,7 +58,7 @@ def test_a_run_with_a_vehicle_no_detector_saw_is_refused(runs):
     departs" although the lines were fitted with them, one of them a run of the truck
     alone)."""
     records, setup, alone = runs
-    both = calibrate_site(records, setup)
+    both = clean
     one = calibrate_site(records, dataclasses.replace(setup,
                                                       lanes=(setup.calibration_pair,)))
     assert not alone[1]
@@ -65,15 +73,15 @@ def test_a_run_with_a_vehicle_no_detector_saw_is_refused(runs):
             assert why == (fit.reason if fit.rejected else ""), (why, fit.reason)
 
 
-def test_the_load_centre_stays_put_under_the_truck_alone(runs):
+def test_the_load_centre_stays_put_under_the_truck_alone(runs, clean):
     """The measure itself on every run, each channel's offset its median over the
     record's first 100 samples (quiet before the truck): every run of the truck alone
     within 0.6 m (measured 0.32-0.50 m); 5 of the 6 runs with a lane-3 vehicle beyond
     1 m (measured 1.16-2.19 m).  The sixth (0.65 m) has its lane-3 truck on the span for
     nearly all the calibration truck's time (0.38 s apart at the gauges): the centre
     stays put, shifted, and the run is refused by its factor instead."""
-    records, setup, alone = runs
-    site = calibrate_site(records, setup)
+    records, _, alone = runs
+    site = clean
     spreads = [load_centre_spread(rec, site.lines, np.median(
         read_channels(rec, site.lines.channels)[:100], axis=0)) for rec in records]
     assert all(s < 0.6 for s, a in zip(spreads, alone, strict=True) if a), spreads
@@ -91,7 +99,7 @@ def _reversed(rec, names):
     return dataclasses.replace(rec, data=data)
 
 
-def test_gauges_that_read_a_load_negative_count_by_their_size(runs):
+def test_gauges_that_read_a_load_negative_count_by_their_size(runs, clean):
     """Four gauges of twelve (s01-s04) reading negative in every run: each channel counts
     in the sign of its line (review of stop 36: with signed strains the negative gauges
     cancelled the others, the "centre" spread 14-46 m on a 15.55 m deck and a run of the
@@ -99,7 +107,7 @@ def test_gauges_that_read_a_load_negative_count_by_their_size(runs):
     and each used run's spread is the same (within 0.01 m)."""
     records, setup, _ = runs
     flipped = [_reversed(r, ("s01", "s02", "s03", "s04")) for r in records]
-    site = calibrate_site(records, setup)
+    site = clean
     again = calibrate_site(flipped, setup)
     assert again.reasons == site.reasons
     for k, why in enumerate(site.reasons):
@@ -107,3 +115,43 @@ def test_gauges_that_read_a_load_negative_count_by_their_size(runs):
             a = load_centre_spread(records[k], site.lines, site.fits[k].offsets)
             b = load_centre_spread(flipped[k], again.lines, again.fits[k].offsets)
             assert b == pytest.approx(a, abs=0.01), (k, a, b)
+
+
+def _unseen(rec):
+    """``rec`` with its axle detectors' channels replaced by their quiet start: its truck
+    is one that no detector sees (a vehicle in a lane without detectors)."""
+    data = rec.data.copy()
+    for k, s in enumerate(rec.sensors):
+        if s.kind is SensorKind.AXLE_DETECTOR:
+            data[:, k] = np.resize(data[:100, k], data.shape[0])
+    return dataclasses.replace(rec, data=data)
+
+
+def _after(a, b):
+    """Record ``b`` appended to record ``a`` (one sample step after a's end), each of b's
+    channels moved by its first samples' level less a's last samples' level."""
+    step = a.time[1] - a.time[0]
+    t = np.concatenate([a.time, a.time[-1] + step + b.time - b.time[0]])
+    d = np.concatenate([a.data, b.data - b.data[:50].mean(axis=0) + a.data[-50:].mean(axis=0)])
+    return dataclasses.replace(a, time=t, data=d)
+
+
+@pytest.mark.parametrize("ghost", [1, 2])
+def test_a_truck_no_detector_saw_after_the_truck_is_cut_off(runs, clean, ghost):
+    """The first used run with another used run's truck after it, that truck unseen by
+    the detectors (their channels quiet).  The first pass took the run for the truck
+    alone, the unseen truck's strain drew the provisional lines' support off the other
+    runs' axles, and the whole calibration was refused ("no axle of records[1] is on
+    the support 26.8 … 33.0 m": review of stop 36).  Now the provisional span falls back
+    on the runs' own supports and the run is cut off the activity no detected vehicle
+    explains: the same runs used, with the same factors (within 0.5 %; measured equal to
+    the third decimal)."""
+    records, setup, _ = runs
+    site = clean
+    used = [k for k, why in enumerate(site.reasons) if not why]
+    joined = list(records)
+    joined[used[0]] = _after(records[used[0]], _unseen(records[used[ghost]]))
+    cal = calibrate_site(joined, setup)
+    assert cal.reasons == site.reasons, cal.reasons
+    for k in used:
+        assert cal.fits[k].scale == pytest.approx(site.fits[k].scale, rel=5e-3)
