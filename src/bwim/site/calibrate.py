@@ -22,7 +22,9 @@ Contract
      spacings.  A vehicle that crosses before or after the truck without sharing the
      span with it (also in the truck's lane: the truck is then the one vehicle of its
      layout) does not reject the run: the run is cut to the truck's own part of the
-     record (:func:`bwim.site.isolate.own_part`), and every later step uses that part.
+     record (:func:`bwim.site.isolate.own_part`; gauge activity no detected vehicle
+     explains before or after the truck is cut off too), and every later step uses that
+     part.
      Gauge activity that no detected vehicle explains next to the truck (a
      vehicle in a lane without detectors) rejects the run too, and so does a used run
      whose load's lateral centre moves across the deck while the truck crosses
@@ -30,7 +32,8 @@ Contract
      runs' median and :data:`LOAD_CENTRE_MOVE` m more: such a vehicle on the span with
      the truck part of the time).  The span is the lines'
      support, so this takes passes: first the runs with no other vehicle in the record
-     at all give provisional lines (one such run alone: its own lines, one per gauge;
+     at all give provisional lines (one such run alone, or lines that cannot be fitted:
+     the median of each run's own support, its lines alone, one per gauge;
      what each other pair reads of the span's bending, learned robustly from every run,
      is no vehicle: :mod:`bwim.site.bending`), then every run is judged with their
      support; when
