@@ -32,8 +32,9 @@ Contract
      runs' median and :data:`LOAD_CENTRE_MOVE` m more: such a vehicle on the span with
      the truck part of the time).  The span is the lines'
      support, so this takes passes: first the runs with no other vehicle in the record
-     at all give provisional lines (one such run alone, or lines that cannot be fitted:
-     the median of each run's own support, its lines alone, one per gauge;
+     at all give provisional lines (one such run alone: its own lines' support, one line
+     per gauge; lines that cannot be fitted: the median of the runs' own supports when
+     three runs or more give one, else refused;
      what each other pair reads of the span's bending, learned robustly from every run,
      is no vehicle: :mod:`bwim.site.bending`), then every run is judged with their
      support; when
@@ -888,29 +889,46 @@ def _first_support(records: Sequence[Record], setup: SiteSetup, reasons: Sequenc
                    events: Sequence[EventDetection]) -> tuple[float, float] | None:
     """The span by which pass 2 judges whether another vehicle shares the bridge with
     the truck: the support of provisional lines from the runs of pass 1 (the truck alone
-    in the whole record, as far as the detectors tell).  When pass 1 kept one run, or
-    the provisional lines cannot be fitted (a vehicle no detector saw before or after the
-    truck in one run: its strain draws the support off every other run's axles), the
-    median of each run's own support (its lines alone, one per gauge: one run has one
-    lateral position), so that runs whose other vehicle crossed before or after the
-    truck are not all refused; None when no run gives one."""
-    if len(kept) >= 2:
-        try:
-            return _site_calibration(records, setup, [Detection()] * len(records), reasons,
-                                     passages, kept, events).lines.support
-        except _FIT_ERRORS:
-            pass
-    supports = []
-    for k, p in zip(kept, passages, strict=True):
-        try:
-            supports.append(calibrate_lines([records[k]], [p], setup.calibration_loads,
-                                            support_lobes=setup.support_lobes).support)
-        except _FIT_ERRORS:
-            continue
-    if not supports:
+    in the whole record, as far as the detectors tell).  When pass 1 kept one run, its
+    own support (its lines alone, one per gauge: one run has one lateral position), so
+    that runs whose other vehicle crossed before or after the truck are not all refused.
+    When the provisional lines cannot be fitted (a vehicle no detector saw before or
+    after the truck in one run: its strain draws the support off every other run's
+    axles), the median of each run's own support if three runs or more give one (the
+    majority's: two that disagree cannot tell which is right).  None otherwise."""
+    if len(kept) == 1:
+        return _own_support(records[kept[0]], passages[0], setup)
+    if len(kept) < 2:
+        return None
+    try:
+        return _site_calibration(records, setup, [Detection()] * len(records), reasons,
+                                 passages, kept, events).lines.support
+    except _FIT_ERRORS as exc:
+        if len(kept) < 3:
+            shown = ", ".join(str(k + 1) for k in kept)
+            raise InputError(
+                f"the first lines, from runs {shown} (the truck alone in the record, as "
+                f"far as the detectors tell), cannot be fitted ({' '.join(str(exc).split())}):"
+                " one of them may hold a vehicle no detector saw before or after the truck, "
+                "which draws the lines' support off the other's axles; give more runs"
+                ) from None
+    supports = [s for k, p in zip(kept, passages, strict=True)
+                if (s := _own_support(records[k], p, setup)) is not None]
+    if len(supports) < 3:
         return None
     lo, hi = np.median(np.array(supports, dtype=float), axis=0)
     return float(lo), float(hi)
+
+
+def _own_support(record: Record, passage: Passage, setup: SiteSetup
+                 ) -> tuple[float, float] | None:
+    """The support of one run's own lines (one per gauge), None when they cannot be
+    fitted."""
+    try:
+        return calibrate_lines([record], [passage], setup.calibration_loads,
+                               support_lobes=setup.support_lobes).support
+    except _FIT_ERRORS:
+        return None
 
 
 #: What a provisional fit of the lines may raise without ending the calibration.
