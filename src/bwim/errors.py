@@ -22,6 +22,7 @@ from typing import TypeVar
 import numpy as np
 
 __all__ = [
+    "DATA_ERRORS",
     "BwimError",
     "InputError",
     "NumericalError",
@@ -47,6 +48,12 @@ class InputError(BwimError, ValueError):
 
 class NumericalError(BwimError, ArithmeticError):
     """Valid input on which the numerics failed (singular system, no convergence)."""
+
+
+#: What computing on one record, run or vehicle may raise that ends that computation and
+#: not the caller's: bwim's own errors and the numerical failures of degenerate data (a
+#: batch goes on to the next record, a lane's detection to the next lane).
+DATA_ERRORS = (BwimError, ArithmeticError, ValueError, np.linalg.LinAlgError)
 
 
 def _fmt(value: object) -> str:

@@ -33,10 +33,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from bwim.batch.executors import Executor, Serial, Task
-from bwim.errors import BwimError, InputError
+from bwim.errors import DATA_ERRORS, BwimError, InputError
 from bwim.records import Record
 from bwim.summary import SummaryRow, failed_row
 
@@ -44,7 +42,7 @@ __all__ = ["Item", "Outcome", "identify_records", "items_of", "weigh_events", "w
 
 #: What processing one record may raise without ending a batch: bwim's own errors and the
 #: numerical failures of a degenerate record.
-BATCH_ERRORS = (BwimError, ArithmeticError, ValueError, np.linalg.LinAlgError)
+BATCH_ERRORS = DATA_ERRORS
 
 
 def reason_of(exc: BaseException) -> str:

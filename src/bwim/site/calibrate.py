@@ -121,7 +121,7 @@ from bwim.detect.presence import unexplained_activity, windows_overlap
 from bwim.detect.response import band_pass, peak_polarity
 from bwim.detect.result import FLAG_COUNT_MISMATCH, FLAG_MULTIPLE_PRESENCE, FLAG_TRUNCATED
 from bwim.detect.signals import channel_data, robust_sigma
-from bwim.errors import BwimError, InputError
+from bwim.errors import DATA_ERRORS, InputError
 from bwim.records import Passage, Record
 from bwim.site.bending import DetectorBending, learn_bending
 from bwim.site.drift import TemperatureDrift, TimeOfDayDrift, seconds_of_day
@@ -327,18 +327,17 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
     lane_detections = [e.by_lane.get(setup.calibration_lane, Detection()) for e in events]
     cal = _site_calibration(records, setup, lane_detections, reasons, passages, kept,
                             events)
-    moving = _moving_load_runs(records, cal, kept)
-    if moving:  # a run whose load moved across the deck: another vehicle shared the span
-        reasons = [moving.get(k, why) for k, why in enumerate(reasons)]
-        keep = [i for i, k in enumerate(kept) if k not in moving]
-        passages, kept = [passages[i] for i in keep], [kept[i] for i in keep]
-        cal = _site_calibration(records, setup, lane_detections, reasons, passages, kept)
-    faulty = _faulty_gauge_runs(records, setup, cal, passages, kept)
-    if faulty:  # a run whose gauge disagrees with the same gauge in the others: out
-        reasons = [faulty.get(k, why) for k, why in enumerate(reasons)]
-        keep = [i for i, k in enumerate(kept) if k not in faulty]
-        passages, kept = [passages[i] for i in keep], [kept[i] for i in keep]
-        cal = _site_calibration(records, setup, lane_detections, reasons, passages, kept)
+    # a run whose load moved across the deck (another vehicle shared the span), then a
+    # run whose gauge disagrees with the same gauge in the others: out, the lines fitted
+    # again (each run's reason is then the new fit's)
+    for judge in (_moving_load_runs, _faulty_gauge_runs):
+        out = judge(records, setup, cal, passages, kept)
+        if out:
+            reasons = [out.get(k, why) for k, why in enumerate(reasons)]
+            keep = [i for i, k in enumerate(kept) if k not in out]
+            passages, kept = [passages[i] for i in keep], [kept[i] for i in keep]
+            cal = _site_calibration(records, setup, lane_detections, reasons, passages,
+                                    kept)
     _check_spacings(events, cal.reasons, setup)
     _check_scales(records, cal)
     _check_load_order(records, passages, kept, cal.lines, setup)
@@ -369,7 +368,7 @@ def _faulty_gauge_runs(records: Sequence[Record], setup: SiteSetup, cal: _Lines,
             model = weighing_model(records[k], p, lines, combine=setup.combine)
             w = model.weigh(scale=fit.scale)
             health = check_gauges(records[k], p, lines, combine=setup.combine)
-        except (BwimError, ArithmeticError, ValueError, np.linalg.LinAlgError):
+        except DATA_ERRORS:
             continue
         if [c.name for c in w.channels] != names or w.measured.shape[0] == 0:
             continue
@@ -450,14 +449,15 @@ def load_centre_spread(record: Record, lines: MultiRunCalibration,
     return float(hi - lo)
 
 
-def _moving_load_runs(records: Sequence[Record], cal: _Lines, kept: Sequence[int]
-                      ) -> dict[int, str]:
+def _moving_load_runs(records: Sequence[Record], setup: SiteSetup, cal: _Lines,
+                      passages: Sequence[Passage], kept: Sequence[int]) -> dict[int, str]:
     """Used runs whose load's lateral centre moved across the deck while the truck
     crossed (:func:`load_centre_spread`) more than :data:`LOAD_CENTRE_FACTOR` times the
     used runs' median and by :data:`LOAD_CENTRE_MOVE` more: another vehicle, which no
     detector saw, shared the span with the truck part of the time (one truck alone loads
     the deck at one lateral position).  ``{run: reason}``; none with fewer than three
-    used runs."""
+    used runs.  (``setup`` and ``passages`` unused: the signature of
+    :func:`_faulty_gauge_runs`, the other judge of the used runs.)"""
     spread = {}
     for k in kept:
         fit = cal.fits[k]
@@ -585,7 +585,7 @@ def _check_load_order(records: Sequence[Record], passages: Sequence[Passage],
         other = calibrate_lines([records[k] for k in kept], passages, loads[::-1],
                                 lateral=setup.lateral,
                                 support_lobes=setup.support_lobes)
-    except _FIT_ERRORS:
+    except DATA_ERRORS:
         return  # the reverse order cannot even be fitted: the declared one stands
     _refuse_reversed(float(lines.line.residual), float(other.line.residual))
 
@@ -608,13 +608,9 @@ def _check_load_order_strain(records: Sequence[Record], setup: SiteSetup,
         other = calibrate_lines([records[k] for k in kept], passages, reverse,
                                 lateral=setup.lateral,
                                 support_lobes=setup.support_lobes)
-    except _FIT_ERRORS:
+    except DATA_ERRORS:
         return
     _refuse_reversed(float(lines.line.residual), float(other.line.residual))
-
-
-#: What fitting lines to a wrong declaration may raise.
-_FIT_ERRORS = (InputError, ArithmeticError, ValueError, np.linalg.LinAlgError)
 
 
 def _symmetric(loads: np.ndarray) -> bool:
@@ -903,7 +899,7 @@ def _first_support(records: Sequence[Record], setup: SiteSetup, reasons: Sequenc
     try:
         return _site_calibration(records, setup, [Detection()] * len(records), reasons,
                                  passages, kept, events).lines.support
-    except _FIT_ERRORS as exc:
+    except DATA_ERRORS as exc:
         if len(kept) < 3:
             shown = ", ".join(str(k + 1) for k in kept)
             raise InputError(
@@ -927,12 +923,8 @@ def _own_support(record: Record, passage: Passage, setup: SiteSetup
     try:
         return calibrate_lines([record], [passage], setup.calibration_loads,
                                support_lobes=setup.support_lobes).support
-    except _FIT_ERRORS:
+    except DATA_ERRORS:
         return None
-
-
-#: What a provisional fit of the lines may raise without ending the calibration.
-_FIT_ERRORS = (BwimError, ArithmeticError, ValueError, np.linalg.LinAlgError)
 
 
 # --- 4. lines ------------------------------------------------------------------------------

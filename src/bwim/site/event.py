@@ -89,7 +89,7 @@ from bwim.detect.result import (
     FLAG_SPEED_RANGE,
     FLAG_TRUNCATED,
 )
-from bwim.errors import BwimError, InputError
+from bwim.errors import DATA_ERRORS, InputError
 from bwim.fe.bridge import Bridge
 from bwim.mfi import ForceIdentification, identify_forces
 from bwim.plausibility import HARD_FLAGS, quality_of
@@ -110,9 +110,6 @@ from bwim.wim import Weighing, weigh
 
 __all__ = ["EventWeighing", "VehicleWeighing", "weigh_event"]
 
-#: What one event's detection or weighing may raise without ending a batch: bwim's own
-#: errors and the numerical failures of a degenerate record (a singular fit).
-_EVENT_ERRORS = (BwimError, ArithmeticError, ValueError, np.linalg.LinAlgError)
 #: m: how far from the calibration runs' mean lateral position a vehicle weighed by the
 #: lines may lie: the wander a lane leaves a truck (a 2.5 m wide truck in a 3.5 m lane
 #: moves ± 0.5 m) and the detected position's own error (about as much).  Beyond it the
@@ -350,7 +347,7 @@ def weigh_event(record: Record, calibration: SiteCalibration, *,
             det = detect_from_strain(record, lines.line_at(), span=span,
                                      gauges=gauge_names(record))
             ev = _single_lane(det, calibration)
-    except _EVENT_ERRORS as exc:
+    except DATA_ERRORS as exc:
         return EventWeighing(weighed=False, reason=f"detection failed: {_why(exc)}", **base)
     if not ev.vehicles:
         det = ev.by_lane.get(setup.calibration_lane or 1)
@@ -461,7 +458,7 @@ def _vehicle(record: Record, ev: EventDetection, k: int, calibration: SiteCalibr
     try:
         health = check_gauges(record, v.passage, calibration.lines, combine=setup.combine,
                               alone=FLAG_MULTIPLE_PRESENCE not in flags)
-    except _EVENT_ERRORS as exc:
+    except DATA_ERRORS as exc:
         return refused(f"weighing failed: {_why(exc)}")
     if not health.usable:
         return refused(health.reason, flags=(*flags, *health.flags))
@@ -495,7 +492,7 @@ def _vehicle(record: Record, ev: EventDetection, k: int, calibration: SiteCalibr
         w = health.mark(health.model.weigh(**scaling) if health.model is not None else
                         weigh(record, v.passage, health.lines, combine=setup.combine,
                               **scaling))
-    except _EVENT_ERRORS as exc:
+    except DATA_ERRORS as exc:
         return refused(f"weighing failed: {_why(exc)}")
     flags = tuple(dict.fromkeys([*flags, *w.flags, *drift_flags]))
     if method == "trend":
@@ -518,7 +515,7 @@ def _group_laterals(record: Record, lv: LaneVehicle, calibration: SiteCalibratio
         return group_laterals(record, lv.vehicle.passage,
                               gauge_line=gauge_line(calibration.lines), window=lv.window,
                               gauges=[g for g in gauge_names(record) if g not in faulty])
-    except _EVENT_ERRORS:
+    except DATA_ERRORS:
         return ()
 
 
@@ -583,7 +580,7 @@ def _weigh_mfi(record: Record, lv: LaneVehicle, flags: tuple[str, ...], model: S
         return refused(_why(exc))
     try:
         ident = identify_forces(model.bridge, rec, **options)
-    except _EVENT_ERRORS as exc:
+    except DATA_ERRORS as exc:
         return refused(f"weighing by MFI failed: {_why(exc)}")
     if "max_residual" not in options:  # the model's own limit, for this vehicle's weight
         ident = dataclasses.replace(ident, residual_limit=model.residual_limit(

@@ -87,7 +87,7 @@ from types import MappingProxyType
 
 import numpy as np
 
-from bwim.errors import BwimError, InputError
+from bwim.errors import DATA_ERRORS, InputError
 from bwim.plausibility import ordered_flags, quality_of
 from bwim.records import Passage, Record
 from bwim.wim import Weighing
@@ -130,9 +130,6 @@ CLIP_CHANCE = 1e-3
 DRIFT_NOISE = 20.0
 #: Channels needed to compare one channel's ratio with the others' (a line and a check).
 MIN_COMPARED = 4
-
-#: What a weighing may raise on a degenerate subset of channels.
-_WEIGH_ERRORS = (BwimError, ArithmeticError, ValueError, np.linalg.LinAlgError)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -383,11 +380,11 @@ def _worst(record: Record, passage: Passage, lines: MultiRunCalibration,
     sub = restrict_lines(lines, names)
     try:
         model = weighing_model(record, passage, sub, combine=combine)
-    except _WEIGH_ERRORS:
+    except DATA_ERRORS:
         return None, {}, None
     try:
         w = model.weigh(scale_correction=False)
-    except _WEIGH_ERRORS:
+    except DATA_ERRORS:
         return None, {}, model
     if not np.isfinite(w.gvw) or w.gvw <= 0:
         return None, {}, model

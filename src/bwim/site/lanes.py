@@ -76,16 +76,13 @@ from bwim.detect import Detection, LearnedResponses, VehicleDetection, detect_ax
 from bwim.detect.presence import span_windows, unexplained_activity, windows_overlap
 from bwim.detect.result import FLAG_MULTIPLE_PRESENCE
 from bwim.detect.signals import channel_data
-from bwim.errors import BwimError, require_positive
+from bwim.errors import DATA_ERRORS, require_positive
 from bwim.records import Passage, Record
 from bwim.site.bending import DetectorBending
 from bwim.site.setup import MAX_WHEELBASE, DetectorLane, SiteSetup
 
 __all__ = ["ECHO_SPACING", "MAX_WHEELBASE", "MIN_HEADWAY", "MIN_OVERHANGS", "EventDetection",
            "LaneVehicle", "detect_lanes", "is_echo", "reads_axles_of", "split_long", "too_long"]
-
-#: What one lane's detection may raise without ending the event's detection.
-_ERRORS = (BwimError, ArithmeticError, ValueError, np.linalg.LinAlgError)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -194,7 +191,7 @@ def detect_lanes(record: Record, setup: SiteSetup, *,
             det = detect_axles(record, pair.channels, pair.distance, position=position,
                                span=lane_span, gauges=list(gauges),
                                responses=responses.get(pair.lane), **options)
-        except _ERRORS as exc:
+        except DATA_ERRORS as exc:
             notes.append(f"lane {pair.lane}: detection failed: {' '.join(str(exc).split())}")
             by_lane[pair.lane] = Detection(message=str(exc), method="")
             continue
