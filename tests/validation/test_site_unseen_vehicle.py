@@ -174,3 +174,31 @@ def test_two_runs_that_disagree_on_the_span_are_refused(runs, clean):
     with pytest.raises(InputError, match=r"the first lines, from runs .* cannot be fitted "
                                          r".* give more runs"):
         calibrate_site(subset, setup)
+
+
+def test_lines_linear_in_the_lateral_position_take_their_span_from_plain_lines(
+        tmp_path_factory):
+    """Seed 9's short-span-4-lane runs with the calibration lane's detector pair alone and
+    lines linear in the lateral position (``lateral = "linear"``).  Pass 1 takes all 12
+    runs for the truck alone (no detector sees the lane-3 vehicles of six of them); the
+    provisional lines, fitted with the lateral slope, put the span at 9.3-16.6 m, off
+    the truck's axles (one line per gauge: -1.6-4.5 m), and every run was refused as
+    truncated (review of stop 36).  The provisional span is now that of one line per
+    gauge whatever the lateral model: the calibration stands, using exactly the runs
+    of the truck alone, and the runs with a lane-3 vehicle are refused or reported."""
+    day = make_test_day(tmp_path_factory.mktemp("linear") / "day", site="short-span-4-lane",
+                        seed=9, n_traffic=1, n_calibration_day_traffic=0, mesh=0.5)
+    scenario = load_scenario(day.scenario)
+    with open(day.truth, newline="", encoding="utf-8") as f:
+        lanes: dict[str, list[str]] = {}
+        for r in csv.DictReader(f):
+            if r["kind"] == "calibration":
+                lanes.setdefault(r["record"], []).append(r["lane"])
+    alone = [sorted(lanes[p.name]) == ["1"] for p in day.calibration]
+    setup = build_site_setup(scenario)
+    one = dataclasses.replace(setup, lanes=(setup.calibration_pair,), lateral="linear")
+    site = calibrate_site([load_record(p, scenario) for p in day.calibration], one)
+    used = [not why for why in site.reasons]
+    assert used == alone, site.reasons
+    lo, hi = site.lines.support
+    assert lo < 0.0 < 4.0 < hi < 6.0, site.lines.support

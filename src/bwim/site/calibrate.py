@@ -32,8 +32,10 @@ Contract
      runs' median and :data:`LOAD_CENTRE_MOVE` m more: such a vehicle on the span with
      the truck part of the time).  The span is the lines'
      support, so this takes passes: first the runs with no other vehicle in the record
-     at all give provisional lines (one such run alone: its own lines' support, one line
-     per gauge; lines that cannot be fitted: the median of the runs' own supports when
+     at all give provisional lines (one line per gauge whatever the lateral model: a
+     lateral slope does not move the span, and its freedom lets a vehicle no detector
+     saw draw it off the axles; one such run alone: its own lines' support; lines that
+     cannot be fitted: the median of the runs' own supports when
      three runs or more give one, else refused;
      what each other pair reads of the span's bending, learned robustly from every run,
      is no vehicle: :mod:`bwim.site.bending`), then every run is judged with their
@@ -103,6 +105,7 @@ from __future__ import annotations
 
 import hashlib
 from collections.abc import Mapping, Sequence
+import dataclasses
 from dataclasses import dataclass, field
 from datetime import date
 from types import MappingProxyType
@@ -896,8 +899,12 @@ def _first_support(records: Sequence[Record], setup: SiteSetup, reasons: Sequenc
         return _own_support(records[kept[0]], passages[0], setup)
     if len(kept) < 2:
         return None
+    # one line per gauge whatever ``setup.lateral``: the span is where the lines are
+    # non-zero, which a lateral slope does not move; fitted to runs that may still hold a
+    # vehicle no detector saw, that slope's freedom only lets it draw the span off
+    plain = dataclasses.replace(setup, lateral=None)
     try:
-        return _site_calibration(records, setup, [Detection()] * len(records), reasons,
+        return _site_calibration(records, plain, [Detection()] * len(records), reasons,
                                  passages, kept, events).lines.support
     except DATA_ERRORS as exc:
         if len(kept) < 3:
