@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
+import scipy.sparse
 
 from bwim.errors import InputError
 from bwim.sensors import Sensor
@@ -61,7 +62,13 @@ class InfluenceSurfaces:
         out = np.zeros((x.size, self.g.shape[1]))
         if np.any(on):
             rows = model.point_rows(x[on], None if y is None else y[on])
-            out[on] = np.einsum("pk,pks->ps", rows.vals, self.g[rows.dofs])
+            # Σ_k N_pk g[dof_pk] as a sparse product: the numbers of
+            # einsum("pk,pks->ps", vals, g[dofs]) without gathering a (p, k, s) array
+            p, k = rows.vals.shape
+            shape = (p, self.g.shape[0])
+            n = scipy.sparse.csr_matrix((rows.vals.ravel(), rows.dofs.ravel(),
+                                         np.arange(0, p * k + 1, k)), shape=shape)
+            out[on] = n @ self.g
         return out
 
     def response(self, x: np.ndarray, y: np.ndarray | None, P: np.ndarray) -> np.ndarray:
