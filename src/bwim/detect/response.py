@@ -356,11 +356,7 @@ def _start(rec: Record, chans: tuple[str, str], gauges: tuple[str, ...], distanc
         raise InputError("the two axle detectors do not correlate within the speed range")
     v = distance / (lag / fs)
     u = v * (t[:, None] - t[0]) - offsets[None, :]  # axle positions if tau = t[0]
-    best, tau = -np.inf, float(t[0])
-    for shift in np.arange(0.0, t[-1] - t[0], 0.1 / v):
-        score = float(z[:, 0] @ band_pass(_bump(u - v * shift) @ loads, fs))
-        if score > best:
-            best, tau = score, float(t[0] + shift)
+    tau = float(t[0]) + _best_shift(z[:, 0], u, v, loads, fs, float(t[-1] - t[0]))
     sigma = HIGH_PASS / v * fs
     if gauges:
         g = rec.channels(list(gauges)).data.astype(float)
@@ -368,6 +364,35 @@ def _start(rec: Record, chans: tuple[str, str], gauges: tuple[str, ...], distanc
                     tau=tau, v=v)
     return _Run(t=t, y=high_pass(raw, sigma), g=np.zeros((t.size, 0)), sigma=sigma,
                 tau=tau, v=v)
+
+
+#: Shifts of :func:`_best_shift` made at once (memory: this many band-passed records).
+_SHIFT_BLOCK = 64
+
+
+def _best_shift(z: np.ndarray, u: np.ndarray, v: float, loads: np.ndarray, fs: float,
+                duration: float) -> float:
+    """The time shift (s: multiples of 0.1 m of travel from 0 up to ``duration``) at
+    which the truck's layout of bumps (``u``: each axle's distance past detector 1 at
+    every sample for a first axle at the record's start), band-passed, best matches the
+    band-passed detector ``z``; the first of equal best scores.  Each score is
+    ``z @ band_pass(_bump(u - v shift) @ loads)`` (the same products as one shift at a
+    time, band-passed :data:`_SHIFT_BLOCK` shifts together)."""
+    shifts = np.arange(0.0, duration, 0.1 / v)
+    best, at = -np.inf, 0.0
+    for start in range(0, shifts.size, _SHIFT_BLOCK):
+        block = shifts[start:start + _SHIFT_BLOCK]
+        layouts = np.empty((u.shape[0], block.size))
+        for j, shift in enumerate(block):
+            layouts[:, j] = _bump(u - v * shift) @ loads
+        # each shift's band-passed layout, one contiguous row each (the dot products of
+        # contiguous vectors, as one shift at a time)
+        passed = np.ascontiguousarray(band_pass(layouts, fs).T)
+        for j, row in enumerate(passed):
+            score = float(z @ row)
+            if score > best:
+                best, at = score, float(block[j])
+    return at
 
 
 def _peak(grid: np.ndarray, k: np.ndarray) -> tuple[float, float]:
