@@ -103,9 +103,9 @@ Contract
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 from collections.abc import Mapping, Sequence
-import dataclasses
 from dataclasses import dataclass, field
 from datetime import date
 from types import MappingProxyType
