@@ -217,6 +217,11 @@ def test_outlier_runs_are_rejected_with_a_reason():
     reasons = {r.index: r.reason for r in cal.rejected}
     assert set(reasons) == {7, 8}
     assert "scale factor" in reasons[7]
+    # the reasons' numbers are the rejecting fit's, and say so: the run's RunFit holds
+    # its factor and misfit against the final lines (review of stop 36: 1.117 quoted
+    # beside a factor of 1.004)
+    assert ", fitted with the runs kept then, departs" in reasons[7], reasons[7]
+    assert "runs kept then" in reasons[8], reasons[8]
     assert cal.runs[7].scale == pytest.approx(1.2, rel=0.02)
     assert cal.kept == tuple(range(7))
     flagged = calibrate_lines([*recs, mp], [*pas, mpp], TRUCK,
@@ -400,3 +405,16 @@ def test_alternation_by_hand_and_the_result_vocabulary():
     # the support estimated: two passes of the fit, each with its own solves
     free = calibrate_lines(recs, pas, TRUCK, outlier=None)
     assert free.nfev > free.nit + 1
+
+
+def test_a_misfit_rejection_says_whose_lines_it_is_against():
+    """Five runs, the last with four times the others' misfit (median 1, robust sd 0):
+    rejected by the misfit rule, its reason quoting the misfit against the lines of the
+    runs kept then (the final lines, fitted without it, give its RunFit another)."""
+    from bwim.wim.outliers import DEFAULT_OUTLIER_RULE, worst_run
+
+    r = worst_run([0, 1, 2, 3, 4], np.array([1.0, 1.0, 1.0, 1.0, 4.0]), None,
+                  np.arange(5.0), DEFAULT_OUTLIER_RULE, None)
+    assert r is not None and r.index == 4
+    assert r.reason.startswith("misfit 4 > 1.5 against the lines of the runs kept then"), \
+        r.reason

@@ -134,7 +134,8 @@ class RunFit:
         Fitted baseline offset of each channel.
     rejected : bool
     reason : str
-        Why the run was rejected ("" when kept).
+        Why the run was rejected ("" when kept); a factor or misfit it quotes is that of
+        the fit that rejected it (the runs kept then), not this RunFit's.
     """
 
     index: int

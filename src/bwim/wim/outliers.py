@@ -138,8 +138,11 @@ def worst_run(kept: Sequence[int], misfit: np.ndarray, scales: np.ndarray | None
     rsd = 1.4826 * float(np.median(np.abs(misfit - med)))
     limit = max(med + rule.misfit * rsd, rule.misfit_floor * med)
     severity = misfit / limit if limit > 0 else np.zeros_like(misfit)
-    why = [f"misfit {m:.3g} > {limit:.3g} (median {med:.3g} + {rule.misfit:g} robust sd "
-           f"{rsd:.3g}, and > {rule.misfit_floor:g} x median)" for m in misfit]
+    # the numbers are those of the fit that rejects the run: the lines fitted again
+    # without it give it another factor and misfit (its RunFit's), which the reason says
+    why = [f"misfit {m:.3g} > {limit:.3g} against the lines of the runs kept then (median "
+           f"{med:.3g} + {rule.misfit:g} robust sd {rsd:.3g}, and > {rule.misfit_floor:g} x "
+           "median)" for m in misfit]
     if scales is not None and len(kept) >= 3:
         dev = robust_departures(times, scales, bandwidth)
         sd = 1.4826 * float(np.median(np.abs(dev)))
@@ -148,8 +151,9 @@ def worst_run(kept: Sequence[int], misfit: np.ndarray, scales: np.ndarray | None
             sev = abs(dev[i]) / lim
             if sev > severity[i]:
                 severity[i] = sev
-                why[i] = (f"scale factor {scales[i]:.4g} departs {100 * dev[i]:+.1f} % from "
-                          f"the runs' robust trend (limit {100 * lim:.1f} %)")
+                why[i] = (f"scale factor {scales[i]:.4g}, fitted with the runs kept then, "
+                          f"departs {100 * dev[i]:+.1f} % from the runs' robust trend "
+                          f"(limit {100 * lim:.1f} %)")
     i = int(np.argmax(severity))
     if severity[i] <= 1.0:
         return None
