@@ -31,6 +31,23 @@ def test_site_setup_needs_the_detectors_distance():
     np.testing.assert_array_equal(s.calibration_loads, [50e3, 100e3])
 
 
+def test_a_setup_of_one_pair_given_by_its_detectors_can_be_replaced():
+    """The one-pair shorthand (``detectors=``, ``distance=``, ``position=``) lives on in
+    ``lanes``: ``dataclasses.replace`` of such a setup keeps its pair (it raised "give
+    lanes or detectors, not both", also inside ``calibrate_site`` with lines linear in
+    the lateral position)."""
+    import dataclasses
+
+    s = SiteSetup(calibration_loads=[50e3, 100e3], calibration_spacings=[4.0],
+                  detectors=("ad1", "ad2"), distance=3.0, position=-2.5, max_spacing=9.0)
+    assert s.detectors is None and s.distance is None
+    linear = dataclasses.replace(s, lateral="linear")
+    assert linear.lanes == s.lanes and linear.lateral == "linear"
+    (pair,) = linear.lanes
+    assert (pair.channels, pair.distance, pair.position, pair.max_spacing) == (
+        ("ad1", "ad2"), 3.0, -2.5, 9.0)
+
+
 def test_weigh_refuses_two_records_of_one_name(tmp_path, capsys):
     scenario = tmp_path / "site.toml"
     scenario.write_text('[logger]\ncolumns = ["time", "s01"]\n[[sensors]]\nname = ["s01"]\n'

@@ -902,7 +902,7 @@ def _first_support(records: Sequence[Record], setup: SiteSetup, reasons: Sequenc
     # one line per gauge whatever ``setup.lateral``: the span is where the lines are
     # non-zero, which a lateral slope does not move; fitted to runs that may still hold a
     # vehicle no detector saw, that slope's freedom only lets it draw the span off
-    plain = dataclasses.replace(setup, lateral=None)
+    plain = setup if setup.lateral is None else dataclasses.replace(setup, lateral=None)
     try:
         return _site_calibration(records, plain, [Detection()] * len(records), reasons,
                                  passages, kept, events).lines.support

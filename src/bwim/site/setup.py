@@ -139,7 +139,8 @@ class SiteSetup:
     calibration_lane : int, optional
         The lane the calibration truck drives (default: the first detector lane's).
     detectors, distance, position, max_spacing
-        One lane's pair, as before ``lanes`` (lane 1, +x).
+        One lane's pair, as before ``lanes`` (lane 1, +x): made into ``lanes``, these
+        then read None (``position`` 0).
     combine : str
         How the gauges are combined (:func:`bwim.wim.weigh`): ``"auto"``, ``"gls"``,
         ``"blue"`` or ``"sum"``.
@@ -190,6 +191,11 @@ class SiteSetup:
             lanes = (DetectorLane(channels=tuple(self.detectors), distance=self.distance,
                                   position=require_finite("position", self.position),
                                   max_spacing=self.max_spacing),)
+            # the shorthand lives on in ``lanes`` alone: a setup is then one the lanes form
+            # gives, and dataclasses.replace of it does not give both
+            for name, value in (("detectors", None), ("distance", None), ("position", 0.0),
+                                ("max_spacing", None)):
+                object.__setattr__(self, name, value)
         for k, ln in enumerate(lanes):
             if not isinstance(ln, DetectorLane):
                 raise InputError(f"lanes[{k}] must be a DetectorLane, got {type(ln).__name__}")
