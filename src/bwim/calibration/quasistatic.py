@@ -315,7 +315,7 @@ def moving_force_columns(bridge: Bridge, sensors, x: np.ndarray, y: np.ndarray,
         phi_w = np.zeros((xs.size, modes.n))
         if np.any(on):
             rows = model.point_rows(xs[on], ys[on] if bridge.is_plate else None)
-            phi_w[on] = np.einsum("pk,pkm->pm", rows.vals, modes.shapes[rows.dofs])
+            phi_w[on] = rows.interpolate(modes.shapes)
         phi_w = phi_w.reshape(n_t, n_w, modes.n) * P[None, :, None]
         fm = _group_sum(phi_w, group, n_groups)
         eps = bridge.sensor_matrix(sensors) @ modes.shapes  # (s, m)

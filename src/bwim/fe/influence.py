@@ -21,7 +21,6 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.sparse
 
 from bwim.errors import InputError
 from bwim.sensors import Sensor
@@ -62,13 +61,7 @@ class InfluenceSurfaces:
         out = np.zeros((x.size, self.g.shape[1]))
         if np.any(on):
             rows = model.point_rows(x[on], None if y is None else y[on])
-            # Σ_k N_pk g[dof_pk] as a sparse product: the numbers of
-            # einsum("pk,pks->ps", vals, g[dofs]) without gathering a (p, k, s) array
-            p, k = rows.vals.shape
-            shape = (p, self.g.shape[0])
-            n = scipy.sparse.csr_matrix((rows.vals.ravel(), rows.dofs.ravel(),
-                                         np.arange(0, p * k + 1, k)), shape=shape)
-            out[on] = n @ self.g
+            out[on] = rows.interpolate(self.g)
         return out
 
     def response(self, x: np.ndarray, y: np.ndarray | None, P: np.ndarray) -> np.ndarray:

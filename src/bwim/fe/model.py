@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 from enum import StrEnum
 
 import numpy as np
+import scipy.sparse
 
 from bwim.errors import InputError, parse_enum
 from bwim.fe.assembly import Assembler, ElementSet
@@ -117,6 +118,18 @@ class PointRows:
     dofs: np.ndarray
     vals: np.ndarray
     slopes: np.ndarray | None = None
+
+    def interpolate(self, fields: np.ndarray) -> np.ndarray:
+        """``Σ_k vals[p, k] fields[dofs[p, k]]`` for every point ``p``, shape (n, m), of
+        nodal ``fields`` (n_free, m): the deflection at the points of m displacement
+        fields (mode shapes, influence surfaces).  As a sparse product: the numbers of
+        ``einsum("pk,pkm->pm", vals, fields[dofs])`` without gathering an (n, k, m)
+        array."""
+        n, k = self.vals.shape
+        rows = scipy.sparse.csr_matrix(
+            (self.vals.ravel(), self.dofs.ravel(), np.arange(0, n * k + 1, k)),
+            shape=(n, fields.shape[0]))
+        return rows @ fields
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)
