@@ -62,3 +62,14 @@ def small_site_truck(small_site_calibrated):
     with open(day.reference, newline="") as f:
         ref = next(r for r in csv.DictReader(f) if r["lane"] == "1")
     return site, load_record(day.out_dir / "traffic" / ref["record"], scenario)
+
+
+@pytest.fixture(scope="session")
+def seed31_site(tmp_path_factory):
+    """Seed 31's short-span-4-lane day with one traffic file (the bench_realsite site:
+    twelve calibration runs, six of them with a lane-3 vehicle crossing; a 0.5 m mesh;
+    about 5 s), made once per session: tests read its files and write nowhere in it."""
+    from bwim.synthetic import make_test_day
+
+    return make_test_day(tmp_path_factory.mktemp("seed31") / "day", site="short-span-4-lane",
+                         seed=31, n_traffic=1, n_calibration_day_traffic=0, mesh=0.5)

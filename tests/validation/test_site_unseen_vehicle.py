@@ -29,9 +29,8 @@ from bwim.wim.influence_line import read_channels
 
 
 @pytest.fixture(scope="module")
-def runs(tmp_path_factory):
-    day = make_test_day(tmp_path_factory.mktemp("unseen") / "day", site="short-span-4-lane",
-                        seed=31, n_traffic=1, n_calibration_day_traffic=0, mesh=0.5)
+def runs(seed31_site):
+    day = seed31_site
     scenario = load_scenario(day.scenario)
     with open(day.truth, newline="", encoding="utf-8") as f:
         lanes: dict[str, list[str]] = {}
