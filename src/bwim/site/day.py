@@ -18,7 +18,8 @@ Contract
   4. the counted vehicles' speeds (:func:`bwim.site.speeds.drop_speed_outliers`): a
      vehicle not weighed whose speed is far from its lane's traffic around it in time
      is a trace of another vehicle (the span's bending, another truck's axles), and is
-     left out of the rows;
+     left out of the rows (a record left without a row keeps one, refused, that says
+     so);
   5. the vehicles split across two records (:func:`bwim.site.split.refuse_split_vehicles`):
      two vehicles of one lane and direction from two records, the rear one's first axle
      closer to the front one's last than two vehicles following each other can be, are
@@ -58,7 +59,8 @@ class DayResult:
     Attributes
     ----------
     rows : tuple of SummaryRow
-        Every row, in the input's order, less the traces ``speeds`` left out.
+        Every row, in the input's order, less the traces ``speeds`` left out (each
+        record keeps a row).
     faults : FaultCheck
         The day's count of each gauge's faults and the rows refused for faults it does
         not confirm.

@@ -23,6 +23,9 @@ Contract
   of the rows (it is no vehicle); the others are returned unchanged, in order.  A lane
   and direction with fewer than ``min_vehicles`` (:data:`bwim.site.wander.MIN_VEHICLES`)
   rows with a speed and a time is not judged.
+* A record every row of which is left out keeps one row in their place: ``"refused"``,
+  no vehicle, its first left-out row's time, reason :data:`NO_VEHICLE` (a summary has a
+  row for every record it was given).
 * A weighed row flagged ``multiple_presence`` whose record holds no other row once the
   left-out ones are gone loses that flag: the site chain weighs a vehicle with another on
   the span only when the other travels the other way (:mod:`bwim.site.event`), and here
@@ -51,7 +54,12 @@ from bwim.records import local_seconds, seconds_of_day
 from bwim.site.wander import MIN_VEHICLES
 from bwim.summary import SummaryRow
 
-__all__ = ["NEIGHBOURS", "SIGMA_FLOOR", "SPEED_Z", "SpeedCheck", "drop_speed_outliers"]
+__all__ = ["NEIGHBOURS", "NO_VEHICLE", "SIGMA_FLOOR", "SPEED_Z", "SpeedCheck",
+           "drop_speed_outliers"]
+
+#: The reason of the row a record keeps when every vehicle read in it was a trace.
+NO_VEHICLE = ("no vehicle: what was read in it is a trace of another vehicle (its speed far "
+              "from its lane's traffic around it)")
 
 #: The vehicles of the same lane and direction nearest in time that a vehicle's speed is
 #: judged against (about the traffic of a few minutes on a busy road).
@@ -72,7 +80,8 @@ class SpeedCheck:
     Attributes
     ----------
     rows : tuple of SummaryRow
-        The input rows less those left out, in order.
+        The input rows less those left out, in order (a record left without a row keeps
+        one, refused with :data:`NO_VEHICLE`, where its first row was).
     dropped : tuple of SummaryRow
         The rows left out, in order.
     limit : float
@@ -133,12 +142,19 @@ def drop_speed_outliers(rows: Sequence[SummaryRow], *, limit: float = SPEED_Z,
             sigma = max(robust_sigma(v[near]), SIGMA_FLOOR * abs(m))
             if sigma > 0 and abs(v[j] - m) / sigma > limit:
                 drop.add(int(k))
-    kept = [r for k, r in enumerate(rows) if k not in drop]
     dropped = tuple(rows[k] for k in sorted(drop))
     traced = {r.record for r in dropped}
-    left = Counter(r.record for r in kept)
-    kept = [_alone(r) if (r.record in traced and left[r.record] == 1 and r.weighed
-                          and FLAG_MULTIPLE_PRESENCE in r.flags) else r for r in kept]
+    left = Counter(r.record for k, r in enumerate(rows) if k not in drop)
+    kept, emptied = [], set()
+    for k, r in enumerate(rows):
+        if k not in drop:
+            kept.append(_alone(r) if (r.record in traced and left[r.record] == 1 and r.weighed
+                                      and FLAG_MULTIPLE_PRESENCE in r.flags) else r)
+        elif left[r.record] == 0 and r.record not in emptied:
+            # every row of the record was a trace: the record keeps one row, which says so
+            emptied.add(r.record)
+            kept.append(SummaryRow(record=r.record, status="refused", time=r.time,
+                                   reason=NO_VEHICLE))
     return SpeedCheck(rows=tuple(kept), dropped=dropped, limit=limit)
 
 
