@@ -89,7 +89,10 @@ Contract
   :data:`RUN_GAUGE_SNR` times out of its noise.  A run whose ratio is negative or off by
   more than :data:`~bwim.site.health.GAIN_TOLERANCE` is left out with the gauge named,
   and the lines are fitted again without it.  With only two runs seeing the gauge, a
-  disagreement cannot be attributed: InputError, asking for more runs.
+  disagreement cannot be attributed: InputError, asking for more runs.  After a run is
+  left out (by this judge or the moving load's), the runs left are judged again, by both,
+  until neither leaves one out: two runs left that disagree are refused as they are when
+  given alone.
 * **A gauge clipped or drifting in one run**, in the same pass: a run in which a gauge is
   held at a rail (:func:`bwim.site.health.check_gauges`' clipping test on the run and its
   passage) is left out naming the gauge; a run in which a gauge's baseline changes (its
@@ -295,6 +298,8 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
                          f"{type(records[bad]).__name__}")
     _check_distinct(records)
     _check_loads(setup)
+    if setup.lateral == "linear":
+        _check_lateral_metres(records)
     if not setup.lanes:
         if int(strain_passes) < 0:
             raise InputError(f"strain_passes must be >= 0, got {strain_passes!r}")
@@ -337,15 +342,20 @@ def calibrate_site(records: Sequence[Record], setup: SiteSetup, *,
                             events)
     # a run whose load moved across the deck (another vehicle shared the span), then a
     # run whose gauge disagrees with the same gauge in the others: out, the lines fitted
-    # again (each run's reason is then the new fit's)
-    for judge in (_moving_load_runs, _faulty_gauge_runs):
-        out = judge(records, setup, cal, passages, kept)
-        if out:
-            reasons = [out.get(k, why) for k, why in enumerate(reasons)]
-            keep = [i for i, k in enumerate(kept) if k not in out]
-            passages, kept = [passages[i] for i in keep], [kept[i] for i in keep]
-            cal = _site_calibration(records, setup, lane_detections, reasons, passages,
-                                    kept)
+    # again (each run's reason is then the new fit's), and the runs left judged again by
+    # both until neither leaves one out (two runs left that disagree are refused)
+    judged = False
+    while not judged:
+        judged = True
+        for judge in (_moving_load_runs, _faulty_gauge_runs):
+            out = judge(records, setup, cal, passages, kept)
+            if out:
+                judged = False
+                reasons = [out.get(k, why) for k, why in enumerate(reasons)]
+                keep = [i for i, k in enumerate(kept) if k not in out]
+                passages, kept = [passages[i] for i in keep], [kept[i] for i in keep]
+                cal = _site_calibration(records, setup, lane_detections, reasons,
+                                        passages, kept)
     _check_spacings(events, cal.reasons, setup)
     _check_scales(records, cal)
     _check_load_order(records, passages, kept, cal.lines, setup)
@@ -417,7 +427,8 @@ def _faulty_gauge_runs(records: Sequence[Record], setup: SiteSetup, cal: _Lines,
                 raise InputError(
                     f"gauge {name} disagrees between the only two calibration runs that "
                     f"see it (runs {runs[seen[0]] + 1} and {runs[seen[1]] + 1}, gain ratio "
-                    f"{q:.2f}): one of them has a faulty gauge; give more runs")
+                    f"{q:.2f}): one of them has a faulty gauge, or another vehicle on the span "
+                    "with its truck; give more runs")
             continue
         ref = float(np.median(col[seen]))
         for i in seen:
@@ -632,6 +643,23 @@ def _refuse_reversed(declared: float, reversed_: float) -> None:
             f"reverse order (relative residual {reversed_:.3f} against {declared:.3f} as "
             "declared): give [vehicle] axle_loads from the first axle to the last, in the "
             "truck's direction of travel, as axle_spacings")
+
+
+def _check_lateral_metres(records: Sequence[Record]) -> None:
+    """Lines linear in the lateral position need that position in metres: every gauge
+    with its ``y``, not all one (:func:`bwim.detect.lateral_position`).  A lateral index
+    in gauge order (the other case) depends on each vehicle's wheels and loads as much as
+    on where it drives: on basic-2-lane (gauges without ``y``), lines linear in it
+    weighed lane-1 trucks driving within the runs' lateral range 12-42 % low, flagged
+    ``lateral_extrapolated`` at most (review of stop 37)."""
+    for k, rec in enumerate(records):
+        ys = [s.y for s in rec.sensors if s.kind.is_structural]
+        if len(ys) < 2 or any(y is None for y in ys) or max(ys) <= min(ys):
+            raise InputError(
+                f"lateral = 'linear' needs every gauge's y (m, not all one), which "
+                f"records[{k}]'s sensors do not give: a lateral index in gauge order is no "
+                "position to make lines linear in; give the gauges' y or leave lateral "
+                "unset")
 
 
 def _check_distinct(records: Sequence[Record]) -> None:

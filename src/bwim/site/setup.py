@@ -145,7 +145,9 @@ class SiteSetup:
         How the gauges are combined (:func:`bwim.wim.weigh`): ``"auto"``, ``"gls"``,
         ``"blue"`` or ``"sum"``.
     lateral : str or None
-        ``"linear"``: lines linear in the lateral position; None: one line per gauge.
+        ``"linear"``: lines linear in the lateral position (in metres: every gauge needs
+        its ``y``, else :func:`~bwim.site.calibrate_site` refuses it); None: one line per
+        gauge.
     support_lobes : bool
         The lines keep a lobe beyond their first zeros (a slab continuous over its
         supports: :func:`bwim.wim.calibrate_lines`' ``support_lobes``); a record may end
