@@ -46,6 +46,13 @@ def test_a_setup_of_one_pair_given_by_its_detectors_can_be_replaced():
     (pair,) = linear.lanes
     assert (pair.channels, pair.distance, pair.position, pair.max_spacing) == (
         ("ad1", "ad2"), 3.0, -2.5, 9.0)
+    # the shorthand's fields replaced on their own would leave the pair as it was: refused
+    # (review of stop 37: distance=4.0 read back 4.0 while the pair kept 3.0)
+    for field, value in (("distance", 4.0), ("position", 1.0), ("max_spacing", 20.0)):
+        with pytest.raises(InputError, match="go with detectors="):
+            dataclasses.replace(s, **{field: value})
+    again = dataclasses.replace(s, detectors=("ad1", "ad2"), distance=4.0, lanes=())
+    assert again.lanes[0].distance == 4.0
 
 
 def test_weigh_refuses_two_records_of_one_name(tmp_path, capsys):

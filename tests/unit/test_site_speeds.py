@@ -54,11 +54,12 @@ def test_a_trace_is_left_out_and_the_traffic_kept(lane3):
 
 def test_a_record_whose_every_vehicle_was_a_trace_keeps_a_row_saying_so(lane3):
     """The trace's record held nothing else: it keeps one refused row, with no weights,
-    no lane and the reason, where the trace was (review of stop 37: `bwim weigh` of the
-    800 records of seed 31's bench day wrote 793 rows, the 7 records whose only vehicle
-    read was a trace missing from summary.csv).  A record with another row keeps that
-    row alone."""
-    trace = _row(500, 7.0, minutes=60.5)
+    no lane, the trace's flags and the reason, where the trace was (review of stop 37:
+    `bwim weigh` of the 800 records of seed 31's bench day wrote 793 rows, the 7 records
+    whose only vehicle read was a trace missing from summary.csv).  A record with
+    another row keeps that row alone."""
+    trace = SummaryRow(**{**_row(500, 7.0, minutes=60.5).__dict__,
+                          "flags": ("truncated", "multiple_presence")})
     fast = _row(501, 36.0, minutes=80.5)
     other = SummaryRow(**{**_row(502, 22.0, minutes=80.5).__dict__, "record": fast.record,
                           "vehicle": 2})
@@ -69,6 +70,7 @@ def test_a_record_whose_every_vehicle_was_a_trace_keeps_a_row_saying_so(lane3):
     kept = check.rows[60]
     assert (kept.status, kept.reason, kept.gvw, kept.lane, kept.speed, kept.time) == (
         "refused", NO_VEHICLE, None, None, None, trace.time)
+    assert kept.flags == ("truncated", "multiple_presence")
     assert check.rows[-1] is other
 
 

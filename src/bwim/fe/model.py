@@ -123,8 +123,8 @@ class PointRows:
         """``Σ_k vals[p, k] fields[dofs[p, k]]`` for every point ``p``, shape (n, m), of
         nodal ``fields`` (n_free, m): the deflection at the points of m displacement
         fields (mode shapes, influence surfaces).  As a sparse product: the numbers of
-        ``einsum("pk,pkm->pm", vals, fields[dofs])`` without gathering an (n, k, m)
-        array."""
+        ``einsum("pk,pkm->pm", vals, fields[dofs])`` (bit for bit with two fields or
+        more, to rounding with one) without gathering an (n, k, m) array."""
         n, k = self.vals.shape
         rows = scipy.sparse.csr_matrix(
             (self.vals.ravel(), self.dofs.ravel(), np.arange(0, n * k + 1, k)),

@@ -140,7 +140,8 @@ class SiteSetup:
         The lane the calibration truck drives (default: the first detector lane's).
     detectors, distance, position, max_spacing
         One lane's pair, as before ``lanes`` (lane 1, +x): made into ``lanes``, these
-        then read None (``position`` 0).
+        then read None (``position`` 0); without ``detectors`` they are refused (with
+        ``lanes`` each :class:`DetectorLane` has its own).
     combine : str
         How the gauges are combined (:func:`bwim.wim.weigh`): ``"auto"``, ``"gls"``,
         ``"blue"`` or ``"sum"``.
@@ -198,6 +199,10 @@ class SiteSetup:
             for name, value in (("detectors", None), ("distance", None), ("position", 0.0),
                                 ("max_spacing", None)):
                 object.__setattr__(self, name, value)
+        elif self.distance is not None or self.position != 0.0 or self.max_spacing is not None:
+            # (also dataclasses.replace of a one-pair setup, whose pair is in lanes now)
+            raise InputError("distance, position and max_spacing go with detectors= (one "
+                             "pair); with lanes, give them to each DetectorLane")
         for k, ln in enumerate(lanes):
             if not isinstance(ln, DetectorLane):
                 raise InputError(f"lanes[{k}] must be a DetectorLane, got {type(ln).__name__}")
@@ -230,9 +235,6 @@ class SiteSetup:
                 raise InputError(f"lane {ln.number} travels {ln.direction} in traffic_lanes "
                                  f"but {pairs[ln.number]} at its axle detectors")
         object.__setattr__(self, "traffic_lanes", traffic)
-        if self.max_spacing is not None:
-            object.__setattr__(self, "max_spacing",
-                               require_positive("max_spacing", self.max_spacing))
         if self.combine not in ("auto", "gls", "blue", "sum"):
             raise InputError(f"combine must be auto, gls, blue or sum, got {self.combine!r}")
         if self.lateral not in (None, "linear"):

@@ -24,8 +24,8 @@ Contract
   and direction with fewer than ``min_vehicles`` (:data:`bwim.site.wander.MIN_VEHICLES`)
   rows with a speed and a time is not judged.
 * A record every row of which is left out keeps one row in their place: ``"refused"``,
-  no vehicle, its first left-out row's time, reason :data:`NO_VEHICLE` (a summary has a
-  row for every record it was given).
+  no vehicle, its first left-out row's time, the left-out rows' flags, reason
+  :data:`NO_VEHICLE` (a summary has a row for every record it was given).
 * A weighed row flagged ``multiple_presence`` whose record holds no other row once the
   left-out ones are gone loses that flag: the site chain weighs a vehicle with another on
   the span only when the other travels the other way (:mod:`bwim.site.event`), and here
@@ -57,9 +57,10 @@ from bwim.summary import SummaryRow
 __all__ = ["NEIGHBOURS", "NO_VEHICLE", "SIGMA_FLOOR", "SPEED_Z", "SpeedCheck",
            "drop_speed_outliers"]
 
-#: The reason of the row a record keeps when every vehicle read in it was a trace.
-NO_VEHICLE = ("no vehicle: what was read in it is a trace of another vehicle (its speed far "
-              "from its lane's traffic around it)")
+#: The reason of the row a record keeps when every vehicle read in it was left out as a
+#: trace (what was read may also be a vehicle of its own misread: none is counted).
+NO_VEHICLE = ("not counted: every vehicle read in it was left out as a trace of another "
+              "vehicle (its speed far from its lane's traffic around it)")
 
 #: The vehicles of the same lane and direction nearest in time that a vehicle's speed is
 #: judged against (about the traffic of a few minutes on a busy road).
@@ -152,9 +153,11 @@ def drop_speed_outliers(rows: Sequence[SummaryRow], *, limit: float = SPEED_Z,
                                       and FLAG_MULTIPLE_PRESENCE in r.flags) else r)
         elif left[r.record] == 0 and r.record not in emptied:
             # every row of the record was a trace: the record keeps one row, which says so
+            # (with the left-out rows' flags)
             emptied.add(r.record)
+            flags = dict.fromkeys(f for d in dropped if d.record == r.record for f in d.flags)
             kept.append(SummaryRow(record=r.record, status="refused", time=r.time,
-                                   reason=NO_VEHICLE))
+                                   flags=tuple(flags), reason=NO_VEHICLE))
     return SpeedCheck(rows=tuple(kept), dropped=dropped, limit=limit)
 
 
