@@ -13,6 +13,7 @@ influence lines on 250+ trucks, is ``benchmarks/bench_site_model.py``.
 
 import csv
 import dataclasses
+import re
 
 import numpy as np
 import pytest
@@ -191,7 +192,12 @@ def test_model_file_round_trip(fitted, tmp_path):
             (re.sub(r"tolerance = \S+", "tolerance = 5.0", text, count=1), "tolerance must"),
             (re.sub(r"\norigin = \S+", "\norigin = nan", text, count=1), "origin must"),
             (re.sub(r"model_error = \S+", "model_error = -5.0", text, count=1),
-             "model_error must not be negative")):
+             "model_error must not be negative"),
+            # a value the self-check did not judge (review of stop 37: E_x doubled by hand
+            # weighed every vehicle 1.85 times too heavy), and a file without its digest
+            (re.sub(r"\nE_x = \S+", "\nE_x = 60000000000.0", text, count=1),
+             "not those its self-check judged"),
+            (re.sub(r"\ndigest = \S+", "", text, count=1), "not those its self-check")):
         bad = tmp_path / "bad.toml"
         bad.write_text(changed)
         with pytest.raises(InputError, match=words):
@@ -235,6 +241,13 @@ def test_the_residual_limit_counts_the_noise_and_the_models_error(fitted):
     assert model.residual_limit(noise) == pytest.approx(
         RESIDUAL_FACTOR * np.hypot(noise_share(noise), model.model_error))
     assert SiteModel.of_bridge(model.bridge).residual_limit(noise) == MAX_RESIDUAL
+    # lighter than the truck: the model's error grows as √(truck / weight), the ratio at
+    # most 4 (review of stop 37: a vehicle weighed at an eighth of its weight raised its
+    # own limit past its residual)
+    truck = model.truck_weight
+    for weight, ratio in ((truck, 1.0), (truck / 2, 2.0), (truck / 4, 4.0), (truck / 40, 4.0)):
+        assert model.residual_limit(noise, weight) == pytest.approx(
+            RESIDUAL_FACTOR * np.hypot(noise_share(noise), model.model_error * ratio**0.5))
 
 
 def test_the_models_residual_limit_decides_the_weighing(fitted):
@@ -331,7 +344,9 @@ def test_a_model_weighs_only_with_the_runs_and_gauges_it_was_made_from(fitted, t
     (name and position) a model was made from; ``bwim weigh --bridge`` refuses other runs
     (the logger's scale changed: the model weighed the truck +24 %) or another scenario's
     gauges (a gauge's x moved: +14 %), in one line, before anything is written (review of
-    stop 33: both were weighed)."""
+    stop 33: both were weighed).  The truck's declared loads and the logger's scale count
+    too (review of stop 37: with the truck +10 % the MFI weights stayed as they were, with
+    the scale × 1.1 they rose 10 %, both written as weights)."""
     import shutil
 
     from bwim.cli import main
@@ -349,15 +364,26 @@ def test_a_model_weighs_only_with_the_runs_and_gauges_it_was_made_from(fitted, t
     first = sorted(other.iterdir())[0]
     lines = first.read_text().splitlines(keepends=True)
     first.write_text("".join(lines[:-1]))  # one sample less: another file
+    text = day.scenario.read_text()
     moved = tmp_path / "scenario.toml"
-    moved.write_text(day.scenario.read_text().replace("x = 3.0", "x = 2.0", 1))
+    moved.write_text(text.replace("x = 3.0", "x = 2.0", 1))
+    loads = re.search(r"axle_loads = \[([^]]*)\]", text)
+    heavier = tmp_path / "heavier.toml"
+    heavier.write_text(text.replace(loads.group(0), "axle_loads = [" + ", ".join(
+        f"{1.1 * float(v):.1f}" for v in loads.group(1).split(",")) + "]"))
+    scaled = tmp_path / "scaled.toml"
+    scaled.write_text(text.replace("[logger]\n", "[logger]\nscale = 1.1\n", 1))
+    assert scaled.read_text() != text
     for scen, cal, words in ((day.scenario, other, f"it was made with 'run {first.name}"),
-                             (moved, day.out_dir / "calibration", "'gauge s01 x=3.0")):
+                             (moved, day.out_dir / "calibration", "'gauge s01 strain_x x=3.0"),
+                             (heavier, day.out_dir / "calibration", "'truck axle loads"),
+                             (scaled, day.out_dir / "calibration", 'made with "logger columns')):
         out = tmp_path / "out"
         code = main(["weigh", str(scen), str(day.out_dir / "traffic"),
                      "--calibration-records", str(cal), "--bridge", str(path),
                      "-o", str(out)])
         err = capsys.readouterr().err.strip().splitlines()
         assert code == 2 and len(err) == 1 and words in err[0], err
-        assert "calibrated from other calibration runs or gauges" in err[0]
+        assert "calibrated from other calibration runs or gauges than these, or another "\
+               "truck or logger setting" in err[0]
         assert not out.exists() or not any(out.iterdir())

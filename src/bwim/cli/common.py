@@ -255,9 +255,13 @@ class CalibrationProgress:
 
 def site_provenance(calibration: Sequence[Path], scenario) -> tuple[str, ...]:
     """What a site model is made from (:attr:`bwim.site.SiteModel.provenance`): each
-    calibration run's file by name and content digest, in name order, and each gauge of
-    the scenario by name and position."""
-    from bwim.scenario import build_sensors
+    calibration run's file by name and content digest, in name order, each gauge of the
+    scenario by name, kind and position, the calibration truck (axle loads and spacings)
+    and how the logger's files are read (columns and scale factors): a model made with
+    other loads weighs in their proportion, and one whose readings another scale turns
+    reads them off by it (review of stop 37: the truck +10 % or the scale × 1.1 left the
+    MFI weights as they were, or +10 %)."""
+    from bwim.scenario import build_logger_format, build_sensors, build_site_setup
 
     runs = []
     for p in sorted(calibration, key=lambda q: q.name):
@@ -266,14 +270,21 @@ def site_provenance(calibration: Sequence[Path], scenario) -> tuple[str, ...]:
             for block in iter(lambda: f.read(1 << 20), b""):
                 digest.update(block)
         runs.append(f"run {p.name} sha256:{digest.hexdigest()[:16]}")
-    gauges = [f"gauge {g.name} x={g.x!r} y={g.y!r}" for g in build_sensors(scenario)
-              if g.kind.is_structural]
-    return (*runs, *gauges)
+    gauges = [f"gauge {g.name} {g.kind.value} x={g.x!r} y={g.y!r}"
+              for g in build_sensors(scenario) if g.kind.is_structural]
+    setup = build_site_setup(scenario)
+    truck = (f"truck axle loads {[float(v) for v in setup.calibration_loads]!r} N, "
+             f"spacings {[float(v) for v in setup.calibration_spacings]!r} m")
+    fmt = build_logger_format(scenario)
+    logger = (f"logger columns {list(fmt.columns)!r} scales "
+              f"{[float(v) for v in fmt.scales]!r}")
+    return (*runs, *gauges, truck, logger)
 
 
 def refuse_other_provenance(model, calibration: Sequence[Path], scenario) -> None:
-    """Refuse a site model made from other calibration runs or gauges than these (one
-    line naming the first difference); a model without a record passes."""
+    """Refuse a site model made from other calibration runs, gauges, truck or logger
+    settings than these (one line naming the first difference); a model without a record
+    passes."""
     made = tuple(getattr(model, "provenance", ()))
     if not made:
         return
@@ -284,5 +295,6 @@ def refuse_other_provenance(model, calibration: Sequence[Path], scenario) -> Non
         first = (f"it was made with {missing[0]!r}" if missing else
                  f"it was not made with {extra[0]!r}")
         raise InputError(f"the site model was calibrated from other calibration runs or "
-                         f"gauges than these ({first}): calibrate it again "
-                         "(bwim calibrate), or give its own runs and scenario")
+                         f"gauges than these, or another truck or logger setting ({first}): "
+                         "calibrate it again (bwim calibrate), or give its own runs and "
+                         "scenario")

@@ -7,9 +7,12 @@ Contract
   table: ``channels`` and their ``gains`` (logger units per unit strain), ``origin`` and
   ``lateral`` (m), ``track_width`` (m), ``tolerance``, ``accepted`` and ``reason``,
   ``weighing_scale``, ``model_error`` and ``truck_weight`` (N), ``provenance`` (what it
-  was made from: :attr:`~bwim.site.SiteModel.provenance`), and the self-check's ``runs``
-  (``index`` from 1, ``explained``, ``gvw_error``, ``reason``).
-  Floats are written with :func:`repr`: a saved model reads back bit for bit.
+  was made from: :attr:`~bwim.site.SiteModel.provenance`), the self-check's ``runs``
+  (``index`` from 1, ``explained``, ``gvw_error``, ``reason``) and a ``digest`` of all
+  that and the bridge.  Floats are written with :func:`repr`: a saved model reads back bit
+  for bit.
+* An accepted model is loaded only when its self-check accepts it and its values are
+  those the self-check judged (the digest): a model edited by hand is refused.
 * :func:`load_site_model` reads it back (``fit`` is None: the fit's details stay with the
   run that made it).  :func:`load_model` reads either such a file (a ``SiteModel``) or any
   bridge or scenario file (a :class:`~bwim.fe.bridge.Bridge`), for ``--bridge``.
@@ -17,6 +20,7 @@ Contract
 
 from __future__ import annotations
 
+import hashlib
 import math
 import os
 from typing import Any
@@ -34,13 +38,13 @@ from bwim.site.model import ModelRun, SiteModel
 __all__ = ["load_model", "load_site_model", "save_site_model"]
 
 _KEYS = ("channels", "gains", "origin", "lateral", "track_width", "tolerance", "accepted",
-         "reason", "weighing_scale", "model_error", "truck_weight", "provenance", "runs")
+         "reason", "weighing_scale", "model_error", "truck_weight", "provenance", "runs",
+         "digest")
 
 
-def save_site_model(model: SiteModel, path: str | os.PathLike, *, title: str = "") -> None:
-    """Write ``model`` (module contract), atomically."""
-    doc = scenario_to_dict(Scenario(bridge=bridge_spec(model.bridge), title=title))
-    table: dict[str, Any] = {
+def _table(model: SiteModel) -> dict[str, Any]:
+    """The ``[site_model]`` table of ``model``, without its digest."""
+    return {
         "channels": list(model.gains), "gains": [float(g) for g in model.gains.values()],
         "origin": float(model.origin), "lateral": float(model.lateral),
         "track_width": None if model.track_width is None else float(model.track_width),
@@ -52,7 +56,20 @@ def save_site_model(model: SiteModel, path: str | os.PathLike, *, title: str = "
         "runs": [{"index": r.index + 1, "explained": float(r.explained),
                   "gvw_error": float(r.gvw_error), "reason": r.reason} for r in model.runs],
     }
-    doc["site_model"] = table
+
+
+def _digest(model: SiteModel) -> str:
+    """A digest of everything the model weighs with and its self-check's verdict: the
+    bridge's exact parameters and the ``[site_model]`` values (the title aside)."""
+    doc = scenario_to_dict(Scenario(bridge=bridge_spec(model.bridge)))
+    doc["site_model"] = _table(model)
+    return "sha256:" + hashlib.sha256(to_toml(doc).encode("utf-8")).hexdigest()[:32]
+
+
+def save_site_model(model: SiteModel, path: str | os.PathLike, *, title: str = "") -> None:
+    """Write ``model`` (module contract), atomically."""
+    doc = scenario_to_dict(Scenario(bridge=bridge_spec(model.bridge), title=title))
+    doc["site_model"] = {**_table(model), "digest": _digest(model)}
     header = ("bwim site model: the bridge calibrated from logger files, the logger's gains "
               "and the axle detectors' frame.\nWeigh with: bwim weigh SITE.toml traffic/ "
               "--calibration-records calibration/ --bridge THIS.toml")
@@ -115,6 +132,12 @@ def load_model(path: str | os.PathLike) -> SiteModel | Bridge:
                    f"run {bad.index + 1}: {bad.reason or f'GVW error {bad.gvw_error:+.3f}'}")
             raise InputError(f"{src}: accepted = true, but its self-check does not accept "
                              f"it ({why}, tolerance {model.tolerance:g})")
+        # ... and the values it judged: a bridge or gain edited since weighs unchecked
+        # (review of stop 37: E_x doubled by hand, every weight 1.85 times too high)
+        if table.get("digest") != _digest(model):
+            raise InputError(f"{path}: its values are not those its self-check judged (no "
+                             "digest, or another): calibrate it again (bwim calibrate) "
+                             "rather than edit it")
     return model
 
 
