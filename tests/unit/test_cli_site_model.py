@@ -38,3 +38,20 @@ def test_calibrate_refuses_a_bad_option_in_one_line(small_site, tmp_path, capsys
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1 and named in err[0]
     assert not out.exists()
+
+
+def test_calibrate_refuses_to_save_the_model_among_its_runs(small_site, tmp_path, capsys):
+    """``bwim calibrate SITE cal/ -o cal/site-model.toml`` (review of stop 37): a logger's
+    records folder takes any file, so the model would be read as a calibration run next
+    time, and the model then refused as made from other runs.  Refused in one line before
+    any work, nothing written."""
+    import shutil
+
+    cal = tmp_path / "calibration"
+    shutil.copytree(small_site.out_dir / "calibration", cal)
+    before = sorted(p.name for p in cal.iterdir())
+    code = main(["calibrate", str(small_site.scenario), str(cal), "-o",
+                 str(cal / "site-model.toml")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "is the input folder" in err[0], err
+    assert sorted(p.name for p in cal.iterdir()) == before

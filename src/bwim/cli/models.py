@@ -62,6 +62,7 @@ def simulate_command(args: argparse.Namespace) -> int:
 # --- calibrate -------------------------------------------------------------------------------
 def calibrate_command(args: argparse.Namespace) -> int:
     from bwim.calibration import MassSource, calibrate
+    from bwim.io.outputs import refuse_output_in_inputs
     from bwim.scenario import build_bridge, build_road, build_vehicle, load_scenario, save_bridge
 
     check_jobs(args.jobs)
@@ -70,6 +71,9 @@ def calibrate_command(args: argparse.Namespace) -> int:
     out = out_file(args.output, (".toml",), inputs=[args.scenario, *paths],
                     force=args.force)
     if scenario.logger is not None:
+        # (a logger's records folder takes any file: a model saved there is read as a run
+        # next time, and the model then refused as made from other runs)
+        refuse_output_in_inputs(out.parent, args.records)
         return _site_model(args, scenario, paths, out)
     for key in ("gains", "track_width"):
         if getattr(args, key, None) is not None:
