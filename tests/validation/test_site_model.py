@@ -197,7 +197,11 @@ def test_model_file_round_trip(fitted, tmp_path):
             # weighed every vehicle 1.85 times too heavy), and a file without its digest
             (re.sub(r"\nE_x = \S+", "\nE_x = 60000000000.0", text, count=1),
              "not those its self-check judged"),
-            (re.sub(r"\ndigest = \S+", "", text, count=1), "not those its self-check")):
+            (re.sub(r"\ndigest = \S+", "", text, count=1), "not those its self-check"),
+            (re.sub(r"\nchannels = \[[^]]*\]", "\nchannels = []", text, count=1),
+             "one positive gain per channel"),
+            (re.sub(r"\nchannels = \[\"(\w+)\", \"\w+\"", r'\nchannels = ["\1", "\1"', text,
+                    count=1), "channels must name each gauge once")):
         bad = tmp_path / "bad.toml"
         bad.write_text(changed)
         with pytest.raises(InputError, match=words):

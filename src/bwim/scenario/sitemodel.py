@@ -100,6 +100,8 @@ def load_model(path: str | os.PathLike) -> SiteModel | Bridge:
         gains = [_number(g, "a gain", src, 0.0) for g in table["gains"]]
         if len(channels) != len(gains):
             raise InputError(f"{src}: one positive gain per channel is needed")
+        if not channels or len(set(channels)) != len(channels):
+            raise InputError(f"{src}: channels must name each gauge once, got {channels}")
         runs = tuple(ModelRun(index=_at_least_one(r["index"], src) - 1,
                               explained=float(r["explained"]),
                               gvw_error=float(r["gvw_error"]), reason=str(r.get("reason", "")))
