@@ -57,6 +57,22 @@ def test_runs_within_one_day_keep_seconds_since_midnight():
         assert day.factor(t) == (float(direct(t)), not direct.covers(t))
 
 
+def test_the_last_runs_own_crossing_is_within_the_calibration():
+    """The runs are timed by their records' starts, a vehicle by its crossing: with the
+    runs' record lengths given (here 2 s each), a time up to 2 s after the last run's
+    start is inside the calibration, later outside (review of stop 37: the last run's own
+    truck, weighed as traffic 0.4 s after its record's start, was flagged
+    ``outside_calibration_time``).  The factors are the trend's either way."""
+    day = TimeOfDayDrift.fit([8 * H, 12 * H, 16 * H], [1.0, 0.9, 1.0], (), [2.0] * 3)
+    assert day.factor(16 * H + 0.4) == (1.0, False)
+    assert day.factor(16 * H + 2.0) == (1.0, False)
+    assert day.factor(16 * H + 2.5) == (1.0, True)
+    assert day.factor(8 * H - 0.1)[1]
+    night = TimeOfDayDrift.fit([t % 86400.0 for t in TIMES], FACTORS, DATES, [3.0] * 6)
+    assert night.factor(1 * H + 2.0) == (pytest.approx(0.95), False)  # 01:00 + 2 s
+    assert night.factor(1 * H + 4.0)[1]
+
+
 def test_clock_times_sort_from_where_their_day_starts():
     """bwim.records.day_origin / clock_key (the report's period and flow per hour):
     23:50, 00:10 run in that order; dated clocks come first, by instant."""

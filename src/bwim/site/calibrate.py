@@ -1031,7 +1031,8 @@ def _time_of_day(records: Sequence[Record], cal: _Lines) -> TimeOfDayDrift | Non
         dates = ()
     else:  # a run without a clock and a record time: the runs cannot be placed in the day
         return None
-    return TimeOfDayDrift.fit(tod, [fit.scale for _, fit in used], dates)
+    return TimeOfDayDrift.fit(tod, [fit.scale for _, fit in used], dates,
+                              [float(rec.time[-1] - rec.time[0]) for rec, _ in used])
 
 
 def temperature_channel(record: Record, setup: SiteSetup) -> str | None:

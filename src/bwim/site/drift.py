@@ -148,20 +148,29 @@ class TimeOfDayDrift:
         Where the axis's day starts, s since midnight: 0, or for runs that straddle
         midnight the middle of the longest gap between their times of day (an event
         in that gap takes the factor of the runs' nearer end).
+    reach : float
+        s: how long the last run's record lasts beyond its start (the runs are timed by
+        their records' starts, a vehicle by its crossing: the last run's own truck
+        crosses within it).
     """
 
     trend: ScaleTrend
     dates: tuple[date, ...]
     origin: float = 0.0
+    reach: float = 0.0
 
     @classmethod
     def fit(cls, times_of_day: Sequence[float], factors: Sequence[float],
-            dates: tuple[date, ...] = ()) -> TimeOfDayDrift:
+            dates: tuple[date, ...] = (), durations: Sequence[float] | None = None
+            ) -> TimeOfDayDrift:
         """The trend of the runs' ``factors`` over their ``times_of_day`` (s since
-        midnight), on an axis that keeps their span whole."""
+        midnight: their records' starts), on an axis that keeps their span whole;
+        ``durations`` (s) their records' lengths."""
         origin = day_origin(times_of_day)
         axis = [on_day_axis(t, origin) for t in times_of_day]
-        return cls(trend=ScaleTrend.fit(axis, factors), dates=dates, origin=origin)
+        reach = 0.0 if durations is None else float(durations[int(np.argmax(axis))])
+        return cls(trend=ScaleTrend.fit(axis, factors), dates=dates, origin=origin,
+                   reach=max(reach, 0.0))
 
     def axis(self, time_of_day: float) -> float:
         """A time of day (s since midnight) on the trend's axis: from :attr:`origin` to
@@ -176,7 +185,8 @@ class TimeOfDayDrift:
             other_day = bool(self.dates) and when.date() not in self.dates
         else:
             tod, other_day = self.axis(float(when)), False
-        return float(self.trend(tod)), other_day or not self.trend.covers(tod)
+        lo, hi = self.trend.span
+        return float(self.trend(tod)), other_day or not lo <= tod <= hi + self.reach
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)

@@ -195,7 +195,8 @@ class MultiRunCalibration(OptimizeResult):
     scale_trend : ScaleTrend or None
         The factors over clock time (None with ``per_run_scale=False``).
     time_span : (float, float)
-        First and last clock time of the kept runs, s.
+        Clock time of the first kept run's start and of the last one's end, s (a
+        vehicle crossing later is weighed ``outside_calibration_time``).
     core_support : (float, float) or None
         With ``support_lobes``, the support without the lobes beyond the line's first
         zeros (m): a record may end (or start) while an axle is still on a lobe, not on
@@ -722,7 +723,13 @@ def _result(runs: _Runs, current: _KeptFit, evaluation: _Evaluation) -> MultiRun
         misfit_median=float(np.median([evaluation.runs[k].misfit for k in kept])),
         sum_misfit_median=evaluation.sum_misfit_median,
         scale_trend=trend,
-        time_span=(float(runs.times[kept].min()), float(runs.times[kept].max())),
+        # from the first kept run's start to the last one's end: a vehicle is dated by
+        # its crossing, the runs by their records' starts (the last run's own truck
+        # crosses after it)
+        time_span=(float(runs.times[kept].min()),
+                   max(float(runs.times[k]) + float(runs.records[k].time[-1]
+                                                    - runs.records[k].time[0])
+                       for k in kept)),
         core_support=current.core,
         x=fit.scales, fun=evaluation.rss, nfev=current.nfev, nit=fit.nit,
         success=fit.success, message=fit.message,
