@@ -249,6 +249,12 @@ def test_runs_table_is_read_back(tmp_path):
     assert [r.name for r in runs.runs] == ["r1.csv", "r2.csv"] and runs.n_used == 1
     assert runs.runs[0].scale == 1.01 and runs.runs[0].time == datetime(2015, 10, 1, 7, 30)
     assert runs.runs[1].scale is None and not runs.runs[1].used
+    assert runs.runs[0].lateral == 3.1
+    # the lateral column names its unit (review of stop 37), read as the plain one
+    for unit in ("m", "gauge index"):
+        p.write_text(f"run,speed (m/s),lateral ({unit}),scale,residual,status\n"
+                     "r1.csv,14.20,3.10,1.0100,0.031,used\n")
+        assert read_calibration_runs(p).runs[0].lateral == 3.1
     p.write_text("run,speed (m/s),lateral,scale,residual,status\nr1.csv,14,3,big,0.03,used\n")
     with pytest.raises(InputError, match=r"line 2: column scale: 'big'"):
         read_calibration_runs(p)

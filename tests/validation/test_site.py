@@ -129,6 +129,8 @@ def test_weigh_command_writes_the_contract_summary(day, tmp_path, capsys):
         assert float(r["gvw_kN"]) == pytest.approx(w.sum(), abs=0.02)
     assert (out / "influence_lines.h5").exists()
     runs = _rows(out / "calibration_runs.csv")
+    # this day's gauges have no y: the lateral position is their index, and says so
+    assert "lateral (gauge index)" in runs[0] and float(runs[0]["lateral (gauge index)"]) > 0
     # each run's start: this day's time column is the clock of day (truth: event start)
     starts = {r["record"]: r["event_start_s"] for r in _rows(day.truth)}
     assert [r["run"] for r in runs] == [p.name for p in day.calibration]

@@ -213,7 +213,11 @@ def _calibrate_site(paths: Sequence[Path], scenario, folder: Path):
                      "" if fit is None else f"{fit.residual:.3g}",
                      reason or "used"))
     rows += [(name, "", "", "", "", "", f"unreadable: {msg}") for name, msg in unread]
-    header = ("run", "time", "speed (m/s)", "lateral", "scale", "residual", "status")
+    # the lateral position's unit: metres where the gauges' y are known, else their index
+    units = {v.lateral_unit for det in site.detections for v in det.vehicles}
+    lateral = "lateral (m)" if units == {"m"} else (
+        "lateral (gauge index)" if units == {"gauge index"} else "lateral")
+    header = ("run", "time", "speed (m/s)", lateral, "scale", "residual", "status")
 
     def write() -> None:
         write_csv(folder / "calibration_runs.csv", header, rows)

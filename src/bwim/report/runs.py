@@ -101,7 +101,8 @@ def read_calibration_runs(path: str | os.PathLike) -> CalibrationRuns:
         raise InputError(f"{p}: not a calibration runs table (no column "
                          f"{', '.join(missing)})")
     cols = {"speed": _column(header, "speed (m/s)", "speed_m_s"),
-            "lateral": _column(header, "lateral"), "scale": _column(header, "scale"),
+            "lateral": _column(header, "lateral (m)", "lateral (gauge index)", "lateral"),
+            "scale": _column(header, "scale"),
             "residual": _column(header, "residual"), "status": _column(header, "status"),
             "time": _column(header, "time")}
 
