@@ -204,6 +204,17 @@ def test_bwim_weigh_continuous(day, tmp_path, capsys):
                                            read_reference(ref)) if m.row and m.row.weighed]
     assert [(m.row.record, m.row.gvw) for m in matched] == [
         (weighed[0]["record"], float(weighed[0]["gvw_kN"]) * 1e3)]
+    # --force without --continuous into the same folder: the earlier cut's event files
+    # and events.csv go with its summary (review of stop 37: they stayed beside a summary
+    # that had none of their events); a file the index does not list stays
+    (out / "events" / "mine.txt").write_text("not an event")
+    records = tmp_path / "records"
+    records.mkdir()
+    (records / site.traffic[0].name).write_bytes(site.traffic[0].read_bytes())
+    assert main(["weigh", str(site.scenario), str(records), "--calibration-records",
+                 str(site.calibration[0].parent), "-o", str(out), "--force"]) == 0
+    assert not (out / "events.csv").exists()
+    assert [p.name for p in (out / "events").iterdir()] == ["mine.txt"]
 
 
 

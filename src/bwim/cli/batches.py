@@ -547,6 +547,31 @@ def _continuous_items(paths: Sequence[Path], scenario, events: Path, *, resume: 
 
 #: File beside the summary of ``weigh --continuous``: each event's place in its long file.
 EVENT_INDEX = "events.csv"
+
+
+def _forget_cut_events(folder: Path) -> None:
+    """A fresh run with ``--force`` and without ``--continuous`` deletes an earlier
+    ``--continuous`` run's index and the event files it lists (beside a summary of other
+    records they would be taken for its events), and their folder once empty; a file the
+    index does not list stays."""
+    import csv
+
+    index = folder / EVENT_INDEX
+    if not index.is_file():
+        return
+    events = folder / EVENTS
+    try:
+        with open(index, newline="", encoding="utf-8") as f:
+            listed = {row.get("event", "") for row in csv.DictReader(f)}
+    except (OSError, UnicodeDecodeError, csv.Error):
+        listed = set()
+    if events.is_dir():
+        for p in events.iterdir():
+            if p.is_file() and p.suffix == ".h5" and p.stem in listed:
+                p.unlink()
+        if not any(events.iterdir()):
+            events.rmdir()
+    index.unlink()
 _INDEX_HEADER = ("event", "long_file", "start_s", "stop_s", "on_s", "off_s", "clock",
                  "peak_sigma", "flags")
 
@@ -596,6 +621,8 @@ def weigh_command(args: argparse.Namespace) -> int:
         if _fresh(args, folder):  # no output of a command replaced without --force
             refuse_existing_outputs(outputs, force=args.force, resumable=True)
             refuse_existing_outputs(tables, force=args.force, resumable=True)
+            if site and args.force and not args.continuous:
+                _forget_cut_events(folder)
         batch = BatchFolder(folder, resume=args.resume, force=args.force, meta=_meta(
             "weigh", scenario=args.scenario, calibration=sorted(cal, key=str),
             influence=args.influence, bridge=args.bridge), parquet=args.parquet)
