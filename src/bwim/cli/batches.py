@@ -547,6 +547,8 @@ def _continuous_items(paths: Sequence[Path], scenario, events: Path, *, resume: 
 
 #: File beside the summary of ``weigh --continuous``: each event's place in its long file.
 EVENT_INDEX = "events.csv"
+_INDEX_HEADER = ("event", "long_file", "start_s", "stop_s", "on_s", "off_s", "clock",
+                 "peak_sigma", "flags")
 
 
 def _forget_cut_events(folder: Path) -> None:
@@ -572,8 +574,6 @@ def _forget_cut_events(folder: Path) -> None:
         if not any(events.iterdir()):
             events.rmdir()
     index.unlink()
-_INDEX_HEADER = ("event", "long_file", "start_s", "stop_s", "on_s", "off_s", "clock",
-                 "peak_sigma", "flags")
 
 
 def _index_row(name: str, path: Path, ev) -> tuple:
