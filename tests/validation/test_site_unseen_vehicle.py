@@ -28,16 +28,22 @@ from bwim.synthetic import make_test_day
 from bwim.wim.influence_line import read_channels
 
 
-@pytest.fixture(scope="module")
-def runs(seed31_site):
-    day = seed31_site
-    scenario = load_scenario(day.scenario)
+def _alone(day) -> list[bool]:
+    """Whether each calibration run of ``day`` holds the truck alone (truth.csv: no other
+    vehicle in the record)."""
     with open(day.truth, newline="", encoding="utf-8") as f:
         lanes: dict[str, list[str]] = {}
         for r in csv.DictReader(f):
             if r["kind"] == "calibration":
                 lanes.setdefault(r["record"], []).append(r["lane"])
-    alone = [sorted(lanes[p.name]) == ["1"] for p in day.calibration]
+    return [sorted(lanes[p.name]) == ["1"] for p in day.calibration]
+
+
+@pytest.fixture(scope="module")
+def runs(seed31_site):
+    day = seed31_site
+    scenario = load_scenario(day.scenario)
+    alone = _alone(day)
     return [load_record(p, scenario) for p in day.calibration], build_site_setup(scenario), alone
 
 
@@ -188,12 +194,7 @@ def test_lines_linear_in_the_lateral_position_take_their_span_from_plain_lines(
     day = make_test_day(tmp_path_factory.mktemp("linear") / "day", site="short-span-4-lane",
                         seed=9, n_traffic=1, n_calibration_day_traffic=0, mesh=0.5)
     scenario = load_scenario(day.scenario)
-    with open(day.truth, newline="", encoding="utf-8") as f:
-        lanes: dict[str, list[str]] = {}
-        for r in csv.DictReader(f):
-            if r["kind"] == "calibration":
-                lanes.setdefault(r["record"], []).append(r["lane"])
-    alone = [sorted(lanes[p.name]) == ["1"] for p in day.calibration]
+    alone = _alone(day)
     setup = build_site_setup(scenario)
     one = dataclasses.replace(setup, lanes=(setup.calibration_pair,), lateral="linear")
     site = calibrate_site([load_record(p, scenario) for p in day.calibration], one)
