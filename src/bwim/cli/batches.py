@@ -513,7 +513,8 @@ def _continuous_items(paths: Sequence[Path], scenario, events: Path, *, resume: 
     for p in paths:
         n = 0
         try:
-            for n, ev in enumerate(cut_file(p, fmt, trigger, sensors=sensors), start=1):
+            for n, ev in enumerate(cut_file(p, fmt, trigger, sensors=sensors, clip_run=None),
+                                   start=1):
                 name = f"{display_name(p)}#{n}"
                 target = events / f"{name}.h5"
                 index.append(_index_row(name, p, ev))

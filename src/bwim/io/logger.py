@@ -446,7 +446,8 @@ def read_logger(
         saturation), unless the channel starts or ends at that value (its resting level
         without traffic, e.g. a quantised one-sided signal).
         Axle-detector channels are not checked (a saturated pulse still marks its axle).
-        None: no check.
+        None: no check (the site chain's reader, :func:`bwim.scenario.record_reader`: its
+        gauge check leaves a clipped gauge out of the vehicle it fails in and names it).
     time_tolerance : float
         Allowed relative deviation of each time step from the median step (default 1 %),
         on top of one unit of the last time decimal the file writes; also the allowed

@@ -579,9 +579,12 @@ class RecordReader:
         p = Path(path)
         if self.fmt is None or p.suffix.lower() in _HDF5_SUFFIXES:
             return load_record(p, self.scenario)
-        # their y (and x) travel with the readings
+        # their y (and x) travel with the readings; a gauge held at a rail is judged by
+        # the site chain, which leaves it out of the vehicle it fails in and names it
+        # (bwim.site.health), not by the reader, which would fail the whole record
         return _with_run_settings(
-            read_logger(p, self.fmt, sensors=self.sensors or None), self.scenario)
+            read_logger(p, self.fmt, sensors=self.sensors or None, clip_run=None),
+            self.scenario)
 
 
 def record_reader(scenario: Scenario) -> RecordReader:
