@@ -99,6 +99,8 @@ def test_site_outputs_replaced_with_force(day, weighed, tmp_path, capsys):
     code = main(_weigh_argv(day, [day.traffic[0]], out, "--force"))
     assert code == 0, capsys.readouterr().err
     assert (out / "calibration_runs.csv").read_text().startswith("run,")
+    # this site's gauges have their y: the runs' lateral position in metres, and says so
+    assert "lateral (m)" in _rows(out / "calibration_runs.csv")[0]
     assert len(_rows(out / "summary.csv")) >= 1
 
 
