@@ -32,7 +32,15 @@ from bwim.sensors import Sensor, SensorKind
 
 from .signals import channel_data, column_medians, median
 
-__all__ = ["LateralPosition", "lateral_position", "section_gauges"]
+__all__ = ["LateralPosition", "in_metres", "lateral_position", "section_gauges"]
+
+
+def in_metres(gauges: Sequence[Sensor]) -> bool:
+    """Whether the lateral position of ``gauges`` is in metres (module contract): two or
+    more, every one with its ``y``, not all one (the sensors' y are finite,
+    :class:`bwim.sensors.Sensor`: they differ when max > min)."""
+    ys = [getattr(s, "y", None) for s in gauges]
+    return len(ys) > 1 and all(y is not None for y in ys) and max(ys) > min(ys)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -124,8 +132,7 @@ def lateral_position(
     sens = section_gauges(record, gauges)
     names = tuple(s.name for s in sens)
     ys = [getattr(s, "y", None) for s in sens]
-    # the sensors' y are finite (bwim.sensors.Sensor): they differ when max > min
-    metres = len(sens) > 1 and all(y is not None for y in ys) and max(ys) > min(ys)
+    metres = in_metres(sens)
     unit = "m" if metres else "gauge index"
     if not sens:
         return LateralPosition(value=float("nan"), unit=unit, weights=np.zeros(0), gauges=())

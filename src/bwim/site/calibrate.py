@@ -124,6 +124,7 @@ from bwim.detect import (
     detect_known_truck,
     learn_responses,
 )
+from bwim.detect.lateral import in_metres
 from bwim.detect.presence import unexplained_activity, windows_overlap
 from bwim.detect.response import band_pass, peak_polarity
 from bwim.detect.result import FLAG_COUNT_MISMATCH, FLAG_MULTIPLE_PRESENCE, FLAG_TRUNCATED
@@ -653,8 +654,7 @@ def _check_lateral_metres(records: Sequence[Record]) -> None:
     weighed lane-1 trucks driving within the runs' lateral range 12-42 % low, flagged
     ``lateral_extrapolated`` at most (review of stop 37)."""
     for k, rec in enumerate(records):
-        ys = [s.y for s in rec.sensors if s.kind.is_structural]
-        if len(ys) < 2 or any(y is None for y in ys) or max(ys) <= min(ys):
+        if not in_metres([s for s in rec.sensors if s.kind.is_structural]):
             raise InputError(
                 f"lateral = 'linear' needs every gauge's y (m, not all one), which "
                 f"records[{k}]'s sensors do not give: a lateral index in gauge order is no "
