@@ -61,8 +61,9 @@ Contract
   reported at the first line that has one, before the checks of the whole record (time,
   clipping, clock).
 * Streaming, bounded memory.  The file is read once, in chunks of at most :data:`CHUNK`
-  characters (whole lines), each parsed at once (vectorised over its bytes; a chunk with
-  anything unusual is re-read line by line, which gives the same numbers or the precise
+  characters (whole lines), each parsed at once (its fields found vectorised over its
+  bytes, their plain decimals read in one compiled pass:
+  :mod:`bwim.io.decimal_fields`; a chunk with anything unusual is re-read line by line, which gives the same numbers or the precise
   message) into the record's data array, sized from the estimate and scaled in place:
   the reader holds the data array, the time column (and a few arrays of its length while
   it is checked) and one chunk's text and work arrays, whatever the file's length; the
@@ -87,6 +88,7 @@ import numpy as np
 from bwim.errors import InputError, parse_enum, require_positive
 from bwim.io._csv import check_time, open_regular, rounding
 from bwim.io.clock import ClockRow, ClockSpec, logger_clock
+from bwim.io.decimal_fields import PlainDecimals, plain_decimals
 from bwim.limits import check_memory
 from bwim.records import Record
 from bwim.sensors import Sensor, SensorKind
@@ -633,60 +635,7 @@ class _Rows:
 
 # --- the parser ------------------------------------------------------------------------------
 
-_PAD = 16                   #: bytes before a chunk's text (the digit matrix looks back)
-_MAX_DIGITS = 14            #: digits a field may have on the vectorised path (exactness)
-_P10 = 10.0 ** np.arange(23)  # exact powers of ten
-
-
-@dataclass
-class _Numbers:
-    values: np.ndarray      # (k,) the numbers, exact where ok
-    ok: np.ndarray          # (k,) bool: a plain decimal read exactly
-    decimals: np.ndarray    # (k,) digits after the decimal mark
-
-
-def _plain_numbers(a: np.ndarray, fs: np.ndarray, fe: np.ndarray, comma: bool) -> _Numbers:
-    """Read the fields ``a[fs:fe]`` that are plain decimals (an optional leading sign,
-    1 to 14 digits, at most one decimal mark, nothing else), vectorised.
-
-    Each value is ``m / 10**f`` with the integer mantissa ``m < 2**53`` and ``10**f``
-    both exact, so the division rounds the exact decimal once: the double that ``float``
-    gives (Clinger's fast path).  Other fields come back with ``ok`` False.
-    """
-    length = fe - fs
-    w = int(min(length.max(initial=1), _MAX_DIGITS + 2))
-    back = np.arange(w - 1, -1, -1)[:, None]        # row j: byte fe - 1 - back[j]
-    inside = back < length                          # (w, k): the row is in the field
-    b = a[fe - 1 - back]                            # (w, k); _PAD bytes keep the index >= 0
-    d = b - np.uint8(48)
-    digit = d < 10
-    digit &= inside
-    mark = b == 44 if comma else b == 46
-    mark &= inside
-    sign = (b == 45) | (b == 43)
-    sign &= inside
-    lead = a[fs]
-    negative = lead == 45
-    lead = negative | (lead == 43)
-    n_digit = digit.sum(axis=0, dtype=np.uint8)
-    n_mark = mark.sum(axis=0, dtype=np.uint8)
-    n_sign = sign.sum(axis=0, dtype=np.uint8)
-    # nothing but digits, one mark at most and a sign only in front
-    ok = ((n_digit + n_mark + n_sign == length) & (n_sign == lead) & (n_mark <= 1)
-          & (n_digit >= 1) & (n_digit <= _MAX_DIGITS) & (length <= _MAX_DIGITS + 2))
-    d *= digit                                      # digits; 0 elsewhere (mark, sign, outside)
-    r = d[0].astype(float)
-    for j in range(1, w):                           # r = the digits as one integer, the
-        r *= 10.0                                   # mark's place counted as a 0 digit
-        r += d[j]
-    # the mark's distance from the field's end (float32 sums of small integers: exact)
-    decimals = (back[:, 0].astype(np.float32) @ mark.astype(np.float32)).astype(np.int64)
-    p = _P10[np.minimum(decimals, _MAX_DIGITS)]
-    head = np.floor(r / (10.0 * p))                 # the digits before the mark (exact)
-    mantissa = np.where(n_mark > 0, head * p + (r - head * 10.0 * p), r)
-    values = mantissa / p
-    np.negative(values, out=values, where=negative)
-    return _Numbers(values=values, ok=ok, decimals=decimals)
+_PAD = 16                   #: newlines before a chunk's text (a field's start is never 0)
 
 
 class _Parser:
@@ -910,10 +859,10 @@ class _Parser:
         return True
 
     def _numbers(self, a: np.ndarray, b: bytes, fs: np.ndarray, fe: np.ndarray
-                 ) -> _Numbers | None:
+                 ) -> PlainDecimals | None:
         """The numbers of the fields ``b[fs:fe]``: plain decimals vectorised, others one by
         one as the line-by-line path reads them; None if one is not a finite number."""
-        nums = _plain_numbers(a, fs, fe, self.comma)
+        nums = plain_decimals(a, fs, fe, self.comma)
         for i in np.flatnonzero(~nums.ok).tolist():
             s = _clean(b[fs[i]:fe[i]].decode())
             s = _point(s, self.comma)
