@@ -60,14 +60,14 @@ Contract
   :mod:`bwim.io.clock`).  A problem of the text (lines, fields, numbers, the row count) is
   reported at the first line that has one, before the checks of the whole record (time,
   clipping, clock).
-* Streaming, bounded memory.  The file is read once, in chunks of at most :data:`CHUNK`
+* Streaming, bounded memory. The file is read once, in chunks of at most :data:`CHUNK`
   characters (whole lines), each parsed at once (its fields found vectorised over its
-  bytes, their plain decimals read in one compiled pass:
-  :mod:`bwim.io.decimal_fields`; a chunk with anything unusual is re-read line by line, which gives the same numbers or the precise
-  message) into the record's data array, sized from the estimate and scaled in place:
-  the reader holds the data array, the time column (and a few arrays of its length while
-  it is checked) and one chunk's text and work arrays, whatever the file's length; the
-  memory estimate checked against the limit counts all of these.
+  bytes, their plain decimals read in one compiled pass: :mod:`bwim.io.decimal_fields`; a
+  chunk with anything unusual is re-read line by line, which gives the same numbers or the
+  precise message) into the record's data array, sized from the estimate and scaled in
+  place: the reader holds the data array, the time column (and a few arrays of its length
+  while it is checked) and one chunk's text and work arrays, whatever the file's length;
+  the memory estimate checked against the limit counts all of these.
 """
 
 from __future__ import annotations
