@@ -181,10 +181,27 @@ def _ridge(G, p):
 
 @njit(cache=True)
 def _dots(A, na, b, out):
-    """``out[i] = Σ_m A[i, m] b[m]`` for i < ``na``, each sum in the order of m (four
-    rows at a time: four sums running side by side, each in that order)."""
+    """``out[i] = Σ_m A[i, m] b[m]`` for i < ``na``, each sum in the order of m (eight
+    or four rows at a time: sums running side by side, each in that order)."""
     r = b.size
     i = 0
+    while i + 8 <= na:
+        a0, a1, a2, a3 = A[i], A[i + 1], A[i + 2], A[i + 3]
+        a4, a5, a6, a7 = A[i + 4], A[i + 5], A[i + 6], A[i + 7]
+        s0 = s1 = s2 = s3 = s4 = s5 = s6 = s7 = 0.0
+        for m in range(r):
+            bm = b[m]
+            s0 += a0[m] * bm
+            s1 += a1[m] * bm
+            s2 += a2[m] * bm
+            s3 += a3[m] * bm
+            s4 += a4[m] * bm
+            s5 += a5[m] * bm
+            s6 += a6[m] * bm
+            s7 += a7[m] * bm
+        out[i], out[i + 1], out[i + 2], out[i + 3] = s0, s1, s2, s3
+        out[i + 4], out[i + 5], out[i + 6], out[i + 7] = s4, s5, s6, s7
+        i += 8
     while i + 4 <= na:
         a0, a1, a2, a3 = A[i], A[i + 1], A[i + 2], A[i + 3]
         s0 = s1 = s2 = s3 = 0.0
@@ -576,12 +593,30 @@ def best_match(res, atoms, lo, length, pad, slack, energy, excluded, corr, picke
         # each sum in the atom's order (the loop over the samples m innermost)
         out = corr[c]
         _fill_with(out, 0.0)
-        for i in range(length[c]):
-            ai = atoms[c, i]
+        L = length[c]
+        i = 0
+        while i < L:  # four terms a pass, added one after the other
             base = pad + lo[c] + i
-            z = res[c, base:base + n]
-            for m in range(n):
-                out[m] += z[m] * ai
+            if i + 4 <= L:
+                a0, a1, a2, a3 = atoms[c, i], atoms[c, i + 1], atoms[c, i + 2], atoms[c, i + 3]
+                z0 = res[c, base:base + n]
+                z1 = res[c, base + 1:base + 1 + n]
+                z2 = res[c, base + 2:base + 2 + n]
+                z3 = res[c, base + 3:base + 3 + n]
+                for m in range(n):
+                    o = out[m]
+                    o += z0[m] * a0
+                    o += z1[m] * a1
+                    o += z2[m] * a2
+                    o += z3[m] * a3
+                    out[m] = o
+                i += 4
+            else:
+                ai = atoms[c, i]
+                z = res[c, base:base + n]
+                for m in range(n):
+                    out[m] += z[m] * ai
+                i += 1
     best = -1.0
     at = 0
     for m in range(n):

@@ -57,6 +57,9 @@ Contract
   0.5, 1)`` with ``Δ`` the smallest misfit reduction (level variances) of its axles;
   ``c_both`` the mean over its axles of ``exp(−½ (ln(A_2 / (ρ A_1)) / (2 s))²)``, ``s``
   the learned spread (at least ``MIN_RATIO_BOUND / RATIO_SPREADS``), at least 0.5.
+* Compiled (:mod:`bwim.detect.fit_kernels`, numba): the pursuit's trials and matcher and
+  the refinements' least squares (:mod:`bwim.detect.vehicle_fit`): the same equations,
+  numbers agreeing with a numpy version's to rounding.
 * Times in s, distances in m, speeds in m/s.
 """
 

@@ -29,6 +29,13 @@ Contract
 * An axle is **seen by both** detectors when ``|ln(A_2 / (ρ A_1))|`` (``ρ`` the learned
   gain ratio) is at most :data:`RATIO_SPREADS` times the spread the calibration runs
   showed, and at least :data:`MIN_RATIO_BOUND`.
+* Compiled (:mod:`bwim.detect.fit_kernels`, numba): the atoms (element by element the
+  operations of :meth:`Problem.atoms`: the same numbers), a :class:`Solution`'s least
+  squares and Jacobian, and :func:`refine`'s whole Levenberg–Marquardt loop.  The same
+  equations; their sums run in orders of their own, as numpy's BLAS and LAPACK run in
+  theirs, so the numbers agree with a numpy version's to rounding.  A fit of coincident
+  axles (singular but for the 1e-12 ridge) turns that rounding into differences of any
+  size, in numpy as much (its results then change with the BLAS kernel).
 * Times in s, distances in m, speeds in m/s; amplitudes in each detector's reading units.
 """
 
