@@ -368,17 +368,21 @@ def refine(pb: Problem, taus: np.ndarray, v: float, iterations: int = MAX_LM, *,
     taus = np.sort(np.asarray(taus, dtype=float))
     p = np.concatenate((taus, [v]))
     sol = solution(pb, taus, v, start)
-    # the kernel starts from sol's arrays and leaves the last accepted trial's in them
+    # the kernel starts from (copies of) sol's arrays and leaves the last accepted
+    # trial's in them
     last = Solution.__new__(Solution)
-    last._empty(pb, taus, v, sol.w, True)
+    last.__dict__.update(sol.__dict__)
     for name in ("dtt", "Mt", "dXt", "Ginv", "a", "res"):
-        getattr(last, name)[...] = getattr(sol, name)
+        setattr(last, name, getattr(sol, name).copy())
+    for name in ("amps", "gains"):  # cached properties of sol's arrays
+        last.__dict__.pop(name, None)
     g = pb.table
     w = sol.w
+    before = p.tobytes()
     cost = levenberg_marquardt(g.scalars, g.first, g.values, w.t, w.y[..., 0], w.rest_t, p,
                                int(iterations), sol.k, CONVERGED, last.dtt, last.Mt, last.dXt,
                                last.Ginv, last.a, last.res)
-    if np.array_equal(p[:-1], taus) and p[-1] == v:
+    if p.tobytes() == before:
         last = sol  # no trial accepted (an accepted one lowers the misfit: moves)
     else:
         last.taus, last.v = p[:-1].copy(), float(p[-1])
