@@ -251,8 +251,8 @@ def window(pb: Problem, taus: np.ndarray, v: float) -> np.ndarray:
 
 class Rows:
     """What every fit on one vehicle's window reads: the sampled rows' times, readings
-    (2, n_rows, 1) and rest columns (2, n_rows, k; and transposed, ``rest_t``, as the
-    compiled kernels read them), copied once per window."""
+    (2, n_rows, 1) and rest columns (2, n_rows, k; and transposed, :attr:`rest_t`, as
+    the compiled kernels read them), copied once per window."""
 
     def __init__(self, pb: Problem, rows: np.ndarray, index: slice | None = None):
         """``index``: a slice selecting the same rows (read through views rather than
@@ -263,7 +263,11 @@ class Rows:
         self.t = np.ascontiguousarray(pb.t[at])  # C order, as the compiled kernels read
         self.y = np.ascontiguousarray(y[:, at])
         self.rest = np.ascontiguousarray(rest[:, at])
-        self.rest_t = np.ascontiguousarray(self.rest.transpose(0, 2, 1))  # (2, k, n_rows)
+
+    @cached_property
+    def rest_t(self) -> np.ndarray:
+        """The rest columns transposed, (2, k, n_rows), C order (made when read)."""
+        return np.ascontiguousarray(self.rest.transpose(0, 2, 1))
 
 
 class Solution:
