@@ -57,6 +57,9 @@ Contract
   0.5, 1)`` with ``Δ`` the smallest misfit reduction (level variances) of its axles;
   ``c_both`` the mean over its axles of ``exp(−½ (ln(A_2 / (ρ A_1)) / (2 s))²)``, ``s``
   the learned spread (at least ``MIN_RATIO_BOUND / RATIO_SPREADS``), at least 0.5.
+* Compiled (:mod:`bwim.detect.fit_kernels`, numba): the pursuit's trials and matcher and
+  the refinements' least squares (:mod:`bwim.detect.vehicle_fit`): the same equations,
+  numbers agreeing with a numpy version's to rounding.
 * Times in s, distances in m, speeds in m/s.
 """
 
@@ -65,9 +68,9 @@ from __future__ import annotations
 import itertools
 
 import numpy as np
-from scipy.ndimage import maximum_filter1d
 
 from .assemble import VehicleEstimate
+from .fit_kernels import best_match, pursuit_trial
 from .groups import choose_groups
 from .response import LearnedResponses, band_pass, xcorr_lag
 from .signals import median
@@ -127,7 +130,9 @@ class _Matcher:
     up to ``slack`` samples off that speed.  The atoms are made once (the speed is fixed
     while the pursuit runs); the residual is read from a buffer padded by :attr:`pad`
     zeros each side (every atom's reach), the times already taken from a mask kept up to
-    date (:meth:`exclude`)."""
+    date (:meth:`exclude`).  The choice is compiled
+    (:func:`~bwim.detect.fit_kernels.best_match`: the same equations as
+    :meth:`best` states)."""
 
     def __init__(self, pb: Problem, v: float, slack: int, min_gap: float):
         self.pb, self.v, self.slack = pb, v, slack
@@ -147,6 +152,14 @@ class _Matcher:
                        *(m_hi for _, m_hi, _ in self.parts))
         self.gap = min_gap / v
         self.excluded = np.zeros(pb.t.size, dtype=bool)
+        # the atoms as the kernel reads them: end-padded rows, first offsets, lengths
+        self._atoms = np.zeros((2, max(a.size for _, _, a in self.parts)))
+        for c, (_, _, atom) in enumerate(self.parts):
+            self._atoms[c, :atom.size] = atom
+        self._lo = np.array([m_lo for m_lo, _, _ in self.parts], dtype=np.int64)
+        self._len = np.array([a.size for _, _, a in self.parts], dtype=np.int64)
+        self._corr = np.empty((2, pb.t.size))
+        self._picked = np.zeros(2, dtype=np.int64)
 
     def exclude(self, tk: float) -> None:
         """No new axle within ``min_gap`` m of travel of the time ``tk`` (t ascending: a
@@ -160,22 +173,14 @@ class _Matcher:
         """The best new axle for the residual ``res`` (2, pad + n_t + pad; zeros in the
         pads), not where excluded: its time at detector 1 and the time the second
         detector's atom says (both at detector 1 for the speed ``v``)."""
-        t, slack, pad = self.pb.t, self.slack, self.pad
-        n = t.size
-        # Σ_i res[m + m_lo + i] atom[i] for every sample m (zero beyond the record)
-        corr = [np.correlate(res[c, pad + m_lo:pad + n + m_hi], atom, mode="valid")
-                for c, (m_lo, m_hi, atom) in enumerate(self.parts)]
-        # the second detector's best within ±slack samples (the largest value: exact)
-        c2 = (maximum_filter1d(corr[1], 2 * slack + 1, mode="constant", cval=-np.inf)
-              if slack else corr[1])
-        score = np.maximum(corr[0] + c2, 0.0) ** 2 / self.energy
-        score[self.excluded] = 0.0
-        m = int(score.argmax())
-        off = 0
-        if slack:  # where that best was (the first of equals, as argmax)
-            a = max(m - slack, 0)
-            off = a + int(corr[1][a:m + slack + 1].argmax()) - m
-        return float(t[m]), float(t[m + off])
+        # corr_d[m] = Σ_i res[m + m_lo + i] atom[i] for every sample m (zero beyond the
+        # record); the score max(corr_1 + max(corr_2 within ±slack), 0)² / energy, 0
+        # where excluded; its argmax m (the first of equals) and where the second
+        # detector's best within ±slack of m was (the first of equals)
+        best_match(np.ascontiguousarray(res, dtype=float), self._atoms, self._lo, self._len,
+                   self.pad, self.slack, self.energy, self.excluded, self._corr, self._picked)
+        t = self.pb.t
+        return float(t[self._picked[0]]), float(t[self._picked[1]])
 
 
 def pursue_axles(record_time: np.ndarray, y: np.ndarray, learned: LearnedResponses, *,
@@ -263,13 +268,11 @@ def _acceptable(pb: Problem, amps: np.ndarray, min_height: float) -> bool:
 class _Pursuit:
     """Orthogonal matching pursuit over the whole record: the axles' responses with each
     detector's rest projected out, their Gram matrix and least-squares amplitudes kept up
-    to date as axles are added.  Both detectors' problems as one stack of two (numpy
-    gives the same numbers as two separate ones).  The residual (:attr:`res`, 2 × n_t)
-    sits in a buffer with ``pad`` zeros each side (what :class:`_Matcher` reads).  The
-    responses and their Gram matrix live in buffers sized for MAX_AXLES + 1 axles: a
-    trial writes the new axle's row after the accepted ones (each detector's rows stay
-    contiguous, so numpy's products make the same BLAS calls as on arrays of their own),
-    an accepted axle keeps it."""
+    to date as axles are added.  The residual (:attr:`res`, 2 × n_t) sits in a buffer
+    with ``pad`` zeros each side (what :class:`_Matcher` reads).  The responses and their
+    Gram matrix live in buffers sized for MAX_AXLES + 1 axles: a trial (compiled:
+    :func:`~bwim.detect.fit_kernels.pursuit_trial`) writes the new axle's row after the
+    accepted ones, an accepted axle keeps it."""
 
     def __init__(self, pb: Problem, v: float, pad: int = 0):
         self.pb, self.v, self.pad = pb, v, pad
@@ -280,15 +283,14 @@ class _Pursuit:
             Q = pb.q_rest[c]
             y.append(pb.y[:, c] - Q @ (Q.T @ pb.y[:, c]))
         self.Q = np.array(pb.q_rest)  # (2, n_t, k)
-        self.Qt = self.Q.transpose(0, 2, 1)
+        self._Qt = np.ascontiguousarray(self.Q.transpose(0, 2, 1))  # as the kernel reads
         self.y = np.array(y)[..., None]  # (2, n_t, 1)
         n = pb.t.size
         # the axles' projected responses, one per row, and their Gram matrix (no ridge):
         # the first taus.size rows (and columns) are the accepted axles'
         self._Xt = np.empty((2, MAX_AXLES + 1, n))
         self._G = np.empty((2, MAX_AXLES + 1, MAX_AXLES + 1))
-        self._xy = np.empty((2, n, 2))  # a new response, then the readings
-        self._xy[:, :, 1] = self.y[..., 0]
+        self._t = np.ascontiguousarray(pb.t, dtype=float)
         self._buffer = np.zeros((2, n + 2 * pad))
         self._buffer[:, pad:pad + n] = self.y[..., 0]
         self.chi = float(np.sum(np.column_stack(y) ** 2))
@@ -303,25 +305,16 @@ class _Pursuit:
         ``tk`` added (at ``tk2`` for the second detector).  The Gram matrix grows by the
         new response's products (the same numbers as made whole, to rounding); the ridge
         of :func:`~bwim.detect.vehicle_fit.ridged_normal`."""
-        dt = self.pb.t[None, :, None] - np.array([tk, tk2])[:, None, None]
-        x = self.pb.both_atoms(self.v, dt)[0]  # (2, n_t, 1)
-        if self.Q.shape[2]:  # no rest (high-passed): x less zeros is x
-            x -= self.Q @ (self.Qt @ x)
         p = self.taus.size
-        Xt = self._Xt[:, :p + 1]  # (2, p + 1, n_t), the new response last
-        Xt[:, p] = x[..., 0]
-        xy = self._xy
-        xy[:, :, 0] = x[..., 0]
-        gb = Xt @ xy  # (2, p + 1, 2): the new response's products, then Xᵀ y
-        G = self._G[:, :p + 1, :p + 1]
-        G[:, :, p] = gb[:, :, 0]
-        G[:, p, :p] = gb[:, :p, 0]
-        ridged = G.copy()
-        diag = ridged.reshape(2, -1)[:, ::p + 2]  # a view
-        diag += 1e-12 * (diag.sum(axis=-1) / (p + 1) + 1e-300)[:, None]
-        a = np.linalg.solve(ridged, gb[:, :, 1:])
-        res = (self.y - Xt.transpose(0, 2, 1) @ a)[..., 0].T.copy()  # (n_t, 2)
-        return a[..., 0].T.copy(), float(np.sum(res**2)), res
+        pb = self.pb
+        amps, res = np.empty((p + 1, 2)), np.empty((self._t.size, 2))
+        g = pb.table
+        # the atoms (less their projection on the rest) as row p of the responses, the
+        # Gram matrix's row and column p, (G + ridge) a = Xᵀy, res = y − X a
+        chi = pursuit_trial(g.scalars, g.first, g.values, self._t, float(tk), float(tk2),
+                            float(self.v), self._Qt, self.y[..., 0], self._Xt, self._G, p,
+                            amps, res)
+        return amps, chi, res
 
     def accept(self, tk: float, tk2: float, chi: float, state) -> None:
         """Keep the axle of the last :meth:`trial` (``state``: its residual)."""

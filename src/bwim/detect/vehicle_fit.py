@@ -29,6 +29,13 @@ Contract
 * An axle is **seen by both** detectors when ``|ln(A_2 / (ρ A_1))|`` (``ρ`` the learned
   gain ratio) is at most :data:`RATIO_SPREADS` times the spread the calibration runs
   showed, and at least :data:`MIN_RATIO_BOUND`.
+* Compiled (:mod:`bwim.detect.fit_kernels`, numba): the atoms (element by element the
+  operations of :meth:`Problem.atoms`: the same numbers), a :class:`Solution`'s least
+  squares and Jacobian, and :func:`refine`'s whole Levenberg–Marquardt loop.  The same
+  equations; their sums run in orders of their own, as numpy's BLAS and LAPACK run in
+  theirs, so the numbers agree with a numpy version's to rounding.  A fit of coincident
+  axles (singular but for the 1e-12 ridge) turns that rounding into differences of any
+  size, in numpy as much (its results then change with the BLAS kernel).
 * Times in s, distances in m, speeds in m/s; amplitudes in each detector's reading units.
 """
 
@@ -39,8 +46,15 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-from scipy.linalg.lapack import dgesv as _gesv
 
+from .fit_kernels import (
+    GridTable,
+    grid_atoms,
+    grid_table,
+    jacobian,
+    least_squares,
+    levenberg_marquardt,
+)
 from .response import HIGH_PASS, LearnedResponses, high_pass
 
 __all__ = ["CONVERGED", "MAX_LM", "MIN_RATIO_BOUND", "RATIO_SPREADS", "REACH",
@@ -126,37 +140,30 @@ class Problem:
         return np.array([self.y[:, c] for c in range(2)])[..., None], np.array(self.rest)
 
     @cached_property
-    def _both(self):
-        """Both detectors' grids as one (for :meth:`both_atoms`): offsets, scales and
-        bounds of shape (2, 1, 1), K and its differences end to end, each's first index."""
-        def col(values, dtype=float):
-            return np.array(values, dtype=dtype)[:, None, None]
-
-        u = [g[0] for g in self.grids]
-        du = [ui[1] - ui[0] for ui in u]
-        return (col([self.shift[c] + u[c][0] for c in range(2)]),
-                col([1.0 / d for d in du]), col([ui.size - 1.000001 for ui in u]),
-                np.concatenate([g[1] for g in self.grids]), np.concatenate(self.steps),
-                col([0, u[0].size], np.intp), col(self.w),
-                col([self.w[c] / du[c] for c in range(2)]))
+    def table(self) -> GridTable:
+        """Both detectors' grids as the compiled kernels read them
+        (:mod:`bwim.detect.fit_kernels`)."""
+        return grid_table(self.grids, self.steps, self.shift, self.w)
 
     def both_atoms(self, v: float, dt: np.ndarray, slopes: bool = False,
                    out: np.ndarray | None = None):
-        """:meth:`atoms` of both detectors as one array (2, n_rows, n), the same numbers,
-        from the rows' times less the axles' ``dt`` (n_rows, n); with ``slopes`` also the
+        """:meth:`atoms` of both detectors as one array (2, n_rows, n), the same numbers
+        (compiled: :func:`~bwim.detect.fit_kernels.grid_atoms`, element by element the
+        operations of :meth:`atoms`), from the rows' times less the axles' ``dt``
+        (n_rows, n; or (2, n_rows, n): each detector's own); with ``slopes`` also the
         slopes (2, n_rows, n).  ``out``: where to write the atoms (2, n_rows, n)."""
-        off, inv_du, top, k, steps, first, w, w_du = self._both
-        x = (v * dt - off) * inv_du
-        np.maximum(x, 0.0, out=x)  # the grids end in zeros (np.clip: the same numbers)
-        np.minimum(x, top, out=x)
-        j = x.astype(np.intp)
-        x -= j
-        j += first
-        step = steps[j]
-        x *= step
-        x += k[j]
-        out = np.multiply(x, w, out=out)
-        return (out, step * w_du) if slopes else (out, None)
+        d = np.ascontiguousarray(dt, dtype=float)
+        if d.ndim == 2:
+            d = d[None]
+        shape = (2, *d.shape[1:])
+        o = out if out is not None and out.flags.c_contiguous else np.empty(shape)
+        der = np.empty(shape if slopes else (0, 0, 0))
+        g = self.table
+        grid_atoms(g.scalars, g.first, g.values, float(v), d, o, der)
+        if out is not None and o is not out:
+            out[...] = o
+            o = out
+        return (o, der) if slopes else (o, None)
 
     def log_ratio(self, amps: np.ndarray) -> np.ndarray:
         """``ln(A_2 / (ratio A_1))`` per axle (±inf where one detector sees nothing)."""
@@ -244,7 +251,8 @@ def window(pb: Problem, taus: np.ndarray, v: float) -> np.ndarray:
 
 class Rows:
     """What every fit on one vehicle's window reads: the sampled rows' times, readings
-    (2, n_rows, 1) and rest columns (2, n_rows, k), copied once per window."""
+    (2, n_rows, 1) and rest columns (2, n_rows, k; and transposed, :attr:`rest_t`, as
+    the compiled kernels read them), copied once per window."""
 
     def __init__(self, pb: Problem, rows: np.ndarray, index: slice | None = None):
         """``index``: a slice selecting the same rows (read through views rather than
@@ -252,38 +260,61 @@ class Rows:
         y, rest = pb.stacked
         at = rows if index is None else index
         self.rows = rows
-        self.t = pb.t[at]
-        self.y = np.ascontiguousarray(y[:, at])  # C order: numpy's products then give
-        self.rest = np.ascontiguousarray(rest[:, at])  # the numbers of one detector's
+        self.t = np.ascontiguousarray(pb.t[at])  # C order, as the compiled kernels read
+        self.y = np.ascontiguousarray(y[:, at])
+        self.rest = np.ascontiguousarray(rest[:, at])
+
+    @cached_property
+    def rest_t(self) -> np.ndarray:
+        """The rest columns transposed, (2, k, n_rows), C order (made when read)."""
+        return np.ascontiguousarray(self.rest.transpose(0, 2, 1))
 
 
 class Solution:
     """Both detectors' least-squares amplitudes and rest of the axles ``taus`` at speed
     ``v`` on a window's rows (see :func:`solve`), as one stack of two problems; the
-    Jacobian on request."""
+    Jacobian on request.  Made by the compiled
+    :func:`~bwim.detect.fit_kernels.least_squares`: ``Mt`` (2, n + k, n_rows) the
+    design matrix transposed (the atoms, then the rest), ``dXt`` (2, n, n_rows) the
+    atoms' slopes (None without), ``dtt`` (n, n_rows) the rows' times less each axle's,
+    ``Ginv`` ``(MᵀM + ridge)⁻¹`` (the ridge of :func:`ridged_normal`; the pseudo-inverse
+    where singular), ``a`` (2, n) the amplitudes, ``res`` the residual of both
+    detectors end to end."""
 
     def __init__(self, pb: Problem, taus: np.ndarray, v: float, w: Rows, slopes: bool):
-        n = taus.size
+        taus = np.ascontiguousarray(taus, dtype=float)
+        self._empty(pb, taus, v, w, slopes)
+        g = pb.table
+        least_squares(g.scalars, g.first, g.values, w.t, w.y[..., 0], w.rest_t, taus,
+                      float(v), self.k, self.dtt, self.Mt,
+                      self.dXt if slopes else np.empty((0, 0, 0)), self.Ginv, self.a,
+                      self.res)
+
+    def _empty(self, pb: Problem, taus: np.ndarray, v: float, w: Rows, slopes: bool):
+        """Its times, speed, rows and arrays to be written."""
+        n, r = taus.size, w.t.size
+        p = n + w.rest.shape[2]
         self.taus, self.v, self.w, self.slopes = taus, v, w, slopes
-        self.dt = w.t[:, None] - taus[None, :]
-        M = np.empty((2, w.t.size, n + w.rest.shape[2]))  # the atoms, then the rest
-        M[:, :, n:] = w.rest
-        self.dX = pb.both_atoms(v, self.dt, slopes, out=M[:, :, :n])[1]
-        Mt, G = ridged_normal(M)
-        try:
-            Ginv = np.linalg.inv(G)
-        except np.linalg.LinAlgError:
-            Ginv = np.empty_like(G)
-            for c in range(2):
-                try:
-                    Ginv[c] = np.linalg.inv(G[c])
-                except np.linalg.LinAlgError:
-                    Ginv[c] = np.linalg.pinv(G[c])
-        coef = Ginv @ (Mt @ w.y)
         # every step-th sample: scaled to the misfit of all samples
         self.k, self.step = math.sqrt(pb.step), pb.step
-        self.res = (w.y - M @ coef).reshape(-1) * self.k
-        self.M, self.Mt, self.Ginv, self.a = M, Mt, Ginv, coef[:, :n, 0]
+        self.dtt, self.Mt = np.empty((n, r)), np.empty((2, p, r))
+        self.dXt = np.empty((2, n, r)) if slopes else None
+        self.Ginv, self.a, self.res = np.empty((2, p, p)), np.empty((2, n)), np.empty(2 * r)
+
+    @property
+    def M(self) -> np.ndarray:
+        """The design matrices (2, n_rows, n + k): the atoms, then the rest."""
+        return self.Mt.transpose(0, 2, 1)
+
+    @property
+    def dX(self) -> np.ndarray | None:
+        """The atoms' slopes (2, n_rows, n), None without."""
+        return None if self.dXt is None else self.dXt.transpose(0, 2, 1)
+
+    @property
+    def dt(self) -> np.ndarray:
+        """The rows' times less the axles' (n_rows, n)."""
+        return self.dtt.T
 
     # amplitudes and removal costs when read (a refinement's rejected trials never are)
     @cached_property
@@ -300,13 +331,11 @@ class Solution:
         return (gains[0] + gains[1]) * self.step
 
     def jacobian(self) -> np.ndarray:
-        """The variable-projection Jacobian (Kaufman) of the residual in (τ_1 … τ_n, v)."""
-        n, v, dX = self.taus.size, self.v, self.dX
-        D = np.empty((2, self.w.t.size, n + 1))
-        D[:, :, :n] = -v * dX * self.a[:, None, :]  # ∂(X a)/∂τ_i
-        D[:, :, n] = ((dX * self.dt) @ self.a[..., None])[..., 0]  # ∂(X a)/∂v
-        J = self.M @ (self.Ginv @ (self.Mt @ D)) - D
-        return J.reshape(-1, n + 1) * self.k
+        """The variable-projection Jacobian (Kaufman) of the residual in (τ_1 … τ_n, v)
+        (compiled: :func:`~bwim.detect.fit_kernels.jacobian`), (2 n_rows, n + 1)."""
+        Jt = np.empty((self.taus.size + 1, self.res.size))
+        jacobian(self.Mt, self.Ginv, self.a, self.dXt, self.dtt, float(self.v), self.k, Jt)
+        return Jt.T.copy()
 
 
 def solve(pb: Problem, taus: np.ndarray, v: float, rows: np.ndarray, slopes: bool):
@@ -334,50 +363,33 @@ def solution(pb: Problem, taus: np.ndarray, v: float, start: Solution | None = N
 def refine(pb: Problem, taus: np.ndarray, v: float, iterations: int = MAX_LM, *,
            start: Solution | None = None) -> VehicleFit:
     """The vehicle's axle times and speed by Levenberg–Marquardt on the variable
-    projection (amplitudes and rest by least squares inside), on a fixed window.
-    ``start``: the :class:`Solution` with slopes at these times and speed on their window
-    when already made (the same numbers, not made again)."""
+    projection (amplitudes and rest by least squares inside), on a fixed window: the
+    whole loop compiled (:func:`~bwim.detect.fit_kernels.levenberg_marquardt`: A = JsᵀJs,
+    trials of (A + λ diag(diag(A) + 1e-12)) x = Jsᵀr, λ ×10 on a rejected trial, /3 on
+    an accepted one, the stops of the module contract).  ``start``: the :class:`Solution`
+    with slopes at these times and speed on their window when already made (the same
+    numbers, not made again)."""
     taus = np.sort(np.asarray(taus, dtype=float))
     p = np.concatenate((taus, [v]))
     sol = solution(pb, taus, v, start)
-    rows = sol.w
-    r = sol.res
-    cost = float(r @ r)
-    lam = 1e-3
-    scale = np.full(taus.size + 1, 1.0 / v)  # τ in s, v in m/s: metres
-    for _ in range(iterations):
-        Js = sol.jacobian() * scale  # sol: the last accepted (only it is read)
-        A = Js.T @ Js
-        g = Js.T @ r
-        improved = False
-        for _ in range(8):
-            damped = A.copy()  # A + λ diag(diag(A) + 1e-12), by LAPACK's gesv directly
-            diag = damped.reshape(-1)[::taus.size + 2]  # (numpy's solve: the same numbers)
-            diag += lam * (diag + 1e-12)
-            x, info = _gesv(damped, g)[2:]
-            if info:
-                raise np.linalg.LinAlgError("singular matrix")
-            step = -x * scale
-            trial = p + step
-            tt, vv = np.sort(trial[:-1]), trial[-1]
-            if vv <= 0:
-                lam *= 10.0
-                continue
-            # a step that moves an axle off the window leaves its column zero at a
-            # detector: the fit is degenerate, its misfit not finite, the step rejected
-            with np.errstate(invalid="ignore", over="ignore"):
-                trial_sol = Solution(pb, tt, vv, rows, True)
-                c2 = float(trial_sol.res @ trial_sol.res)
-            if np.isfinite(c2) and c2 < cost:
-                rel = (cost - c2) / max(cost, 1e-300)
-                sol = trial_sol
-                p, r, cost = np.concatenate((tt, [vv])), sol.res, c2
-                lam = max(lam / 3.0, 1e-7)
-                improved = True
-                break
-            lam *= 10.0
-        if not improved or rel < CONVERGED or np.abs(step[:-1]).max() * p[-1] < 5e-3:
-            break
+    # the kernel starts from (copies of) sol's arrays and leaves the last accepted
+    # trial's in them
+    last = Solution.__new__(Solution)
+    last.__dict__.update(sol.__dict__)
+    for name in ("dtt", "Mt", "dXt", "Ginv", "a", "res"):
+        setattr(last, name, getattr(sol, name).copy())
+    for name in ("amps", "gains"):  # cached properties of sol's arrays
+        last.__dict__.pop(name, None)
+    g = pb.table
+    w = sol.w
+    before = p.tobytes()
+    cost = levenberg_marquardt(g.scalars, g.first, g.values, w.t, w.y[..., 0], w.rest_t, p,
+                               int(iterations), sol.k, CONVERGED, last.dtt, last.Mt, last.dXt,
+                               last.Ginv, last.a, last.res)
+    if p.tobytes() == before:
+        last = sol  # no trial accepted (an accepted one lowers the misfit: moves)
+    else:
+        last.taus, last.v = p[:-1].copy(), float(p[-1])
     # the last accepted solution's amplitudes and removal costs (made once, when read)
-    return VehicleFit(taus=p[:-1], v=float(p[-1]), amps=sol.amps, chi=cost, gains=sol.gains,
-                      solution=sol)
+    return VehicleFit(taus=p[:-1], v=float(p[-1]), amps=last.amps, chi=cost,
+                      gains=last.gains, solution=last)
