@@ -36,7 +36,9 @@ __all__ = [
     "explained_kernel",
     "grid_autocorrelation",
     "group_choices",
+    "one_axle_may_fit_at",
     "one_axle_points",
+    "one_axle_tolerance",
     "pairwise_sum",
     "segment_bounds",
     "short_sum",
@@ -279,43 +281,57 @@ def segment_bounds(local, k0, k1, lag, margin, st, dip, extent, peak_floor):
 
 
 @njit(cache=True)
-def one_axle_points(resid, h0, h1, j0, auto00, auto10, st, n_grid, ratio, bound):
-    """:func:`bwim.detect.groups.one_axle_may_fit`: cumulative count (``n_grid + 1``)
-    of the grid points where one axle might fit the residual ``resid`` (2, n_rows);
-    ``h0``, ``h1`` the responses starting at samples ``j0`` (2,), ``auto00``, ``auto10``
-    their autocorrelations at lag 0."""
-    b = np.full((2, n_grid), -np.inf)
+def one_axle_tolerance(resid, h0, h1):
+    """The bound on the rounding of the one-axle test's correlations, per detector:
+    ``1e-9 Σ|h| max|z| + 1e-300`` (numpy's sum and max, the same numbers)."""
     tol = np.empty(2)
-    n_rows = resid.shape[1]
     for c in range(2):
         h = h0 if c == 0 else h1
-        z = resid[c]
-        if n_rows >= h.size:
-            n_cc = n_rows - h.size + 1
-            for m in range(n_grid):
-                q = st * m + j0[c]
-                if 0 <= q < n_cc:
-                    b[c, m] = correlation_at(z, q, h)
-        habs = np.abs(h)
         zmax = 0.0
-        for i in range(n_rows):
-            x = abs(z[i])
+        for i in range(resid.shape[1]):
+            x = abs(resid[c, i])
             if x > zmax or math.isnan(x):
                 zmax = x
                 if math.isnan(x):
                     break
-        tol[c] = 1e-9 * pairwise_sum(habs, 0, h.size) * zmax + 1e-300
-    one0, one1 = max(auto00, 1e-300), max(auto10, 1e-300)
+        tol[c] = 1e-9 * pairwise_sum(np.abs(h), 0, h.size) * zmax + 1e-300
+    return tol
+
+
+@njit(cache=True)
+def one_axle_may_fit_at(resid, h0, h1, j0, auto00, auto10, st, m, tol, ratio, bound):
+    """Whether one axle might fit the residual ``resid`` (2, n_rows) at grid point ``m``
+    (see :func:`one_axle_points`; ``tol``: :func:`one_axle_tolerance`)."""
+    n_rows = resid.shape[1]
+    b0 = b1 = -np.inf  # no correlation: the response leaves the window
+    for c in range(2):
+        h = h0 if c == 0 else h1
+        q = st * m + j0[c]
+        if n_rows >= h.size and 0 <= q < n_rows - h.size + 1:
+            if c == 0:
+                b0 = correlation_at(resid[0], q, h)
+            else:
+                b1 = correlation_at(resid[1], q, h)
+    if not (b0 > -tol[0] and b1 > -tol[1]):
+        return False
+    if not (b0 > 1e3 * tol[0] and b1 > 1e3 * tol[1]):
+        return True  # near zero: let the exact test decide
+    lr = math.log((b1 / max(auto10, 1e-300)) / (ratio * (b0 / max(auto00, 1e-300))))
+    slack = 4.0 * (tol[0] / b0 + tol[1] / b1)
+    return abs(lr) <= bound + slack + 1e-12
+
+
+@njit(cache=True)
+def one_axle_points(resid, h0, h1, j0, auto00, auto10, st, n_grid, ratio, bound):
+    """:func:`bwim.detect.groups.one_axle_may_fit`: cumulative count (``n_grid + 1``)
+    of the grid points where one axle might fit the residual ``resid`` (2, n_rows);
+    ``h0``, ``h1`` the responses starting at samples ``j0`` (2,), ``auto00``, ``auto10``
+    their autocorrelations at lag 0 (:func:`one_axle_may_fit_at` at every point)."""
+    tol = one_axle_tolerance(resid, h0, h1)
     out = np.zeros(n_grid + 1, dtype=np.int64)
     for m in range(n_grid):
-        b0, b1 = b[0, m], b[1, m]
-        maybe = b0 > -tol[0] and b1 > -tol[1]
-        sure = b0 > 1e3 * tol[0] and b1 > 1e3 * tol[1]
-        if maybe and sure:
-            lr = math.log((b1 / one1) / (ratio * (b0 / one0)))
-            slack = 4.0 * (tol[0] / b0 + tol[1] / b1)
-            maybe = abs(lr) <= bound + slack + 1e-12
-        out[m + 1] = out[m] + (1 if maybe else 0)
+        ok = one_axle_may_fit_at(resid, h0, h1, j0, auto00, auto10, st, m, tol, ratio, bound)
+        out[m + 1] = out[m] + (1 if ok else 0)
     return out
 
 
@@ -572,17 +588,22 @@ def choose_in_window(t, lo, taus, at, resid, parts, local, k0, k1, h0, h1, j0, s
     keep = np.empty((n_seg, 5), dtype=np.int64)  # first, last, i0, i1, offset
     energies = np.empty(n_seg)
     inside = np.empty(n_seg)
-    bare = np.zeros(0, dtype=np.int64)
+    tol = np.zeros(0)  # the one-axle test's bound on rounding, made when first asked
     n_chosen, off = 0, 0
     for p in range(n_seg):
         first, last = segs[p, 0], segs[p, 1]
         i0 = np.searchsorted(at, first, side="left")
         i1 = np.searchsorted(at, last, side="right")
         if i0 == i1:
-            if bare.size == 0:
-                bare = one_axle_points(resid, h0, h1, j0, auto0[0], auto1[0], st, n_grid,
-                                       ratio, bound)
-            if bare[last + 1] == bare[first]:
+            if tol.size == 0:
+                tol = one_axle_tolerance(resid, h0, h1)
+            fits = False  # the window's one-axle test, on this segment's points alone
+            for m in range(first, last + 1):
+                if one_axle_may_fit_at(resid, h0, h1, j0, auto0[0], auto1[0], st, m, tol,
+                                       ratio, bound):
+                    fits = True
+                    break
+            if not fits:
                 continue  # no axle of the vehicle here and no one axle fits: noise
         first, last = max(first, 0), min(last, n_grid - 1)
         energy = r_inside = 0.0
