@@ -40,6 +40,7 @@ __all__ = [
     "one_axle_points",
     "one_axle_tolerance",
     "pairwise_sum",
+    "response_on_samples",
     "segment_bounds",
     "short_sum",
 ]
@@ -144,6 +145,19 @@ def correlation_at(z, q, h):
             s += z[q + j] * h[j]
         return s
     return np.dot(z[q:q + n], h)
+
+
+@njit(cache=True)
+def response_on_samples(u, k, w, v, fs, d):
+    """:func:`bwim.detect.groups.responses` of one detector (grid ``u``, ordinates ``k``,
+    weight ``w``, shift ``d``): the first sample and the weighted response on the samples
+    (``numpy.interp``'s numbers, as numba computes them)."""
+    j0 = math.ceil((u[0] + d) / v * fs)
+    j1 = math.floor((u[-1] + d) / v * fs)
+    x = np.empty(max(j1 - j0 + 1, 0))
+    for i in range(x.size):
+        x[i] = v * float(j0 + i) / fs - d
+    return j0, np.interp(x, u, k) * w
 
 
 @njit(cache=True)
@@ -385,6 +399,49 @@ def _even(c0, c1, off, start, s, k, inv0, inv1, b0, b1, a0, a1, ratio, bound):
     return g0 + g1, valid
 
 
+#: The unit roundoff of float64.
+_U = 2.0**-53
+
+
+@njit(cache=True)
+def _even_bound(c0, c1, off, start, s, k, inv0, inv1, b0, b1, lo_x, hi_x, ratio):
+    """A cheap look at one hypothesis (see :func:`_even`) without BLAS: False where it is
+    surely not valid (an axle's amplitude surely not positive, or its gain ratio surely
+    beyond ``lo_x`` … ``hi_x``, the bound's exponentials), and an upper bound on the
+    misfit :func:`_even` gives it (its plain products' sum plus a bound on both sums'
+    rounding: any order of a k-term sum is within ``k u Σ|terms|`` of the exact one)."""
+    for j in range(k):
+        b0[j] = c0[off + start + s * j]
+        b1[j] = c1[off + start + s * j]
+    g = 0.0
+    err = 1e-300
+    maybe = True
+    for i in range(k):
+        x0 = x1 = 0.0
+        m0 = m1 = 0.0
+        for j in range(k):
+            p0 = inv0[i, j] * b0[j]
+            p1 = inv1[i, j] * b1[j]
+            x0 += p0
+            x1 += p1
+            m0 += abs(p0)
+            m1 += abs(p1)
+        e0 = 8.0 * k * _U * m0 + 1e-300  # bounds |x - BLAS's amplitude| (2 k u Σ|p| at most)
+        e1 = 8.0 * k * _U * m1 + 1e-300
+        g += x0 * b0[i] + x1 * b1[i]
+        err += (e0 * abs(b0[i]) + e1 * abs(b1[i])
+                + 8.0 * k * _U * ((abs(x0) + e0) * abs(b0[i]) + (abs(x1) + e1) * abs(b1[i])))
+        if maybe:
+            if x0 + e0 <= 0.0 or x1 + e1 <= 0.0:
+                maybe = False  # surely not positive at a detector
+            elif x0 - e0 > 0.0 and x1 - e1 > 0.0:
+                r = x1 / (ratio * x0)
+                m = 2.0 * (e0 / (x0 - e0) + e1 / (x1 - e1)) + 1e-12
+                if r < lo_x * (1.0 - m) or r > hi_x * (1.0 + m):
+                    maybe = False  # surely not seen by both
+    return maybe, g + err + 8.0 * _U * abs(g)
+
+
 @njit(cache=True)
 def _inverses(auto0, auto1, k, s_min, n_sp):
     """Each spacing's inverses (n_sp, 2, k, k)."""
@@ -463,6 +520,7 @@ def _choice(c0, c1, off, L, auto0, auto1, outside, energy, limit, n_samples, s_m
         return 0.0, 0
     best, count = best_g, 1
     pos[0] = best_j
+    lo_x, hi_x = math.exp(-bound), math.exp(bound)
     for k in range(2, group_axles + 1):
         inv = invs[k - 2]
         b0, b1, a0, a1 = np.empty(k), np.empty(k), np.empty(k), np.empty(k)
@@ -476,6 +534,14 @@ def _choice(c0, c1, off, L, auto0, auto1, outside, energy, limit, n_samples, s_m
                     inv[i, 0] = _inverse(auto0, s, k)
                     inv[i, 1] = _inverse(auto1, s, k)
                     done[k - 2, i] = True
+                # numpy's numbers (BLAS) only where the hypothesis might be valid and
+                # might beat the best so far (the bound: see _even_bound)
+                maybe, most = _even_bound(c0, c1, off, start, s, k, inv[i, 0], inv[i, 1],
+                                          b0, b1, lo_x, hi_x, ratio)
+                if not maybe:
+                    continue  # its score is -inf: it changes no choice
+                if top_s >= 0 and (math.isnan(top_g) or most < top_g):
+                    continue  # it cannot be the first largest
                 g, ok = _even(c0, c1, off, start, s, k, inv[i, 0], inv[i, 1], b0, b1, a0,
                               a1, ratio, bound)
                 sc = g if ok else -np.inf
@@ -565,20 +631,42 @@ def explained_kernel(hyp, c0, c1, auto0, auto1):
 
 
 @njit(cache=True)
-def choose_in_window(t, lo, taus, at, resid, parts, local, k0, k1, h0, h1, j0, st, lag,
-                     margin, s_min, s_max, ratio, bound, limit, group_axles, level_gain,
-                     rare_group, dip, extent, peak_floor):
+def choose_in_window(t, lo, taus, y, rest, X, coef, u0, k0, u1, k1, w, shift0, shift1, v, fs,
+                     st, lag, margin, s_min, s_max, ratio, bound, limit, group_axles,
+                     level_gain, rare_group, dip, extent, peak_floor):
     """:func:`bwim.detect.groups.choose_groups` after the vehicle's least squares on its
-    window (samples ``lo`` … of ``t``): ``taus`` (sorted) at grid points ``at``, the
-    residual ``resid`` (2, n_rows), each axle's fitted part ``parts`` (2, n_rows, n), the
-    local readings ``local`` (2, n_rows), the responses' ordinates ``k0``, ``k1``, the
-    :func:`~bwim.detect.groups.templates` ``h0``, ``h1`` from samples ``j0`` (their
-    autocorrelations every ``st``-th sample made here, :func:`grid_autocorrelation`, at
-    least to the widest group's lag).  The new times (sorted) and whether they changed."""
+    window (samples ``lo`` … of ``t``): ``taus`` (sorted), the window's readings ``y``
+    (2, n_rows, 1), rest columns ``rest`` (2, n_rows, p), atoms ``X`` (2, n_rows, n) and
+    the least-squares coefficients ``coef`` (2, n + p, 1); the responses' grids ``u0``,
+    ``k0``, ``u1``, ``k1``, weights ``w`` and shifts.  The responses on the samples
+    (:func:`response_on_samples`) and their autocorrelations every ``st``-th sample
+    (:func:`grid_autocorrelation`, at least to the widest group's lag) are made here.
+    The new times (sorted) and whether they changed."""
+    n = taus.size
+    n_rows = y.shape[1]
+    n_grid = (n_rows - 1) // st + 1
+    j00, h0 = response_on_samples(u0, k0, w[0], v, fs, shift0)
+    j01, h1 = response_on_samples(u1, k1, w[1], v, fs, shift1)
+    j0 = np.array([j00, j01])
     auto0 = grid_autocorrelation(h0, st, s_max * group_axles + 1)
     auto1 = grid_autocorrelation(h1, st, s_max * group_axles + 1)
-    n_rows = resid.shape[1]
-    n_grid = (n_rows - 1) // st + 1
+    # the readings less the rest (BLAS gemv, as numpy's matmul), each axle's fitted part,
+    # the residual (numpy's sum of the parts)
+    local = np.empty((2, n_rows))
+    parts = np.empty((2, n_rows, n))
+    resid = np.empty((2, n_rows))
+    p = rest.shape[2]
+    for c in range(2):
+        r = np.dot(rest[c], coef[c, n:, 0].copy()) if p > 0 else np.zeros(n_rows)
+        for i in range(n_rows):
+            local[c, i] = y[c, i, 0] - r[i]
+            for g in range(n):
+                parts[c, i, g] = X[c, i, g] * coef[c, g, 0]
+            resid[c, i] = local[c, i] - short_sum(parts[c, i])
+    # the axles' grid points (numpy's round: half to even)
+    at = np.empty(n, dtype=np.int64)
+    for g in range(n):
+        at[g] = np.int64(np.rint((taus[g] - t[lo]) * fs / st))
     segs = segment_bounds(local, k0, k1, lag, margin, st, dip, extent, peak_floor)
     r_total = np.dot(resid[0], resid[0]) + np.dot(resid[1], resid[1])
     n_samples = 2 * n_rows

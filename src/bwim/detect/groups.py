@@ -39,6 +39,8 @@ Contract
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .group_kernels import (
@@ -47,9 +49,9 @@ from .group_kernels import (
     explained_kernel,
     group_choices,
     one_axle_points,
+    response_on_samples,
     segment_bounds,
 )
-from .signals import last_axis_sum
 from .vehicle_fit import REACH, Problem, Rows, ridged_normal
 
 __all__ = ["GROUP_AXLES", "GROUP_DIP", "GROUP_EXTENT", "GROUP_SPACING", "LEVEL_GAIN",
@@ -90,14 +92,11 @@ def templates(pb: Problem, v: float) -> list[tuple[int, np.ndarray, np.ndarray]]
 
 
 def responses(pb: Problem, v: float) -> list[tuple[int, np.ndarray]]:
-    """:func:`templates` without their autocorrelation: (first sample offset, values)."""
-    out = []
-    for c, (u, k, _) in enumerate(pb.grids):
-        d = pb.shift[c]
-        j0 = int(np.ceil((u[0] + d) / v * pb.fs))
-        j1 = int(np.floor((u[-1] + d) / v * pb.fs))
-        out.append((j0, np.interp(v * np.arange(j0, j1 + 1) / pb.fs - d, u, k) * pb.w[c]))
-    return out
+    """:func:`templates` without their autocorrelation: (first sample offset, values)
+    (:func:`bwim.detect.group_kernels.response_on_samples`)."""
+    return [response_on_samples(u, k, float(pb.w[c]), float(v), float(pb.fs),
+                                float(pb.shift[c]))
+            for c, (u, k, _) in enumerate(pb.grids)]
 
 
 def choose_groups(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp: float,
@@ -111,7 +110,6 @@ def choose_groups(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp:
     response and that response's autocorrelation (on the window's sampling grid).  The new
     times, or None."""
     taus = np.sort(taus)
-    n = taus.size
     lo = int(pb.t.searchsorted(span[0] - REACH / v))
     hi = int(pb.t.searchsorted(span[1] + (pb.shift[1] + REACH) / v, side="right"))
     w = Rows(pb, np.arange(lo, hi), slice(lo, hi))
@@ -119,21 +117,15 @@ def choose_groups(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp:
     X = pb.both_atoms(v, w.t[:, None] - taus[None, :])[0]
     Mt, G = ridged_normal(np.concatenate([X, w.rest], axis=2))
     coef = np.linalg.solve(G, Mt @ w.y)
-    local = (w.y - w.rest @ coef[:, n:])[..., 0]  # (2, n_rows)
-    parts = X * coef[:, None, :n, 0]  # (2, n_rows, n)
-    fitted = last_axis_sum(parts)
-    resid = local - fitted
-    tpl = responses(pb, v)
     st = pb.step  # hypotheses on every st-th sample
-    at = ((taus - pb.t[lo]) * pb.fs / st).round().astype(np.int64)  # axles' grid points
-    # the segments, their correlations and choices, compiled (see the module contract);
-    # the responses' autocorrelation on the grid (zero beyond the response) made there
+    (u0, k0, _), (u1, k1, _) = pb.grids
+    # the rest taken off, the segments, their correlations and choices, compiled (see the
+    # module contract)
     new, changed = choose_in_window(
-        pb.t, lo, taus, at, resid, parts, np.ascontiguousarray(local), pb.grids[0][1],
-        pb.grids[1][1], tpl[0][1], tpl[1][1], np.array([tpl[0][0], tpl[1][0]]), st,
-        round(pb.shift[1] / v * pb.fs), round(SEGMENT_MARGIN / v * pb.fs),
-        max(1, int(np.ceil(min_sp / v * pb.fs / st))),
-        int(np.floor(GROUP_SPACING / v * pb.fs / st)), float(pb.ratio), float(pb.bound),
+        pb.t, lo, taus, w.y, w.rest, X, coef, u0, k0, u1, k1, pb.w, float(pb.shift[0]),
+        float(pb.shift[1]), float(v), float(pb.fs), st, round(pb.shift[1] / v * pb.fs),
+        round(SEGMENT_MARGIN / v * pb.fs), max(1, math.ceil(min_sp / v * pb.fs / st)),
+        math.floor(GROUP_SPACING / v * pb.fs / st), float(pb.ratio), float(pb.bound),
         float(limit), GROUP_AXLES, LEVEL_GAIN, RARE_GROUP, GROUP_DIP, GROUP_EXTENT,
         PEAK_FLOOR)
     return new if changed else None
