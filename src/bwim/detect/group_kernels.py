@@ -82,7 +82,7 @@ def pairwise_sum(a, lo, n):
     values, halves beyond, the first a multiple of 8), the same number.  numpy's
     recursion as a loop over an explicit stack (numba's cache fails recursive functions)."""
     if n <= 128:
-        return _block_sum(a, lo, n)
+        return 0.0 + _block_sum(a, lo, n)  # numpy adds the sum to its identity, 0
     # post-order over the halves: each frame (start, count, stage, left half's sum)
     starts = np.empty(64, dtype=np.int64)
     counts = np.empty(64, dtype=np.int64)
@@ -112,7 +112,7 @@ def pairwise_sum(a, lo, n):
                 value = lefts[d] + value  # its right half: its sum
                 depth -= 1
             if depth == 0:
-                return value
+                return 0.0 + value
         else:  # split: the left half first
             stages[d] = 1
             half = m // 2
