@@ -131,7 +131,7 @@ def short_sum(a):
         for i in range(1, k):
             s += a[i]
         return s
-    return pairwise_sum(a, 0, k)
+    return pairwise_sum(a, k - k, k)  # (not a literal 0: one compiled signature)
 
 
 @njit(cache=True)
@@ -151,13 +151,35 @@ def correlation_at(z, q, h):
 def response_on_samples(u, k, w, v, fs, d):
     """:func:`bwim.detect.groups.responses` of one detector (grid ``u``, ordinates ``k``,
     weight ``w``, shift ``d``): the first sample and the weighted response on the samples
-    (``numpy.interp``'s numbers, as numba computes them)."""
+    (``numpy.interp``'s numbers: its interval, slope and value, written out)."""
     j0 = math.ceil((u[0] + d) / v * fs)
     j1 = math.floor((u[-1] + d) / v * fs)
-    x = np.empty(max(j1 - j0 + 1, 0))
-    for i in range(x.size):
-        x[i] = v * float(j0 + i) / fs - d
-    return j0, np.interp(x, u, k) * w
+    h = np.empty(max(j1 - j0 + 1, 0))
+    n = u.size
+    j = 0
+    for i in range(h.size):
+        x = v * float(j0 + i) / fs - d
+        # numpy.interp: the interval u[j] <= x < u[j + 1], its slope and value
+        if x < u[0]:
+            y = k[0]
+        elif x > u[n - 1]:
+            y = k[n - 1]
+        else:
+            if x < u[j]:
+                j = 0
+            while j < n - 1 and u[j + 1] <= x:
+                j += 1
+            if j == n - 1 or x == u[j]:
+                y = k[j]
+            else:
+                slope = (k[j + 1] - k[j]) / (u[j + 1] - u[j])
+                y = slope * (x - u[j]) + k[j]
+                if math.isnan(y):
+                    y = slope * (x - u[j + 1]) + k[j + 1]
+                    if math.isnan(y) and k[j] == k[j + 1]:
+                        y = k[j]
+        h[i] = y * w
+    return j0, h
 
 
 @njit(cache=True)
@@ -308,7 +330,7 @@ def one_axle_tolerance(resid, h0, h1):
                 zmax = x
                 if math.isnan(x):
                     break
-        tol[c] = 1e-9 * pairwise_sum(np.abs(h), 0, h.size) * zmax + 1e-300
+        tol[c] = 1e-9 * pairwise_sum(np.abs(h), h.size - h.size, h.size) * zmax + 1e-300
     return tol
 
 
@@ -373,7 +395,10 @@ def _inverse(auto, s, k):
     for i in range(k):
         for j in range(k):
             G[i, j] = auto[s * abs(i - j)] + ridge * (1.0 if i == j else 0.0)
-    return np.linalg.solve(G, np.eye(k))
+    eye = np.zeros((k, k))
+    for i in range(k):
+        eye[i, i] = 1.0
+    return np.linalg.solve(G, eye)
 
 
 @njit(cache=True)
@@ -504,7 +529,7 @@ def _choice(c0, c1, off, L, auto0, auto1, outside, energy, limit, n_samples, s_m
             ratio, bound, group_axles, level_gain, rare_group, invs, done, pos):
     """One segment's choice of its ``L`` grid points' correlations from ``off`` (see
     :func:`group_choices`): the misfit removed and the count, its grid points into
-    ``pos``.  ``invs`` (per count from 2, (n_sp, 2, k, k)) and ``done`` (counts, n_sp):
+    ``pos``.  ``invs`` (count - 2, n_sp, 2, k, k at most) and ``done`` (count - 2, n_sp):
     the spacings' inverses made so far, filled on demand."""
     one0, one1 = max(auto0[0], 1e-300), max(auto1[0], 1e-300)
     best_g, best_j = -np.inf, -1
@@ -522,8 +547,8 @@ def _choice(c0, c1, off, L, auto0, auto1, outside, energy, limit, n_samples, s_m
     pos[0] = best_j
     lo_x, hi_x = math.exp(-bound), math.exp(bound)
     for k in range(2, group_axles + 1):
-        inv = invs[k - 2]
         b0, b1, a0, a1 = np.empty(k), np.empty(k), np.empty(k), np.empty(k)
+        A0, A1 = np.empty((k, k)), np.empty((k, k))  # an inverse in C order, for BLAS
         top_g, top_s, top_start = -np.inf, -1, -1
         for start in range(L):
             for s in range(s_min, s_max + 1):
@@ -531,19 +556,21 @@ def _choice(c0, c1, off, L, auto0, auto1, outside, energy, limit, n_samples, s_m
                     break
                 i = s - s_min
                 if not done[k - 2, i]:
-                    inv[i, 0] = _inverse(auto0, s, k)
-                    inv[i, 1] = _inverse(auto1, s, k)
+                    invs[k - 2, i, 0, :k, :k] = _inverse(auto0, s, k)
+                    invs[k - 2, i, 1, :k, :k] = _inverse(auto1, s, k)
                     done[k - 2, i] = True
+                inv0, inv1 = invs[k - 2, i, 0], invs[k - 2, i, 1]
                 # numpy's numbers (BLAS) only where the hypothesis might be valid and
                 # might beat the best so far (the bound: see _even_bound)
-                maybe, most = _even_bound(c0, c1, off, start, s, k, inv[i, 0], inv[i, 1],
-                                          b0, b1, lo_x, hi_x, ratio)
+                maybe, most = _even_bound(c0, c1, off, start, s, k, inv0, inv1, b0, b1,
+                                          lo_x, hi_x, ratio)
                 if not maybe:
                     continue  # its score is -inf: it changes no choice
                 if top_s >= 0 and (math.isnan(top_g) or most < top_g):
                     continue  # it cannot be the first largest
-                g, ok = _even(c0, c1, off, start, s, k, inv[i, 0], inv[i, 1], b0, b1, a0,
-                              a1, ratio, bound)
+                A0[:, :] = inv0[:k, :k]
+                A1[:, :] = inv1[:k, :k]
+                g, ok = _even(c0, c1, off, start, s, k, A0, A1, b0, b1, a0, a1, ratio, bound)
                 sc = g if ok else -np.inf
                 if top_s < 0 or _better(sc, top_g):
                     top_g, top_s, top_start = sc, s, start
@@ -569,7 +596,7 @@ def group_choices(c0, c1, lengths, auto0, auto1, outside, energies, limit, n_sam
     spacing's inverses made once, when first asked for."""
     n_seg = lengths.size
     n_sp = max(s_max - s_min + 1, 0)
-    invs = [np.empty((n_sp, 2, k, k)) for k in range(2, group_axles + 1)]
+    invs = np.empty((max(group_axles - 1, 0), n_sp, 2, group_axles, group_axles))
     done = np.zeros((max(group_axles - 1, 0), n_sp), dtype=np.bool_)
     gained = np.zeros(n_seg)
     counts = np.zeros(n_seg, dtype=np.int64)
@@ -603,7 +630,7 @@ def explained_kernel(hyp, c0, c1, auto0, auto1):
             amps[h, 0, 1] = a1
         return gained, amps
     G = np.empty((k, k))
-    b = np.empty(k)
+    b = np.empty((k, 1))  # one column: gesv's one signature with the inverses'
     p = np.empty(k)
     for h in range(n_hyp):
         total = 0.0
@@ -612,7 +639,7 @@ def explained_kernel(hyp, c0, c1, auto0, auto1):
             corr = c0 if c == 0 else c1
             ridge = 1e-12 * auto[0]
             for i in range(k):
-                b[i] = corr[hyp[h, i]]
+                b[i, 0] = corr[hyp[h, i]]
                 for j in range(k):
                     lag = abs(hyp[h, i] - hyp[h, j])
                     if lag >= auto.size:
@@ -620,8 +647,8 @@ def explained_kernel(hyp, c0, c1, auto0, auto1):
                     G[i, j] = auto[lag] + ridge * (1.0 if i == j else 0.0)
             a = np.linalg.solve(G, b)
             for i in range(k):
-                p[i] = a[i] * b[i]
-                amps[h, i, c] = a[i]
+                p[i] = a[i, 0] * b[i, 0]
+                amps[h, i, c] = a[i, 0]
             if c == 0:
                 total = short_sum(p)
             else:
@@ -680,8 +707,11 @@ def choose_in_window(t, lo, taus, y, rest, X, coef, u0, k0, u1, k1, w, shift0, s
     n_chosen, off = 0, 0
     for p in range(n_seg):
         first, last = segs[p, 0], segs[p, 1]
-        i0 = np.searchsorted(at, first, side="left")
-        i1 = np.searchsorted(at, last, side="right")
+        i0 = i1 = 0  # the axles at first … last (at is ascending)
+        while i0 < n and at[i0] < first:
+            i0 += 1
+        while i1 < n and at[i1] <= last:
+            i1 += 1
         if i0 == i1:
             if tol.size == 0:
                 tol = one_axle_tolerance(resid, h0, h1)
@@ -764,4 +794,12 @@ def choose_in_window(t, lo, taus, y, rest, X, coef, u0, k0, u1, k1, w, shift0, s
                 break
         if not inside_any:
             changed = True
-    return np.sort(out[:n_out]), changed
+    new = out[:n_out].copy()
+    for i in range(1, n_out):  # a few times: insertion sort (numpy's order of numbers)
+        x = new[i]
+        j = i - 1
+        while j >= 0 and new[j] > x:
+            new[j + 1] = new[j]
+            j -= 1
+        new[j + 1] = x
+    return new, changed
