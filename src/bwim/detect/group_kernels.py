@@ -10,10 +10,17 @@ Contract
   :func:`bwim.detect.signals.last_axis_sum`), longer ones pairwise as numpy's sum
   (:func:`pairwise_sum`); dot products and the correlations' inner products by BLAS
   ``ddot`` as numpy's (:func:`correlation_at`: numpy's own loop for kernels of at most 11
-  values); each evenly spaced system's inverse by LAPACK ``gesv`` on the identity (as
-  ``numpy.linalg.inv``), applied by BLAS ``gemv`` (as numpy's matmul), a hypothesis's
-  system by ``gesv`` (as ``numpy.linalg.solve``).  numba calls scipy's OpenBLAS, numpy its
-  own: the same kernels, measured equal on this machine (the unit tests check it).
+  values); the readings less the rest by BLAS ``gemv`` (as numpy's matmul);
+  ``numpy.interp`` written out (its interval, slope and value); each evenly spaced
+  system's inverse by LAPACK ``gesv`` on the identity (as ``numpy.linalg.inv``), applied
+  by BLAS ``gemv`` (as numpy's matmul), a hypothesis's system by ``gesv`` (as
+  ``numpy.linalg.solve``).  numba calls scipy's OpenBLAS, numpy its own: the same
+  kernels, measured equal on this machine (the unit tests check it, bit for bit).
+* Evenly spaced hypotheses: a hypothesis's BLAS product is made only where a cheap look
+  (its plain products, and a bound on how far any order of their sums, BLAS's included,
+  can be from them: ``k u Σ|terms|`` per sum, taken 4 times over) says it might be valid
+  and might beat the best so far; a hypothesis skipped is surely invalid or surely not
+  larger, so the choice (the first largest valid one, numpy's argmax) is the same.
 * One exception: logarithms are the C library's, numpy's may be its own SIMD ones; the two
   can differ in the last bit, which changes a decision only where an axle's log gain
   ratio lies within that bit of the bound.

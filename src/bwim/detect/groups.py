@@ -26,8 +26,9 @@ Contract
   the window, widened by a bound on its rounding) is noise and skipped without changing
   any choice.
 * Compiled: the vehicle's least squares on its window is numpy's (through
-  :mod:`bwim.detect.vehicle_fit`); everything after it (the segments, the correlations,
-  every count's hypotheses and the choice) is one call of
+  :mod:`bwim.detect.vehicle_fit`); everything after it (the rest and the axles taken off,
+  the responses on the samples, the segments, the correlations, every count's
+  hypotheses and the choice) is one call of
   :func:`bwim.detect.group_kernels.choose_in_window` (numba), whose loops compute the
   same equations with numpy's numbers (its contract says how; one exception: a
   logarithm's last bit); :func:`segments`, :func:`one_axle_may_fit`,
