@@ -652,7 +652,13 @@ def explained_kernel(hyp, c0, c1, auto0, auto1):
                     if lag >= auto.size:
                         raise IndexError("lag beyond the autocorrelation")
                     G[i, j] = auto[lag] + ridge * (1.0 if i == j else 0.0)
-            a = np.linalg.solve(G, b)
+            finite = True
+            for i in range(k):
+                finite = finite and math.isfinite(b[i, 0])
+            if finite:
+                a = np.linalg.solve(G, b)
+            else:  # numba's solve refuses what LAPACK would carry through: NaN, as numpy
+                a = np.full((k, 1), np.nan)
             for i in range(k):
                 p[i] = a[i, 0] * b[i, 0]
                 amps[h, i, c] = a[i, 0]
