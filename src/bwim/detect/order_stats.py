@@ -1,0 +1,176 @@
+"""Compiled order statistics for the detection: medians, robust deviations, the
+five-sample running median of :func:`bwim.detect.signals.despike`.
+
+Contract
+--------
+* Each kernel is a numba function (``njit(cache=True)``, no fastmath, no parallelism)
+  that computes what :mod:`bwim.detect.signals` describes with numpy or scipy calls,
+  the same numbers: an order statistic is one of the values (found by selection, a
+  three-way quickselect on a copy), the mean of the two middle values of an even count
+  is ``(a + b) / 2`` as :func:`bwim.detect.signals.median` makes it, and every other
+  operation is the same single IEEE operation numpy applies element by element.
+  Signed zeros may differ where the order of equal values does (equal as numbers).
+* Inputs are float64 and C-contiguous (the callers in :mod:`bwim.detect.signals`
+  convert), so each kernel has one compiled signature (numba types a read-only array
+  apart: one would compile a second; the detection passes none).
+* :func:`median_of` is the median of a 1-D array (NaN for none, NaN if any value is);
+  :func:`mad_of` the median absolute deviation from the median (0 for none; NaN when a
+  value is).
+* :func:`despike_columns` is :func:`~bwim.detect.signals.despike`'s arithmetic for
+  finite readings (n_t ≥ 5, k): each column's five-sample running median with the ends
+  extended by their edge values (``scipy.ndimage.median_filter(y, size=(5, 1),
+  mode="nearest")``), the deviations from it, each column's robust σ of them (1.4826
+  MAD) and the range of its running medians, and the spikes: deviations beyond
+  ``sigmas`` × σ and ``share`` × that range.  It says when a reading is not finite
+  (the caller then takes the numpy and scipy path, whose NaN handling it does not copy).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+__all__ = ["despike_columns", "mad_of", "median_of"]
+
+
+@njit(cache=True)
+def _select(buf, lo, hi, k):
+    """Rearrange ``buf[lo:hi]`` so that ``buf[k]`` holds the value of rank ``k`` (sorted
+    order) with no larger value before it and no smaller after it: a three-way
+    quickselect (runs of equal values, common in quantised readings, in one step).
+    The values are finite or ±inf (no NaN)."""
+    while hi - lo > 1:
+        a, b, c = buf[lo], buf[(lo + hi) // 2], buf[hi - 1]
+        # median of three as the pivot
+        if a < b:
+            pivot = b if b < c else (c if a < c else a)
+        else:
+            pivot = a if a < c else (c if b < c else b)
+        # Dijkstra's three-way partition: [lo, lt) < pivot, [lt, gt) == pivot, [gt, hi) >
+        lt, i, gt = lo, lo, hi
+        while i < gt:
+            x = buf[i]
+            if x < pivot:
+                buf[i] = buf[lt]
+                buf[lt] = x
+                lt += 1
+                i += 1
+            elif x > pivot:
+                gt -= 1
+                buf[i] = buf[gt]
+                buf[gt] = x
+            else:
+                i += 1
+        if k < lt:
+            hi = lt
+        elif k >= gt:
+            lo = gt
+        else:
+            return
+
+
+@njit(cache=True)
+def _median_inplace(buf, n):
+    """The median of ``buf[:n]`` (no NaN, n ≥ 1), rearranging it."""
+    k = n // 2
+    _select(buf, 0, n, k)
+    if n % 2:
+        return buf[k]
+    below = buf[0]  # the largest value before rank k: rank k - 1
+    for i in range(1, k):
+        if buf[i] > below:
+            below = buf[i]
+    return (below + buf[k]) / 2
+
+
+@njit(cache=True)
+def median_of(v):
+    """The median of ``v`` (1-D, float64, C-contiguous); NaN for none or if any is."""
+    n = v.size
+    if n == 0:
+        return np.nan
+    buf = np.empty(n)
+    for i in range(n):
+        x = v[i]
+        if x != x:
+            return np.nan
+        buf[i] = x
+    return _median_inplace(buf, n)
+
+
+@njit(cache=True)
+def mad_of(v):
+    """``median |v − median v|`` of ``v`` (1-D, float64, C-contiguous); 0 for none,
+    NaN if any value is NaN."""
+    n = v.size
+    if n == 0:
+        return 0.0
+    buf = np.empty(n)
+    for i in range(n):
+        x = v[i]
+        if x != x:
+            return np.nan
+        buf[i] = x
+    m = _median_inplace(buf, n)
+    for i in range(n):
+        buf[i] = abs(v[i] - m)
+    return _median_inplace(buf, n)
+
+
+@njit(cache=True)
+def _middle_of_five(w):
+    """The middle value of the five in ``w`` (no NaN), sorting ``w`` (insertion sort)."""
+    for i in range(1, 5):
+        x = w[i]
+        j = i - 1
+        while j >= 0 and w[j] > x:
+            w[j + 1] = w[j]
+            j -= 1
+        w[j + 1] = x
+    return w[2]
+
+
+@njit(cache=True)
+def despike_columns(y, sigmas, share, mad_to_sigma):
+    """``despike``'s arithmetic on ``y`` (n_t ≥ 5, k; float64, C-contiguous; see the
+    module docstring; σ = ``mad_to_sigma`` × MAD): (running medians, spikes (bool),
+    number of spikes, whether every reading is finite).  When one is not, the other
+    outputs are not computed."""
+    n, k = y.shape
+    med = np.empty((n, k))
+    spikes = np.zeros((n, k), dtype=np.bool_)
+    for i in range(n):
+        for c in range(k):
+            x = y[i, c]
+            if not (x - x == 0.0):  # NaN or ±inf
+                return med, spikes, 0, False
+    count = 0
+    buf = np.empty(n)
+    dev = np.empty(n)
+    w = np.empty(5)
+    for c in range(k):
+        top = -np.inf
+        bottom = np.inf
+        for i in range(n):
+            for j in range(5):  # the ends extended by their edge values
+                w[j] = y[min(max(i + j - 2, 0), n - 1), c]
+            m = _middle_of_five(w)
+            med[i, c] = m
+            if m > top:
+                top = m
+            if m < bottom:
+                bottom = m
+            dev[i] = y[i, c] - m
+            buf[i] = dev[i]
+        centre = _median_inplace(buf, n)
+        for i in range(n):
+            buf[i] = abs(dev[i] - centre)
+        sigma = mad_to_sigma * _median_inplace(buf, n)
+        limit_sigma = sigmas * sigma
+        limit_share = share * (top - bottom)
+        for i in range(n):
+            ad = abs(dev[i])
+            if ad > limit_sigma and ad > limit_share:
+                spikes[i, c] = True
+                count += 1
+    return med, spikes, count, True
