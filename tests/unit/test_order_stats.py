@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.ndimage import median_filter
 
-from bwim.detect.order_stats import despike_columns, mad_of, median_of
+from bwim.detect.order_stats import despike_columns, mad_of, median_of, outside_activity
 from bwim.detect.signals import (
     MAD_TO_SIGMA,
     SPIKE_SHARE,
@@ -96,3 +96,49 @@ def test_non_finite_readings_take_scipys_path():
     got = despike(y)
     assert np.array_equal(got.spikes, ref_spikes)
     assert np.array_equal(got.values, ref_values, equal_nan=True)
+
+
+def _reference_activity(t, s, w, margin, fraction, snr):
+    """unexplained_activity's active samples with numpy (its code before the kernel)."""
+    inside = np.zeros(t.size, dtype=bool)
+    for a, b in w:
+        inside |= (t >= a - margin) & (t <= b + margin)
+    outside = ~inside
+    if outside.sum() < 0.1 * t.size or not inside.any():
+        return None
+    dev = s - np.median(s[outside])
+    d = np.diff(s)
+    noise = (MAD_TO_SIGMA * np.median(np.abs(d - np.median(d))) if d.size else 0.0) / np.sqrt(2.0)
+    limit = max(fraction * np.abs(dev[inside]).max(), snr * noise)
+    return outside & (np.abs(dev) > limit)
+
+
+def test_outside_activity_is_numpys():
+    rng = np.random.default_rng(11)
+    n_active = n_none = 0
+    for trial in range(2000):
+        n = int(rng.integers(1, 300))
+        t = np.arange(n) / 512.0 + float(rng.normal())
+        s = rng.normal(size=n) * 0.1 + float(rng.normal()) * 5
+        if trial % 3 == 0:
+            s = np.round(s * 20.0)  # quantised
+        for _ in range(int(rng.integers(0, 3))):  # pulses
+            i = int(rng.integers(0, n))
+            s[i:i + int(rng.integers(1, 40))] += float(rng.normal()) * 10
+        m = int(rng.integers(0, 4))
+        lo = rng.uniform(t[0] - 0.2, t[-1] + 0.1, size=m)
+        w = np.column_stack([lo, lo + rng.uniform(0.0, 0.4, size=m)])
+        margin, fraction, snr = 0.05, float(rng.uniform(0.05, 0.5)), float(rng.uniform(2, 10))
+        status, active = outside_activity(t, s, w, margin, fraction, snr, MAD_TO_SIGMA)
+        ref = _reference_activity(t, s, w, margin, fraction, snr)
+        if ref is None:
+            assert status == 0
+            n_none += 1
+        else:
+            assert status == 1 and np.array_equal(active, ref), (trial, active, ref)
+            n_active += int(ref.any())
+    assert n_active > 200 and n_none > 200
+    s = np.ones(50)
+    s[3] = np.nan
+    assert outside_activity(np.arange(50.0), s, np.array([[10.0, 20.0]]), 0.05, 0.2, 8.0,
+                            MAD_TO_SIGMA)[0] == 2

@@ -1,5 +1,6 @@
 """Compiled order statistics for the detection: medians, robust deviations, the
-five-sample running median of :func:`bwim.detect.signals.despike`.
+five-sample running median of :func:`bwim.detect.signals.despike`, the quiet level and
+noise of :func:`bwim.detect.presence.unexplained_activity`.
 
 Contract
 --------
@@ -23,6 +24,11 @@ Contract
   MAD) and the range of its running medians, and the spikes: deviations beyond
   ``sigmas`` × σ and ``share`` × that range.  It says when a reading is not finite
   (the caller then takes the numpy and scipy path, whose NaN handling it does not copy).
+* :func:`outside_activity` is :func:`bwim.detect.presence.unexplained_activity`'s
+  arithmetic for a finite signal: the samples inside a window widened by ``margin``,
+  the quiet level (median outside), the noise (1.4826 MAD of the first difference over
+  √2), the limit (the larger of ``fraction`` × the largest departure inside and ``snr``
+  × the noise, as Python's ``max`` takes it) and the samples outside beyond it.
 """
 
 from __future__ import annotations
@@ -30,7 +36,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["despike_columns", "mad_of", "median_of"]
+__all__ = ["despike_columns", "mad_of", "median_of", "outside_activity"]
 
 
 @njit(cache=True)
@@ -174,3 +180,64 @@ def despike_columns(y, sigmas, share, mad_to_sigma):
                 spikes[i, c] = True
                 count += 1
     return med, spikes, count, True
+
+
+@njit(cache=True)
+def outside_activity(t, s, windows, margin, fraction, snr, mad_to_sigma):
+    """:func:`~bwim.detect.presence.unexplained_activity`'s samples of activity (see the
+    module docstring): ``t``, ``s`` (n,), ``windows`` (m, 2) (float64, C-contiguous).
+    Returns (status, active): status 0 when nothing can be reported (quiet samples
+    fewer than 10 % of the record, or none inside a window), 1 with ``active`` (bool,
+    (n,)) the samples outside every widened window departing beyond the limit, 2 when
+    a reading is not finite (nothing computed)."""
+    n = t.size
+    active = np.zeros(n, dtype=np.bool_)
+    for i in range(n):
+        x = s[i]
+        if not (x - x == 0.0):
+            return 2, active
+    inside = np.zeros(n, dtype=np.bool_)
+    for j in range(windows.shape[0]):
+        lo = windows[j, 0] - margin
+        hi = windows[j, 1] + margin
+        for i in range(n):
+            if t[i] >= lo and t[i] <= hi:
+                inside[i] = True
+    n_out = 0
+    for i in range(n):
+        if not inside[i]:
+            n_out += 1
+    if n_out < 0.1 * n or n_out == n:
+        return 0, active
+    buf = np.empty(max(n_out, n - 1))
+    k = 0
+    for i in range(n):
+        if not inside[i]:
+            buf[k] = s[i]
+            k += 1
+    level = _median_inplace(buf, n_out)
+    # the noise: 1.4826 MAD of the first difference, over √2
+    if n > 1:
+        diff = np.empty(n - 1)
+        for i in range(n - 1):
+            diff[i] = s[i + 1] - s[i]
+            buf[i] = diff[i]
+        centre = _median_inplace(buf, n - 1)
+        for i in range(n - 1):
+            buf[i] = abs(diff[i] - centre)
+        noise = mad_to_sigma * _median_inplace(buf, n - 1) / np.sqrt(2.0)
+    else:
+        noise = 0.0 / np.sqrt(2.0)
+    top = -np.inf
+    for i in range(n):
+        if inside[i]:
+            d = abs(s[i] - level)
+            if d > top:
+                top = d
+    a = fraction * top
+    b = snr * noise
+    limit = b if b > a else a  # Python's max(a, b)
+    for i in range(n):
+        if not inside[i] and abs(s[i] - level) > limit:
+            active[i] = True
+    return 1, active
