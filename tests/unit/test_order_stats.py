@@ -12,7 +12,13 @@ from __future__ import annotations
 import numpy as np
 from scipy.ndimage import median_filter
 
-from bwim.detect.order_stats import despike_columns, mad_of, median_of, outside_activity
+from bwim.detect.order_stats import (
+    column_medians_of,
+    despike_columns,
+    mad_of,
+    median_of,
+    outside_activity,
+)
 from bwim.detect.signals import (
     MAD_TO_SIGMA,
     SPIKE_SHARE,
@@ -142,3 +148,24 @@ def test_outside_activity_is_numpys():
     s[3] = np.nan
     assert outside_activity(np.arange(50.0), s, np.array([[10.0, 20.0]]), 0.05, 0.2, 8.0,
                             MAD_TO_SIGMA)[0] == 2
+
+
+def test_column_medians_of_are_numpys():
+    rng = np.random.default_rng(13)
+    n_zero = 0
+    for trial in range(3000):
+        n, k = int(rng.integers(1, 70)), int(rng.integers(1, 6))
+        a = rng.normal(size=(n, k))
+        if trial % 3 == 0:
+            a = np.round(a * 0.7)  # ties, zeros of both signs
+        if trial % 7 == 0:
+            a[rng.integers(0, n), rng.integers(0, k)] = np.nan
+        if trial % 11 == 0:
+            a[rng.integers(0, n), rng.integers(0, k)] = np.inf
+        with np.errstate(invalid="ignore"):
+            ref = np.median(a, axis=0)
+        got, zero = column_medians_of(a)
+        assert np.array_equal(got, ref, equal_nan=True), (a, got, ref)
+        assert zero == bool(np.any(ref == 0))
+        n_zero += zero
+    assert n_zero > 300

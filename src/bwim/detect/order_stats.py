@@ -16,7 +16,9 @@ Contract
   apart: one would compile a second; the detection passes none).
 * :func:`median_of` is the median of a 1-D array (NaN for none, NaN if any value is);
   :func:`mad_of` the median absolute deviation from the median (0 for none; NaN when a
-  value is).
+  value is); :func:`column_medians_of` the median of each column of a 2-D array (NaN
+  for a column holding one), and whether one is zero (a zero's sign is numpy's only
+  through numpy's own order of equal values).
 * :func:`despike_columns` is :func:`~bwim.detect.signals.despike`'s arithmetic for
   finite readings (n_t ≥ 5, k): each column's five-sample running median with the ends
   extended by their edge values (``scipy.ndimage.median_filter(y, size=(5, 1),
@@ -36,7 +38,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["despike_columns", "mad_of", "median_of", "outside_activity"]
+__all__ = ["column_medians_of", "despike_columns", "mad_of", "median_of",
+           "outside_activity"]
 
 
 @njit(cache=True)
@@ -121,6 +124,29 @@ def mad_of(v):
     for i in range(n):
         buf[i] = abs(v[i] - m)
     return _median_inplace(buf, n)
+
+
+@njit(cache=True)
+def column_medians_of(v):
+    """The median of each column of ``v`` (n ≥ 1, k) (float64, C-contiguous), shape (k,),
+    NaN for a column holding one; and whether a median is zero (its sign, numpy's, rests
+    on the order of equal values: the caller then takes numpy's partial sort)."""
+    n, k = v.shape
+    out = np.empty(k)
+    buf = np.empty(n)
+    zero = False
+    for c in range(k):
+        nan = False
+        for i in range(n):
+            x = v[i, c]
+            if x != x:
+                nan = True
+                break
+            buf[i] = x
+        out[c] = np.nan if nan else _median_inplace(buf, n)
+        if out[c] == 0.0:
+            zero = True
+    return out, zero
 
 
 @njit(cache=True)

@@ -11,8 +11,11 @@ Contract
   for an even count; NaN if any value is), the same number by one compiled selection
   (:func:`bwim.detect.order_stats.median_of`; equal as numbers: where numpy gives +0.0,
   ties of signed zeros may give -0.0); :func:`column_medians` is
-  ``numpy.median(values, axis=0)`` of a 2-D array, the same numbers, by one partial
-  sort of each column laid out contiguously.
+  ``numpy.median(values, axis=0)`` of a 2-D array, the same numbers bit for bit, by one
+  compiled selection in each column
+  (:func:`bwim.detect.order_stats.column_medians_of`), or, when a median is zero (whose
+  sign rests on numpy's order of equal values), by numpy's partial sort of each column
+  laid out contiguously.
 * :func:`last_axis_sum` is ``values.sum(axis=-1)``, the same numbers: numpy adds a last
   axis shorter than 8 one value after the other from 0 (its pairwise sum starts at 8
   values), as this does with one array operation per value instead of numpy's reduction
@@ -54,7 +57,7 @@ from scipy.ndimage import median_filter
 from bwim.records import Record
 from bwim.sensors import Sensor
 
-from .order_stats import despike_columns, mad_of, median_of
+from .order_stats import column_medians_of, despike_columns, mad_of, median_of
 
 __all__ = ["SPIKE_SHARE", "SPIKE_SIGMAS", "Despiked", "channel_data", "column_medians",
            "despike", "gaussian_average", "gaussian_kernel", "last_axis_sum", "median",
@@ -116,10 +119,13 @@ def median(values: np.ndarray) -> float:
 def column_medians(values: np.ndarray) -> np.ndarray:
     """The median of each column of a 2-D array (n, k), shape (k,) (see the module
     docstring); NaN for a column holding one, and for every column when n = 0."""
-    v = np.asarray(values, dtype=float)
+    v = np.ascontiguousarray(values, dtype=float)
     n = v.shape[0]
     if n == 0:
         return np.full(v.shape[1], np.nan)
+    out, zero = column_medians_of(v)
+    if not zero:
+        return out
     rows = np.ascontiguousarray(v.T)  # each column's values one after the other
     k = n // 2
     # the middle order statistics (the mean of the two for an even count) and the
