@@ -6,9 +6,10 @@ Contract
 --------
 * Each kernel is a numba function (``njit(cache=True)``, no fastmath, no parallelism)
   that computes what :mod:`bwim.detect.signals` describes with numpy or scipy calls,
-  the same numbers: an order statistic is one of the values (found by selection, a
-  three-way quickselect on a copy), the mean of the two middle values of an even count
-  is ``(a + b) / 2`` as :func:`bwim.detect.signals.median` makes it, and every other
+  the same numbers: an order statistic is one of the values (found by selection,
+  Hoare's, on a copy; a running median by minima and maxima), the mean of the two
+  middle values of an even count is ``(a + b) / 2`` as
+  :func:`bwim.detect.signals.median` makes it, and every other
   operation is the same single IEEE operation numpy applies element by element.
   Signed zeros may differ where the order of equal values does (equal as numbers).
 * Inputs are float64 and C-contiguous (the callers in :mod:`bwim.detect.signals`
@@ -45,37 +46,30 @@ __all__ = ["column_medians_of", "despike_columns", "mad_of", "median_of",
 @njit(cache=True)
 def _select(buf, lo, hi, k):
     """Rearrange ``buf[lo:hi]`` so that ``buf[k]`` holds the value of rank ``k`` (sorted
-    order) with no larger value before it and no smaller after it: a three-way
-    quickselect (runs of equal values, common in quantised readings, in one step).
-    The values are finite or ±inf (no NaN)."""
-    while hi - lo > 1:
-        a, b, c = buf[lo], buf[(lo + hi) // 2], buf[hi - 1]
-        # median of three as the pivot
-        if a < b:
-            pivot = b if b < c else (c if a < c else a)
-        else:
-            pivot = a if a < c else (c if b < c else b)
-        # Dijkstra's three-way partition: [lo, lt) < pivot, [lt, gt) == pivot, [gt, hi) >
-        lt, i, gt = lo, lo, hi
-        while i < gt:
-            x = buf[i]
-            if x < pivot:
-                buf[i] = buf[lt]
-                buf[lt] = x
-                lt += 1
+    order) with no larger value before it and no smaller after it: Hoare's selection
+    (Wirth's form: both scans stop at values equal to the pivot, which keeps runs of
+    equal values, common in quantised readings, balanced), the pivot the median of the
+    first, middle and last values.  The values are finite or ±inf (no NaN)."""
+    left, right = lo, hi - 1
+    while left < right:
+        a, b, c = buf[left], buf[(left + right) // 2], buf[right]
+        pivot = max(min(a, b), min(max(a, b), c))  # the middle one of three
+        i, j = left, right
+        while i <= j:
+            while buf[i] < pivot:
                 i += 1
-            elif x > pivot:
-                gt -= 1
-                buf[i] = buf[gt]
-                buf[gt] = x
-            else:
+            while pivot < buf[j]:
+                j -= 1
+            if i <= j:
+                x = buf[i]
+                buf[i] = buf[j]
+                buf[j] = x
                 i += 1
-        if k < lt:
-            hi = lt
-        elif k >= gt:
-            lo = gt
-        else:
-            return
+                j -= 1
+        if j < k:
+            left = i
+        if k < i:
+            right = j
 
 
 @njit(cache=True)
@@ -150,16 +144,13 @@ def column_medians_of(v):
 
 
 @njit(cache=True)
-def _middle_of_five(w):
-    """The middle value of the five in ``w`` (no NaN), sorting ``w`` (insertion sort)."""
-    for i in range(1, 5):
-        x = w[i]
-        j = i - 1
-        while j >= 0 and w[j] > x:
-            w[j + 1] = w[j]
-            j -= 1
-        w[j + 1] = x
-    return w[2]
+def _middle_of_five(a, b, c, d, e):
+    """The middle one of five values (no NaN), by minima and maxima only (no branch to
+    mispredict on noisy readings): the middle of ``e``, the larger of the pairs'
+    smaller values and the smaller of their larger ones."""
+    f = max(min(a, b), min(c, d))
+    g = min(max(a, b), max(c, d))
+    return max(min(e, f), min(max(e, f), g))
 
 
 @njit(cache=True)
@@ -179,14 +170,13 @@ def despike_columns(y, sigmas, share, mad_to_sigma):
     count = 0
     buf = np.empty(n)
     dev = np.empty(n)
-    w = np.empty(5)
     for c in range(k):
         top = -np.inf
         bottom = np.inf
         for i in range(n):
-            for j in range(5):  # the ends extended by their edge values
-                w[j] = y[min(max(i + j - 2, 0), n - 1), c]
-            m = _middle_of_five(w)
+            # the ends extended by their edge values
+            m = _middle_of_five(y[max(i - 2, 0), c], y[max(i - 1, 0), c], y[i, c],
+                                y[min(i + 1, n - 1), c], y[min(i + 2, n - 1), c])
             med[i, c] = m
             if m > top:
                 top = m
