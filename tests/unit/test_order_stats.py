@@ -164,8 +164,15 @@ def test_column_medians_of_are_numpys():
             a[rng.integers(0, n), rng.integers(0, k)] = np.inf
         with np.errstate(invalid="ignore"):
             ref = np.median(a, axis=0)
-        got, zero = column_medians_of(a)
+        got, zero = column_medians_of(a, np.ones(n, dtype=bool))
         assert np.array_equal(got, ref, equal_nan=True), (a, got, ref)
         assert zero == bool(np.any(ref == 0))
         n_zero += zero
+        rows = rng.random(n) < 0.6
+        if rows.any():
+            with np.errstate(invalid="ignore"):
+                ref = np.median(a[rows], axis=0)
+            got, zero = column_medians_of(a, rows)
+            assert np.array_equal(got, ref, equal_nan=True), (a, rows, got, ref)
+            assert zero == bool(np.any(ref == 0))
     assert n_zero > 300

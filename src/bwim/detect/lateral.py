@@ -187,7 +187,7 @@ def lateral_positions(
             if quiet.shape != t.shape or not quiet.any():
                 raise InputError("quiet must be a boolean mask of the record's samples with "
                                  "at least one True")
-            level = column_medians(data[quiet])
+            level = column_medians(data, quiet)  # those of data[quiet]
         if weight == "peak":
             # the largest deviation: the largest reading less the level (a subtraction
             # rounds monotonically: the same number as the largest of the differences)

@@ -17,8 +17,8 @@ Contract
   apart: one would compile a second; the detection passes none).
 * :func:`median_of` is the median of a 1-D array (NaN for none, NaN if any value is);
   :func:`mad_of` the median absolute deviation from the median (0 for none; NaN when a
-  value is); :func:`column_medians_of` the median of each column of a 2-D array (NaN
-  for a column holding one), and whether one is zero (a zero's sign is numpy's only
+  value is); :func:`column_medians_of` the median of each column of the chosen rows of
+  a 2-D array (NaN for a column holding one), and whether one is zero (a zero's sign is numpy's only
   through numpy's own order of equal values).
 * :func:`despike_columns` is :func:`~bwim.detect.signals.despike`'s arithmetic for
   finite readings (n_t ≥ 5, k): each column's five-sample running median with the ends
@@ -121,23 +121,27 @@ def mad_of(v):
 
 
 @njit(cache=True)
-def column_medians_of(v):
-    """The median of each column of ``v`` (n ≥ 1, k) (float64, C-contiguous), shape (k,),
-    NaN for a column holding one; and whether a median is zero (its sign, numpy's, rests
-    on the order of equal values: the caller then takes numpy's partial sort)."""
+def column_medians_of(v, rows):
+    """The median of each column of ``v[rows]`` (``v`` (n, k) float64, C-contiguous;
+    ``rows`` bool (n,), at least one True), shape (k,), NaN for a column holding one;
+    and whether a median is zero (its sign, numpy's, rests on the order of equal values:
+    the caller then takes numpy's partial sort)."""
     n, k = v.shape
     out = np.empty(k)
     buf = np.empty(n)
     zero = False
     for c in range(k):
         nan = False
+        m = 0
         for i in range(n):
-            x = v[i, c]
-            if x != x:
-                nan = True
-                break
-            buf[i] = x
-        out[c] = np.nan if nan else _median_inplace(buf, n)
+            if rows[i]:
+                x = v[i, c]
+                if x != x:
+                    nan = True
+                    break
+                buf[m] = x
+                m += 1
+        out[c] = np.nan if nan else _median_inplace(buf, m)
         if out[c] == 0.0:
             zero = True
     return out, zero

@@ -11,8 +11,8 @@ Contract
   for an even count; NaN if any value is), the same number by one compiled selection
   (:func:`bwim.detect.order_stats.median_of`; equal as numbers: where numpy gives +0.0,
   ties of signed zeros may give -0.0); :func:`column_medians` is
-  ``numpy.median(values, axis=0)`` of a 2-D array, the same numbers bit for bit, by one
-  compiled selection in each column
+  ``numpy.median(values, axis=0)`` of a 2-D array (or of some of its rows), the same
+  numbers bit for bit, by one compiled selection in each column
   (:func:`bwim.detect.order_stats.column_medians_of`), or, when a median is zero (whose
   sign rests on numpy's order of equal values), by numpy's partial sort of each column
   laid out contiguously.
@@ -116,26 +116,31 @@ def median(values: np.ndarray) -> float:
     return float(median_of(np.ascontiguousarray(values, dtype=float).reshape(-1)))
 
 
-def column_medians(values: np.ndarray) -> np.ndarray:
+def column_medians(values: np.ndarray, rows: np.ndarray | None = None) -> np.ndarray:
     """The median of each column of a 2-D array (n, k), shape (k,) (see the module
-    docstring); NaN for a column holding one, and for every column when n = 0."""
+    docstring); NaN for a column holding one, and for every column when n = 0.  With
+    ``rows`` (bool, (n,)): of ``values[rows]``, without copying them first."""
     v = np.ascontiguousarray(values, dtype=float)
-    n = v.shape[0]
-    if n == 0:
+    if rows is None:
+        rows = np.ones(v.shape[0], dtype=bool)
+    else:
+        rows = np.ascontiguousarray(rows, dtype=bool)
+    if not rows.any():
         return np.full(v.shape[1], np.nan)
-    out, zero = column_medians_of(v)
+    out, zero = column_medians_of(v, rows)
     if not zero:
         return out
-    rows = np.ascontiguousarray(v.T)  # each column's values one after the other
+    cols = np.ascontiguousarray(v[rows].T)  # each column's values one after the other
+    n = cols.shape[1]
     k = n // 2
     # the middle order statistics (the mean of the two for an even count) and the
     # largest, NaN when the column holds one (NaN sorts last): numpy.median's partial
     # sort, the same indices (so the same order of equal values, e.g. 0 and -0)
-    rows.partition([k, -1] if n % 2 else [k - 1, k, -1], axis=1)
-    middle = rows[:, k:k + 1] if n % 2 else rows[:, k - 1:k + 1]
+    cols.partition([k, -1] if n % 2 else [k - 1, k, -1], axis=1)
+    middle = cols[:, k:k + 1] if n % 2 else cols[:, k - 1:k + 1]
     out = np.add.reduce(middle, axis=1)  # their mean as numpy.mean makes it
     out /= middle.shape[1]
-    nan = np.isnan(rows[:, -1])
+    nan = np.isnan(cols[:, -1])
     if nan.any():
         out[nan] = np.nan
     return out
