@@ -33,7 +33,7 @@ import numpy as np
 from bwim.records import Passage, Record
 from bwim.sensors import Sensor
 
-from .lateral import lateral_position
+from .lateral import lateral_positions
 from .presence import overlapping, span_windows, unexplained_activity
 from .result import (
     FLAG_MULTIPLE_PRESENCE,
@@ -168,8 +168,9 @@ def assemble_detection(
         lat_windows = _segments([(float(e.times[0]), float(e.times[-1])) for e in est],
                                 float(t[0]), float(t[-1]))
     names = [s.name for s in gauges]
+    readings = channel_data(record, names) if names else None
     if windows is not None and names and len(est):
-        total = channel_data(record, names).sum(axis=1)
+        total = readings.sum(axis=1)
         extra = unexplained_activity(t, total, windows, margin=QUIET_MARGIN,
                                      fraction=unexplained_fraction)
         # no detected vehicle on the span at the start: every vehicle's time on the span
@@ -186,12 +187,15 @@ def assemble_detection(
             spans = ", ".join(f"{a:.3f}–{b:.3f} s" for a, b in extra)
             notes.append(f"strain activity at {spans} outside every detected vehicle's time "
                          "on the span (a vehicle the detection did not see?)")
+    # every vehicle's lateral position with the one quiet mask: the gauges' quiet levels
+    # taken once (lateral_position of each window, the same numbers)
+    lats = (lateral_positions(record, lat_windows, quiet=quiet, gauges=names,
+                              threshold=lateral_threshold, readings=readings)
+            if names and est else None)
     vehicles = []
     for k, (e, p) in enumerate(zip(est, passages, strict=True)):
-        if names:
-            lat = lateral_position(record, window=lat_windows[k], quiet=quiet, gauges=names,
-                                   threshold=lateral_threshold)
-            lateral, unit = lat.value, lat.unit
+        if lats is not None:
+            lateral, unit = lats[k].value, lats[k].unit
         else:
             lateral, unit = float("nan"), "gauge index"
         if np.isfinite(lateral):

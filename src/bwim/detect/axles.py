@@ -80,6 +80,7 @@ from .result import (
 from .signals import (
     channel_data,
     despike,
+    median,
     parabolic_vertex,
     remove_baseline,
     robust_sigma,
@@ -403,7 +404,8 @@ def _detect_learned(record: Record, detectors: Sequence[str], distance: float,
     # a spike cannot be an axle where the narrowest response at the top speed is wider
     # than SPIKE_WIDTH samples: take spikes out first (their energy would otherwise set
     # the vehicle's residual level, and with it every axle group's count)
-    fs = record.sampling_rate if record.time.size > 1 else 0.0
+    # Record.sampling_rate's number, 1 / the median step
+    fs = 1.0 / median(np.diff(record.time)) if record.time.size > 1 else 0.0
     width = min(r.fwhm for r in responses.responses) / opts.speed_range[1] * fs
     spiked = False
     if width >= SPIKE_WIDTH:

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .response import LearnedResponses
+from .signals import column_medians
 
 __all__ = ["GAIN_FACTOR", "NOTHING", "REST_SHARE", "SEEN", "DetectorFault", "detector_faults",
            "diagnose"]
@@ -64,7 +65,7 @@ def diagnose(y: np.ndarray, learned: LearnedResponses) -> DetectorFault:
     y = np.asarray(y, dtype=float)
     if y.ndim != 2 or y.shape[1] != 2 or y.shape[0] < 2:
         return DetectorFault()
-    rest = np.median(y[:max(1, int(REST_SHARE * y.shape[0]))], axis=0)
+    rest = column_medians(y[:max(1, int(REST_SHARE * y.shape[0]))])  # numpy.median's
     names = learned.channels
     scale = np.array([1.0, learned.gain_ratio])
     z = (y - rest) * np.array([r.sign for r in learned.responses])

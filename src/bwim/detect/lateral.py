@@ -32,7 +32,8 @@ from bwim.sensors import Sensor, SensorKind
 
 from .signals import channel_data, column_medians, median
 
-__all__ = ["LateralPosition", "in_metres", "lateral_position", "section_gauges"]
+__all__ = ["LateralPosition", "in_metres", "lateral_position", "lateral_positions",
+           "section_gauges"]
 
 
 def in_metres(gauges: Sequence[Sensor]) -> bool:
@@ -128,42 +129,78 @@ def lateral_position(
     """
     if weight not in ("peak", "area"):
         raise InputError(f"unknown weight {weight!r}; expected 'peak' or 'area'")
+    t = record.time
+    if quiet is None and window is not None:
+        inside = (t >= window[0]) & (t <= window[1])
+        if inside.any():
+            quiet = ~inside
+            if quiet.sum() < 0.1 * t.size:
+                edge = max(1, t.size // 10)
+                quiet = np.zeros(t.size, dtype=bool)
+                quiet[:edge] = quiet[-edge:] = True
+    return lateral_positions(record, [window], quiet=quiet, gauges=gauges, weight=weight,
+                             threshold=threshold)[0]
+
+
+def lateral_positions(
+    record: Record,
+    windows: Sequence[tuple[float, float] | None],
+    *,
+    quiet: np.ndarray | None = None,
+    gauges: Sequence[str] | None = None,
+    weight: str = "peak",
+    threshold: float = 0.5,
+    readings: np.ndarray | None = None,
+) -> list[LateralPosition]:
+    """:func:`lateral_position` of each of ``windows`` with one ``quiet`` mask (given,
+    or None only when every window is None: the whole record, the first and last 10 %
+    quiet), the same numbers: the gauges are read, and their quiet levels taken, once.
+    ``readings``: the gauges' readings, ``channel_data(record, gauges)``, if already
+    read."""
+    if weight not in ("peak", "area"):
+        raise InputError(f"unknown weight {weight!r}; expected 'peak' or 'area'")
     thr = require_range("threshold", threshold, 0.0, 1.0, closed=False) if threshold else 0.0
     sens = section_gauges(record, gauges)
     names = tuple(s.name for s in sens)
-    ys = [getattr(s, "y", None) for s in sens]
     metres = in_metres(sens)
     unit = "m" if metres else "gauge index"
     if not sens:
-        return LateralPosition(value=float("nan"), unit=unit, weights=np.zeros(0), gauges=())
+        return [LateralPosition(value=float("nan"), unit=unit, weights=np.zeros(0),
+                                gauges=()) for _ in windows]
     t = record.time
-    data = channel_data(record, names)
-    inside = np.ones(t.size, dtype=bool) if window is None else (
-        (t >= window[0]) & (t <= window[1]))
-    if not inside.any():
-        return LateralPosition(value=float("nan"), unit=unit, weights=np.zeros(len(sens)),
-                               gauges=names)
+    data = channel_data(record, names) if readings is None else readings
     if quiet is None:
-        quiet = ~inside
-        if quiet.sum() < 0.1 * t.size:
-            edge = max(1, t.size // 10)
-            quiet = np.zeros(t.size, dtype=bool)
-            quiet[:edge] = quiet[-edge:] = True
+        edge = max(1, t.size // 10)
+        quiet = np.zeros(t.size, dtype=bool)
+        quiet[:edge] = quiet[-edge:] = True
     quiet = np.asarray(quiet, dtype=bool)
-    if quiet.shape != t.shape or not quiet.any():
-        raise InputError("quiet must be a boolean mask of the record's samples with at "
-                         "least one True")
-    level = column_medians(data[quiet])
-    if weight == "peak":
-        # the largest deviation: the largest reading less the level (a subtraction
-        # rounds monotonically: the same number as the largest of the differences)
-        w = np.maximum(data[inside].max(axis=0) - level, 0.0)
-    else:
-        w = np.maximum(data[inside] - level, 0.0).sum(axis=0) * median(np.diff(t))
-    if not (w > 0).any():
-        return LateralPosition(value=float("nan"), unit=unit, weights=np.zeros(len(sens)),
-                               gauges=names)
-    w = np.maximum(w - thr * w.max(), 0.0)
-    coord = np.asarray(ys, dtype=float) if metres else np.arange(1.0, len(sens) + 1.0)
-    return LateralPosition(value=float(w @ coord / w.sum()), unit=unit, weights=w,
-                           gauges=names)
+    out = []
+    level = None
+    for window in windows:
+        inside = np.ones(t.size, dtype=bool) if window is None else (
+            (t >= window[0]) & (t <= window[1]))
+        if not inside.any():
+            out.append(LateralPosition(value=float("nan"), unit=unit,
+                                       weights=np.zeros(len(sens)), gauges=names))
+            continue
+        if level is None:
+            if quiet.shape != t.shape or not quiet.any():
+                raise InputError("quiet must be a boolean mask of the record's samples with "
+                                 "at least one True")
+            level = column_medians(data, quiet)  # those of data[quiet]
+        if weight == "peak":
+            # the largest deviation: the largest reading less the level (a subtraction
+            # rounds monotonically: the same number as the largest of the differences)
+            w = np.maximum(data[inside].max(axis=0) - level, 0.0)
+        else:
+            w = np.maximum(data[inside] - level, 0.0).sum(axis=0) * median(np.diff(t))
+        if not (w > 0).any():
+            out.append(LateralPosition(value=float("nan"), unit=unit,
+                                       weights=np.zeros(len(sens)), gauges=names))
+            continue
+        w = np.maximum(w - thr * w.max(), 0.0)
+        coord = (np.asarray([s.y for s in sens], dtype=float) if metres
+                 else np.arange(1.0, len(sens) + 1.0))
+        out.append(LateralPosition(value=float(w @ coord / w.sum()), unit=unit, weights=w,
+                                   gauges=names))
+    return out

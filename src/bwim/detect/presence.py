@@ -12,7 +12,10 @@ Contract
 * :func:`unexplained_activity` returns the time intervals (s, shape (k, 2)) in which a
   signal (e.g. the sum of the gauges of one section) departs from its quiet level by more
   than ``fraction`` of its largest departure inside the windows and more than ``snr``
-  noise standard deviations, outside every window widened by ``margin`` s.
+  noise standard deviations, outside every window widened by ``margin`` s.  Finite
+  signals go through one compiled kernel
+  (:func:`bwim.detect.order_stats.outside_activity`, the same numbers), others through
+  numpy.
 """
 
 from __future__ import annotations
@@ -25,7 +28,8 @@ from bwim.errors import InputError, require_finite, require_positive
 from bwim.records import Passage
 from bwim.wim import InfluenceLine
 
-from .signals import median, robust_sigma
+from .order_stats import outside_activity
+from .signals import MAD_TO_SIGMA, median, robust_sigma
 
 __all__ = ["overlapping", "resolve_span", "span_windows", "unexplained_activity",
            "windows_overlap"]
@@ -76,6 +80,22 @@ def overlapping(windows: np.ndarray) -> np.ndarray:
     return hit
 
 
+def _outside_activity(t: np.ndarray, s: np.ndarray, w: np.ndarray, margin: float,
+                      fraction: float, snr: float) -> np.ndarray | None:
+    """:func:`unexplained_activity`'s active samples with numpy (None: nothing to
+    report); :func:`bwim.detect.order_stats.outside_activity` does it compiled."""
+    inside = np.zeros(t.size, dtype=bool)
+    for a, b in w:
+        inside |= (t >= a - margin) & (t <= b + margin)
+    outside = ~inside
+    if outside.sum() < 0.1 * t.size or not inside.any():
+        return None
+    dev = s - median(s[outside])
+    noise = robust_sigma(np.diff(s)) / np.sqrt(2.0)
+    limit = max(fraction * np.abs(dev[inside]).max(), snr * noise)
+    return outside & (np.abs(dev) > limit)
+
+
 def unexplained_activity(
     time: np.ndarray,
     signal: np.ndarray,
@@ -92,20 +112,14 @@ def unexplained_activity(
     the record, else nothing is reported); the noise is the robust standard deviation of
     the first difference over √2.  Activity must last ``min_duration`` s.
     """
-    t = np.asarray(time, dtype=float)
-    s = np.asarray(signal, dtype=float)
-    w = np.asarray(windows, dtype=float).reshape(-1, 2)
-    inside = np.zeros(t.size, dtype=bool)
-    for a, b in w:
-        inside |= (t >= a - margin) & (t <= b + margin)
-    outside = ~inside
-    if outside.sum() < 0.1 * t.size or not inside.any():
-        return np.zeros((0, 2))
-    dev = s - median(s[outside])
-    noise = robust_sigma(np.diff(s)) / np.sqrt(2.0)
-    limit = max(fraction * np.abs(dev[inside]).max(), snr * noise)
-    active = outside & (np.abs(dev) > limit)
-    if not active.any():
+    t = np.ascontiguousarray(time, dtype=float)
+    s = np.ascontiguousarray(signal, dtype=float)
+    w = np.ascontiguousarray(windows, dtype=float).reshape(-1, 2)
+    status, active = outside_activity(t, s, w, float(margin), float(fraction), float(snr),
+                                      MAD_TO_SIGMA)
+    if status == 2:  # a reading not finite: numpy's NaN rules
+        active = _outside_activity(t, s, w, margin, fraction, snr)
+    if status == 0 or active is None or not active.any():
         return np.zeros((0, 2))
     edges = np.flatnonzero(np.diff(np.concatenate([[0], active.astype(int), [0]])))
     runs = edges.reshape(-1, 2)  # [start, stop) sample indices

@@ -8,10 +8,14 @@ Contract
 * :func:`robust_sigma` is the normalised median absolute deviation, 1.4826 MAD, the
   standard deviation of Gaussian noise that ignores a minority of large samples (pulses).
 * :func:`median` is ``numpy.median`` of a 1-D array (the mean of the two middle values
-  for an even count; NaN if any value is), the same number by one partial sort (equal as
-  numbers: where numpy gives +0.0, ties of signed zeros may give -0.0);
-  :func:`column_medians` is ``numpy.median(values, axis=0)`` of a 2-D array, the same
-  numbers, by one partial sort of each column laid out contiguously.
+  for an even count; NaN if any value is), the same number by one compiled selection
+  (:func:`bwim.detect.order_stats.median_of`; equal as numbers: where numpy gives +0.0,
+  ties of signed zeros may give -0.0); :func:`column_medians` is
+  ``numpy.median(values, axis=0)`` of a 2-D array (or of some of its rows), the same
+  numbers bit for bit, by one compiled selection in each column
+  (:func:`bwim.detect.order_stats.column_medians_of`), or, when a median is zero (whose
+  sign rests on numpy's order of equal values), by numpy's partial sort of each column
+  laid out contiguously.
 * :func:`last_axis_sum` is ``values.sum(axis=-1)``, the same numbers: numpy adds a last
   axis shorter than 8 one value after the other from 0 (its pairwise sum starts at 8
   values), as this does with one array operation per value instead of numpy's reduction
@@ -34,6 +38,9 @@ Contract
   :data:`SPIKE_SIGMAS` robust deviations, and more than :data:`SPIKE_SHARE` of the
   channel's range, off the median of their five-sample neighbourhood) by that median;
   only for signals whose narrowest pulse is much wider than a spike (the caller checks).
+  Finite readings go through one compiled kernel
+  (:func:`bwim.detect.order_stats.despike_columns`: the numbers of
+  ``scipy.ndimage.median_filter`` and :func:`robust_sigma`), others through scipy.
 
 Arrays are 1-D in samples unless stated; times in s, distances in m.
 """
@@ -49,6 +56,8 @@ from scipy.ndimage import median_filter
 
 from bwim.records import Record
 from bwim.sensors import Sensor
+
+from .order_stats import column_medians_of, despike_columns, mad_of, median_of
 
 __all__ = ["SPIKE_SHARE", "SPIKE_SIGMAS", "Despiked", "channel_data", "column_medians",
            "despike", "gaussian_average", "gaussian_kernel", "last_axis_sum", "median",
@@ -88,46 +97,50 @@ def despike(y: np.ndarray) -> Despiked:
     y = np.asarray(y, dtype=float)
     if y.ndim != 2 or y.shape[0] < 5:
         return Despiked(values=y, spikes=np.zeros(y.shape, dtype=bool))
-    med = median_filter(y, size=(5, 1), mode="nearest")
-    dev = y - med
-    sigma = np.array([robust_sigma(dev[:, c]) for c in range(dev.shape[1])])
-    span = np.ptp(med, axis=0)
-    spikes = (np.abs(dev) > SPIKE_SIGMAS * sigma) & (np.abs(dev) > SPIKE_SHARE * span)
-    if not spikes.any():
+    med, spikes, count, finite = despike_columns(np.ascontiguousarray(y), SPIKE_SIGMAS,
+                                                 SPIKE_SHARE, MAD_TO_SIGMA)
+    if not finite:  # scipy's handling of NaN and infinities
+        med = median_filter(y, size=(5, 1), mode="nearest")
+        dev = y - med
+        sigma = np.array([robust_sigma(dev[:, c]) for c in range(dev.shape[1])])
+        span = np.ptp(med, axis=0)
+        spikes = (np.abs(dev) > SPIKE_SIGMAS * sigma) & (np.abs(dev) > SPIKE_SHARE * span)
+        count = int(spikes.sum())
+    if not count:
         return Despiked(values=y, spikes=spikes)
     return Despiked(values=np.where(spikes, med, y), spikes=spikes)
 
 
 def median(values: np.ndarray) -> float:
     """The median of the values of a 1-D array (see the module docstring); NaN for none."""
-    v = np.asarray(values, dtype=float).reshape(-1)
-    n = v.size
-    if n == 0 or np.isnan(v).any():
-        return float(np.median(v)) if n else float("nan")
-    k = n // 2
-    if n % 2:
-        return float(np.partition(v, k)[k])
-    part = np.partition(v, (k - 1, k))
-    return float((part[k - 1] + part[k]) / 2)
+    return float(median_of(np.ascontiguousarray(values, dtype=float).reshape(-1)))
 
 
-def column_medians(values: np.ndarray) -> np.ndarray:
+def column_medians(values: np.ndarray, rows: np.ndarray | None = None) -> np.ndarray:
     """The median of each column of a 2-D array (n, k), shape (k,) (see the module
-    docstring); NaN for a column holding one, and for every column when n = 0."""
-    v = np.asarray(values, dtype=float)
-    n = v.shape[0]
-    if n == 0:
+    docstring); NaN for a column holding one, and for every column when n = 0.  With
+    ``rows`` (bool, (n,)): of ``values[rows]``, without copying them first."""
+    v = np.ascontiguousarray(values, dtype=float)
+    if rows is None:
+        rows = np.ones(v.shape[0], dtype=bool)
+    else:
+        rows = np.ascontiguousarray(rows, dtype=bool)
+    if not rows.any():
         return np.full(v.shape[1], np.nan)
-    rows = np.ascontiguousarray(v.T)  # each column's values one after the other
+    out, zero = column_medians_of(v, rows)
+    if not zero:
+        return out
+    cols = np.ascontiguousarray(v[rows].T)  # each column's values one after the other
+    n = cols.shape[1]
     k = n // 2
     # the middle order statistics (the mean of the two for an even count) and the
     # largest, NaN when the column holds one (NaN sorts last): numpy.median's partial
     # sort, the same indices (so the same order of equal values, e.g. 0 and -0)
-    rows.partition([k, -1] if n % 2 else [k - 1, k, -1], axis=1)
-    middle = rows[:, k:k + 1] if n % 2 else rows[:, k - 1:k + 1]
+    cols.partition([k, -1] if n % 2 else [k - 1, k, -1], axis=1)
+    middle = cols[:, k:k + 1] if n % 2 else cols[:, k - 1:k + 1]
     out = np.add.reduce(middle, axis=1)  # their mean as numpy.mean makes it
     out /= middle.shape[1]
-    nan = np.isnan(rows[:, -1])
+    nan = np.isnan(cols[:, -1])
     if nan.any():
         out[nan] = np.nan
     return out
@@ -148,10 +161,8 @@ def last_axis_sum(values: np.ndarray) -> np.ndarray:
 
 def robust_sigma(values: np.ndarray) -> float:
     """1.4826 × median |v − median v|: the noise standard deviation, robust to pulses."""
-    v = np.asarray(values, dtype=float)
-    if v.size == 0:
-        return 0.0
-    return float(MAD_TO_SIGMA * median(np.abs(v - median(v))))
+    v = np.ascontiguousarray(values, dtype=float).reshape(-1)
+    return float(MAD_TO_SIGMA * mad_of(v)) if v.size else 0.0
 
 
 def remove_baseline(values: np.ndarray, window: int) -> np.ndarray:

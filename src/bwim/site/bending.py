@@ -52,10 +52,15 @@ MARGIN = 0.3
 TRACE_SHARE = 0.5
 
 
-def _detrended(t: np.ndarray, a: np.ndarray) -> np.ndarray:
-    """``a`` (n_t, k) less its least-squares offset and slope in ``t``."""
+def _trend_basis(t: np.ndarray) -> np.ndarray:
+    """An orthonormal basis (n_t, 2) of the offsets and slopes in ``t``."""
     tc = t - t.mean()
-    q = np.linalg.qr(np.column_stack([np.ones_like(tc), tc]))[0]
+    return np.linalg.qr(np.column_stack([np.ones_like(tc), tc]))[0]
+
+
+def _detrended(q: np.ndarray, a: np.ndarray) -> np.ndarray:
+    """``a`` (n_t, k) less its least-squares offset and slope in the times whose
+    :func:`_trend_basis` is ``q``."""
     return a - q @ (q.T @ a)
 
 
@@ -85,9 +90,9 @@ class DetectorBending:
         m = (t >= window[0] - MARGIN) & (t <= window[1] + MARGIN)
         if int(m.sum()) < 8:
             return float("nan")
-        tw = t[m]
-        y = _detrended(tw, channel_data(record, self.channels)[m].astype(float))
-        g = _detrended(tw, channel_data(record, self.gauges)[m].astype(float))
+        q = _trend_basis(t[m])
+        y = _detrended(q, channel_data(record, self.channels)[m].astype(float))
+        g = _detrended(q, channel_data(record, self.gauges)[m].astype(float))
         share = 0.0
         for c in range(2):
             bend = g @ self.weights[c]
@@ -117,8 +122,9 @@ def learn_bending(records: Sequence[Record], channels: tuple[str, str],
         raise InputError("learning a detector pair's bending needs runs and gauges")
     ys, gs = [], []
     for rec in records:
-        ys.append(_detrended(rec.time, channel_data(rec, channels).astype(float)))
-        gs.append(_detrended(rec.time, channel_data(rec, gauges).astype(float)))
+        q = _trend_basis(rec.time)
+        ys.append(_detrended(q, channel_data(rec, channels).astype(float)))
+        gs.append(_detrended(q, channel_data(rec, gauges).astype(float)))
     y, g = np.concatenate(ys), np.concatenate(gs)
     ridge = GAUGE_RIDGE * float(np.mean(np.einsum("ij,ij->j", g, g))) * np.eye(g.shape[1])
     weights = np.zeros((2, g.shape[1]))

@@ -1,0 +1,263 @@
+"""Compiled order statistics for the detection: medians, robust deviations, the
+five-sample running median of :func:`bwim.detect.signals.despike`, the quiet level and
+noise of :func:`bwim.detect.presence.unexplained_activity`.
+
+Contract
+--------
+* Each kernel is a numba function (``njit(cache=True)``, no fastmath, no parallelism)
+  that computes what :mod:`bwim.detect.signals` describes with numpy or scipy calls,
+  the same numbers: an order statistic is one of the values (found by selection,
+  Hoare's, on a copy; a running median by minima and maxima), the mean of the two
+  middle values of an even count is ``(a + b) / 2`` as
+  :func:`bwim.detect.signals.median` makes it, and every other
+  operation is the same single IEEE operation numpy applies element by element.
+  Signed zeros may differ where the order of equal values does (equal as numbers).
+* Inputs are float64 and C-contiguous (the callers in :mod:`bwim.detect.signals`
+  convert), so each kernel has one compiled signature (numba types a read-only array
+  apart: one would compile a second; the detection passes none).
+* :func:`median_of` is the median of a 1-D array (NaN for none, NaN if any value is);
+  :func:`mad_of` the median absolute deviation from the median (0 for none; NaN when a
+  value is); :func:`column_medians_of` the median of each column of the chosen rows of
+  a 2-D array (NaN for a column holding one), and whether one is zero (a zero's sign is numpy's only
+  through numpy's own order of equal values).
+* :func:`despike_columns` is :func:`~bwim.detect.signals.despike`'s arithmetic for
+  finite readings (n_t ≥ 5, k): each column's five-sample running median with the ends
+  extended by their edge values (``scipy.ndimage.median_filter(y, size=(5, 1),
+  mode="nearest")``), the deviations from it, each column's robust σ of them (1.4826
+  MAD) and the range of its running medians, and the spikes: deviations beyond
+  ``sigmas`` × σ and ``share`` × that range.  It says when a reading is not finite
+  (the caller then takes the numpy and scipy path, whose NaN handling it does not copy).
+* :func:`outside_activity` is :func:`bwim.detect.presence.unexplained_activity`'s
+  arithmetic for a finite signal: the samples inside a window widened by ``margin``,
+  the quiet level (median outside), the noise (1.4826 MAD of the first difference over
+  √2), the limit (the larger of ``fraction`` × the largest departure inside and ``snr``
+  × the noise, as Python's ``max`` takes it) and the samples outside beyond it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+__all__ = ["column_medians_of", "despike_columns", "mad_of", "median_of",
+           "outside_activity"]
+
+
+@njit(cache=True)
+def _select(buf, lo, hi, k):
+    """Rearrange ``buf[lo:hi]`` so that ``buf[k]`` holds the value of rank ``k`` (sorted
+    order) with no larger value before it and no smaller after it: Hoare's selection
+    (Wirth's form: both scans stop at values equal to the pivot, which keeps runs of
+    equal values, common in quantised readings, balanced), the pivot the median of the
+    first, middle and last values.  The values are finite or ±inf (no NaN)."""
+    left, right = lo, hi - 1
+    while left < right:
+        a, b, c = buf[left], buf[(left + right) // 2], buf[right]
+        pivot = max(min(a, b), min(max(a, b), c))  # the middle one of three
+        i, j = left, right
+        while i <= j:
+            while buf[i] < pivot:
+                i += 1
+            while pivot < buf[j]:
+                j -= 1
+            if i <= j:
+                x = buf[i]
+                buf[i] = buf[j]
+                buf[j] = x
+                i += 1
+                j -= 1
+        if j < k:
+            left = i
+        if k < i:
+            right = j
+
+
+@njit(cache=True)
+def _median_inplace(buf, n):
+    """The median of ``buf[:n]`` (no NaN, n ≥ 1), rearranging it."""
+    k = n // 2
+    _select(buf, 0, n, k)
+    if n % 2:
+        return buf[k]
+    below = buf[0]  # the largest value before rank k: rank k - 1
+    for i in range(1, k):
+        if buf[i] > below:
+            below = buf[i]
+    return (below + buf[k]) / 2
+
+
+@njit(cache=True)
+def median_of(v):
+    """The median of ``v`` (1-D, float64, C-contiguous); NaN for none or if any is."""
+    n = v.size
+    if n == 0:
+        return np.nan
+    buf = np.empty(n)
+    for i in range(n):
+        x = v[i]
+        if x != x:
+            return np.nan
+        buf[i] = x
+    return _median_inplace(buf, n)
+
+
+@njit(cache=True)
+def mad_of(v):
+    """``median |v − median v|`` of ``v`` (1-D, float64, C-contiguous); 0 for none,
+    NaN if any value is NaN."""
+    n = v.size
+    if n == 0:
+        return 0.0
+    buf = np.empty(n)
+    for i in range(n):
+        x = v[i]
+        if x != x:
+            return np.nan
+        buf[i] = x
+    m = _median_inplace(buf, n)
+    for i in range(n):
+        buf[i] = abs(v[i] - m)
+    return _median_inplace(buf, n)
+
+
+@njit(cache=True)
+def column_medians_of(v, rows):
+    """The median of each column of ``v[rows]`` (``v`` (n, k) float64, C-contiguous;
+    ``rows`` bool (n,), at least one True), shape (k,), NaN for a column holding one;
+    and whether a median is zero (its sign, numpy's, rests on the order of equal values:
+    the caller then takes numpy's partial sort)."""
+    n, k = v.shape
+    out = np.empty(k)
+    buf = np.empty(n)
+    zero = False
+    for c in range(k):
+        nan = False
+        m = 0
+        for i in range(n):
+            if rows[i]:
+                x = v[i, c]
+                if x != x:
+                    nan = True
+                    break
+                buf[m] = x
+                m += 1
+        out[c] = np.nan if nan else _median_inplace(buf, m)
+        if out[c] == 0.0:
+            zero = True
+    return out, zero
+
+
+@njit(cache=True)
+def _middle_of_five(a, b, c, d, e):
+    """The middle one of five values (no NaN), by minima and maxima only (no branch to
+    mispredict on noisy readings): the middle of ``e``, the larger of the pairs'
+    smaller values and the smaller of their larger ones."""
+    f = max(min(a, b), min(c, d))
+    g = min(max(a, b), max(c, d))
+    return max(min(e, f), min(max(e, f), g))
+
+
+@njit(cache=True)
+def despike_columns(y, sigmas, share, mad_to_sigma):
+    """``despike``'s arithmetic on ``y`` (n_t ≥ 5, k; float64, C-contiguous; see the
+    module docstring; σ = ``mad_to_sigma`` × MAD): (running medians, spikes (bool),
+    number of spikes, whether every reading is finite).  When one is not, the other
+    outputs are not computed."""
+    n, k = y.shape
+    med = np.empty((n, k))
+    spikes = np.zeros((n, k), dtype=np.bool_)
+    for i in range(n):
+        for c in range(k):
+            x = y[i, c]
+            if not (x - x == 0.0):  # NaN or ±inf
+                return med, spikes, 0, False
+    count = 0
+    buf = np.empty(n)
+    dev = np.empty(n)
+    for c in range(k):
+        top = -np.inf
+        bottom = np.inf
+        for i in range(n):
+            # the ends extended by their edge values
+            m = _middle_of_five(y[max(i - 2, 0), c], y[max(i - 1, 0), c], y[i, c],
+                                y[min(i + 1, n - 1), c], y[min(i + 2, n - 1), c])
+            med[i, c] = m
+            if m > top:
+                top = m
+            if m < bottom:
+                bottom = m
+            dev[i] = y[i, c] - m
+            buf[i] = dev[i]
+        centre = _median_inplace(buf, n)
+        for i in range(n):
+            buf[i] = abs(dev[i] - centre)
+        sigma = mad_to_sigma * _median_inplace(buf, n)
+        limit_sigma = sigmas * sigma
+        limit_share = share * (top - bottom)
+        for i in range(n):
+            ad = abs(dev[i])
+            if ad > limit_sigma and ad > limit_share:
+                spikes[i, c] = True
+                count += 1
+    return med, spikes, count, True
+
+
+@njit(cache=True)
+def outside_activity(t, s, windows, margin, fraction, snr, mad_to_sigma):
+    """:func:`~bwim.detect.presence.unexplained_activity`'s samples of activity (see the
+    module docstring): ``t``, ``s`` (n,), ``windows`` (m, 2) (float64, C-contiguous).
+    Returns (status, active): status 0 when nothing can be reported (quiet samples
+    fewer than 10 % of the record, or none inside a window), 1 with ``active`` (bool,
+    (n,)) the samples outside every widened window departing beyond the limit, 2 when
+    a reading is not finite (nothing computed)."""
+    n = t.size
+    active = np.zeros(n, dtype=np.bool_)
+    for i in range(n):
+        x = s[i]
+        if not (x - x == 0.0):
+            return 2, active
+    inside = np.zeros(n, dtype=np.bool_)
+    for j in range(windows.shape[0]):
+        lo = windows[j, 0] - margin
+        hi = windows[j, 1] + margin
+        for i in range(n):
+            if t[i] >= lo and t[i] <= hi:
+                inside[i] = True
+    n_out = 0
+    for i in range(n):
+        if not inside[i]:
+            n_out += 1
+    if n_out < 0.1 * n or n_out == n:
+        return 0, active
+    buf = np.empty(max(n_out, n - 1))
+    k = 0
+    for i in range(n):
+        if not inside[i]:
+            buf[k] = s[i]
+            k += 1
+    level = _median_inplace(buf, n_out)
+    # the noise: 1.4826 MAD of the first difference, over √2
+    if n > 1:
+        diff = np.empty(n - 1)
+        for i in range(n - 1):
+            diff[i] = s[i + 1] - s[i]
+            buf[i] = diff[i]
+        centre = _median_inplace(buf, n - 1)
+        for i in range(n - 1):
+            buf[i] = abs(diff[i] - centre)
+        noise = mad_to_sigma * _median_inplace(buf, n - 1) / np.sqrt(2.0)
+    else:
+        noise = 0.0 / np.sqrt(2.0)
+    top = -np.inf
+    for i in range(n):
+        if inside[i]:
+            d = abs(s[i] - level)
+            if d > top:
+                top = d
+    a = fraction * top
+    b = snr * noise
+    limit = b if b > a else a  # Python's max(a, b)
+    for i in range(n):
+        if not inside[i] and abs(s[i] - level) > limit:
+            active[i] = True
+    return 1, active
