@@ -90,6 +90,7 @@ import numpy as np
 from bwim.errors import DATA_ERRORS, InputError
 from bwim.plausibility import ordered_flags, quality_of
 from bwim.records import Passage, Record
+from bwim.site.health_numba import gain_stats, loo_lines
 from bwim.wim import Weighing
 from bwim.wim.influence_line import read_channels
 from bwim.wim.multirun import MultiRunCalibration
@@ -474,31 +475,25 @@ class _Comparison:
 
 def _compare(w: Weighing, sub: MultiRunCalibration) -> _Comparison | None:
     """Each channel's gain ratio, correlation and signal against its fitted static
-    reading over the samples with an axle on the support (None when degenerate)."""
+    reading over the samples with an axle on the support (None when degenerate).  The
+    correlation takes the shape alone (both centred): a channel that does not respond
+    is uncorrelated with its fit (:func:`bwim.site.health_numba.gain_stats`)."""
     m, f = w.measured, w.fitted
-    power = (f * f).sum(axis=0)
-    if m.shape[0] == 0 or np.any(power <= 0):
+    if m.shape[0] == 0:
         return None
-    a = (m * f).sum(axis=0) / power
-    # the shape alone: a channel that does not respond is uncorrelated with its fit
-    mc, fc = m - m.mean(axis=0), f - f.mean(axis=0)
-    corr = (mc * fc).sum(axis=0) / np.sqrt(np.maximum((mc * mc).sum(axis=0)
-                                                      * (fc * fc).sum(axis=0), 1e-300))
+    st = gain_stats(m, f)
+    if np.any(st.power <= 0):
+        return None
     sd = np.sqrt(np.clip(np.diag(sub.error_covariance(w.gvw)), np.finfo(float).tiny, None))
-    rms = np.sqrt(power / m.shape[0])
-    return _Comparison(gain=a, corr=corr, snr=rms / sd, rms=rms)
+    return _Comparison(gain=st.gain, corr=st.corr, snr=st.rms / sd, rms=st.rms)
 
 
 def _predicted(y: np.ndarray, values: np.ndarray, snr: np.ndarray) -> np.ndarray:
     """For each channel, the weighted straight line through the other channels' values
-    against their positions ``y`` (weights ``snr²``), at its own position."""
-    n = len(values)
-    others = ~np.eye(n, dtype=bool)  # row g: every channel but g, in order
-
-    def rows(a: np.ndarray) -> np.ndarray:
-        return np.broadcast_to(a, (n, n))[others].reshape(n, n - 1)
-
-    return _lines_at(rows(y), rows(values), rows(snr ** 2), y)
+    against their positions ``y`` (weights ``snr²``), at its own position (nan when the
+    others have no weight; :func:`bwim.site.health_numba.loo_lines`: each line's sums
+    are numpy's over that channel's others alone)."""
+    return loo_lines(y, values, snr ** 2, y)
 
 
 def gain_ratios(weighing: Weighing, lines: MultiRunCalibration) -> dict[str, float]:
@@ -519,18 +514,3 @@ def gain_ratios(weighing: Weighing, lines: MultiRunCalibration) -> dict[str, flo
     expected = _predicted(_positions(sub), c.gain, c.snr)
     return {n: float(c.gain[g] / expected[g]) for g, n in enumerate(names)
             if expected[g] > 0}
-
-
-def _lines_at(x: np.ndarray, y: np.ndarray, weight: np.ndarray, at: np.ndarray
-              ) -> np.ndarray:
-    """Per row of ``x``, ``y`` and ``weight`` (n, m) the weighted least-squares straight
-    line through (x, y), at ``at`` (n,); nan for a row without weight.  (Each row is
-    summed as one vector: the numbers of the line through that row alone.)"""
-    wsum = weight.sum(axis=1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        xm = (weight * x).sum(axis=1) / wsum
-        ym = (weight * y).sum(axis=1) / wsum
-        dx = x - xm[:, None]
-        sxx = (weight * dx ** 2).sum(axis=1)
-        slope = np.where(sxx > 0, (weight * dx * (y - ym[:, None])).sum(axis=1) / sxx, 0.0)
-        return np.where(wsum > 0, ym + slope * (at - xm), np.nan)
