@@ -84,6 +84,7 @@ from bwim.records import Passage, Record
 from bwim.wim.influence_line import Channel, read_channels
 from bwim.wim.moses import AxleGroups, group_axles, group_share
 from bwim.wim.multirun import MultiRunCalibration
+from bwim.wim.weigh_numba import channel_products, fit_residual, group_readings
 
 __all__ = ["HARD_FLAGS", "NORMAL_CONDITION", "SOFT_FLAGS", "Limits", "Weighing",
            "WeighingModel", "weigh", "weighing_model"]
@@ -442,8 +443,9 @@ def _design(record: Record, event: _Inputs, calibration: MultiRunCalibration) ->
     E = read_channels(record, line.channels)  # (n_t, n_c)
     ords = calibration.ordinates_at(event.lateral)[1:-1]  # interior ordinates (m, n_c)
     pos = event.passage.axle_x(record.time)  # (n_t, n_axles)
-    M = _unit_readings(pos, ords, line.x[0], line.spacing, line.x.size - 1)
-    Mg = np.matmul(event.groups.share.T, M)  # (n_t, n_groups, n_c): Σ_i share_ig M_kic
+    # (n_t, n_groups, n_c): Σ_i share_ig M_kic, M the readings under each axle
+    Mg = group_readings(pos, ords, line.x[0], line.spacing, line.x.size - 1,
+                        event.groups.share)
     lo, hi = line.support
     on = ((pos > lo) & (pos < hi)).any(axis=1)
     return _Design(readings=E, positions=pos, groups=Mg, on=on, support=(lo, hi),
@@ -464,29 +466,6 @@ def _scaled(design: _Design, calibration: MultiRunCalibration, scale_correction:
                                and trend is not None)
 
 
-def _unit_readings(pos: np.ndarray, ords: np.ndarray, x0: float, h: float, n: int
-                   ) -> np.ndarray:
-    """The lines' readings of a unit load at each position of ``pos`` (n_t, n_axles),
-    shape (n_t, n_axles, n_c): linear between the nodes ``x0 + j h``, j = 0 … n, with
-    the interior ordinates ``ords`` (n − 1, n_c) and zero at both ends.  The numbers of
-    ``hat_design(pos.reshape(-1, 1), [1], x0, h, n) @ ords`` (the matrix method's
-    design, :func:`bwim.wim.influence_line.hat_design`), without the sparse matrix: its
-    row of two weights times the ordinates, summed in the same order."""
-    u = (pos - x0) / h
-    inside = (u > 0.0) & (u < n)
-    j = np.floor(np.where(inside, u, 0.0)).astype(np.int64)
-    f = np.where(inside, u - j, 0.0)
-    padded = np.zeros((n + 1, ords.shape[1]))  # nodes 0 … n: the ends' terms zero
-    padded[1:n] = ords
-    j, f = j[inside], f[inside]
-    on = np.zeros((j.size, ords.shape[1]))  # the sparse product's sums start at 0
-    on += (1.0 - f)[:, None] * padded[j]
-    on += f[:, None] * padded[j + 1]
-    out = np.zeros((*pos.shape, ords.shape[1]))
-    out[inside] = on
-    return out
-
-
 @dataclass(frozen=True, kw_only=True, eq=False)
 class _Centred:
     """The readings and the design with the channels' offsets removed, and their
@@ -505,12 +484,9 @@ class _Centred:
 def _centred_of(readings: np.ndarray, groups: np.ndarray, offsets: np.ndarray | None,
                 flags: tuple[str, ...]) -> _Centred:
     """The centred readings and design with their normal equations' products."""
-    Mt = groups.transpose(2, 1, 0)  # (n_c, n_groups, n_t)
-    Xs = groups.sum(axis=2)  # the channels' sum (n_t, n_groups)
+    p = channel_products(groups, readings)
     return _Centred(readings=readings, groups=groups, offsets=offsets, flags=flags,
-                    gram=Mt @ Mt.transpose(0, 2, 1),
-                    rhs=(Mt @ readings.T[:, :, None])[:, :, 0],
-                    sum_gram=Xs.T @ Xs, sum_rhs=Xs.T @ readings.sum(axis=1))
+                    gram=p.gram, rhs=p.rhs, sum_gram=p.sum_gram, sum_rhs=p.sum_rhs)
 
 
 def _centred(design: _Design, event: _Inputs) -> _Centred:
@@ -568,22 +544,24 @@ def _fit(design: _Design, centred: _Centred, event: _Inputs,
     axle_w = share @ group_w
 
     E = design.readings
-    fitted = s * np.einsum("kgc,g->kc", design.groups, np.nan_to_num(group_w))
-    offsets = (E - fitted).mean(axis=0) if event.baseline == "fit" else centred.offsets
-    meas = E - offsets
-    den = float(np.linalg.norm(meas))
-    resid = float(np.linalg.norm(meas - fitted)) / den if den > 0 else float("inf")
-    if combine == "sum":  # the summed readings were fitted: judge their residual
-        sd_sum = np.sqrt(max(float(np.sum(C)), np.finfo(float).tiny))
-        misfit = float(np.sqrt(np.mean(((meas - fitted).sum(axis=1) / sd_sum) ** 2)))
+    summed = combine == "sum"  # the summed readings were fitted: judge their residual
+    if summed:
+        sd = np.sqrt(max(float(np.sum(C)), np.finfo(float).tiny))
         misfit_ref = calibration.sum_misfit_median
     else:
         sd = np.sqrt(np.clip(np.diag(C), np.finfo(float).tiny, None))
-        misfit = float(np.sqrt(np.mean(((meas - fitted) / sd) ** 2)))
         misfit_ref = calibration.misfit_median
+    # fitted readings, offsets (fitted: the mean of reading − fit), the sums of squares
+    r = fit_residual(E, design.groups, np.nan_to_num(group_w), s,
+                     offsets=None if event.baseline == "fit" else centred.offsets,
+                     deviation=sd, summed=summed)
+    den = np.sqrt(r.sum_measured)
+    resid = float(np.sqrt(r.sum_residual) / den) if den > 0 else float("inf")
+    count = E.shape[0] * (1 if summed else E.shape[1])  # the residuals the misfit averages
+    misfit = float(np.sqrt(r.sum_misfit / count)) if count else float("nan")
     return _Fit(group_weights=group_w, axle_weights=axle_w, undetermined=rank < n_g,
-                condition=condition, offsets=offsets, measured=meas, fitted=fitted,
-                residual=resid, misfit=misfit, misfit_ref=misfit_ref)
+                condition=condition, offsets=r.offsets, measured=r.measured,
+                fitted=r.fitted, residual=resid, misfit=misfit, misfit_ref=misfit_ref)
 
 
 def _flags(event: _Inputs, design: _Design, centred: _Centred, fit: _Fit,
