@@ -5,7 +5,13 @@ bit (numpy's pairwise sums, its column sums, no fused multiply-add)."""
 import numpy as np
 import pytest
 
-from bwim.site.health_numba import gain_stats, loo_lines, numpy_sum
+from bwim.site.health_numba import (
+    gain_stats,
+    held_extremes,
+    loo_lines,
+    numpy_sum,
+    step_noise,
+)
 
 
 def _lines_at(x, y, weight, at):
@@ -80,3 +86,41 @@ def test_gain_stats_are_numpys_column_sums(seed):
         for g, r in zip((got.power, got.gain, got.corr, got.rms), _gain_reference(m, f),
                         strict=True):
             assert g.tobytes() == r.tobytes(), trial
+
+
+def _held_reference(readings, run):
+    out = np.zeros(readings.shape[1], dtype=bool)
+    m = readings.shape[0] - run + 1
+    if m <= 0:
+        return out
+    for extreme in (readings.max(axis=0), readings.min(axis=0)):
+        at = readings == extreme
+        held = at[:m].copy()
+        for j in range(1, run):
+            held &= at[j:j + m]
+        out |= held.any(axis=0)
+    return out
+
+
+def test_step_noise_is_numpys_std_of_the_steps():
+    rng = np.random.default_rng(8)
+    for trial in range(300):
+        n, nc = int(rng.integers(2, 1500)), int(rng.integers(1, 14))
+        a = np.cumsum(rng.normal(size=(n, nc)), axis=0) * 10.0 ** rng.uniform(-9, 3, nc)
+        if trial % 4 == 0:  # a coarse logger: repeated samples, a constant channel
+            a = np.round(a / a.std() * 3.0) if a.std() > 0 else a
+            a[:, 0] = 1.5
+        ref = np.std(np.diff(np.ascontiguousarray(a.T), axis=1), axis=1) / np.sqrt(2.0)
+        assert step_noise(a).tobytes() == ref.tobytes(), trial
+
+
+def test_held_extremes_are_runs_at_the_maximum_or_minimum():
+    rng = np.random.default_rng(9)
+    for trial in range(400):
+        n, nc, run = int(rng.integers(1, 80)), int(rng.integers(1, 8)), int(
+            rng.integers(1, 8))
+        a = rng.integers(-3, 4, size=(n, nc)).astype(float)  # many ties and runs
+        if trial % 3 == 0:
+            a = rng.normal(size=(n, nc))
+            a[n // 3:n // 3 + run, 0] = a.max() + 1.0
+        assert np.array_equal(held_extremes(a, run), _held_reference(a, run)), trial

@@ -90,7 +90,7 @@ import numpy as np
 from bwim.errors import DATA_ERRORS, InputError
 from bwim.plausibility import ordered_flags, quality_of
 from bwim.records import Passage, Record
-from bwim.site.health_numba import gain_stats, loo_lines
+from bwim.site.health_numba import gain_stats, held_extremes, loo_lines, step_noise
 from bwim.wim import Weighing
 from bwim.wim.influence_line import read_channels
 from bwim.wim.multirun import MultiRunCalibration
@@ -279,9 +279,8 @@ def _flat(readings: np.ndarray, lines: MultiRunCalibration) -> list[GaugeFault]:
     """Step 1: channels without their noise."""
     if readings.shape[0] < 3:
         return []
-    # each channel's row contiguous: numpy's sums then run as over that channel alone
-    steps = np.diff(np.ascontiguousarray(readings.T), axis=1)
-    noises = np.std(steps, axis=1) / np.sqrt(2.0)
+    # numpy's std of each channel's steps alone (bwim.site.health_numba.step_noise)
+    noises = step_noise(readings)
     out = []
     for k, c in enumerate(lines.channels):
         ref = float(lines.channel_noise[k])
@@ -320,17 +319,7 @@ def _runs(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def _held(readings: np.ndarray) -> np.ndarray:
     """Per channel whether it holds its maximum or its minimum over the record for at
     least :data:`CLIP_RUN` consecutive samples (only those can be clipped)."""
-    out = np.zeros(readings.shape[1], dtype=bool)
-    m = readings.shape[0] - CLIP_RUN + 1  # the runs' possible starts
-    if m <= 0:
-        return out
-    for extreme in (readings.max(axis=0), readings.min(axis=0)):
-        at = readings == extreme
-        run = at[:m].copy()  # at the extreme from each start for CLIP_RUN samples
-        for j in range(1, CLIP_RUN):
-            run &= at[j:j + m]
-        out |= run.any(axis=0)
-    return out
+    return held_extremes(readings, CLIP_RUN)
 
 
 def _clipped(readings: np.ndarray, lines: MultiRunCalibration, record: Record,

@@ -13,6 +13,10 @@ Contract
   line through the other n − 1 points ``(x_j, values_j)`` (weights ``weight_j``), at
   ``at``; nan for a point whose others have no weight, the line's slope 0 when their
   ``x`` do not spread.
+* :func:`step_noise` gives each channel's sample-to-sample variation,
+  ``std(diff(reading)) / √2`` (numpy's ``std``: the mean, the squared deviations'
+  mean, its root), and :func:`held_extremes` whether a channel holds its maximum or its
+  minimum over the record for at least ``run`` consecutive samples.
 * **The numbers of numpy, bit for bit**: every sum is numpy's for the same vector
   (:func:`numpy_sum`: its pairwise summation, from 0), every column sum of a table numpy's
   ``sum(axis=0)`` of a C-ordered table (row after row, from 0), and each product and
@@ -30,7 +34,8 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-__all__ = ["GainStats", "gain_stats", "loo_lines", "numpy_sum"]
+__all__ = ["GainStats", "gain_stats", "held_extremes", "loo_lines", "numpy_sum",
+           "step_noise"]
 
 #: numpy's block of its pairwise summation (``PW_BLOCKSIZE``), and its unrolling (8).
 _BLOCK = 128
@@ -217,3 +222,56 @@ def loo_lines(x: np.ndarray, values: np.ndarray, weight: np.ndarray, at: np.ndar
         return np.ascontiguousarray(a, dtype=float).reshape(-1)
 
     return _loo_lines(vec(x), vec(values), vec(weight), vec(at))
+
+
+@numba.njit(cache=True)
+def _step_noise(a):  # pragma: no cover - compiled
+    n, nc = a.shape
+    out = np.empty(nc)
+    d = np.empty(n - 1)
+    for c in range(nc):
+        for k in range(n - 1):
+            d[k] = a[k + 1, c] - a[k, c]
+        mean = _sum(d) / (n - 1)
+        for k in range(n - 1):
+            x = d[k] - mean
+            d[k] = x * x
+        out[c] = np.sqrt(_sum(d) / (n - 1)) / np.sqrt(2.0)
+    return out
+
+
+def step_noise(readings: np.ndarray) -> np.ndarray:
+    """Each channel's ``std(diff(reading)) / √2`` (module docstring); ``readings``
+    (n_t ≥ 2, n_c)."""
+    return _step_noise(np.ascontiguousarray(readings, dtype=float))
+
+
+@numba.njit(cache=True)
+def _held_extremes(a, run):  # pragma: no cover - compiled
+    n, nc = a.shape
+    out = np.zeros(nc, dtype=np.bool_)
+    if n < run:
+        return out
+    hi = a[0].copy()
+    lo = a[0].copy()
+    for k in range(1, n):
+        for c in range(nc):
+            if a[k, c] > hi[c]:
+                hi[c] = a[k, c]
+            if a[k, c] < lo[c]:
+                lo[c] = a[k, c]
+    at_hi = np.zeros(nc, dtype=np.int64)  # the current run at each extreme
+    at_lo = np.zeros(nc, dtype=np.int64)
+    for k in range(n):
+        for c in range(nc):
+            at_hi[c] = at_hi[c] + 1 if a[k, c] == hi[c] else 0
+            at_lo[c] = at_lo[c] + 1 if a[k, c] == lo[c] else 0
+            if at_hi[c] >= run or at_lo[c] >= run:
+                out[c] = True
+    return out
+
+
+def held_extremes(readings: np.ndarray, run: int) -> np.ndarray:
+    """Per channel of ``readings`` (n_t, n_c; finite) whether it holds its maximum or its
+    minimum for at least ``run`` ≥ 1 consecutive samples (module docstring)."""
+    return _held_extremes(np.ascontiguousarray(readings, dtype=float), int(run))
