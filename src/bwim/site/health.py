@@ -385,26 +385,28 @@ def _worst(record: Record, passage: Passage, lines: MultiRunCalibration,
     noise = sub.channel_noise
     y = _positions(sub)
     expected = _predicted(y, c.gain, c.snr)
-    ratios = {n: float(c.gain[g] / expected[g]) for g, n in enumerate(names)
-              if expected[g] > 0}
+    ratios = _ratios(names, c.gain, expected)
     worst, score = None, SIGNIFICANCE
     drifting, excess = None, 1.0
     shown = _predicted(y, trend / c.rms, c.snr) * c.rms
+    # each channel's significance, and its drift: the residual's change over the record
+    # beyond what the others' show (their changes in proportion to their signals, on a
+    # line across the deck), in units of its noise (0 without noise)
+    significances = (np.abs(c.gain - expected) * c.snr).tolist()
+    changes = np.divide(np.abs(trend - shown), noise, out=np.zeros(len(names)),
+                        where=noise > 0).tolist()
     for g in range(len(names)):
-        if names[g] in ratios:
+        significance = significances[g]
+        if names[g] in ratios and significance > score:
             ratio = ratios[names[g]]
-            off = ratio <= 0 or abs(np.log(ratio)) > np.log(GAIN_TOLERANCE)
-            significance = abs(c.gain[g] - expected[g]) * c.snr[g]
-            if off and significance > score:
+            if ratio <= 0 or abs(np.log(ratio)) > np.log(GAIN_TOLERANCE):  # off
                 kind = ("silent" if abs(c.corr[g]) < SILENT_CORRELATION
                         else "reversed" if ratio < 0 else "gain")
                 worst, score = GaugeFault(
                     gauge=names[g], kind=kind, ratio=ratio,
                     detail=f"gain {ratio:.2f} × what the other gauges predict "
                            f"({significance:.1f} residual deviations)"), significance
-        # drift: the residual's change over the record beyond what the others' show
-        # (their changes in proportion to their signals, on a line across the deck)
-        change = abs(trend[g] - shown[g]) / noise[g] if noise[g] > 0 else 0.0
+        change = changes[g]
         if change / DRIFT_NOISE > excess:
             drifting, excess = GaugeFault(
                 gauge=names[g], kind="drift", ratio=float("nan"),
@@ -500,6 +502,13 @@ def gain_ratios(weighing: Weighing, lines: MultiRunCalibration) -> dict[str, flo
     c = _compare(weighing, sub)
     if c is None:
         return {}
-    expected = _predicted(_positions(sub), c.gain, c.snr)
-    return {n: float(c.gain[g] / expected[g]) for g, n in enumerate(names)
-            if expected[g] > 0}
+    return _ratios(names, c.gain, _predicted(_positions(sub), c.gain, c.snr))
+
+
+def _ratios(names: Sequence[str], gain: np.ndarray, expected: np.ndarray
+            ) -> dict[str, float]:
+    """Each channel's gain over its prediction, ``a_g / â_g``, where the prediction is
+    positive."""
+    keep = expected > 0
+    ratio = np.divide(gain, expected, out=np.zeros(len(names)), where=keep).tolist()
+    return {names[g]: ratio[g] for g in np.flatnonzero(keep).tolist()}

@@ -552,7 +552,8 @@ def _fit(design: _Design, centred: _Centred, event: _Inputs,
         sd = np.sqrt(np.clip(np.diag(C), np.finfo(float).tiny, None))
         misfit_ref = calibration.misfit_median
     # fitted readings, offsets (fitted: the mean of reading − fit), the sums of squares
-    r = fit_residual(E, design.groups, np.nan_to_num(group_w), s,
+    finite = group_w if np.isfinite(group_w).all() else np.nan_to_num(group_w)
+    r = fit_residual(E, design.groups, finite, s,
                      offsets=None if event.baseline == "fit" else centred.offsets,
                      deviation=sd, summed=summed)
     den = np.sqrt(r.sum_measured)
