@@ -90,6 +90,7 @@ import numpy as np
 from bwim.errors import DATA_ERRORS, InputError
 from bwim.plausibility import ordered_flags, quality_of
 from bwim.records import Passage, Record
+from bwim.site.health_numba import gain_stats, held_extremes, loo_lines, step_noise
 from bwim.wim import Weighing
 from bwim.wim.influence_line import read_channels
 from bwim.wim.multirun import MultiRunCalibration
@@ -278,9 +279,8 @@ def _flat(readings: np.ndarray, lines: MultiRunCalibration) -> list[GaugeFault]:
     """Step 1: channels without their noise."""
     if readings.shape[0] < 3:
         return []
-    # each channel's row contiguous: numpy's sums then run as over that channel alone
-    steps = np.diff(np.ascontiguousarray(readings.T), axis=1)
-    noises = np.std(steps, axis=1) / np.sqrt(2.0)
+    # numpy's std of each channel's steps alone (bwim.site.health_numba.step_noise)
+    noises = step_noise(readings)
     out = []
     for k, c in enumerate(lines.channels):
         ref = float(lines.channel_noise[k])
@@ -319,17 +319,7 @@ def _runs(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def _held(readings: np.ndarray) -> np.ndarray:
     """Per channel whether it holds its maximum or its minimum over the record for at
     least :data:`CLIP_RUN` consecutive samples (only those can be clipped)."""
-    out = np.zeros(readings.shape[1], dtype=bool)
-    m = readings.shape[0] - CLIP_RUN + 1  # the runs' possible starts
-    if m <= 0:
-        return out
-    for extreme in (readings.max(axis=0), readings.min(axis=0)):
-        at = readings == extreme
-        run = at[:m].copy()  # at the extreme from each start for CLIP_RUN samples
-        for j in range(1, CLIP_RUN):
-            run &= at[j:j + m]
-        out |= run.any(axis=0)
-    return out
+    return held_extremes(readings, CLIP_RUN)
 
 
 def _clipped(readings: np.ndarray, lines: MultiRunCalibration, record: Record,
@@ -395,26 +385,28 @@ def _worst(record: Record, passage: Passage, lines: MultiRunCalibration,
     noise = sub.channel_noise
     y = _positions(sub)
     expected = _predicted(y, c.gain, c.snr)
-    ratios = {n: float(c.gain[g] / expected[g]) for g, n in enumerate(names)
-              if expected[g] > 0}
+    ratios = _ratios(names, c.gain, expected)
     worst, score = None, SIGNIFICANCE
     drifting, excess = None, 1.0
     shown = _predicted(y, trend / c.rms, c.snr) * c.rms
+    # each channel's significance, and its drift: the residual's change over the record
+    # beyond what the others' show (their changes in proportion to their signals, on a
+    # line across the deck), in units of its noise (0 without noise)
+    significances = (np.abs(c.gain - expected) * c.snr).tolist()
+    changes = np.divide(np.abs(trend - shown), noise, out=np.zeros(len(names)),
+                        where=noise > 0).tolist()
     for g in range(len(names)):
-        if names[g] in ratios:
+        significance = significances[g]
+        if names[g] in ratios and significance > score:
             ratio = ratios[names[g]]
-            off = ratio <= 0 or abs(np.log(ratio)) > np.log(GAIN_TOLERANCE)
-            significance = abs(c.gain[g] - expected[g]) * c.snr[g]
-            if off and significance > score:
+            if ratio <= 0 or abs(np.log(ratio)) > np.log(GAIN_TOLERANCE):  # off
                 kind = ("silent" if abs(c.corr[g]) < SILENT_CORRELATION
                         else "reversed" if ratio < 0 else "gain")
                 worst, score = GaugeFault(
                     gauge=names[g], kind=kind, ratio=ratio,
                     detail=f"gain {ratio:.2f} × what the other gauges predict "
                            f"({significance:.1f} residual deviations)"), significance
-        # drift: the residual's change over the record beyond what the others' show
-        # (their changes in proportion to their signals, on a line across the deck)
-        change = abs(trend[g] - shown[g]) / noise[g] if noise[g] > 0 else 0.0
+        change = changes[g]
         if change / DRIFT_NOISE > excess:
             drifting, excess = GaugeFault(
                 gauge=names[g], kind="drift", ratio=float("nan"),
@@ -474,31 +466,25 @@ class _Comparison:
 
 def _compare(w: Weighing, sub: MultiRunCalibration) -> _Comparison | None:
     """Each channel's gain ratio, correlation and signal against its fitted static
-    reading over the samples with an axle on the support (None when degenerate)."""
+    reading over the samples with an axle on the support (None when degenerate).  The
+    correlation takes the shape alone (both centred): a channel that does not respond
+    is uncorrelated with its fit (:func:`bwim.site.health_numba.gain_stats`)."""
     m, f = w.measured, w.fitted
-    power = (f * f).sum(axis=0)
-    if m.shape[0] == 0 or np.any(power <= 0):
+    if m.shape[0] == 0:
         return None
-    a = (m * f).sum(axis=0) / power
-    # the shape alone: a channel that does not respond is uncorrelated with its fit
-    mc, fc = m - m.mean(axis=0), f - f.mean(axis=0)
-    corr = (mc * fc).sum(axis=0) / np.sqrt(np.maximum((mc * mc).sum(axis=0)
-                                                      * (fc * fc).sum(axis=0), 1e-300))
+    st = gain_stats(m, f)
+    if np.any(st.power <= 0):
+        return None
     sd = np.sqrt(np.clip(np.diag(sub.error_covariance(w.gvw)), np.finfo(float).tiny, None))
-    rms = np.sqrt(power / m.shape[0])
-    return _Comparison(gain=a, corr=corr, snr=rms / sd, rms=rms)
+    return _Comparison(gain=st.gain, corr=st.corr, snr=st.rms / sd, rms=st.rms)
 
 
 def _predicted(y: np.ndarray, values: np.ndarray, snr: np.ndarray) -> np.ndarray:
     """For each channel, the weighted straight line through the other channels' values
-    against their positions ``y`` (weights ``snr²``), at its own position."""
-    n = len(values)
-    others = ~np.eye(n, dtype=bool)  # row g: every channel but g, in order
-
-    def rows(a: np.ndarray) -> np.ndarray:
-        return np.broadcast_to(a, (n, n))[others].reshape(n, n - 1)
-
-    return _lines_at(rows(y), rows(values), rows(snr ** 2), y)
+    against their positions ``y`` (weights ``snr²``), at its own position (nan when the
+    others have no weight; :func:`bwim.site.health_numba.loo_lines`: each line's sums
+    are numpy's over that channel's others alone)."""
+    return loo_lines(y, values, snr ** 2, y)
 
 
 def gain_ratios(weighing: Weighing, lines: MultiRunCalibration) -> dict[str, float]:
@@ -516,21 +502,13 @@ def gain_ratios(weighing: Weighing, lines: MultiRunCalibration) -> dict[str, flo
     c = _compare(weighing, sub)
     if c is None:
         return {}
-    expected = _predicted(_positions(sub), c.gain, c.snr)
-    return {n: float(c.gain[g] / expected[g]) for g, n in enumerate(names)
-            if expected[g] > 0}
+    return _ratios(names, c.gain, _predicted(_positions(sub), c.gain, c.snr))
 
 
-def _lines_at(x: np.ndarray, y: np.ndarray, weight: np.ndarray, at: np.ndarray
-              ) -> np.ndarray:
-    """Per row of ``x``, ``y`` and ``weight`` (n, m) the weighted least-squares straight
-    line through (x, y), at ``at`` (n,); nan for a row without weight.  (Each row is
-    summed as one vector: the numbers of the line through that row alone.)"""
-    wsum = weight.sum(axis=1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        xm = (weight * x).sum(axis=1) / wsum
-        ym = (weight * y).sum(axis=1) / wsum
-        dx = x - xm[:, None]
-        sxx = (weight * dx ** 2).sum(axis=1)
-        slope = np.where(sxx > 0, (weight * dx * (y - ym[:, None])).sum(axis=1) / sxx, 0.0)
-        return np.where(wsum > 0, ym + slope * (at - xm), np.nan)
+def _ratios(names: Sequence[str], gain: np.ndarray, expected: np.ndarray
+            ) -> dict[str, float]:
+    """Each channel's gain over its prediction, ``a_g / â_g``, where the prediction is
+    positive."""
+    keep = expected > 0
+    ratio = np.divide(gain, expected, out=np.zeros(len(names)), where=keep).tolist()
+    return {names[g]: ratio[g] for g in np.flatnonzero(keep).tolist()}

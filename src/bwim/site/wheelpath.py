@@ -93,9 +93,13 @@ def gauge_line(lines: MultiRunCalibration) -> float:
     """x (m, in the passages' frame) of the gauge line: the median over the channels of
     the position of each channel's largest ordinate (in magnitude) at the lines' mean
     lateral position."""
-    line = lines.line_at()
-    ords = np.abs(np.asarray(line.ordinates, dtype=float).reshape(line.x.size, -1))
-    return float(np.median(line.x[np.argmax(ords, axis=0)]))
+    x = lines.line.x  # the lines at their mean lateral position (lines.line_at()'s)
+    ords = np.abs(np.asarray(lines.ordinates_at(lines.lateral_center), dtype=float))
+    at = sorted(x[np.argmax(ords.reshape(x.size, -1), axis=0)].tolist())
+    n = len(at)  # their median, numpy.median's number: the middle one or two, their mean
+    if n == 0:
+        return float("nan")
+    return 0.0 + at[n // 2] if n % 2 else ((0.0 + at[n // 2 - 1]) + at[n // 2]) / 2.0
 
 
 def group_laterals(record: Record, passage: Passage, *, gauge_line: float,

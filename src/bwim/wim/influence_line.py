@@ -113,6 +113,8 @@ def read_channels(record: Record, channels: Sequence[Channel]) -> np.ndarray:
     column = {s.name: i for i, s in enumerate(record.sensors)}
     if any(s.name not in column for c in channels for s in c.sensors):
         return np.stack([c.read(record) for c in channels], axis=1)  # names the missing one
+    if all(len(c.sensors) == 1 for c in channels):  # one sensor each: its column as it is
+        return record.data[:, [column[c.sensors[0].name] for c in channels]]
     return np.stack([record.data[:, [column[s.name] for s in c.sensors]].sum(axis=1)
                      for c in channels], axis=1)
 

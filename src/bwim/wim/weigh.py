@@ -84,6 +84,7 @@ from bwim.records import Passage, Record
 from bwim.wim.influence_line import Channel, read_channels
 from bwim.wim.moses import AxleGroups, group_axles, group_share
 from bwim.wim.multirun import MultiRunCalibration
+from bwim.wim.weigh_numba import channel_products, fit_residual, group_readings
 
 __all__ = ["HARD_FLAGS", "NORMAL_CONDITION", "SOFT_FLAGS", "Limits", "Weighing",
            "WeighingModel", "weigh", "weighing_model"]
@@ -178,8 +179,9 @@ def _groups(groups: Any, passage: Passage) -> AxleGroups:
 
 
 def _whitener(C: np.ndarray, combine: str) -> np.ndarray | None:
-    """Matrix T (n_c', n_c) applied to the channel axis: ``T C Tᵀ = I`` for "blue", its
-    diagonal version for "gls", None for the plain sum."""
+    """Matrix T (n_c', n_c) applied to the channel axis: ``T C Tᵀ = I`` for "blue"; for
+    "gls" its diagonal version, given as the vector of its diagonal (n_c,); None for the
+    plain sum."""
     if combine == "sum":
         return None
     if combine == "gls":
@@ -187,7 +189,7 @@ def _whitener(C: np.ndarray, combine: str) -> np.ndarray | None:
         if np.any(var <= 0):
             raise InputError("combine='gls' needs a positive residual variance per channel "
                              "(the calibration fitted a channel exactly); use 'sum'")
-        return np.diag(1.0 / np.sqrt(var))
+        return 1.0 / np.sqrt(var)
     try:
         L = np.linalg.cholesky(C)
     except np.linalg.LinAlgError:
@@ -202,26 +204,46 @@ def _whitener(C: np.ndarray, combine: str) -> np.ndarray | None:
 NORMAL_CONDITION = 1e3
 
 
-def _solve(Ec: np.ndarray, Mc: np.ndarray, s: float, T: np.ndarray | None
-           ) -> tuple[np.ndarray, int, np.ndarray]:
-    """Least squares of the (whitened) channels: group weights, rank, singular values
-    (descending).  By the normal equations when the design's condition number is below
-    :data:`NORMAL_CONDITION` (then of full rank), else by ``numpy.linalg.lstsq``."""
+def _system(Ec: np.ndarray, Mc: np.ndarray, s: float, T: np.ndarray | None
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """The least-squares design ``A`` (channel-major rows) and readings ``b`` of the
+    (whitened) channels: ``T`` None (their sum), a vector (a diagonal whitener) or a
+    matrix."""
     if T is None:
         Ew, Mw = Ec.sum(axis=1, keepdims=True), Mc.sum(axis=2, keepdims=True)
-    elif np.count_nonzero(T - np.diag(np.diag(T))) == 0:  # diagonal: scale the channels
-        Ew, Mw = Ec * np.diag(T), Mc * np.diag(T)
+    elif T.ndim == 1:  # diagonal: scale the channels
+        Ew, Mw = Ec * T, Mc * T
     else:
         Ew, Mw = Ec @ T.T, Mc @ T.T
     n_g = Mc.shape[1]
-    A = s * Mw.transpose(2, 0, 1).reshape(-1, n_g)
-    b = Ew.T.ravel()
+    return s * Mw.transpose(2, 0, 1).reshape(-1, n_g), Ew.T.ravel()
+
+
+def _solve(centred: _Centred, s: float, T: np.ndarray | None
+           ) -> tuple[np.ndarray, int, np.ndarray]:
+    """Least squares of the (whitened) channels (``T`` as :func:`_system`'s): group
+    weights, rank, singular values (descending).  By the normal equations when the
+    design's condition number is below :data:`NORMAL_CONDITION` (then of full rank), else
+    by ``numpy.linalg.lstsq``.  The normal equations of the sum and of a diagonal
+    whitener are made of the centred design's per-channel products
+    (:class:`_Centred`: ``AᵀA = s² Σ_c T_c² G_c``, the numbers of ``A.T @ A`` to
+    rounding), without the design."""
+    Ec, Mc = centred.readings, centred.groups
     # the normal equations where they are well conditioned (the lstsq numbers to rounding:
     # relative error about eps × cond², far below the weights' own), lstsq otherwise
-    G = A.T @ A
+    if T is None:
+        G, rhs = (s * s) * centred.sum_gram, s * centred.sum_rhs
+    elif T.ndim == 1:
+        w = T * T
+        G, rhs = (s * s) * np.tensordot(w, centred.gram, 1), s * (w @ centred.rhs)
+    else:
+        A, b = _system(Ec, Mc, s, T)
+        G, rhs = A.T @ A, A.T @ b
+    n_g = Mc.shape[1]
     lam = np.linalg.eigvalsh(G)[::-1]  # σ² of A, descending
     if lam.size and lam[-1] > 0 and lam[0] <= NORMAL_CONDITION**2 * lam[-1]:
-        return np.linalg.solve(G, A.T @ b), n_g, np.sqrt(lam)
+        return np.linalg.solve(G, rhs), n_g, np.sqrt(lam)
+    A, b = _system(Ec, Mc, s, T)
     sol, _, rank, sv = np.linalg.lstsq(A, b, rcond=None)
     return sol, int(rank), sv
 
@@ -421,8 +443,9 @@ def _design(record: Record, event: _Inputs, calibration: MultiRunCalibration) ->
     E = read_channels(record, line.channels)  # (n_t, n_c)
     ords = calibration.ordinates_at(event.lateral)[1:-1]  # interior ordinates (m, n_c)
     pos = event.passage.axle_x(record.time)  # (n_t, n_axles)
-    M = _unit_readings(pos, ords, line.x[0], line.spacing, line.x.size - 1)
-    Mg = np.matmul(event.groups.share.T, M)  # (n_t, n_groups, n_c): Σ_i share_ig M_kic
+    # (n_t, n_groups, n_c): Σ_i share_ig M_kic, M the readings under each axle
+    Mg = group_readings(pos, ords, line.x[0], line.spacing, line.x.size - 1,
+                        event.groups.share)
     lo, hi = line.support
     on = ((pos > lo) & (pos < hi)).any(axis=1)
     return _Design(readings=E, positions=pos, groups=Mg, on=on, support=(lo, hi),
@@ -443,37 +466,27 @@ def _scaled(design: _Design, calibration: MultiRunCalibration, scale_correction:
                                and trend is not None)
 
 
-def _unit_readings(pos: np.ndarray, ords: np.ndarray, x0: float, h: float, n: int
-                   ) -> np.ndarray:
-    """The lines' readings of a unit load at each position of ``pos`` (n_t, n_axles),
-    shape (n_t, n_axles, n_c): linear between the nodes ``x0 + j h``, j = 0 … n, with
-    the interior ordinates ``ords`` (n − 1, n_c) and zero at both ends.  The numbers of
-    ``hat_design(pos.reshape(-1, 1), [1], x0, h, n) @ ords`` (the matrix method's
-    design, :func:`bwim.wim.influence_line.hat_design`), without the sparse matrix: its
-    row of two weights times the ordinates, summed in the same order."""
-    u = (pos - x0) / h
-    inside = (u > 0.0) & (u < n)
-    j = np.floor(np.where(inside, u, 0.0)).astype(np.int64)
-    f = np.where(inside, u - j, 0.0)
-    padded = np.zeros((n + 1, ords.shape[1]))  # nodes 0 … n: the ends' terms zero
-    padded[1:n] = ords
-    j, f = j[inside], f[inside]
-    on = np.zeros((j.size, ords.shape[1]))  # the sparse product's sums start at 0
-    on += (1.0 - f)[:, None] * padded[j]
-    on += f[:, None] * padded[j + 1]
-    out = np.zeros((*pos.shape, ords.shape[1]))
-    out[inside] = on
-    return out
-
-
 @dataclass(frozen=True, kw_only=True, eq=False)
 class _Centred:
-    """The readings and the design with the channels' offsets removed."""
+    """The readings and the design with the channels' offsets removed, and their
+    products of the normal equations (independent of the scale and the whitening)."""
 
     readings: np.ndarray  # (n_t, n_c)
     groups: np.ndarray  # (n_t, n_groups, n_c)
     offsets: np.ndarray | None  # the offsets removed (None: fitted, baseline="fit")
     flags: tuple[str, ...]  # "no_baseline" when too few samples determine them
+    gram: np.ndarray  # (n_c, n_groups, n_groups): G_c = Σ_k groups[k, :, c] ⊗ groups[k, :, c]
+    rhs: np.ndarray  # (n_c, n_groups): Σ_k groups[k, :, c] readings[k, c]
+    sum_gram: np.ndarray  # (n_groups, n_groups): the same of the channels' sum
+    sum_rhs: np.ndarray  # (n_groups,)
+
+
+def _centred_of(readings: np.ndarray, groups: np.ndarray, offsets: np.ndarray | None,
+                flags: tuple[str, ...]) -> _Centred:
+    """The centred readings and design with their normal equations' products."""
+    p = channel_products(groups, readings)
+    return _Centred(readings=readings, groups=groups, offsets=offsets, flags=flags,
+                    gram=p.gram, rhs=p.rhs, sum_gram=p.sum_gram, sum_rhs=p.sum_rhs)
 
 
 def _centred(design: _Design, event: _Inputs) -> _Centred:
@@ -483,8 +496,7 @@ def _centred(design: _Design, event: _Inputs) -> _Centred:
     if event.baseline == "fit":
         if np.count_nonzero(~design.on) < limits.min_baseline:
             flags.append("no_baseline")
-        return _Centred(readings=E - E.mean(axis=0), groups=Mg - Mg.mean(axis=0),
-                        offsets=None, flags=tuple(flags))
+        return _centred_of(E - E.mean(axis=0), Mg - Mg.mean(axis=0), None, tuple(flags))
     if event.baseline == "pretrigger":
         pre = design.positions[:, 0] <= design.support[0]
         n_pre = int(np.argmin(pre)) if not pre.all() else E.shape[0]
@@ -493,7 +505,7 @@ def _centred(design: _Design, event: _Inputs) -> _Centred:
         off = E[:n_pre].mean(axis=0) if n_pre else np.zeros(E.shape[1])
     else:
         off = np.zeros(E.shape[1])
-    return _Centred(readings=E - off, groups=Mg, offsets=off, flags=tuple(flags))
+    return _centred_of(E - off, Mg, off, tuple(flags))
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -521,10 +533,10 @@ def _fit(design: _Design, centred: _Centred, event: _Inputs,
     """
     s, share, combine = design.scale, event.groups.share, event.combine
     n_g = share.shape[1]
-    sol, rank, sv = _solve(centred.readings, centred.groups, s, None)
+    sol, rank, sv = _solve(centred, s, None)
     C = calibration.error_covariance(float(np.nansum(share @ sol)) if rank == n_g else None)
     if combine != "sum":
-        sol, rank, sv = _solve(centred.readings, centred.groups, s, _whitener(C, combine))
+        sol, rank, sv = _solve(centred, s, _whitener(C, combine))
     condition = float(sv[0] / sv[-1]) if sv[-1] > 0 else float("inf")
     if rank < n_g:
         sol = np.full(n_g, np.nan)
@@ -532,22 +544,25 @@ def _fit(design: _Design, centred: _Centred, event: _Inputs,
     axle_w = share @ group_w
 
     E = design.readings
-    fitted = s * np.einsum("kgc,g->kc", design.groups, np.nan_to_num(group_w))
-    offsets = (E - fitted).mean(axis=0) if event.baseline == "fit" else centred.offsets
-    meas = E - offsets
-    den = float(np.linalg.norm(meas))
-    resid = float(np.linalg.norm(meas - fitted)) / den if den > 0 else float("inf")
-    if combine == "sum":  # the summed readings were fitted: judge their residual
-        sd_sum = np.sqrt(max(float(np.sum(C)), np.finfo(float).tiny))
-        misfit = float(np.sqrt(np.mean(((meas - fitted).sum(axis=1) / sd_sum) ** 2)))
+    summed = combine == "sum"  # the summed readings were fitted: judge their residual
+    if summed:
+        sd = np.sqrt(max(float(np.sum(C)), np.finfo(float).tiny))
         misfit_ref = calibration.sum_misfit_median
     else:
         sd = np.sqrt(np.clip(np.diag(C), np.finfo(float).tiny, None))
-        misfit = float(np.sqrt(np.mean(((meas - fitted) / sd) ** 2)))
         misfit_ref = calibration.misfit_median
+    # fitted readings, offsets (fitted: the mean of reading − fit), the sums of squares
+    finite = group_w if np.isfinite(group_w).all() else np.nan_to_num(group_w)
+    r = fit_residual(E, design.groups, finite, s,
+                     offsets=None if event.baseline == "fit" else centred.offsets,
+                     deviation=sd, summed=summed)
+    den = np.sqrt(r.sum_measured)
+    resid = float(np.sqrt(r.sum_residual) / den) if den > 0 else float("inf")
+    count = E.shape[0] * (1 if summed else E.shape[1])  # the residuals the misfit averages
+    misfit = float(np.sqrt(r.sum_misfit / count)) if count else float("nan")
     return _Fit(group_weights=group_w, axle_weights=axle_w, undetermined=rank < n_g,
-                condition=condition, offsets=offsets, measured=meas, fitted=fitted,
-                residual=resid, misfit=misfit, misfit_ref=misfit_ref)
+                condition=condition, offsets=r.offsets, measured=r.measured,
+                fitted=r.fitted, residual=resid, misfit=misfit, misfit_ref=misfit_ref)
 
 
 def _flags(event: _Inputs, design: _Design, centred: _Centred, fit: _Fit,

@@ -1,0 +1,277 @@
+"""The gauge check's comparisons (:mod:`bwim.site.health`), compiled: each channel's gain
+against its fitted reading, and each channel's line through the other channels.
+
+Contract
+--------
+* :func:`gain_stats` gives, per channel of a weighing's measured and fitted readings
+  (``m``, ``f``: (n_w, n_c)), its fitted reading's power ``Σ f²``, its gain
+  ``Σ m f / Σ f²``, the correlation of ``m`` with ``f`` (both centred, the product of
+  their sums of squares floored at 1e-300) and the fitted reading's rms
+  ``√(Σ f² / n_w)``.  A channel without power has a gain of ±inf or nan (the caller
+  refuses such a comparison).
+* :func:`loo_lines` gives, for each of n values, the weighted least-squares straight
+  line through the other n − 1 points ``(x_j, values_j)`` (weights ``weight_j``), at
+  ``at``; nan for a point whose others have no weight, the line's slope 0 when their
+  ``x`` do not spread.
+* :func:`step_noise` gives each channel's sample-to-sample variation,
+  ``std(diff(reading)) / √2`` (numpy's ``std``: the mean, the squared deviations'
+  mean, its root), and :func:`held_extremes` whether a channel holds its maximum or its
+  minimum over the record for at least ``run`` consecutive samples.
+* **The numbers of numpy, bit for bit**: every sum is numpy's for the same vector
+  (:func:`numpy_sum`: its pairwise summation, from 0), every column sum of a table numpy's
+  ``sum(axis=0)`` of a C-ordered table (row after row, from 0), and each product and
+  quotient is the one numpy makes element by element (no fused multiply-add: compiled
+  without ``fastmath``).  tests/unit/test_site_health_numba.py holds them to the numpy
+  expressions :mod:`bwim.site.health` used before, on random data.
+* Compiled with numba (``cache=True``: the first call in a process compiles them, or
+  loads them from numba's cache); float64 arrays in, float64 out.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+
+__all__ = ["GainStats", "gain_stats", "held_extremes", "loo_lines", "numpy_sum",
+           "step_noise"]
+
+#: numpy's block of its pairwise summation (``PW_BLOCKSIZE``), and its unrolling (8).
+_BLOCK = 128
+
+
+@numba.njit(cache=True)
+def _block(a, lo, n):  # pragma: no cover - compiled
+    """numpy's ``pairwise_sum`` of ``a[lo:lo + n]`` for ``n`` ≤ its block: a plain loop
+    below 8 terms, else 8 running sums combined pairwise, then the rest in order."""
+    if n < 8:
+        res = 0.0
+        for i in range(lo, lo + n):
+            res += a[i]
+        return res
+    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
+    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
+    i = 8
+    m = n - n % 8
+    while i < m:
+        r0 += a[lo + i]
+        r1 += a[lo + i + 1]
+        r2 += a[lo + i + 2]
+        r3 += a[lo + i + 3]
+        r4 += a[lo + i + 4]
+        r5 += a[lo + i + 5]
+        r6 += a[lo + i + 6]
+        r7 += a[lo + i + 7]
+        i += 8
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < n:
+        res += a[lo + i]
+        i += 1
+    return res
+
+
+@numba.njit(cache=True)
+def _pairwise(a, lo, n):  # pragma: no cover - compiled
+    """numpy's ``pairwise_sum`` of ``a[lo:lo + n]`` (numpy's loops_utils.h): beyond its
+    block, the sum of its halves (the first half a multiple of 8 terms), each summed the
+    same way.  The recursion is walked with a stack of its own (numba's cache does not
+    load a recursive function)."""
+    if n <= _BLOCK:
+        return _block(a, lo, n)
+    los = np.empty(64, dtype=np.int64)  # the pending halves: start, length, stage
+    ns = np.empty(64, dtype=np.int64)
+    stage = np.zeros(64, dtype=np.int64)  # 0 new, 1 its first half summed
+    left = np.empty(64)  # the first half's sum
+    top = 0
+    los[0], ns[0], stage[0] = lo, n, 0
+    ret = 0.0
+    have = False  # ret holds the sum of the part just popped
+    while True:
+        if have:
+            if top < 0:
+                return ret
+            if stage[top] == 1:  # its first half summed: now its second
+                left[top] = ret
+                stage[top] = 2
+                n2 = ns[top] // 2
+                n2 -= n2 % 8
+                los[top + 1], ns[top + 1], stage[top + 1] = los[top] + n2, ns[top] - n2, 0
+                top += 1
+                have = False
+            else:  # both halves summed
+                ret = left[top] + ret
+                top -= 1
+            continue
+        m = ns[top]
+        if m <= _BLOCK:
+            ret = _block(a, los[top], m)
+            top -= 1
+            have = True
+        else:
+            stage[top] = 1
+            n2 = m // 2
+            n2 -= n2 % 8
+            los[top + 1], ns[top + 1], stage[top + 1] = los[top], n2, 0
+            top += 1
+
+
+@numba.njit(cache=True)
+def _sum(a):  # pragma: no cover - compiled
+    """``numpy.sum`` of a contiguous vector: its identity 0, plus the pairwise sum."""
+    return 0.0 + _pairwise(a, 0, a.size)
+
+
+def numpy_sum(a: np.ndarray) -> float:
+    """The compiled sum of a float vector, the number ``numpy.sum`` gives for it."""
+    return float(_sum(np.ascontiguousarray(a, dtype=float)))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _gain_stats(m, f):  # pragma: no cover - compiled
+    n, nc = m.shape
+    out = np.zeros((4, nc))  # power, gain, corr, rms
+    mf = np.zeros(nc)
+    ms = np.zeros(nc)
+    fs = np.zeros(nc)
+    for k in range(n):  # numpy's column sums: row after row, from 0
+        for c in range(nc):
+            out[0, c] += f[k, c] * f[k, c]
+            mf[c] += m[k, c] * f[k, c]
+            ms[c] += m[k, c]
+            fs[c] += f[k, c]
+    for c in range(nc):
+        ms[c] = ms[c] / n  # the means
+        fs[c] = fs[c] / n
+    cmf = np.zeros(nc)
+    cmm = np.zeros(nc)
+    cff = np.zeros(nc)
+    for k in range(n):
+        for c in range(nc):
+            a = m[k, c] - ms[c]
+            b = f[k, c] - fs[c]
+            cmf[c] += a * b
+            cmm[c] += a * a
+            cff[c] += b * b
+    for c in range(nc):
+        out[1, c] = mf[c] / out[0, c]
+        p = cmm[c] * cff[c]
+        if p < 1e-300:  # numpy.maximum's floor (a nan stays nan)
+            p = 1e-300
+        out[2, c] = cmf[c] / np.sqrt(p)
+        out[3, c] = np.sqrt(out[0, c] / n)
+    return out
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class GainStats:
+    """:func:`gain_stats`' result, one entry per channel."""
+
+    power: np.ndarray  # Σ f²
+    gain: np.ndarray  # Σ m f / Σ f²
+    corr: np.ndarray  # correlation of m with f
+    rms: np.ndarray  # √(Σ f² / n_w)
+
+
+def gain_stats(m: np.ndarray, f: np.ndarray) -> GainStats:
+    """Each channel's gain, correlation and signal against its fitted reading (module
+    docstring); ``m`` and ``f`` (n_w ≥ 1, n_c)."""
+    out = _gain_stats(np.ascontiguousarray(m, dtype=float),
+                      np.ascontiguousarray(f, dtype=float))
+    return GainStats(power=out[0], gain=out[1], corr=out[2], rms=out[3])
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _loo_lines(x, v, w, at):  # pragma: no cover - compiled
+    n = x.size
+    out = np.empty(n)
+    xr = np.empty(n - 1)
+    vr = np.empty(n - 1)
+    wr = np.empty(n - 1)
+    t = np.empty(n - 1)
+    for g in range(n):
+        j = 0
+        for i in range(n):  # the others, in order
+            if i != g:
+                xr[j], vr[j], wr[j] = x[i], v[i], w[i]
+                j += 1
+        wsum = _sum(wr)
+        for i in range(n - 1):
+            t[i] = wr[i] * xr[i]
+        xm = _sum(t) / wsum
+        for i in range(n - 1):
+            t[i] = wr[i] * vr[i]
+        vm = _sum(t) / wsum
+        for i in range(n - 1):
+            d = xr[i] - xm
+            t[i] = wr[i] * (d * d)
+        sxx = _sum(t)
+        for i in range(n - 1):
+            t[i] = wr[i] * (xr[i] - xm) * (vr[i] - vm)
+        sxy = _sum(t)
+        slope = sxy / sxx if sxx > 0 else 0.0
+        out[g] = vm + slope * (at[g] - xm) if wsum > 0 else np.nan
+    return out
+
+
+def loo_lines(x: np.ndarray, values: np.ndarray, weight: np.ndarray, at: np.ndarray
+              ) -> np.ndarray:
+    """Per point, the weighted straight line through the others, at ``at`` (module
+    docstring); all of shape (n,), n ≥ 2."""
+    def vec(a):
+        return np.ascontiguousarray(a, dtype=float).reshape(-1)
+
+    return _loo_lines(vec(x), vec(values), vec(weight), vec(at))
+
+
+@numba.njit(cache=True)
+def _step_noise(a):  # pragma: no cover - compiled
+    n, nc = a.shape
+    out = np.empty(nc)
+    d = np.empty(n - 1)
+    for c in range(nc):
+        for k in range(n - 1):
+            d[k] = a[k + 1, c] - a[k, c]
+        mean = _sum(d) / (n - 1)
+        for k in range(n - 1):
+            x = d[k] - mean
+            d[k] = x * x
+        out[c] = np.sqrt(_sum(d) / (n - 1)) / np.sqrt(2.0)
+    return out
+
+
+def step_noise(readings: np.ndarray) -> np.ndarray:
+    """Each channel's ``std(diff(reading)) / √2`` (module docstring); ``readings``
+    (n_t ≥ 2, n_c)."""
+    return _step_noise(np.ascontiguousarray(readings, dtype=float))
+
+
+@numba.njit(cache=True)
+def _held_extremes(a, run):  # pragma: no cover - compiled
+    n, nc = a.shape
+    out = np.zeros(nc, dtype=np.bool_)
+    if n < run:
+        return out
+    hi = a[0].copy()
+    lo = a[0].copy()
+    for k in range(1, n):
+        for c in range(nc):
+            if a[k, c] > hi[c]:
+                hi[c] = a[k, c]
+            if a[k, c] < lo[c]:
+                lo[c] = a[k, c]
+    at_hi = np.zeros(nc, dtype=np.int64)  # the current run at each extreme
+    at_lo = np.zeros(nc, dtype=np.int64)
+    for k in range(n):
+        for c in range(nc):
+            at_hi[c] = at_hi[c] + 1 if a[k, c] == hi[c] else 0
+            at_lo[c] = at_lo[c] + 1 if a[k, c] == lo[c] else 0
+            if at_hi[c] >= run or at_lo[c] >= run:
+                out[c] = True
+    return out
+
+
+def held_extremes(readings: np.ndarray, run: int) -> np.ndarray:
+    """Per channel of ``readings`` (n_t, n_c; finite) whether it holds its maximum or its
+    minimum for at least ``run`` ≥ 1 consecutive samples (module docstring)."""
+    return _held_extremes(np.ascontiguousarray(readings, dtype=float), int(run))

@@ -1,0 +1,126 @@
+"""The gauge check's compiled comparisons (bwim.site.health_numba) against the numpy
+expressions bwim.site.health used before them, on random data: the same numbers bit for
+bit (numpy's pairwise sums, its column sums, no fused multiply-add)."""
+
+import numpy as np
+import pytest
+
+from bwim.site.health_numba import (
+    gain_stats,
+    held_extremes,
+    loo_lines,
+    numpy_sum,
+    step_noise,
+)
+
+
+def _lines_at(x, y, weight, at):
+    """The numpy reference: per row, the weighted least-squares line at ``at``."""
+    wsum = weight.sum(axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        xm = (weight * x).sum(axis=1) / wsum
+        ym = (weight * y).sum(axis=1) / wsum
+        dx = x - xm[:, None]
+        sxx = (weight * dx ** 2).sum(axis=1)
+        slope = np.where(sxx > 0, (weight * dx * (y - ym[:, None])).sum(axis=1) / sxx, 0.0)
+        return np.where(wsum > 0, ym + slope * (at - xm), np.nan)
+
+
+def _loo_reference(y, values, weight):
+    n = len(values)
+    others = ~np.eye(n, dtype=bool)
+
+    def rows(a):
+        return np.broadcast_to(a, (n, n))[others].reshape(n, n - 1)
+
+    return _lines_at(rows(y), rows(values), rows(weight), y)
+
+
+def _gain_reference(m, f):
+    power = (f * f).sum(axis=0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = (m * f).sum(axis=0) / power
+    mc, fc = m - m.mean(axis=0), f - f.mean(axis=0)
+    corr = (mc * fc).sum(axis=0) / np.sqrt(np.maximum((mc * mc).sum(axis=0)
+                                                      * (fc * fc).sum(axis=0), 1e-300))
+    return power, a, corr, np.sqrt(power / m.shape[0])
+
+
+def test_the_sum_is_numpys_for_every_length():
+    rng = np.random.default_rng(3)
+    for n in [*range(0, 300), 511, 1000, 4097, 70001]:
+        a = rng.normal(size=n) * 10.0 ** rng.uniform(-6, 6, n)
+        assert np.float64(numpy_sum(a)).tobytes() == np.sum(a).tobytes(), n
+    assert np.float64(numpy_sum(-np.zeros(9))).tobytes() == np.sum(-np.zeros(9)).tobytes()
+
+
+def test_leave_one_out_lines_are_numpys_row_sums():
+    rng = np.random.default_rng(5)
+    for trial in range(400):
+        n = int(rng.integers(2, 40))
+        y = np.sort(rng.uniform(0.0, 12.0, n))
+        if trial % 5 == 0:
+            y = np.arange(n, dtype=float)
+        values = rng.normal(1.0, 0.3, n) * 10.0 ** rng.uniform(-3, 3)
+        weight = rng.uniform(0.1, 40.0, n) ** 2
+        if trial % 7 == 0:  # no weight at all beside one channel, no spread in x
+            weight[1:] = 0.0
+        if trial % 11 == 0:
+            y[:] = 2.5
+        got, ref = loo_lines(y, values, weight, y), _loo_reference(y, values, weight)
+        assert got.tobytes() == ref.tobytes(), trial
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_gain_stats_are_numpys_column_sums(seed):
+    rng = np.random.default_rng(seed)
+    for trial in range(150):
+        n, nc = int(rng.integers(1, 700)), int(rng.integers(2, 14))
+        f = rng.normal(size=(n, nc)) * 10.0 ** rng.uniform(-8, 2, nc)
+        m = rng.normal(0.9, 0.5, nc) * f + 1e-3 * rng.normal(size=(n, nc)) * np.abs(f).max()
+        if trial % 10 == 0:
+            f[:, 0] = 0.0  # no power: gain nan, as numpy's 0 / 0
+        if trial % 13 == 0:
+            m[:, -1] = 3.0  # no shape: correlation 0 over the floor
+        got = gain_stats(m, f)
+        for g, r in zip((got.power, got.gain, got.corr, got.rms), _gain_reference(m, f),
+                        strict=True):
+            assert g.tobytes() == r.tobytes(), trial
+
+
+def _held_reference(readings, run):
+    out = np.zeros(readings.shape[1], dtype=bool)
+    m = readings.shape[0] - run + 1
+    if m <= 0:
+        return out
+    for extreme in (readings.max(axis=0), readings.min(axis=0)):
+        at = readings == extreme
+        held = at[:m].copy()
+        for j in range(1, run):
+            held &= at[j:j + m]
+        out |= held.any(axis=0)
+    return out
+
+
+def test_step_noise_is_numpys_std_of_the_steps():
+    rng = np.random.default_rng(8)
+    for trial in range(300):
+        n, nc = int(rng.integers(2, 1500)), int(rng.integers(1, 14))
+        a = np.cumsum(rng.normal(size=(n, nc)), axis=0) * 10.0 ** rng.uniform(-9, 3, nc)
+        if trial % 4 == 0:  # a coarse logger: repeated samples, a constant channel
+            a = np.round(a / a.std() * 3.0) if a.std() > 0 else a
+            a[:, 0] = 1.5
+        ref = np.std(np.diff(np.ascontiguousarray(a.T), axis=1), axis=1) / np.sqrt(2.0)
+        assert step_noise(a).tobytes() == ref.tobytes(), trial
+
+
+def test_held_extremes_are_runs_at_the_maximum_or_minimum():
+    rng = np.random.default_rng(9)
+    for trial in range(400):
+        n, nc, run = int(rng.integers(1, 80)), int(rng.integers(1, 8)), int(
+            rng.integers(1, 8))
+        a = rng.integers(-3, 4, size=(n, nc)).astype(float)  # many ties and runs
+        if trial % 3 == 0:
+            a = rng.normal(size=(n, nc))
+            a[n // 3:n // 3 + run, 0] = a.max() + 1.0
+        assert np.array_equal(held_extremes(a, run), _held_reference(a, run)), trial

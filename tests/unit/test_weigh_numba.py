@@ -1,0 +1,76 @@
+"""A weighing's compiled loops (bwim.wim.weigh_numba) against the numpy expressions
+bwim.wim.weigh used before them, on random data: the same numbers to rounding (1e-12
+relative; the sums run in another order).  The unit readings of single axles are held to
+the matrix method's bit for bit in tests/unit/test_wim.py."""
+
+import numpy as np
+import pytest
+
+from bwim.wim.influence_line import hat_design
+from bwim.wim.weigh_numba import channel_products, fit_residual, group_readings
+
+
+def _close(got, ref, rtol=1e-12):
+    scale = max(float(np.max(np.abs(ref))), 1e-300) if np.size(ref) else 1.0
+    np.testing.assert_allclose(got, ref, rtol=rtol, atol=rtol * scale)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_group_readings_are_the_shared_sum_of_the_axles_readings(seed):
+    rng = np.random.default_rng(seed)
+    for _ in range(60):
+        n, h, x0 = int(rng.integers(2, 40)), rng.uniform(0.05, 1.0), rng.uniform(-5, 5)
+        n_t, n_ax, n_c = (int(rng.integers(1, 200)), int(rng.integers(1, 7)),
+                          int(rng.integers(1, 13)))
+        n_g = int(rng.integers(1, n_ax + 1))
+        pos = x0 + rng.uniform(-2.0, n * h + 2.0, size=(n_t, n_ax))
+        ords = rng.normal(size=(n - 1, n_c)) * 10.0 ** rng.uniform(-9, 3)
+        groups = np.sort(np.concatenate([np.arange(n_g), rng.integers(0, n_g, n_ax - n_g)]))
+        share = np.zeros((n_ax, n_g))
+        share[np.arange(n_ax), groups] = 1.0 / np.bincount(groups)[groups]
+        M = np.asarray(hat_design(pos.reshape(-1, 1), np.ones(1), x0, h, n) @ ords
+                       ).reshape(n_t, n_ax, n_c)
+        _close(group_readings(pos, ords, x0, h, n, share), np.matmul(share.T, M))
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_channel_products_are_the_normal_equations(seed):
+    rng = np.random.default_rng(seed)
+    for _ in range(60):
+        n_t, n_g, n_c = int(rng.integers(1, 700)), int(rng.integers(1, 6)), int(
+            rng.integers(1, 13))
+        X = rng.normal(size=(n_t, n_g, n_c)) * 10.0 ** rng.uniform(-10, -4, n_c)
+        e = rng.normal(size=(n_t, n_c)) * 1e-5
+        p = channel_products(X, e)
+        _close(p.gram, np.einsum("kgc,khc->cgh", X, X))
+        _close(p.rhs, np.einsum("kgc,kc->cg", X, e))
+        Xs, es = X.sum(axis=2), e.sum(axis=1)
+        _close(p.sum_gram, Xs.T @ Xs)
+        _close(p.sum_rhs, Xs.T @ es)
+
+
+@pytest.mark.parametrize("summed", [False, True])
+@pytest.mark.parametrize("fitted_offsets", [False, True])
+def test_fit_residual_is_the_numpy_fit(summed, fitted_offsets):
+    rng = np.random.default_rng(11 + summed + 2 * fitted_offsets)
+    for _ in range(60):
+        n_t, n_g, n_c = int(rng.integers(1, 700)), int(rng.integers(1, 6)), int(
+            rng.integers(1, 13))
+        X = rng.normal(size=(n_t, n_g, n_c)) * 1e-9
+        w = rng.uniform(1e4, 1e5, n_g)
+        s = rng.uniform(0.8, 1.2)
+        E = np.einsum("kgc,g->kc", X, w) * s + 1e-6 * rng.normal(size=(n_t, n_c)) + 3e-4
+        given = None if fitted_offsets else rng.normal(size=n_c) * 1e-4
+        sd = (np.float64(rng.uniform(1e-6, 1e-5)) if summed
+              else rng.uniform(1e-6, 1e-5, n_c))
+        r = fit_residual(E, X, w, s, offsets=given, deviation=sd, summed=summed)
+        fitted = s * np.einsum("kgc,g->kc", X, w)
+        offsets = (E - fitted).mean(axis=0) if given is None else given
+        meas = E - offsets
+        _close(r.fitted, fitted)
+        _close(r.offsets, offsets)
+        _close(r.measured, meas)
+        assert r.sum_measured == pytest.approx(np.linalg.norm(meas) ** 2, rel=1e-12)
+        assert r.sum_residual == pytest.approx(np.linalg.norm(meas - fitted) ** 2, rel=1e-10)
+        z = ((meas - fitted).sum(axis=1) / sd) if summed else (meas - fitted) / sd
+        assert r.sum_misfit == pytest.approx(np.sum(z ** 2), rel=1e-10)
