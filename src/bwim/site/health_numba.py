@@ -18,11 +18,11 @@ Contract
   mean, its root), and :func:`held_extremes` whether a channel holds its maximum or its
   minimum over the record for at least ``run`` consecutive samples.
 * **The numbers of numpy, bit for bit**: every sum is numpy's for the same vector
-  (:func:`numpy_sum`: its pairwise summation, from 0), every column sum of a table numpy's
-  ``sum(axis=0)`` of a C-ordered table (row after row, from 0), and each product and
-  quotient is the one numpy makes element by element (no fused multiply-add: compiled
-  without ``fastmath``).  tests/unit/test_site_health_numba.py holds them to the numpy
-  expressions :mod:`bwim.site.health` used before, on random data.
+  (:func:`bwim.pairwise.pairwise_sum`: its pairwise summation, from 0), every column sum
+  of a table numpy's ``sum(axis=0)`` of a C-ordered table (row after row, from 0), and
+  each product and quotient is the one numpy makes element by element (no fused
+  multiply-add: compiled without ``fastmath``). tests/unit/test_site_health_numba.py holds
+  them to the numpy expressions :mod:`bwim.site.health` used before, on random data.
 * Compiled with numba (``cache=True``: the first call in a process compiles them, or
   loads them from numba's cache); float64 arrays in, float64 out.
 """
@@ -34,97 +34,15 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-__all__ = ["GainStats", "gain_stats", "held_extremes", "loo_lines", "numpy_sum",
-           "step_noise"]
+from bwim.pairwise import pairwise_sum
 
-#: numpy's block of its pairwise summation (``PW_BLOCKSIZE``), and its unrolling (8).
-_BLOCK = 128
+__all__ = ["GainStats", "gain_stats", "held_extremes", "loo_lines", "step_noise"]
 
 
 @numba.njit(cache=True)
-def _block(a, lo, n):  # pragma: no cover - compiled
-    """numpy's ``pairwise_sum`` of ``a[lo:lo + n]`` for ``n`` ≤ its block: a plain loop
-    below 8 terms, else 8 running sums combined pairwise, then the rest in order."""
-    if n < 8:
-        res = 0.0
-        for i in range(lo, lo + n):
-            res += a[i]
-        return res
-    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
-    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
-    i = 8
-    m = n - n % 8
-    while i < m:
-        r0 += a[lo + i]
-        r1 += a[lo + i + 1]
-        r2 += a[lo + i + 2]
-        r3 += a[lo + i + 3]
-        r4 += a[lo + i + 4]
-        r5 += a[lo + i + 5]
-        r6 += a[lo + i + 6]
-        r7 += a[lo + i + 7]
-        i += 8
-    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
-    while i < n:
-        res += a[lo + i]
-        i += 1
-    return res
-
-
-@numba.njit(cache=True)
-def _pairwise(a, lo, n):  # pragma: no cover - compiled
-    """numpy's ``pairwise_sum`` of ``a[lo:lo + n]`` (numpy's loops_utils.h): beyond its
-    block, the sum of its halves (the first half a multiple of 8 terms), each summed the
-    same way.  The recursion is walked with a stack of its own (numba's cache does not
-    load a recursive function)."""
-    if n <= _BLOCK:
-        return _block(a, lo, n)
-    los = np.empty(64, dtype=np.int64)  # the pending halves: start, length, stage
-    ns = np.empty(64, dtype=np.int64)
-    stage = np.zeros(64, dtype=np.int64)  # 0 new, 1 its first half summed
-    left = np.empty(64)  # the first half's sum
-    top = 0
-    los[0], ns[0], stage[0] = lo, n, 0
-    ret = 0.0
-    have = False  # ret holds the sum of the part just popped
-    while True:
-        if have:
-            if top < 0:
-                return ret
-            if stage[top] == 1:  # its first half summed: now its second
-                left[top] = ret
-                stage[top] = 2
-                n2 = ns[top] // 2
-                n2 -= n2 % 8
-                los[top + 1], ns[top + 1], stage[top + 1] = los[top] + n2, ns[top] - n2, 0
-                top += 1
-                have = False
-            else:  # both halves summed
-                ret = left[top] + ret
-                top -= 1
-            continue
-        m = ns[top]
-        if m <= _BLOCK:
-            ret = _block(a, los[top], m)
-            top -= 1
-            have = True
-        else:
-            stage[top] = 1
-            n2 = m // 2
-            n2 -= n2 % 8
-            los[top + 1], ns[top + 1], stage[top + 1] = los[top], n2, 0
-            top += 1
-
-
-@numba.njit(cache=True)
-def _sum(a):  # pragma: no cover - compiled
-    """``numpy.sum`` of a contiguous vector: its identity 0, plus the pairwise sum."""
-    return 0.0 + _pairwise(a, 0, a.size)
-
-
-def numpy_sum(a: np.ndarray) -> float:
-    """The compiled sum of a float vector, the number ``numpy.sum`` gives for it."""
-    return float(_sum(np.ascontiguousarray(a, dtype=float)))
+def _vsum(a):  # pragma: no cover - compiled
+    """``numpy.sum`` of a contiguous vector (:func:`bwim.pairwise.pairwise_sum`)."""
+    return pairwise_sum(a, 0, a.size)
 
 
 @numba.njit(cache=True, error_model="numpy")
@@ -195,20 +113,20 @@ def _loo_lines(x, v, w, at):  # pragma: no cover - compiled
             if i != g:
                 xr[j], vr[j], wr[j] = x[i], v[i], w[i]
                 j += 1
-        wsum = _sum(wr)
+        wsum = _vsum(wr)
         for i in range(n - 1):
             t[i] = wr[i] * xr[i]
-        xm = _sum(t) / wsum
+        xm = _vsum(t) / wsum
         for i in range(n - 1):
             t[i] = wr[i] * vr[i]
-        vm = _sum(t) / wsum
+        vm = _vsum(t) / wsum
         for i in range(n - 1):
             d = xr[i] - xm
             t[i] = wr[i] * (d * d)
-        sxx = _sum(t)
+        sxx = _vsum(t)
         for i in range(n - 1):
             t[i] = wr[i] * (xr[i] - xm) * (vr[i] - vm)
-        sxy = _sum(t)
+        sxy = _vsum(t)
         slope = sxy / sxx if sxx > 0 else 0.0
         out[g] = vm + slope * (at[g] - xm) if wsum > 0 else np.nan
     return out
@@ -232,11 +150,11 @@ def _step_noise(a):  # pragma: no cover - compiled
     for c in range(nc):
         for k in range(n - 1):
             d[k] = a[k + 1, c] - a[k, c]
-        mean = _sum(d) / (n - 1)
+        mean = _vsum(d) / (n - 1)
         for k in range(n - 1):
             x = d[k] - mean
             d[k] = x * x
-        out[c] = np.sqrt(_sum(d) / (n - 1)) / np.sqrt(2.0)
+        out[c] = np.sqrt(_vsum(d) / (n - 1)) / np.sqrt(2.0)
     return out
 
 
