@@ -458,21 +458,3 @@ def test_the_smallest_spacing_is_sparrows_limit():
     below, above = two(limit * (1 - 1e-3)), two(limit * (1 + 1e-3))
     assert below.argmax() == x.size // 2  # one peak at the midpoint
     assert above.argmin() == x.size // 2  # a dip at the midpoint
-
-
-def test_groups_meeting_at_one_sample_give_one_axle_there(monkeypatch):
-    """Two axle groups whose segments meet at one sample may both choose it: the vehicle
-    gets one axle there, not the time twice (a time twice makes its least squares
-    singular but for the ridge, and the refinement's answer rounding noise: 45 of 1,879
-    windows of the four bench days did, before)."""
-    import bwim.detect.groups as groups
-    from bwim.detect.vehicle_fit import make_problem
-
-    v = 21.0
-    taus = 0.3 + np.array([0.0, 3.6]) / v
-    t, y, g, learned = _same_model(taus, v, np.array([[20.0, 5.5], [40.0, 9.0]]))
-    pb = make_problem(t, y, g, learned, v)
-    chosen = np.array([0.31, 0.45, 0.45, 0.52])  # what the compiled choice returned
-    monkeypatch.setattr(groups, "choose_in_window", lambda *a: (chosen.copy(), True))
-    out = groups.choose_groups(pb, taus, v, 1.0, 1.0, (float(t[0]), float(t[-1])))
-    assert out.tolist() == [0.31, 0.45, 0.52]

@@ -109,7 +109,7 @@ def choose_groups(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp:
     and both detectors see every axle.  Fast: with the other axles and the rest fitted and
     taken off, a group's misfit needs only the readings' correlation with one axle's
     response and that response's autocorrelation (on the window's sampling grid).  The new
-    times (each once: two groups meeting at one sample may both choose it), or None."""
+    times, or None."""
     taus = np.sort(taus)
     lo = int(pb.t.searchsorted(span[0] - REACH / v))
     hi = int(pb.t.searchsorted(span[1] + (pb.shift[1] + REACH) / v, side="right"))
@@ -129,12 +129,7 @@ def choose_groups(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp:
         math.floor(GROUP_SPACING / v * pb.fs / st), float(pb.ratio), float(pb.bound),
         float(limit), GROUP_AXLES, LEVEL_GAIN, RARE_GROUP, GROUP_DIP, GROUP_EXTENT,
         PEAK_FLOOR)
-    if not changed:
-        return None
-    # two groups meeting at one sample may both choose it: one axle there, not two (a time
-    # twice makes the vehicle's least squares singular but for the ridge, and its
-    # refinement rounding noise: 45 of 1,879 windows of the four bench days)
-    return np.unique(new)
+    return new if changed else None
 
 
 def one_axle_may_fit(pb: Problem, resid, tpl, auto, st: int, n_grid: int) -> np.ndarray:
