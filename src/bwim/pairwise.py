@@ -10,7 +10,7 @@ Contract
   recursion is walked with a stack of its own: numba's cache does not load a recursive
   function.  :func:`numpy_sum` is the same for a whole vector, from Python.
 * Used by the compiled kernels that must give numpy's numbers
-  (:mod:`bwim.detect.group_kernels`, :mod:`bwim.site.health_numba`); tested against
+  (:mod:`bwim.detect.group_kernels`, :mod:`bwim.site.health_kernels`); tested against
   ``numpy.sum`` (tests/unit/test_pairwise.py).
 * Compiled with numba (``cache=True``).
 """

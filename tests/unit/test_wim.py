@@ -295,13 +295,13 @@ def test_weighing_rejects_bad_input(cal, line):
 
 
 def test_unit_readings_are_the_matrix_methods_design_times_the_ordinates():
-    """The lines' readings under each axle (bwim.wim.weigh_numba.group_readings, each axle
+    """The lines' readings under each axle (bwim.wim.weigh_kernels.group_readings, each axle
     its own group) are, byte for byte (signed zeros too), the matrix method's sparse
     design times the interior ordinates (bwim.wim.influence_line.hat_design, the
     reference): positions between nodes, on nodes, in the end cells and off the support,
     on random meshes and ordinates."""
     from bwim.wim.influence_line import hat_design
-    from bwim.wim.weigh_numba import group_readings
+    from bwim.wim.weigh_kernels import group_readings
 
     rng = np.random.default_rng(7)
     for trial in range(300):

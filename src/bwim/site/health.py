@@ -90,7 +90,7 @@ import numpy as np
 from bwim.errors import DATA_ERRORS, InputError
 from bwim.plausibility import ordered_flags, quality_of
 from bwim.records import Passage, Record
-from bwim.site.health_numba import gain_stats, held_extremes, loo_lines, step_noise
+from bwim.site.health_kernels import gain_stats, held_extremes, loo_lines, step_noise
 from bwim.wim import Weighing
 from bwim.wim.influence_line import read_channels
 from bwim.wim.multirun import MultiRunCalibration
@@ -279,7 +279,7 @@ def _flat(readings: np.ndarray, lines: MultiRunCalibration) -> list[GaugeFault]:
     """Step 1: channels without their noise."""
     if readings.shape[0] < 3:
         return []
-    # numpy's std of each channel's steps alone (bwim.site.health_numba.step_noise)
+    # numpy's std of each channel's steps alone (bwim.site.health_kernels.step_noise)
     noises = step_noise(readings)
     out = []
     for k, c in enumerate(lines.channels):
@@ -468,7 +468,7 @@ def _compare(w: Weighing, sub: MultiRunCalibration) -> _Comparison | None:
     """Each channel's gain ratio, correlation and signal against its fitted static
     reading over the samples with an axle on the support (None when degenerate).  The
     correlation takes the shape alone (both centred): a channel that does not respond
-    is uncorrelated with its fit (:func:`bwim.site.health_numba.gain_stats`)."""
+    is uncorrelated with its fit (:func:`bwim.site.health_kernels.gain_stats`)."""
     m, f = w.measured, w.fitted
     if m.shape[0] == 0:
         return None
@@ -482,7 +482,7 @@ def _compare(w: Weighing, sub: MultiRunCalibration) -> _Comparison | None:
 def _predicted(y: np.ndarray, values: np.ndarray, snr: np.ndarray) -> np.ndarray:
     """For each channel, the weighted straight line through the other channels' values
     against their positions ``y`` (weights ``snr²``), at its own position (nan when the
-    others have no weight; :func:`bwim.site.health_numba.loo_lines`: each line's sums
+    others have no weight; :func:`bwim.site.health_kernels.loo_lines`: each line's sums
     are numpy's over that channel's others alone)."""
     return loo_lines(y, values, snr ** 2, y)
 

@@ -84,7 +84,7 @@ from bwim.records import Passage, Record
 from bwim.wim.influence_line import Channel, read_channels
 from bwim.wim.moses import AxleGroups, group_axles, group_share
 from bwim.wim.multirun import MultiRunCalibration
-from bwim.wim.weigh_numba import channel_products, fit_residual, group_readings
+from bwim.wim.weigh_kernels import channel_products, fit_residual, group_readings
 
 __all__ = ["HARD_FLAGS", "NORMAL_CONDITION", "SOFT_FLAGS", "Limits", "Weighing",
            "WeighingModel", "weigh", "weighing_model"]

@@ -21,7 +21,7 @@ Contract
   (:func:`bwim.pairwise.pairwise_sum`: its pairwise summation, from 0), every column sum
   of a table numpy's ``sum(axis=0)`` of a C-ordered table (row after row, from 0), and
   each product and quotient is the one numpy makes element by element (no fused
-  multiply-add: compiled without ``fastmath``). tests/unit/test_site_health_numba.py holds
+  multiply-add: compiled without ``fastmath``). tests/unit/test_site_health_kernels.py holds
   them to the numpy expressions :mod:`bwim.site.health` used before, on random data.
 * Compiled with numba (``cache=True``: the first call in a process compiles them, or
   loads them from numba's cache); float64 arrays in, float64 out.

@@ -1,4 +1,4 @@
-"""A weighing's compiled loops (bwim.wim.weigh_numba) against the numpy expressions
+"""A weighing's compiled loops (bwim.wim.weigh_kernels) against the numpy expressions
 bwim.wim.weigh used before them, on random data: the same numbers to rounding (1e-12
 relative; the sums run in another order).  The unit readings of single axles are held to
 the matrix method's bit for bit in tests/unit/test_wim.py."""
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from bwim.wim.influence_line import hat_design
-from bwim.wim.weigh_numba import channel_products, fit_residual, group_readings
+from bwim.wim.weigh_kernels import channel_products, fit_residual, group_readings
 
 
 def _close(got, ref, rtol=1e-12):

@@ -1,11 +1,11 @@
-"""The gauge check's compiled comparisons (bwim.site.health_numba) against the numpy
+"""The gauge check's compiled comparisons (bwim.site.health_kernels) against the numpy
 expressions bwim.site.health used before them, on random data: the same numbers bit for
 bit (numpy's pairwise sums, its column sums, no fused multiply-add)."""
 
 import numpy as np
 import pytest
 
-from bwim.site.health_numba import (
+from bwim.site.health_kernels import (
     gain_stats,
     held_extremes,
     loo_lines,
