@@ -12,7 +12,9 @@ Contract
 * Used by the compiled kernels that must give numpy's numbers
   (:mod:`bwim.detect.group_kernels`, :mod:`bwim.site.health_kernels`); tested against
   ``numpy.sum`` (tests/unit/test_pairwise.py).
-* Compiled with numba (``cache=True``).
+* Compiled with numba (``cache=True``).  numba's cache of a kernel does not follow the
+  kernels it calls in other modules: after editing this one, delete the numba cache files
+  (``*.nbi``, ``*.nbc``) of its callers' ``__pycache__`` (an installed copy never changes).
 """
 
 from __future__ import annotations
