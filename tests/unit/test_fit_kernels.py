@@ -88,19 +88,19 @@ def test_least_squares_and_jacobian_match_numpy():
         Ginv = np.linalg.inv(G)
         coef = Ginv @ (M.T @ y[c])
         lstsq = np.linalg.lstsq(M, y[c], rcond=None)[0]
-        np.testing.assert_allclose(coef, lstsq, rtol=0, atol=1e-9 * np.abs(lstsq).max())
+        np.testing.assert_allclose(coef, lstsq, rtol=0, atol=3e-10 * np.abs(lstsq).max())
         np.testing.assert_allclose(got["Mt"][c], M.T, rtol=0, atol=0)
-        np.testing.assert_allclose(got["Ginv"][c], Ginv, rtol=1e-11,
-                                   atol=1e-12 * np.abs(Ginv).max())
-        np.testing.assert_allclose(got["a"][c], coef[:n], rtol=1e-11, atol=0)
+        np.testing.assert_allclose(got["Ginv"][c], Ginv, rtol=2e-14,
+                                   atol=2e-15 * np.abs(Ginv).max())
+        np.testing.assert_allclose(got["a"][c], coef[:n], rtol=1.5e-14, atol=0)
         res = (y[c] - M @ coef) * 2.0
         np.testing.assert_allclose(got["res"][c * r:(c + 1) * r], res, rtol=0,
-                                   atol=1e-12 * np.abs(y).max())
+                                   atol=2e-15 * np.abs(y).max())
         # Kaufman: (M (MᵀM)⁻¹ Mᵀ − I) D, D the atoms' derivatives times their amplitudes
         D = np.column_stack([-v * dX * coef[:n], (dX * dt) @ coef[:n]])
         Jref.append((M @ (Ginv @ (M.T @ D)) - D) * 2.0)
     Jref = np.vstack(Jref)
-    np.testing.assert_allclose(J.T, Jref, rtol=0, atol=1e-11 * np.abs(Jref).max())
+    np.testing.assert_allclose(J.T, Jref, rtol=0, atol=4e-15 * np.abs(Jref).max())
     # without slopes: the same least squares
     plain = _filled(case, slopes=False)
     assert plain["res"].tobytes() == got["res"].tobytes()
@@ -109,7 +109,10 @@ def test_least_squares_and_jacobian_match_numpy():
 def test_levenberg_marquardt_finds_the_model_s_times():
     """Readings made of the model itself (no noise): the refinement from times 3 ms off
     and a speed 2 % off returns the true ones (to its stop: the misfit falling by less
-    than 0.3 % of itself; measured 1 µs, 3e-6 of the speed)."""
+    than 0.3 % of itself; measured 1 µs, 3e-6 of the speed, a misfit 1.2e-10 of the
+    readings' and amplitudes to 2.4e-6).  Tolerances elsewhere here: a few times the
+    largest deviation measured on these cases under OpenBLAS's Haswell, Sandybridge,
+    Nehalem, Prescott, SkylakeX and Zen kernels (rounding in other summation orders)."""
     case = _case(seed=5, n=3, q=0, r=200)
     tab, t, v = case["tab"], case["t"], case["v"]
     truth = np.array([0.30, 0.42, 0.61])
@@ -121,10 +124,10 @@ def test_levenberg_marquardt_finds_the_model_s_times():
     params = np.append(truth + 0.003, 1.02 * v)
     cost = K.levenberg_marquardt(tab.scalars, tab.first, tab.values, t, y, case["rest_t"],
                                  params, 15, 2.0, 3e-3, *got.values())
-    np.testing.assert_allclose(params[:-1], truth, rtol=0, atol=2e-5)
-    assert abs(params[-1] / v - 1) < 3e-5
-    assert cost < 1e-6 * float(np.sum(y**2))
-    np.testing.assert_allclose(got["a"], amps, rtol=1e-3)
+    np.testing.assert_allclose(params[:-1], truth, rtol=0, atol=5e-6)
+    assert abs(params[-1] / v - 1) < 1.5e-5
+    assert cost < 1e-9 * float(np.sum(y**2))
+    np.testing.assert_allclose(got["a"], amps, rtol=1e-5)
     # what it leaves is the least squares at its result
     again = _filled({**case, "taus": params[:-1].copy(), "v": params[-1]})
     assert all(again[key].tobytes() == got[key].tobytes() for key in got)
@@ -148,11 +151,11 @@ def test_pursuit_trial_and_match_match_numpy():
         X = np.column_stack([_atoms_of(case, t - tt[c], c)[0] for tt in taken])
         X = X - Q[c] @ (Q[c].T @ X)
         coef = np.linalg.lstsq(X, yp[c], rcond=None)[0]
-        np.testing.assert_allclose(amps[:, c], coef, rtol=1e-9)
+        np.testing.assert_allclose(amps[:, c], coef, rtol=5e-12)
         np.testing.assert_allclose(res[:, c], yp[c] - X @ coef, rtol=0, atol=1e-12)
-        np.testing.assert_allclose(G[c, :2, :2], X.T @ X, rtol=1e-13)
+        np.testing.assert_allclose(G[c, :2, :2], X.T @ X, rtol=5e-15)
         ref_chi += float(np.sum((yp[c] - X @ coef) ** 2))
-    assert abs(chi - ref_chi) <= 1e-13 * ref_chi
+    assert abs(chi - ref_chi) <= 5e-15 * ref_chi
     # the matcher: correlations, the second's best within the slack, the score's argmax
     pad, slack = 40, 5
     buf = np.zeros((2, n_t + 2 * pad))
@@ -165,7 +168,7 @@ def test_pursuit_trial_and_match_match_numpy():
     K.best_match(buf, atoms, lo, length, pad, slack, 2.5, excluded, corr, picked)
     ref = [np.correlate(buf[c, pad + lo[c]:pad + n_t + lo[c] + length[c] - 1],
                         atoms[c, :length[c]], mode="valid") for c in range(2)]
-    np.testing.assert_allclose(corr, np.array(ref), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(corr, np.array(ref), rtol=0, atol=2e-14)
     c2 = maximum_filter1d(corr[1], 2 * slack + 1, mode="constant", cval=-np.inf)
     score = np.maximum(corr[0] + c2, 0.0) ** 2 / 2.5
     score[excluded] = 0.0
@@ -183,4 +186,4 @@ def test_symmetric_pinv_is_numpy_s():
         out = np.empty((6, 6))
         K.symmetric_pinv(G, out)
         ref = np.linalg.pinv(G)
-        np.testing.assert_allclose(out, ref, rtol=0, atol=1e-12 * np.abs(ref).max())
+        np.testing.assert_allclose(out, ref, rtol=0, atol=4e-14 * np.abs(ref).max())

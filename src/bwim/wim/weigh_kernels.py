@@ -25,7 +25,7 @@ Contract
   units of its own).
 * Sums run in plain order (sample after sample): the numbers of the numpy expressions
   they replace to rounding, not bit for bit (tests/unit/test_weigh_kernels.py holds them
-  to those expressions within 1e-12 relative on random data, and the unit readings to the
+  to those expressions within 1e-13 relative on random data, and the unit readings to the
   matrix method's bit for bit).  No fused multiply-add (compiled without ``fastmath``).
 * Compiled with numba (``cache=True``: the first call in a process compiles them, or
   loads them from numba's cache); float64 arrays in, float64 out.
