@@ -31,7 +31,7 @@ import numpy as np
 from numba import njit
 
 __all__ = ["GridTable", "best_match", "grid_atoms", "grid_table", "jacobian", "least_squares",
-           "levenberg_marquardt", "pursuit_trial", "symmetric_pinv"]
+           "levenberg_marquardt", "pursuit_trial", "sorted_copy", "symmetric_pinv"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -403,8 +403,9 @@ def jacobian(Mt, Ginv, a, dXt, dtt, v, k, Jt):
 
 
 @njit(cache=True)
-def _sorted(x):
-    """``x`` ascending, a copy (insertion sort: np.sort's values, quicker to compile)."""
+def sorted_copy(x):
+    """``x`` (1-D, a few values) ascending, a copy (insertion sort: np.sort's values,
+    quicker to compile)."""
     out = x.copy()
     for i in range(1, out.size):
         v = out[i]
@@ -471,7 +472,7 @@ def levenberg_marquardt(scalars, first, values, t, y, rest, params, iterations, 
             for i in range(n + 1):
                 step[i] = -x[i] * scale
                 trial[i] = params[i] + step[i]
-            tt = _sorted(trial[:n])
+            tt = sorted_copy(trial[:n])
             vv = trial[n]
             if vv <= 0:
                 lam *= 10.0

@@ -36,6 +36,7 @@ import math
 import numpy as np
 from numba import njit
 
+from bwim.detect.fit_kernels import sorted_copy
 from bwim.pairwise import pairwise_sum
 
 __all__ = [
@@ -733,12 +734,4 @@ def choose_in_window(t, lo, taus, y, rest, X, coef, u0, k0, u1, k1, w, shift0, s
                 break
         if not inside_any:
             changed = True
-    new = out[:n_out].copy()
-    for i in range(1, n_out):  # a few times: insertion sort (numpy's order of numbers)
-        x = new[i]
-        j = i - 1
-        while j >= 0 and new[j] > x:
-            new[j + 1] = new[j]
-            j -= 1
-        new[j + 1] = x
-    return new, changed
+    return sorted_copy(out[:n_out]), changed  # a few times

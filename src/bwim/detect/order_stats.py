@@ -87,18 +87,21 @@ def _median_inplace(buf, n):
 
 
 @njit(cache=True)
+def _has_nan(v):
+    """Whether any value of ``v`` (1-D) is NaN."""
+    for i in range(v.size):
+        if v[i] != v[i]:
+            return True
+    return False
+
+
+@njit(cache=True)
 def median_of(v):
     """The median of ``v`` (1-D, float64, C-contiguous); NaN for none or if any is."""
     n = v.size
-    if n == 0:
+    if n == 0 or _has_nan(v):
         return np.nan
-    buf = np.empty(n)
-    for i in range(n):
-        x = v[i]
-        if x != x:
-            return np.nan
-        buf[i] = x
-    return _median_inplace(buf, n)
+    return _median_inplace(v.copy(), n)
 
 
 @njit(cache=True)
@@ -108,12 +111,9 @@ def mad_of(v):
     n = v.size
     if n == 0:
         return 0.0
-    buf = np.empty(n)
-    for i in range(n):
-        x = v[i]
-        if x != x:
-            return np.nan
-        buf[i] = x
+    if _has_nan(v):
+        return np.nan
+    buf = v.copy()
     m = _median_inplace(buf, n)
     for i in range(n):
         buf[i] = abs(v[i] - m)
