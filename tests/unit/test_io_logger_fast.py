@@ -248,3 +248,78 @@ def test_vectorised_must_be_a_bool(tmp_path):
     p.write_text("0;1\n1;2\n")
     with pytest.raises(InputError, match="vectorised must be true or false, got 'no'"):
         read_logger(p, LoggerFormat(columns=("time", "a")), vectorised="no")
+
+
+def _record(path, fmt, **kw):
+    """The whole outcome, clock and NaN bits included."""
+    try:
+        r = read_logger(path, fmt, **kw)
+    except InputError as exc:
+        return ("error", str(exc))
+    return ("ok", r.time.tobytes(), r.data.tobytes(), r.data.shape, r.clock,
+            tuple(s.name for s in r.sensors))
+
+
+def _no_line_by_line(monkeypatch):
+    calls = []
+    original = logger._Parser._slow
+    monkeypatch.setattr(logger._Parser, "_slow",
+                        lambda self, *a: calls.append(a) or original(self, *a))
+    return calls
+
+
+def test_gaps_clock_columns_and_unicode_stay_on_the_vectorised_path(tmp_path, monkeypatch):
+    """Reference: the line-by-line path.  A temperature column with empty and NaN gaps, a
+    clock column (ISO text, quoted), a skipped column and comments with non-ASCII text,
+    rows with and without a trailing delimiter: the same record bit for bit (NaN, clock),
+    read without the line-by-line path."""
+    from bwim.io.clock import ClockSpec
+
+    fmt = LoggerFormat(columns=("clock", "time", "a", "temp", "-"),
+                       kinds={"temp": "temperature"}, clock=ClockSpec(column="clock"))
+    rows = ["# Température °C, état", "clock;time;a;temp;état"]
+    gaps = ["21.5", "", "NaN", " nan ", "-NaN", "21.7", '"nan"', "21.6"]
+    for k in range(300):
+        stamp = f"2015-10-01T09:45:{52 + k // 100:02d}.{(k % 100) * 10:03d}"
+        row = f'"{stamp}";{k / 100:.2f};{np.sin(k / 9):.6f};{gaps[k % len(gaps)]};ok°'
+        rows.append(row + (";" if k % 3 == 0 else ""))
+        if k % 50 == 0:
+            rows.append("# µ-strain, remarque")
+    p = tmp_path / "g.txt"
+    p.write_text("\n".join(rows) + "\n", encoding="utf-8")
+    reference = _record(p, fmt, vectorised=False)
+    calls = _no_line_by_line(monkeypatch)
+    got = _record(p, fmt)
+    assert got == reference and reference[0] == "ok" and reference[4] is not None
+    assert calls == []
+    data = np.frombuffer(reference[2]).reshape(reference[3])
+    assert np.isnan(data[1::len(gaps), 1]).all() and np.isfinite(data[::len(gaps), 1]).all()
+
+
+@pytest.mark.parametrize("chunk", [40, 2**16])
+@pytest.mark.parametrize(
+    "text",
+    ["time;a\n" + "".join(f"{k}.5;{k}\n" + ("   \n" if k % 4 == 0 else "") for k in range(60)),
+     "".join(f"{k}.5;{k}\n" + (" \t \n" if k % 9 == 0 else "") + ("# c\n" if k == 30 else "")
+             for k in range(60)),
+     "".join(f"{k}.5;{k};\n\n" for k in range(60))],
+)
+@pytest.mark.parametrize("max_samples", [59, 60, 62, 10**6])
+def test_memory_estimates_as_line_by_line(tmp_path, monkeypatch, text, chunk, max_samples):
+    """Reference: the line-by-line path.  Lines of spaces, comments and empty lines, a
+    max_samples at and around the row count, small and large chunks: the same memory
+    estimates checked (the same rows, so the same message at a limit), the same record or
+    message."""
+    p = tmp_path / "m.txt"
+    p.write_text(text)
+    fmt = LoggerFormat(columns=("time", "a"))
+    monkeypatch.setattr(logger, "CHUNK", chunk)
+    out = {}
+    for vectorised in (False, True):
+        checks = []
+        monkeypatch.setattr(logger, "check_memory",
+                            lambda n, what, checks=checks: checks.append((n, what)))
+        out[vectorised] = (_record(p, fmt, max_samples=max_samples, vectorised=vectorised),
+                           checks)
+    assert out[True] == out[False]
+    assert out[True][1] or out[True][0][0] == "error"   # (refused before any estimate)

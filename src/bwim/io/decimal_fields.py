@@ -8,8 +8,9 @@ Contract
   ``comma``), nothing else, at most ``MAX_DIGITS + 2`` bytes.  For each field it gives
   its value, whether it is plain (``ok``), and its digits after the mark (``decimals``).
   A field that is not plain has ``ok`` False and its value and decimals undefined: the
-  caller reads it another way (:mod:`bwim.io.logger` reads it as ``float`` does, or
-  refuses it).
+  caller reads it another way (as ``float`` does, or refuses it).  The logger reader
+  applies the same rule in its own one-pass kernel (:mod:`bwim.io.field_kernels`, tested
+  against :func:`plain_decimals` and ``float``).
 * **Exactness.**  The digits, with the mark's place counted as a 0 digit, form an
   integer ``r < 10**15 < 2**53`` (exact in a double, built digit by digit); the mantissa
   ``m`` is ``r`` with that 0 taken out (``m = h p + (r − 10 h p)``, ``h = ⌊r / 10p⌋`` the

@@ -61,8 +61,9 @@ Contract
   reported at the first line that has one, before the checks of the whole record (time,
   clipping, clock).
 * Streaming, bounded memory. The file is read once, in chunks of at most :data:`CHUNK`
-  characters (whole lines), each parsed at once (its fields found vectorised over its
-  bytes, their plain decimals read in one compiled pass: :mod:`bwim.io.decimal_fields`; a
+  characters (whole lines), each parsed at once (split into rows and fields and its plain
+  decimals read in one compiled pass over its bytes: :mod:`bwim.io.field_kernels`; the
+  few other numbers, such as ``1e-06``, one by one as the line-by-line path reads them; a
   chunk with anything unusual is re-read line by line, which gives the same numbers or the
   precise message) into the record's data array, sized from the estimate and scaled in
   place: the reader holds the data array, the time column (and a few arrays of its length
@@ -88,7 +89,9 @@ import numpy as np
 from bwim.errors import InputError, parse_enum, require_positive
 from bwim.io._csv import check_time, open_regular, rounding
 from bwim.io.clock import ClockRow, ClockSpec, logger_clock
-from bwim.io.decimal_fields import PlainDecimals, plain_decimals
+from bwim.io.field_kernels import GAP, ChunkRows, Scan, scan_rows
+from bwim.io.field_kernels import SKIP as SKIP_SLOT
+from bwim.io.field_kernels import TIME as TIME_SLOT
 from bwim.limits import check_memory
 from bwim.records import Record
 from bwim.sensors import Sensor, SensorKind
@@ -111,8 +114,9 @@ MAX_LOGGER_BYTES = 256 * MiB
 CHUNK = 2**16
 """Characters of text parsed at once (whole lines are added to finish the last one)."""
 
-#: Bytes of work memory per character of a chunk while it is parsed (byte masks, field
-#: offsets, the numbers' digit matrix), for the memory estimate.
+#: Bytes of work memory per character of a chunk while it is parsed (its bytes, its rows'
+#: numbers and line numbers, the list of fields that are not plain decimals: at most 30
+#: for ASCII text, see bwim.io.field_kernels), for the memory estimate.
 _WORK_PER_CHAR = 32
 #: Arrays of the time column's length alive besides the data while the record is checked
 #: (time steps, their median, masks), for the memory estimate; a mask of the data's shape
@@ -559,8 +563,11 @@ class _LineNumbers:
         """Rows ``row, row + 1, ...`` are on ``lines`` (ascending)."""
         if lines.size == 0:
             return
-        breaks = np.concatenate([[0], np.flatnonzero(np.diff(lines) != 1) + 1])
-        for b in breaks.tolist():
+        if int(lines[-1]) - int(lines[0]) == lines.size - 1:
+            breaks = [0]                            # consecutive lines (they ascend)
+        else:
+            breaks = [0, *(np.flatnonzero(np.diff(lines) != 1) + 1).tolist()]
+        for b in breaks:
             r, line = row + b, int(lines[b])
             if self.rows and line - self.first[-1] == r - self.rows[-1]:
                 continue                            # continues the last run
@@ -635,8 +642,6 @@ class _Rows:
 
 # --- the parser ------------------------------------------------------------------------------
 
-_PAD = 16                   #: newlines before a chunk's text (a field's start is never 0)
-
 
 class _Parser:
     """Reads a logger file's rows into :class:`_Rows` (see the module docstring)."""
@@ -652,14 +657,17 @@ class _Parser:
         self.max_line = max(4096, (max_field + 1) * (n + 1))
         channels = set(fmt.channels)
         self.keep = [j for j, c in enumerate(cols) if c in channels]
-        # the channel columns as a slice when they are adjacent (a view, not a gather)
-        contiguous = self.keep == list(range(self.keep[0], self.keep[-1] + 1))
-        self.keep_index = (slice(self.keep[0], self.keep[-1] + 1) if contiguous
-                           else np.array(self.keep))
         self.t_col = cols.index(TIME) if fmt.has_time else None
         self.numeric = self.keep if self.t_col is None else [self.t_col, *self.keep]
         # columns whose empty or NaN fields read as NaN (a temperature sensor's gaps)
         self.gaps = {j for j, c in enumerate(cols) if c in gaps}
+        # each column's place for the compiled scan (bwim.io.field_kernels)
+        slot = dict(zip(self.keep, range(len(self.keep)), strict=True))
+        if self.t_col is not None:
+            slot[self.t_col] = TIME_SLOT
+        self.slots = np.array([slot.get(j, SKIP_SLOT) for j in range(n)], dtype=np.int64)
+        self.gap_flags = np.array([GAP if j in self.gaps else 0 for j in range(n)],
+                                  dtype=np.uint8)
         self.clock_cols = {c: cols.index(c) for c in fmt.clock_columns}
         self.comma = fmt.decimal == ","
         self.delim = fmt.delimiter
@@ -717,14 +725,9 @@ class _Parser:
             self.chars += len(text)
             if self.chars > self.max_bytes:
                 raise self._grew()
-            lines = text.split("\n")
-            if lines[-1] == "":
-                lines.pop()
-            self.line += len(lines)
             if pending:
-                lines = pending + lines
                 text = pending[0] + "\n" + text
-            self._chunk(start, lines, text)
+            self.line = start + self._chunk(start, text)
             start, pending = self.line, []
             if not text:
                 break
@@ -770,112 +773,95 @@ class _Parser:
         return raw
 
     # -- one chunk -----------------------------------------------------------------------
-    def _chunk(self, start: int, lines: list[str], text: str) -> None:
-        """Parse ``lines`` (file lines ``start + 1, ...``; ``text``: them, joined)."""
+    def _chunk(self, start: int, text: str) -> int:
+        """Parse the chunk ``text``: file lines ``start + 1, ...``, each ended by a newline
+        (the file's last maybe not); the number of its lines."""
+        if self.vectorised and (n_lines := self._fast(start, text)) is not None:
+            return n_lines
+        lines = text.split("\n")
+        if lines[-1] == "":
+            lines.pop()
         if not lines:
-            return
+            return 0
         if max(map(len, lines)) > self.max_line:
             i = next(i for i, s in enumerate(lines) if len(s) > self.max_line)
             self._slow(start, lines[:i])            # an earlier problem comes first
             raise self._long(start + i + 1)
         if "#" in text or "\n\n" in text or text.startswith("\n"):
-            keep = [i for i, s in enumerate(lines) if (t := s.strip()) and t[0] != "#"]
-            if not keep:
-                return
-            text = "\n".join([lines[i] for i in keep])
-            numbers = start + 1 + np.array(keep, dtype=np.int64)
+            n_rows = sum(1 for s in lines if (t := s.strip()) and t[0] != "#")
+            if not n_rows:
+                return len(lines)
         else:
-            numbers = start + 1 + np.arange(len(lines), dtype=np.int64)
-        if not text.endswith("\n"):
-            text += "\n"
-        if self.rows.n + numbers.size > self.max_samples:
+            n_rows = len(lines)                     # (lines of spaces counted: see _fast)
+        if self.rows.n + n_rows > self.max_samples:
             self._slow(start, lines)                # raises at the row past the limit
-            return
-        self.rows.reserve(numbers.size, self.chars)
-        if not (self.vectorised and self._fast(text, numbers)):
-            self._slow(start, lines)
+            return len(lines)
+        self.rows.reserve(n_rows, self.chars)
+        self._slow(start, lines)
+        return len(lines)
 
-    def _fast(self, text: str, numbers: np.ndarray) -> bool:
-        """Parse content lines (``text``, each ended by a newline) at once; False (nothing
-        added) when anything is unusual."""
-        n, m_rows = self.n, numbers.size
-        # (whitespace other than space and tab, which str.split also splits at, either
-        # changes a row's field count or sits at a field's edge where _clean strips it)
-        b = b"\n" * _PAD + text.encode()
-        a = np.frombuffer(b, dtype=np.uint8)
-        t = a[_PAD:]
-        if self.delim == " ":
-            blank = (t == 32) | (t == 9) | (t == 10)
-            filled = ~blank
-            fs = np.flatnonzero(filled & np.concatenate([[True], blank[:-1]]))
-            fe = np.flatnonzero(filled & np.concatenate([blank[1:], [True]])) + 1
-            per_row = np.bincount(np.searchsorted(np.flatnonzero(t == 10), fs),
-                                  minlength=m_rows)
-            if fs.size != n * m_rows or np.any(per_row != n):
-                return False
-            fs = fs.reshape(m_rows, n) + _PAD
-            fe = fe.reshape(m_rows, n) + _PAD
-        else:
-            code = ord(self.delim)
-            ends = np.flatnonzero((t == code) | (t == 10))
-            if ends.size % m_rows:
-                return False
-            m = ends.size // m_rows
-            if m not in (n, n + 1):
-                return False
-            ends = ends.reshape(m_rows, m) + _PAD
-            kinds = a[ends]
-            if not (np.all(kinds[:, -1] == 10) and np.all(kinds[:, :-1] == code)):
-                return False
-            fs = np.empty_like(ends)
-            flat = fs.reshape(-1)
-            flat[0] = _PAD
-            np.add(ends.reshape(-1)[:-1], 1, out=flat[1:])
-            fe = ends
-            if m == n + 1:
-                if np.any(fe[:, n] > fs[:, n]):
-                    return False                    # a non-empty extra field
-                fs, fe = fs[:, :n], fe[:, :n]
-        if int((fe - fs).max()) > self.max_field:
-            return False                            # (bytes: the line-by-line path decides)
-        keep = self.keep_index
-        data = self._numbers(a, b, fs[:, keep].ravel(), fe[:, keep].ravel())
-        if data is None:
-            return False
-        time = None
-        if self.t_col is not None:
-            time = self._numbers(a, b, fs[:, self.t_col], fe[:, self.t_col])
-            if time is None:
-                return False
-            self.decimals = max(self.decimals, int(time.decimals.max()))
-            time = time.values
-        self.rows.add(data.values.reshape(m_rows, len(self.keep)), time, numbers)
+    def _fast(self, start: int, text: str) -> int | None:
+        """Parse the chunk at once (:func:`bwim.io.field_kernels.scan_rows`): the number of
+        its lines, or None (nothing added) when anything is unusual: the chunk is then read
+        line by line."""
+        data = text.encode()
+        got = scan_rows(data, n_chars=len(text), delimiter=self.delim, slots=self.slots,
+                        gaps=self.gap_flags, n_channels=len(self.keep),
+                        has_time=self.t_col is not None, comma=self.comma,
+                        max_line=self.max_line, max_field=self.max_field,
+                        max_rows=self.max_samples - self.rows.n, first_line=start + 1)
+        if got.status is not Scan.OK:
+            return None
+        decimals = self._others(got, data)
+        if decimals is None:
+            return None
+        m_rows = got.lines.size
+        # the rows the line-by-line route reserves room for: a chunk without a comment
+        # or an empty line counts its lines of spaces too (it never splits such a chunk)
+        n_rows = m_rows
+        if got.space_lines and not ("#" in text or "\n\n" in text or text.startswith("\n")):
+            n_rows += got.space_lines
+        if n_rows == 0:
+            return got.n_lines
+        self.rows.reserve(m_rows if self.rows.n + n_rows > self.max_samples else n_rows,
+                          self.chars)
+        if m_rows == 0:
+            return got.n_lines
+        self.decimals = decimals
+        self.rows.add(got.values, got.time, got.lines)
         if self.clock_cols:
-            row = {c: _clean(b[fs[0, j]:fe[0, j]].decode()) for c, j in self.clock_cols.items()}
+            e = got.edges
             if not self.clock_first:
-                self.clock_first = row
-            self.clock_last = {c: _clean(b[fs[-1, j]:fe[-1, j]].decode())
+                self.clock_first = {c: _clean(data[e[0, j]:e[1, j]].decode())
+                                    for c, j in self.clock_cols.items()}
+            self.clock_last = {c: _clean(data[e[2, j]:e[3, j]].decode())
                                for c, j in self.clock_cols.items()}
-        return True
+        return got.n_lines
 
-    def _numbers(self, a: np.ndarray, b: bytes, fs: np.ndarray, fe: np.ndarray
-                 ) -> PlainDecimals | None:
-        """The numbers of the fields ``b[fs:fe]``: plain decimals vectorised, others one by
-        one as the line-by-line path reads them; None if one is not a finite number."""
-        nums = plain_decimals(a, fs, fe, self.comma)
-        for i in np.flatnonzero(~nums.ok).tolist():
-            s = _clean(b[fs[i]:fe[i]].decode())
-            s = _point(s, self.comma)
+    def _others(self, got: ChunkRows, data: bytes) -> int | None:
+        """Read the numeric fields the scan left (not plain decimals) as the line-by-line
+        route reads them, into ``got``; the time column's decimals, or None if one is not
+        a finite number."""
+        decimals = max(self.decimals, got.decimals)
+        for r, j, s, e in got.bad.tolist():
+            field_ = _clean(data[s:e].decode())
+            if j in self.gaps and _is_gap(field_):
+                got.values[r, self.slots[j]] = math.nan
+                continue
+            s = _point(field_, self.comma)
             if _NUMBER.fullmatch(s) is None:
                 return None
             v = float(s)
             if not math.isfinite(v):
                 return None
-            nums.values[i] = v
-            dot = s.find(".")
-            nums.decimals[i] = len(s) - dot - 1 if dot >= 0 and "e" not in s \
-                and "E" not in s else 0
-        return nums
+            if j == self.t_col:
+                got.time[r] = v
+                dot = s.find(".")
+                if dot >= 0 and "e" not in s and "E" not in s:
+                    decimals = max(decimals, len(s) - dot - 1)
+            else:
+                got.values[r, self.slots[j]] = v
+        return decimals
 
     def _slow(self, start: int, lines: list[str]) -> None:
         """Parse lines one by one, with the precise message for the first problem."""
