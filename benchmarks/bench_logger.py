@@ -6,8 +6,8 @@ status columns; 512 Hz; 1, 2 and 3 s; the time column from 0 with 6 decimals, or
 clock time of day with 9 decimals) and one long recording (``--minutes``, default 10;
 ``--minutes 60`` is the hour at 512 Hz × 20 channels of issue 21) are read by:
 
-* ``read_logger`` (the default: fields found vectorised over the bytes, plain decimals read
-  by one compiled pass, :mod:`bwim.io.decimal_fields`);
+* ``read_logger`` (the default: each chunk's rows and fields found and its plain decimals
+  read by one compiled pass, :mod:`bwim.io.field_kernels`);
 * ``read_logger(vectorised=False)``: every line parsed one by one, the reader's reference
   path and the algorithm of the implementation before the vectorised parser (the
   baseline of the speed-up);

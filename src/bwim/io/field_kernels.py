@@ -9,20 +9,19 @@ Contract
   every other line into fields (the delimiter ``" "``: runs of spaces and tabs; else the
   one byte ``;``, ``,`` or tab, one empty field past the last column dropped), checks
   their count and lengths, and reads the time column's and the channels' fields that are
-  **plain decimals** (the rule of :mod:`bwim.io.decimal_fields`: an optional sign, 1 to
-  :data:`~bwim.io.decimal_fields.MAX_DIGITS` digits, at most one decimal mark, nothing
-  else) while it looks for their ends; an empty or NaN field (``nan`` in any case, signs
+  **plain decimals** (an optional sign ``+`` or ``-``, 1 to :data:`MAX_DIGITS` digits,
+  at most one decimal mark, ``.`` or with ``comma`` ``,``, nothing else) while it looks for their ends; an empty or NaN field (``nan`` in any case, signs
   before it, spaces and tabs around it) of a gap column (a temperature channel) is NaN.
   Skipped and clock columns are never read as numbers.
 * **Exactness.**  A plain field's digits, the mark left out, form an integer ``m <
   10**14 < 2**53`` (built in 64 bits from at most ``MAX_DIGITS + 2`` bytes, so it never
   overflows), exact as a double, and its value is ``m / 10**d`` (``d`` digits after the
   mark; ``10**d`` exact): one rounding, the double that ``float`` gives (Clinger's fast
-  path, as :mod:`bwim.io.decimal_fields` reads it; a sign negates it exactly, ``-0``
-  included).  The reference in the tests is ``float`` itself and
-  :func:`~bwim.io.decimal_fields.plain_decimals` (tests/unit/test_field_kernels.py).
-  The reading is written out in the kernel, not called (as a separate compiled
-  function, inlined or not, the kernel took 30 to 70 % longer).
+  path: W. D. Clinger, *How to read floating point numbers accurately*, PLDI 1990; a
+  sign negates it exactly, ``-0`` included).  The reference in the tests is ``float``
+  itself (tests/unit/test_field_kernels.py).  The reading is written out in the
+  kernel, not called (as a separate compiled function, inlined or not, the kernel took
+  30 to 70 % longer).
 * What it is not sure of it leaves to the caller, who reads the chunk line by line (the
   precise messages, :mod:`bwim.io.logger`): :attr:`ChunkRows.status` is then not
   :attr:`Scan.OK` and nothing else is meaningful.  So: a line longer than ``max_line``
@@ -56,9 +55,10 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from bwim.io.decimal_fields import MAX_DIGITS
+__all__ = ["GAP", "MAX_DIGITS", "SKIP", "TIME", "ChunkRows", "Scan", "scan_rows"]
 
-__all__ = ["GAP", "SKIP", "TIME", "ChunkRows", "Scan", "scan_rows"]
+#: Digits a plain field may have (its integer, the mark left out, stays below 2**53).
+MAX_DIGITS = 14
 
 #: ``slots`` entry of a column that is not read (skipped, a clock column).
 SKIP = -1
