@@ -259,8 +259,10 @@ def rounding(time: np.ndarray, resolution: float) -> float:
 
 def _allowance(dt: np.ndarray, h: float, t: np.ndarray, resolution: float) -> float:
     """:func:`rounding` from the steps ``dt`` and their median ``h`` already made."""
-    return (min(resolution, float(np.quantile(np.abs(dt - h), 0.99)))
-            + 1e-9 * float(np.max(np.abs(t))))
+    dev = np.abs(dt - h)
+    # (the quantile of steps that all equal their median, a clock written exactly, is 0)
+    q99 = float(np.quantile(dev, 0.99)) if resolution > 0 and dev.max() > 0 else 0.0
+    return min(resolution, q99) + 1e-9 * float(np.max(np.abs(t)))
 
 
 def decimal_resolution(time: np.ndarray, *, max_decimals: int = 12) -> float:
