@@ -15,6 +15,17 @@ Contract
   grids end in zeros), the channel's weight and weight / du; ``first`` (2,) each grid's
   first index in ``values``; ``values`` (2, N) both grids' ordinates end to end, then
   their differences (0 after each's last).
+* The atoms' zero rows: a response is zero beyond its reach (its grid's first and last
+  intervals whose ordinate and difference are both +0), so on most of a window's rows
+  most atoms are zero.  Where the inputs allow it (:func:`zero_reach`: every value
+  finite, the rows' times ascending), :func:`least_squares` and the refinement's trials
+  evaluate an atom only on the rows it may reach (by bisection on its grid position,
+  which rises with the row), write ``+0 × weight`` on the others (what :func:`_atom`
+  gives there) and leave their terms out of the sums, as the Jacobian does
+  (:func:`span_dots`): a term left out is a zero times a finite number, ±0, and a sum
+  from +0 never becomes −0 (round to nearest), so adding ±0 leaves it as it is.  The
+  numbers are those of every term summed in its order, byte for byte (the unit tests
+  compare them with plain numpy).
 * Kernels write into arrays the caller made (their shapes are given); singular systems
   raise :class:`numpy.linalg.LinAlgError`, as numpy's solvers do.
 * A least-squares inverse falls back to the pseudo-inverse (:func:`symmetric_pinv`) when
@@ -31,7 +42,8 @@ import numpy as np
 from numba import njit
 
 __all__ = ["GridTable", "best_match", "grid_atoms", "grid_table", "jacobian", "least_squares",
-           "levenberg_marquardt", "pursuit_trial", "sorted_copy", "symmetric_pinv"]
+           "levenberg_marquardt", "pursuit_trial", "sorted_copy", "span_dots", "symmetric_pinv",
+           "zero_reach"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -289,9 +301,224 @@ def symmetric_pinv(G, out):
 
 
 @njit(cache=True)
-def _fill(scalars, first, values, t, y, rest, taus, v, k, dtt, Mt, dXt, Ginv, a, res):
+def _union(lo, hi, i0, i1):
+    """The smallest span holding the spans of rows ``i0`` … ``i1 − 1`` (empty ones
+    aside); (0, 0) when all are empty."""
+    a = -1
+    b = 0
+    for i in range(i0, i1):
+        if lo[i] < hi[i]:
+            if a < 0 or lo[i] < a:
+                a = lo[i]
+            if hi[i] > b:
+                b = hi[i]
+    return max(a, 0), b
+
+
+@njit(cache=True)
+def span_dots(A, na, b, blo, bhi, lo, hi, out):
+    """:func:`_dots` (``out[i] = Σ_m A[i, m] b[m]`` for i < ``na``, each sum from 0 in
+    the order of m) over only the terms where both factors may be nonzero: ``b`` zero
+    outside ``[blo, bhi)``, row ``i`` of ``A`` zero outside ``[lo[i], hi[i])``, every
+    value of both finite.  The same numbers: a term left out is a zero times a finite
+    number, ±0, and a sum from +0 is never −0 (round to nearest), so adding ±0 leaves it
+    as it is.  Rows eight or four at a time (sums side by side, each in that order) over
+    the union of their spans."""
+    i = 0
+    while i + 8 <= na:
+        ulo, uhi = _union(lo, hi, i, i + 8)
+        m0, m1 = max(blo, ulo), min(bhi, uhi)
+        a0, a1, a2, a3 = A[i], A[i + 1], A[i + 2], A[i + 3]
+        a4, a5, a6, a7 = A[i + 4], A[i + 5], A[i + 6], A[i + 7]
+        s0 = s1 = s2 = s3 = s4 = s5 = s6 = s7 = 0.0
+        for m in range(m0, m1):
+            bm = b[m]
+            s0 += a0[m] * bm
+            s1 += a1[m] * bm
+            s2 += a2[m] * bm
+            s3 += a3[m] * bm
+            s4 += a4[m] * bm
+            s5 += a5[m] * bm
+            s6 += a6[m] * bm
+            s7 += a7[m] * bm
+        out[i], out[i + 1], out[i + 2], out[i + 3] = s0, s1, s2, s3
+        out[i + 4], out[i + 5], out[i + 6], out[i + 7] = s4, s5, s6, s7
+        i += 8
+    while i + 4 <= na:
+        ulo, uhi = _union(lo, hi, i, i + 4)
+        m0, m1 = max(blo, ulo), min(bhi, uhi)
+        a0, a1, a2, a3 = A[i], A[i + 1], A[i + 2], A[i + 3]
+        s0 = s1 = s2 = s3 = 0.0
+        for m in range(m0, m1):
+            bm = b[m]
+            s0 += a0[m] * bm
+            s1 += a1[m] * bm
+            s2 += a2[m] * bm
+            s3 += a3[m] * bm
+        out[i], out[i + 1], out[i + 2], out[i + 3] = s0, s1, s2, s3
+        i += 4
+    while i < na:
+        a0 = A[i]
+        s0 = 0.0
+        for m in range(max(blo, lo[i]), min(bhi, hi[i])):
+            s0 += a0[m] * b[m]
+        out[i] = s0
+        i += 1
+
+
+@njit(cache=True)
+def _span_gram(A, n, lo, hi, G, split):
+    """:func:`_gram` by :func:`span_dots` (the same numbers; ``lo``, ``hi`` the rows'
+    spans, every value finite), the rows before ``split`` (the atoms) and from it (the
+    rest: whole rows) in batches of their own (a batch runs over its rows' spans' union)."""
+    for j in range(n):
+        na = min(j + 1, split)
+        span_dots(A, na, A[j], lo[j], hi[j], lo, hi, G[j])
+        if j >= split:
+            span_dots(A[split:], j + 1 - split, A[j], lo[j], hi[j], lo[split:],
+                      hi[split:], G[j, split:])
+    for j in range(n):
+        for i in range(j):
+            G[i, j] = G[j, i]
+
+
+@njit(cache=True)
+def _span_combination(A, n, coef, lo, hi, acc):
+    """``acc = Σ_j A[j] coef[j]`` (each element's sum from 0 in the order of j), row j
+    only over its span ``[lo[j], hi[j])`` when ``coef[j]`` is finite (else all of it;
+    every value of ``A`` finite): the same numbers (a sum from +0 is never −0)."""
+    _fill_with(acc, 0.0)
+    r = acc.size
+    for j in range(n):
+        cj = coef[j]
+        if cj - cj == 0.0:
+            m0, m1 = lo[j], hi[j]
+        else:
+            m0, m1 = 0, r
+        # over views from 0 (a loop from m0 is not vectorised: measured 4x slower)
+        aj = A[j, m0:m1]
+        out = acc[m0:m1]
+        for i in range(m1 - m0):
+            out[i] += aj[i] * cj
+
+
+@njit(cache=True)
+def _all_finite(x):
+    """Whether every value of the C-contiguous ``x`` is finite."""
+    f = x.reshape(x.size)
+    bad = False
+    for i in range(f.size):
+        bad |= not f[i] - f[i] == 0.0
+    return not bad
+
+
+@njit(cache=True)
+def _positive_zero(x):
+    return x == 0.0 and math.copysign(1.0, x) > 0.0
+
+
+@njit(cache=True)
+def zero_reach(scalars, first, values, t, y, rest, flat):
+    """Where the atoms are surely zero, for :func:`least_squares` to leave out: per
+    detector ``c`` ``flat[c] = (zl, zt)``, the grid intervals ``j < zl`` and ``zt ≤ j``
+    (of those an atom reads, j ≤ N − 2) whose ordinate and difference are both +0, so an
+    atom and its slope there are ``+0 × weight`` (:func:`_atom`'s operations).  Returns
+    whether the rows may be left out: every value of the grids, ``t``, ``y`` and ``rest``
+    finite, ``t`` ascending and each grid's ``1 / du`` positive (the grid position of an
+    atom, ``(v dt − offset) / du``, then rises with the row at a positive speed: its zero
+    rows are the first and last of the window, found by bisection, :func:`_reach`)."""
+    ok = (_all_finite(scalars) and _all_finite(values) and _all_finite(t)
+          and _all_finite(y) and _all_finite(rest))
+    for i in range(1, t.size):
+        if t[i] < t[i - 1]:
+            ok = False
+    for c in range(2):
+        if not scalars[1, c] > 0.0:
+            ok = False
+        f = first[c]
+        last = int(scalars[2, c])  # N − 2: the last interval an atom reads
+        zl = 0
+        while zl <= last and _positive_zero(values[0, f + zl]) and _positive_zero(
+                values[1, f + zl]):
+            zl += 1
+        zt = last + 1
+        while zt > zl and _positive_zero(values[0, f + zt - 1]) and _positive_zero(
+                values[1, f + zt - 1]):
+            zt -= 1
+        flat[c, 0] = zl
+        flat[c, 1] = zt
+    return ok
+
+
+@njit(cache=True)
+def _nonzero(x, d):
+    """The smallest span ``(lo, hi)`` outside which the rows ``x`` and ``d`` (1-D, the
+    same size) are both 0; (0, 0) if they are everywhere."""
+    r = x.size
+    a = 0
+    while a < r and x[a] == 0.0 and d[a] == 0.0:
+        a += 1
+    b = r
+    while b > a and x[b - 1] == 0.0 and d[b - 1] == 0.0:
+        b -= 1
+    return (a, b) if a < b else (0, 0)
+
+
+@njit(cache=True)
+def _given_spans(Mt, dXt, dtt, n, lo, hi):
+    """The spans ``lo``, ``hi`` (2, p; the whole window (0, r) on entry) of the atoms of
+    a least squares given (:func:`_nonzero` of each atom's row and its slopes'), when
+    every value of ``Mt``, ``dXt`` and ``dtt`` is finite (else left whole)."""
+    if _all_finite(Mt) and _all_finite(dXt) and _all_finite(dtt):
+        for c in range(2):
+            for j in range(n):
+                lo[c, j], hi[c, j] = _nonzero(Mt[c, j], dXt[c, j])
+
+
+@njit(cache=True)
+def _reach(v, dt, c, scalars, flat):
+    """``(i0, i1)``: the rows ``dt`` (ascending) whose atom at detector ``c`` may differ
+    from +0 × weight (:func:`zero_reach`: the grid intervals ``[zl, zt)``), by bisection
+    on the grid position ``x = (v dt − offset) / du`` (:func:`_atom`'s operations; it
+    rises with the row): the interval is ``int(clip(x))``, below zl where ``x < zl``,
+    from zt on where ``x ≥ zt`` (zl ≥ 1, zt ≤ N − 2; none else)."""
+    r = dt.size
+    zl, zt = flat[c, 0], flat[c, 1]
+    if zl >= zt:
+        return 0, 0  # every interval zero
+    off, inv = scalars[0, c], scalars[1, c]
+    i0 = 0
+    if zl >= 1:
+        a, b = 0, r  # the first row with x ≥ zl
+        while a < b:
+            m = (a + b) // 2
+            if (v * dt[m] - off) * inv >= zl:
+                b = m
+            else:
+                a = m + 1
+        i0 = a
+    i1 = r
+    if zt <= int(scalars[2, c]):
+        a, b = i0, r  # the first row with x ≥ zt
+        while a < b:
+            m = (a + b) // 2
+            if (v * dt[m] - off) * inv >= zt:
+                b = m
+            else:
+                a = m + 1
+        i1 = a
+    return i0, i1
+
+
+@njit(cache=True)
+def _fill(scalars, first, values, t, y, rest, taus, v, k, dtt, Mt, dXt, Ginv, a, res, fast,
+          flat, lo, hi):
     """One least squares (see :func:`least_squares`), written into the arrays given
-    (``dXt`` empty for no slopes)."""
+    (``dXt`` empty for no slopes).  With ``fast`` (:func:`zero_reach`'s answer, ``flat``
+    its intervals) each atom only where it may not be zero, its other rows +0 × weight
+    (what :func:`_atom` gives there) and left out of the sums (:func:`span_dots`: the
+    same numbers); ``lo``, ``hi`` (2, p) the rows' spans written (the whole window for
+    the rest's rows, and for all without ``fast``)."""
     r, n, q = t.size, taus.size, rest.shape[1]
     p = n + q
     for j in range(n):
@@ -304,18 +531,35 @@ def _fill(scalars, first, values, t, y, rest, taus, v, k, dtt, Mt, dXt, Ginv, a,
     piv = np.empty(p, dtype=np.int64)
     coef = np.empty(p)
     acc = np.empty(r)
-    for c in range(2):
+    if fast:  # a positive, finite speed and finite times (the grid position rises)
+        fast = v > 0.0 and v - v == 0.0
         for j in range(n):
-            for i in range(r):
+            if not taus[j] - taus[j] == 0.0:
+                fast = False
+    for c in range(2):
+        zero, zero_slope = 0.0 * scalars[3, c], 0.0 * scalars[4, c]
+        for j in range(n):
+            i0, i1 = _reach(v, dtt[j], c, scalars, flat) if fast else (0, r)
+            m, d = Mt[c, j], dXt[c, j] if want else Mt[c, j]
+            _fill_with(m[:i0], zero)
+            for i in range(i0, i1):
                 x, s = _atom(v, dtt[j, i], c, scalars, first, values)
-                Mt[c, j, i] = x
+                m[i] = x
                 if want:
-                    dXt[c, j, i] = s
+                    d[i] = s
+            _fill_with(m[max(i1, i0):], zero)
+            if want:
+                _fill_with(d[:i0], zero_slope)
+                _fill_with(d[max(i1, i0):], zero_slope)
+            lo[c, j], hi[c, j] = (i0, i1) if i0 < i1 else (0, 0)
         for j in range(q):
             for i in range(r):
                 Mt[c, n + j, i] = rest[c, j, i]
-        _gram(Mt[c], p, G)  # G = MᵀM, b = Mᵀy, each sum in the rows' order
-        _dots(Mt[c], p, y[c], b)
+            lo[c, n + j], hi[c, n + j] = 0, r
+        # G = MᵀM, b = Mᵀy, each sum in the rows' order (the terms of zeros left out)
+        yc = y[c]
+        _span_gram(Mt[c], p, lo[c], hi[c], G, n)
+        span_dots(Mt[c], p, yc, 0, r, lo[c], hi[c], b)
         _ridge(G, p)
         if _lu(G, piv):  # (MᵀM)⁻¹ column by column
             for j in range(p):
@@ -325,7 +569,7 @@ def _fill(scalars, first, values, t, y, rest, taus, v, k, dtt, Mt, dXt, Ginv, a,
                 for i in range(p):
                     Ginv[c, i, j] = e[i]
         else:  # an exact zero pivot (numpy's inv raising): the pseudo-inverse
-            _gram(Mt[c], p, G)
+            _span_gram(Mt[c], p, lo[c], hi[c], G, n)
             _ridge(G, p)
             symmetric_pinv(G, Ginv[c])
         for i in range(p):  # coef = (MᵀM)⁻¹ Mᵀy
@@ -335,13 +579,8 @@ def _fill(scalars, first, values, t, y, rest, taus, v, k, dtt, Mt, dXt, Ginv, a,
             coef[i] = s
         for j in range(n):
             a[c, j] = coef[j]
-        _fill_with(acc, 0.0)  # M coef (each sum in the columns' order)
-        for j in range(p):
-            cj = coef[j]
-            mj = Mt[c, j]
-            for i in range(r):
-                acc[i] += mj[i] * cj
-        yc = y[c]
+        # M coef (each sum in the columns' order)
+        _span_combination(Mt[c], p, coef, lo[c], hi[c], acc)
         for i in range(r):  # residual y − M coef, scaled to all samples
             res[c * r + i] = (yc[i] - acc[i]) * k
 
@@ -355,40 +594,63 @@ def least_squares(scalars, first, values, t, y, rest, taus, v, k, dtt, Mt, dXt, 
     ``dXt`` (2, n, r) the atoms' slopes (or pass it empty (0, 0, 0): none), ``Ginv``
     (2, p, p) ``(MᵀM + ridge)⁻¹``, ``a`` (2, n) the axles' amplitudes and ``res``
     (2 r,) the residual ``y − M (MᵀM)⁻¹ Mᵀy``, both detectors end to end, times ``k``
-    (√ of the sampling step: scaled to all samples)."""
-    _fill(scalars, first, values, t, y, rest, taus, v, k, dtt, Mt, dXt, Ginv, a, res)
+    (√ of the sampling step: scaled to all samples).  Each atom is evaluated, and
+    summed, only over the rows where it may not be zero (:func:`zero_reach`): the same
+    numbers as over all."""
+    flat = np.empty((2, 2), dtype=np.int64)
+    fast = zero_reach(scalars, first, values, t, y, rest, flat)
+    p = Mt.shape[1]
+    lo = np.empty((2, p), dtype=np.int64)
+    hi = np.empty((2, p), dtype=np.int64)
+    _fill(scalars, first, values, t, y, rest, taus, v, k, dtt, Mt, dXt, Ginv, a, res, fast,
+          flat, lo, hi)
 
 
 @njit(cache=True)
-def _jacobian(Mt, Ginv, a, dXt, dtt, v, k, Jt):
+def _jacobian(Mt, Ginv, a, dXt, dtt, v, k, Jt, lo, hi):
+    """:func:`jacobian`, the sums over only the rows' spans ``lo``, ``hi`` (2, p): each
+    atom and its slope zero outside its own, every value of ``Mt``, ``dXt`` and ``dtt``
+    finite, or the whole window (0, r) (:func:`_fill`'s); the same numbers."""
     p, r = Mt.shape[1], Mt.shape[2]
     n = a.shape[1]
     Dt = np.empty((n + 1, r))
     Et = np.empty((n + 1, p))
     F = np.empty(p)
     acc = np.empty(r)
+    dlo = np.empty(n + 1, dtype=np.int64)
+    dhi = np.empty(n + 1, dtype=np.int64)
+    every_lo = np.zeros(p, dtype=np.int64)
+    every_hi = np.full(p, r, dtype=np.int64)
     for c in range(2):
+        # spans of the atoms' rows and of D's columns (a zero slope times a finite
+        # amplitude is ±0); all rows where an amplitude or the speed is not finite
+        sparse = v - v == 0.0
+        for j in range(n):
+            if not a[c, j] - a[c, j] == 0.0:
+                sparse = False
+        mlo, mhi = (lo[c], hi[c]) if sparse else (every_lo, every_hi)
+        for j in range(n):
+            dlo[j], dhi[j] = mlo[j], mhi[j]
+        dlo[n], dhi[n] = _union(mlo, mhi, 0, n)
         _fill_with(Dt[n], 0.0)
         for j in range(n):
             aj = a[c, j]
             dx = dXt[c, j]
-            dj = dtt[j]
             for i in range(r):
                 Dt[j, i] = -v * dx[i] * aj  # ∂(X a)/∂τ_j
-                Dt[n, i] += dx[i] * dj[i] * aj  # ∂(X a)/∂v: Σ_j K'(…) dt_j A_j
+            m0, m1 = dlo[j], dhi[j]  # views from 0: vectorised
+            dxs, djs, dvs = dx[m0:m1], dtt[j, m0:m1], Dt[n, m0:m1]
+            for i in range(m1 - m0):
+                dvs[i] += dxs[i] * djs[i] * aj  # ∂(X a)/∂v: Σ_j K'(…) dt_j A_j
         for j in range(n + 1):
-            _dots(Mt[c], p, Dt[j], Et[j])  # Mᵀ D, each sum in the rows' order
+            # Mᵀ D, each sum in the rows' order (the terms of zeros left out)
+            span_dots(Mt[c], p, Dt[j], dlo[j], dhi[j], mlo, mhi, Et[j])
             for i in range(p):  # F = (MᵀM)⁻¹ Mᵀ D
                 s = 0.0
                 for m in range(p):
                     s += Ginv[c, i, m] * Et[j, m]
                 F[i] = s
-            _fill_with(acc, 0.0)  # M F (each sum in the columns' order)
-            for m in range(p):
-                fm = F[m]
-                mm = Mt[c, m]
-                for i in range(r):
-                    acc[i] += mm[i] * fm
+            _span_combination(Mt[c], p, F, mlo, mhi, acc)  # M F (sums in the columns' order)
             for i in range(r):  # J = M (MᵀM)⁻¹ Mᵀ D − D
                 Jt[j, c * r + i] = (acc[i] - Dt[j, i]) * k
 
@@ -399,7 +661,11 @@ def jacobian(Mt, Ginv, a, dXt, dtt, v, k, Jt):
     (τ_1 … τ_n, v), transposed, written into ``Jt`` (n + 1, 2 r): with ``D`` the
     derivatives of the atoms times their amplitudes (∂/∂τ_i: ``−v K'(…) A_i``; ∂/∂v:
     ``Σ_i K'(…) dt_i A_i``), ``J = (M (MᵀM)⁻¹ Mᵀ D − D) k``."""
-    _jacobian(Mt, Ginv, a, dXt, dtt, v, k, Jt)
+    p, r = Mt.shape[1], Mt.shape[2]
+    lo = np.zeros((2, p), dtype=np.int64)
+    hi = np.full((2, p), r, dtype=np.int64)
+    _given_spans(Mt, dXt, dtt, a.shape[1], lo, hi)
+    _jacobian(Mt, Ginv, a, dXt, dtt, v, k, Jt, lo, hi)
 
 
 @njit(cache=True)
@@ -442,6 +708,13 @@ def levenberg_marquardt(scalars, first, values, t, y, rest, params, iterations, 
     lam = 1e-3
     scale = 1.0 / params[n]  # τ in s, v in m/s: metres
     cur_dtt, cur_Mt, cur_dXt, cur_Ginv, cur_a, cur_res = dtt, Mt, dXt, Ginv, a, res
+    # where the atoms may not be zero (zero_reach): the entry's by a look at its rows,
+    # each trial's from _fill
+    flat = np.empty((2, 2), dtype=np.int64)
+    fast = zero_reach(scalars, first, values, t, y, rest, flat)
+    cur_lo = np.zeros((2, p), dtype=np.int64)
+    cur_hi = np.full((2, p), r, dtype=np.int64)
+    _given_spans(Mt, dXt, dtt, n, cur_lo, cur_hi)
     accepted = 0
     Jt = np.empty((n + 1, 2 * r))
     A = np.empty((n + 1, n + 1))
@@ -453,7 +726,8 @@ def levenberg_marquardt(scalars, first, values, t, y, rest, params, iterations, 
     piv = np.empty(n + 1, dtype=np.int64)
     rel = 0.0
     for _ in range(iterations):
-        _jacobian(cur_Mt, cur_Ginv, cur_a, cur_dXt, cur_dtt, params[n], k, Jt)
+        _jacobian(cur_Mt, cur_Ginv, cur_a, cur_dXt, cur_dtt, params[n], k, Jt, cur_lo,
+                  cur_hi)
         for j in range(n + 1):
             for i in range(2 * r):
                 Jt[j, i] *= scale
@@ -483,8 +757,10 @@ def levenberg_marquardt(scalars, first, values, t, y, rest, params, iterations, 
             t_Ginv = np.empty((2, p, p))
             t_a = np.empty((2, n))
             t_res = np.empty(2 * r)
+            t_lo = np.empty((2, p), dtype=np.int64)
+            t_hi = np.empty((2, p), dtype=np.int64)
             _fill(scalars, first, values, t, y, rest, tt, vv, k, t_dtt, t_Mt, t_dXt, t_Ginv,
-                  t_a, t_res)
+                  t_a, t_res, fast, flat, t_lo, t_hi)
             c2 = 0.0
             for i in range(2 * r):
                 c2 += t_res[i] * t_res[i]
@@ -494,6 +770,7 @@ def levenberg_marquardt(scalars, first, values, t, y, rest, params, iterations, 
                 rel = (cost - c2) / max(cost, 1e-300)
                 cur_dtt, cur_Mt, cur_dXt, cur_Ginv, cur_a, cur_res = t_dtt, t_Mt, t_dXt, \
                     t_Ginv, t_a, t_res
+                cur_lo, cur_hi = t_lo, t_hi
                 accepted += 1
                 for i in range(n):
                     params[i] = tt[i]
