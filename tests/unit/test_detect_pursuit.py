@@ -458,3 +458,39 @@ def test_the_smallest_spacing_is_sparrows_limit():
     below, above = two(limit * (1 - 1e-3)), two(limit * (1 + 1e-3))
     assert below.argmax() == x.size // 2  # one peak at the midpoint
     assert above.argmin() == x.size // 2  # a dip at the midpoint
+
+
+def test_python_float_steps_are_numpy_s():
+    """The per-axle tests the pursuit makes in Python floats give numpy's numbers: the
+    log gain ratios (special values too: zero, negative, NaN and infinite amplitudes) and
+    who is seen by both detectors, the shares below the smallest height, argmins (the
+    first NaN, else the first smallest)."""
+    import warnings
+
+    from bwim.detect.pursuit import _argmin, _low, _weakest
+    from bwim.detect.vehicle_fit import make_problem, relative
+
+    v = 21.0
+    taus = np.array([0.30, 0.45])
+    t, y, g, learned = _same_model(taus, v, np.array([[20.0, 5.0], [30.0, 8.0]]))
+    pb = make_problem(t, y, g, learned, v)
+    rng = np.random.default_rng(5)
+    special = np.array([0.0, -0.0, -3.0, np.nan, np.inf, 1e-310, 1e300])
+    for n in (1, 2, 5, 9, 17):
+        for _ in range(40):
+            amps = rng.standard_normal((n, 2)) * 10.0 ** rng.integers(-3, 3, (n, 2))
+            mask = rng.random((n, 2)) < 0.3
+            amps[mask] = rng.choice(special, mask.sum())
+            with warnings.catch_warnings():  # numpy's overflow in the quotient
+                warnings.simplefilter("ignore", RuntimeWarning)
+                ref = pb.log_ratio(amps)
+                seen = pb.seen_by_both(amps)
+                share = relative(amps)
+                low = np.minimum(share[:, 0], share[:, 1]) < 0.3
+            assert np.array(pb.log_ratios(amps)).tobytes() == ref.tobytes()
+            assert pb.seen(amps) == seen.tolist()
+            assert _low(amps, 0.3) == low.tolist()
+            gains = amps[:, 0].copy()
+            assert _argmin(gains.tolist()) == int(gains.argmin())
+            weak = (amps[:, 1] > 0).tolist()
+            assert _weakest(weak, gains.tolist()) == int(np.where(weak, gains, np.inf).argmin())

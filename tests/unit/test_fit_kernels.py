@@ -65,8 +65,9 @@ def _filled(case, slopes=True):
     n, q, r = taus.size, rest_t.shape[1], t.size
     arrays = dict(dtt=np.empty((n, r)), Mt=np.empty((2, n + q, r)),
                   dXt=np.empty((2, n, r)) if slopes else np.empty((0, 0, 0)),
-                  Ginv=np.empty((2, n + q, n + q)), a=np.empty((2, n)), res=np.empty(2 * r))
-    K.least_squares(tab.scalars, tab.first, tab.values, t, y, rest_t, taus, v, 2.0,
+                  Ginv=np.empty((2, n + q, n + q)), a=np.empty((2, n)), res=np.empty(2 * r),
+                  amps=np.empty((n, 2)), gains=np.empty(n))
+    K.least_squares(tab.scalars, tab.first, tab.values, t, y, rest_t, taus, v, 2.0, 4.0,
                     *arrays.values())
     return arrays
 
@@ -202,7 +203,7 @@ def test_least_squares_and_jacobian_are_every_term_summed_in_order():
         case["t"] = np.ascontiguousarray(case["t"][::order])
         got = _filled(case)
         ref = _reference(case)
-        for key in ("dtt", "Mt", "dXt", "Ginv", "a", "res"):
+        for key in ("dtt", "Mt", "dXt", "Ginv", "a", "res", "amps", "gains"):
             assert got[key].tobytes() == ref[key].tobytes(), (seed, key)
         J = np.empty((case["taus"].size + 1, 2 * r))
         K.jacobian(got["Mt"], got["Ginv"], got["a"], got["dXt"], got["dtt"], case["v"], 2.0,
@@ -255,7 +256,7 @@ def test_levenberg_marquardt_finds_the_model_s_times():
     got = _filled(case)
     params = np.append(truth + 0.003, 1.02 * v)
     cost = K.levenberg_marquardt(tab.scalars, tab.first, tab.values, t, y, case["rest_t"],
-                                 params, 15, 2.0, 3e-3, *got.values())
+                                 params, 15, 2.0, 3e-3, 4.0, *got.values())
     np.testing.assert_allclose(params[:-1], truth, rtol=0, atol=5e-6)
     assert abs(params[-1] / v - 1) < 1.5e-5
     assert cost < 1e-9 * float(np.sum(y**2))

@@ -586,7 +586,25 @@ def _fill(scalars, first, values, t, y, rest, taus, v, k, dtt, Mt, dXt, Ginv, a,
 
 
 @njit(cache=True)
-def least_squares(scalars, first, values, t, y, rest, taus, v, k, dtt, Mt, dXt, Ginv, a, res):
+def _removal_costs(a, Ginv, step, amps, gains):
+    """``amps`` (n, 2) the amplitudes ``a`` (2, n) transposed; ``gains`` (n,) each
+    axle's removal cost ``(a_0j² / max(Ginv_0jj, 1e-300) + a_1j² / max(Ginv_1jj,
+    1e-300)) step`` (numpy's ``a**2`` is ``a × a``; its ``maximum`` keeps a NaN)."""
+    for j in range(a.shape[1]):
+        a0, a1 = a[0, j], a[1, j]
+        amps[j, 0] = a0
+        amps[j, 1] = a1
+        d0, d1 = Ginv[0, j, j], Ginv[1, j, j]
+        if not (d0 != d0 or d0 > 1e-300):
+            d0 = 1e-300
+        if not (d1 != d1 or d1 > 1e-300):
+            d1 = 1e-300
+        gains[j] = (a0 * a0 / d0 + a1 * a1 / d1) * step
+
+
+@njit(cache=True)
+def least_squares(scalars, first, values, t, y, rest, taus, v, k, step, dtt, Mt, dXt, Ginv, a,
+                  res, amps, gains):
     """Both detectors' least squares of the axles ``taus`` (n,) at speed ``v`` on a
     window's rows: times ``t`` (r,), readings ``y`` (2, r), rest columns ``rest``
     (2, q, r; one per row).  Writes ``dtt`` (n, r) the rows' times less each axle's,
@@ -594,9 +612,10 @@ def least_squares(scalars, first, values, t, y, rest, taus, v, k, dtt, Mt, dXt, 
     ``dXt`` (2, n, r) the atoms' slopes (or pass it empty (0, 0, 0): none), ``Ginv``
     (2, p, p) ``(MᵀM + ridge)⁻¹``, ``a`` (2, n) the axles' amplitudes and ``res``
     (2 r,) the residual ``y − M (MᵀM)⁻¹ Mᵀy``, both detectors end to end, times ``k``
-    (√ of the sampling step: scaled to all samples).  Each atom is evaluated, and
-    summed, only over the rows where it may not be zero (:func:`zero_reach`): the same
-    numbers as over all."""
+    (√ of the sampling step ``step``: scaled to all samples), ``amps`` (n, 2) the
+    amplitudes transposed and ``gains`` (n,) each axle's removal cost, scaled to all
+    samples (:func:`_removal_costs`).  Each atom is evaluated, and summed, only over the
+    rows where it may not be zero (:func:`zero_reach`): the same numbers as over all."""
     flat = np.empty((2, 2), dtype=np.int64)
     fast = zero_reach(scalars, first, values, t, y, rest, flat)
     p = Mt.shape[1]
@@ -604,6 +623,7 @@ def least_squares(scalars, first, values, t, y, rest, taus, v, k, dtt, Mt, dXt, 
     hi = np.empty((2, p), dtype=np.int64)
     _fill(scalars, first, values, t, y, rest, taus, v, k, dtt, Mt, dXt, Ginv, a, res, fast,
           flat, lo, hi)
+    _removal_costs(a, Ginv, step, amps, gains)
 
 
 @njit(cache=True)
@@ -685,12 +705,14 @@ def sorted_copy(x):
 
 @njit(cache=True)
 def levenberg_marquardt(scalars, first, values, t, y, rest, params, iterations, k, converged,
-                        dtt, Mt, dXt, Ginv, a, res):
+                        every, dtt, Mt, dXt, Ginv, a, res, amps, gains):
     """Levenberg–Marquardt on (τ, v) over the variable projection of
     :func:`least_squares` (:func:`~bwim.detect.vehicle_fit.refine`): ``params`` (n + 1,)
     the sorted times and the speed, ``dtt`` … ``res`` their least squares with slopes
     (as :func:`least_squares` writes them) on entry; on return the last accepted times
-    and speed and their least squares.  Returns the misfit ``Σ res²``.
+    and speed and their least squares, with their amplitudes ``amps`` and removal costs
+    ``gains`` (left as they are when no trial was accepted; ``every`` the sampling
+    step).  Returns the misfit ``Σ res²``.
 
     Per iteration: ``Js = J s`` (``s = 1 / v₀`` per column: metres), ``A = JsᵀJs``,
     ``g = Jsᵀ r``; up to 8 trials of ``(A + λ diag(diag(A) + 1e-12)) x = g``, step ``−x
@@ -792,6 +814,7 @@ def levenberg_marquardt(scalars, first, values, t, y, rest, params, iterations, 
         _copy(cur_Ginv, Ginv)
         _copy(cur_a, a)
         _copy(cur_res, res)
+        _removal_costs(a, Ginv, every, amps, gains)
     return cost
 
 

@@ -66,6 +66,7 @@ Contract
 from __future__ import annotations
 
 import itertools
+import math
 
 import numpy as np
 
@@ -82,7 +83,6 @@ from .vehicle_fit import (
     VehicleFit,
     make_problem,
     refine,
-    relative,
     solution,
 )
 
@@ -330,17 +330,55 @@ def _without(taus: np.ndarray, i: int) -> np.ndarray:
     return np.concatenate((taus[:i], taus[i + 1:]))
 
 
+def _argmin(values: list[float]) -> int:
+    """``np.argmin`` of a few Python floats: the first NaN, else the first smallest."""
+    best = 0
+    for i, x in enumerate(values):
+        if x != x:
+            return i
+        if x < values[best]:
+            best = i
+    return best
+
+
+def _weakest(weak: list[bool], gains: list[float]) -> int:
+    """``np.where(weak, gains, np.inf).argmin()`` (:func:`_argmin`)."""
+    return _argmin([g if w else math.inf for w, g in zip(weak, gains, strict=True)])
+
+
 def _drop_close(fit: VehicleFit, min_sp: float) -> np.ndarray | None:
     """The times without the weaker of the closest pair closer than ``min_sp``; None if
     none is that close."""
     if fit.taus.size < 2:
         return None
-    d = (fit.taus[1:] - fit.taus[:-1]) * fit.v
-    i = int(d.argmin())
+    taus, v = fit.taus.tolist(), fit.v
+    d = [(b - a) * v for a, b in itertools.pairwise(taus)]  # numpy's operations
+    i = _argmin(d)
     if d[i] >= min_sp:
         return None
-    weaker = i if fit.gains[i] < fit.gains[i + 1] else i + 1
+    gains = fit.gains.tolist()
+    weaker = i if gains[i] < gains[i + 1] else i + 1
     return _without(fit.taus, weaker)
+
+
+def _low(amps: np.ndarray, min_height: float) -> list[bool]:
+    """Per axle whether its lower share of a detector's largest amplitude is below
+    ``min_height``: ``np.minimum(s[:, 0], s[:, 1]) < min_height``, ``s =
+    relative(amps)``, in Python floats (the same IEEE operations; a NaN makes the
+    largest NaN, divided by 1, and the share's minimum NaN: not low)."""
+    rows = amps.tolist()
+    tops = []
+    for c in range(2):
+        col = [r[c] for r in rows]
+        top = max(col) if col else 0.0
+        if math.isnan(sum(col)) and any(x != x for x in col):
+            top = math.nan
+        tops.append(top if top > 0 else 1.0)
+    out = []
+    for a0, a1 in rows:
+        s0, s1 = a0 / tops[0], a1 / tops[1]
+        out.append(s0 == s0 and s1 == s1 and (s0 < min_height or s1 < min_height))
+    return out
 
 
 def _vehicle(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp: float,
@@ -362,17 +400,17 @@ def _vehicle(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp: floa
     for _ in range(MAX_AXLES):
         close = _drop_close(fit, min_sp)
         if close is not None:
-            fit = refine(pb, close, fit.v)
+            fit = refine(pb, close, fit.v, start=fit.solution)
             continue
-        share = relative(fit.amps)  # each axle's lower (np.minimum: the min over its row)
-        weak = ((fit.gains < limit) | (np.minimum(share[:, 0], share[:, 1]) < min_height)
-                | ~pb.seen_by_both(fit.amps))
-        if weak.any() and fit.taus.size > 1:
-            i = int(np.where(weak, fit.gains, np.inf).argmin())
-            fit = refine(pb, _without(fit.taus, i), fit.v)
+        gains = fit.gains.tolist()
+        weak = [g < limit or low or not seen for g, low, seen in zip(
+            gains, _low(fit.amps, min_height), pb.seen(fit.amps), strict=True)]
+        if any(weak) and fit.taus.size > 1:
+            fit = refine(pb, _without(fit.taus, _weakest(weak, gains)), fit.v,
+                         start=fit.solution)
             continue
         break
-    if fit.taus.size == 0 or not pb.seen_by_both(fit.amps).any():
+    if fit.taus.size == 0 or not any(pb.seen(fit.amps)):
         return None
     snr = float(np.sqrt(max(float(fit.gains.min()), 0.0)))
     c_snr = float(np.clip(snr / (2.0 * snr_threshold), 0.5, 1.0))
@@ -396,10 +434,11 @@ def _prune(pb: Problem, taus: np.ndarray, v: float, limit: float, both: bool = F
     sol = None
     while taus.size > 1:
         sol = solution(pb, taus, v, start)
-        weak = sol.gains < limit
+        gains = sol.gains.tolist()
+        weak = [g < limit for g in gains]
         if both:
-            weak |= ~pb.seen_by_both(sol.amps)
-        if not weak.any():
+            weak = [w or not seen for w, seen in zip(weak, pb.seen(sol.amps), strict=True)]
+        if not any(weak):
             return taus, sol
-        taus = _without(taus, int(np.where(weak, sol.gains, np.inf).argmin()))
+        taus = _without(taus, _weakest(weak, gains))
     return taus, None
