@@ -25,7 +25,15 @@ Contract
   (:func:`span_dots`): a term left out is a zero times a finite number, ±0, and a sum
   from +0 never becomes −0 (round to nearest), so adding ±0 leaves it as it is.  The
   numbers are those of every term summed in its order, byte for byte (the unit tests
-  compare them with plain numpy).
+  compare them with plain numpy).  :func:`grid_atoms` (an axle's times ascending) and the
+  pursuit's trials in :func:`pursuit_loop` evaluate only the rows an atom may reach too
+  (the trials' products with the readings of the axles already taken are kept from the
+  trial that made them: the same rows, the same numbers).
+* :func:`pursuit_loop` is the pursuit's whole loop (the matcher, the trials, the
+  exclusions and the acceptance of :mod:`bwim.detect.pursuit`), the same steps as its
+  Python classes take one by one (the unit tests compare them byte for byte): Python's
+  ``max`` (the first unless a later one is larger), numpy's ``searchsorted``
+  (:func:`search_sorted`) and column maximum (a NaN wins).
 * Kernels write into arrays the caller made (their shapes are given); singular systems
   raise :class:`numpy.linalg.LinAlgError`, as numpy's solvers do.
 * A least-squares inverse falls back to the pseudo-inverse (:func:`symmetric_pinv`) when
@@ -42,8 +50,8 @@ import numpy as np
 from numba import njit
 
 __all__ = ["GridTable", "best_match", "grid_atoms", "grid_table", "jacobian", "least_squares",
-           "levenberg_marquardt", "pursuit_trial", "sorted_copy", "span_dots", "symmetric_pinv",
-           "zero_reach"]
+           "levenberg_marquardt", "pursuit_loop", "pursuit_trial", "search_sorted", "sorted_copy", "span_dots",
+           "symmetric_pinv", "zero_reach"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -97,16 +105,36 @@ def grid_atoms(scalars, first, values, v, dt, out, slopes):
     """Both detectors' atoms ``out`` (2, n_rows, n) at ``dt`` (d, n_rows, n): d = 1 the
     same times at both, d = 2 each detector's own; ``slopes`` (2, n_rows, n) their
     slopes, or empty (0, 0, 0) for none.  Element by element the numbers of
-    :meth:`~bwim.detect.vehicle_fit.Problem.both_atoms` in numpy."""
+    :meth:`~bwim.detect.vehicle_fit.Problem.both_atoms` in numpy (an axle's rows beyond
+    its response's reach, its times ascending, written as +0 × weight without evaluating
+    them: the same numbers, :func:`zero_reach`)."""
     want = slopes.size > 0
+    flat = np.empty((2, 2), dtype=np.int64)
+    fast = _grid_zeros(scalars, first, values, flat) and v > 0.0 and v - v == 0.0
+    n_rows = dt.shape[1]
     for c in range(2):
         d = c if dt.shape[0] > 1 else 0
-        for i in range(dt.shape[1]):
-            for j in range(dt.shape[2]):
+        zero, zero_slope = 0.0 * scalars[3, c], 0.0 * scalars[4, c]
+        for j in range(dt.shape[2]):
+            # an axle's rows beyond its response's reach (its times ascending and
+            # finite): +0 × weight, what _atom gives there (zero_reach)
+            col = dt[d, :, j]
+            i0, i1 = 0, n_rows
+            if fast and _ascending(col) and _all_finite_1d(col):
+                i0, i1 = _reach(v, col, c, scalars, flat)
+            for i in range(i0):
+                out[c, i, j] = zero
+                if want:
+                    slopes[c, i, j] = zero_slope
+            for i in range(i0, i1):
                 a, s = _atom(v, dt[d, i, j], c, scalars, first, values)
                 out[c, i, j] = a
                 if want:
                     slopes[c, i, j] = s
+            for i in range(max(i0, i1), n_rows):
+                out[c, i, j] = zero
+                if want:
+                    slopes[c, i, j] = zero_slope
 
 
 @njit(cache=True)
@@ -413,25 +441,27 @@ def _all_finite(x):
 
 
 @njit(cache=True)
+def _all_finite_1d(x):
+    """Whether every value of the 1-D ``x`` (any strides) is finite."""
+    bad = False
+    for i in range(x.size):
+        bad |= not x[i] - x[i] == 0.0
+    return not bad
+
+
+@njit(cache=True)
 def _positive_zero(x):
     return x == 0.0 and math.copysign(1.0, x) > 0.0
 
 
 @njit(cache=True)
-def zero_reach(scalars, first, values, t, y, rest, flat):
-    """Where the atoms are surely zero, for :func:`least_squares` to leave out: per
-    detector ``c`` ``flat[c] = (zl, zt)``, the grid intervals ``j < zl`` and ``zt ≤ j``
-    (of those an atom reads, j ≤ N − 2) whose ordinate and difference are both +0, so an
-    atom and its slope there are ``+0 × weight`` (:func:`_atom`'s operations).  Returns
-    whether the rows may be left out: every value of the grids, ``t``, ``y`` and ``rest``
-    finite, ``t`` ascending and each grid's ``1 / du`` positive (the grid position of an
-    atom, ``(v dt − offset) / du``, then rises with the row at a positive speed: its zero
-    rows are the first and last of the window, found by bisection, :func:`_reach`)."""
-    ok = (_all_finite(scalars) and _all_finite(values) and _all_finite(t)
-          and _all_finite(y) and _all_finite(rest))
-    for i in range(1, t.size):
-        if t[i] < t[i - 1]:
-            ok = False
+def _grid_zeros(scalars, first, values, flat):
+    """Per detector ``c`` ``flat[c] = (zl, zt)``: the grid intervals ``j < zl`` and
+    ``zt ≤ j`` (of those an atom reads, j ≤ N − 2) whose ordinate and difference are both
+    +0, so an atom and its slope there are ``+0 × weight`` (:func:`_atom`'s operations).
+    Returns whether the grids allow a bisection on them (:func:`_reach`): every value
+    finite, each grid's ``1 / du`` positive."""
+    ok = _all_finite(scalars) and _all_finite(values)
     for c in range(2):
         if not scalars[1, c] > 0.0:
             ok = False
@@ -448,6 +478,28 @@ def zero_reach(scalars, first, values, t, y, rest, flat):
         flat[c, 0] = zl
         flat[c, 1] = zt
     return ok
+
+
+@njit(cache=True)
+def _ascending(t):
+    """Whether ``t`` (1-D) never falls (a NaN breaks it)."""
+    for i in range(1, t.size):
+        if not t[i] >= t[i - 1]:
+            return False
+    return True
+
+
+@njit(cache=True)
+def zero_reach(scalars, first, values, t, y, rest, flat):
+    """Where the atoms are surely zero, for :func:`least_squares` to leave out (the grids'
+    flat +0 intervals ``flat``, :func:`_grid_zeros`).  Returns whether the rows may be
+    left out: every value of the grids, ``t``, ``y`` and ``rest`` finite, ``t`` ascending
+    and each grid's ``1 / du`` positive (the grid position of an atom, ``(v dt − offset)
+    / du``, then rises with the row at a positive speed: its zero rows are the first and
+    last of the window, found by bisection, :func:`_reach`)."""
+    ok = _grid_zeros(scalars, first, values, flat)
+    return (ok and _all_finite(t) and _all_finite(y) and _all_finite(rest)
+            and _ascending(t))
 
 
 @njit(cache=True)
@@ -829,21 +881,49 @@ def pursuit_trial(scalars, first, values, t, tk, tk2, v, Qt, y, Xt, G, p, amps, 
     solve ``(G + ridge) a = Xᵀ y`` (``y`` (2, n_t) the readings less their projection,
     the ridge of :func:`~bwim.detect.vehicle_fit.ridged_normal`), ``res`` (n_t, 2) ``y
     − X a``.  Returns the misfit ``Σ res²``."""
+    n_t = t.size
+    flat = np.zeros((2, 2), dtype=np.int64)
+    lo = np.zeros((2, p + 1), dtype=np.int64)
+    hi = np.full((2, p + 1), n_t, dtype=np.int64)
+    return _trial(scalars, first, values, t, tk, tk2, v, Qt, y, Xt, G, p, amps, res, False,
+                  flat, lo, hi, np.empty((2, p + 1)), 0)
+
+
+@njit(cache=True)
+def _trial(scalars, first, values, t, tk, tk2, v, Qt, y, Xt, G, p, amps, res, fast, flat, lo,
+           hi, xty, known):
+    """:func:`pursuit_trial`; with ``fast`` (:func:`zero_reach` of the grids, ``t``,
+    ``y`` and ``Qt``) the atoms only where they may not be zero (+0 × weight elsewhere)
+    and the sums over the rows' spans ``lo``, ``hi`` (2, ≥ p + 1: the accepted rows',
+    row p's written here; the whole record once projected on the rest): the same
+    numbers (:func:`span_dots`).  ``xty`` (2, ≥ p + 1): the rows' products with ``y``,
+    the first ``known`` as made by an earlier trial (the same rows: the same numbers),
+    the others made here."""
     n_t, q = t.size, Qt.shape[1]
     x = np.empty(n_t)
+    dt = np.empty(n_t)
     acc = np.empty(n_t)
     proj = np.empty(q)
     ridged = np.empty((p + 1, p + 1))
     b = np.empty(p + 1)
     gx = np.empty(p + 1)
     piv = np.empty(p + 1, dtype=np.int64)
+    every_lo = np.zeros(q, dtype=np.int64)
+    every_hi = np.full(q, n_t, dtype=np.int64)
     chi = 0.0
+    fast = fast and v > 0.0 and v - v == 0.0 and tk - tk == 0.0 and tk2 - tk2 == 0.0
     for c in range(2):
         tc = tk if c == 0 else tk2
         for i in range(n_t):
-            x[i] = _atom(v, t[i] - tc, c, scalars, first, values)[0]
-        if q:  # x − Q (Qᵀ x)
-            _dots(Qt[c], q, x, proj)
+            dt[i] = t[i] - tc
+        i0, i1 = _reach(v, dt, c, scalars, flat) if fast else (0, n_t)
+        _fill_with(x[:i0], 0.0 * scalars[3, c])  # beyond the response's reach
+        for i in range(i0, i1):
+            x[i] = _atom(v, dt[i], c, scalars, first, values)[0]
+        _fill_with(x[max(i0, i1):], 0.0 * scalars[3, c])
+        lo[c, p], hi[c, p] = (i0, i1) if i0 < i1 else (0, 0)
+        if q:  # x − Q (Qᵀ x) (Qᵀ x over the atom's rows alone)
+            span_dots(Qt[c], q, x, lo[c, p], hi[c, p], every_lo, every_hi, proj)
             _fill_with(acc, 0.0)
             for j in range(q):
                 pj = proj[j]
@@ -852,11 +932,16 @@ def pursuit_trial(scalars, first, values, t, tk, tk2, v, Qt, y, Xt, G, p, amps, 
                     acc[i] += qj[i] * pj
             for i in range(n_t):
                 x[i] -= acc[i]
+            lo[c, p], hi[c, p] = 0, n_t
         for i in range(n_t):
             Xt[c, p, i] = x[i]
         # the new response's products and Xᵀy (each sum in the samples' order)
-        _dots(Xt[c], p + 1, x, gx)
-        _dots(Xt[c], p + 1, y[c], b)
+        span_dots(Xt[c], p + 1, x, lo[c, p], hi[c, p], lo[c], hi[c], gx)
+        if known < p + 1:
+            span_dots(Xt[c, known:], p + 1 - known, y[c], 0, n_t, lo[c, known:],
+                      hi[c, known:], xty[c, known:])
+        for m in range(p + 1):
+            b[m] = xty[c, m]
         for m in range(p + 1):
             G[c, m, p] = gx[m]
             G[c, p, m] = gx[m]
@@ -867,13 +952,9 @@ def pursuit_trial(scalars, first, values, t, tk, tk2, v, Qt, y, Xt, G, p, amps, 
         if not _lu(ridged, piv):
             raise np.linalg.LinAlgError("Singular matrix")
         _lu_solve(ridged, piv, b)
-        _fill_with(acc, 0.0)  # X a (each sum in the axles' order)
         for m in range(p + 1):
             amps[m, c] = b[m]
-            bm = b[m]
-            xm = Xt[c, m]
-            for i in range(n_t):
-                acc[i] += xm[i] * bm
+        _span_combination(Xt[c], p + 1, b, lo[c], hi[c], acc)  # X a (the axles' order)
         for i in range(n_t):
             e = y[c, i] - acc[i]
             res[i, c] = e
@@ -941,3 +1022,110 @@ def best_match(res, atoms, lo, length, pad, slack, energy, excluded, corr, picke
         if corr[1, j] > corr[1, top]:
             top = j
     picked[1] = top
+
+
+@njit(cache=True)
+def _before(a, b):
+    """numpy's order of floats for sorting and searching: ``a < b``, NaN after all."""
+    return a < b or (b != b and a == a)
+
+
+@njit(cache=True)
+def search_sorted(t, x, right):
+    """``t.searchsorted(x, side="right" if right else "left")``: numpy's bisection with
+    numpy's order (:func:`_before`), the same index."""
+    lo, hi = 0, t.size
+    while lo < hi:
+        mid = lo + ((hi - lo) >> 1)
+        if (not _before(x, t[mid])) if right else _before(t[mid], x):
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@njit(cache=True)
+def _exclude_near(t, excluded, tk, gap):
+    """The matcher's exclusion (:mod:`bwim.detect.pursuit` ``_Matcher.exclude``):
+    ``excluded[a:b] |= |t[a:b] − tk| < gap`` with ``a = max(searchsorted(tk − gap) − 1,
+    0)``, ``b = searchsorted(tk + gap, "right") + 1``."""
+    a = max(search_sorted(t, tk - gap, False) - 1, 0)
+    b = min(search_sorted(t, tk + gap, True) + 1, t.size)
+    for i in range(a, b):
+        if abs(t[i] - tk) < gap:
+            excluded[i] = True
+
+
+@njit(cache=True)
+def _reaches(amps, p, min_height):
+    """Whether the last axle (row ``p``) of ``amps`` (p + 1, 2) reaches ``min_height`` of
+    the largest amplitude at both detectors (:mod:`bwim.detect.pursuit`
+    ``_acceptable``): numpy's column maximum (NaN if one is), ``a / (top if top > 0 else
+    1) >= min_height``."""
+    for c in range(2):
+        top = amps[0, c]
+        nan = top != top
+        for i in range(1, p + 1):
+            x = amps[i, c]
+            if x != x:
+                nan = True
+            elif x > top:
+                top = x
+        if nan:
+            top = np.nan
+        if not amps[p, c] / (top if top > 0 else 1.0) >= min_height:
+            return False
+    return True
+
+
+@njit(cache=True)
+def pursuit_loop(scalars, first, values, t, v, Qt, y, Xt, G, res, pad, atoms, lo, length,
+                 slack, energy, excluded, corr, gap, chi, thr2, share, min_height, max_axles,
+                 tries, taus, taus2, out):
+    """The pursuit (:func:`bwim.detect.pursuit.pursue_axles`' loop), its steps those of
+    :func:`best_match`, :func:`pursuit_trial`, :func:`_exclude_near` and
+    :func:`_reaches` (``_Matcher.best``, ``_Pursuit.trial``, ``_Matcher.exclude``,
+    ``_acceptable``, ``_Pursuit.accept``): up to ``tries`` times the best new axle for
+    the residual ``res`` (2, pad + n_t + pad) and its trial; stop when it lowers the
+    misfit ``chi`` by less than ``thr2`` and ``share`` of the strongest fall so far (as
+    Python's ``max`` takes them) or ``max_axles`` are taken; else exclude its
+    neighbourhood and, when its amplitudes reach ``min_height``, take it (its residual
+    into ``res``, its times into ``taus``, ``taus2``).  Returns the number taken;
+    ``out[0]`` the strongest fall, ``out[1]`` the misfit with the axles taken."""
+    n_t = t.size
+    picked = np.zeros(2, dtype=np.int64)
+    flat = np.empty((2, 2), dtype=np.int64)
+    fast = zero_reach(scalars, first, values, t, y, Qt, flat)
+    row_lo = np.zeros((2, Xt.shape[1]), dtype=np.int64)  # the rows' spans (_trial)
+    row_hi = np.full((2, Xt.shape[1]), n_t, dtype=np.int64)
+    xty = np.empty((2, Xt.shape[1]))  # the accepted rows' products with y
+    top = 0.0
+    p = 0
+    for _ in range(tries):
+        best_match(res, atoms, lo, length, pad, slack, energy, excluded, corr, picked)
+        tk, tk2 = t[picked[0]], t[picked[1]]
+        amps = np.empty((p + 1, 2))
+        trial_res = np.empty((n_t, 2))
+        chi_new = _trial(scalars, first, values, t, tk, tk2, v, Qt, y, Xt, G, p, amps,
+                         trial_res, fast, flat, row_lo, row_hi, xty, p)
+        gain = chi - chi_new
+        if gain > top:  # max(top, gain)
+            top = gain
+        bar = share * top
+        if not bar > thr2:  # max(thr2, share × top)
+            bar = thr2
+        if gain < bar or p >= max_axles:
+            break
+        _exclude_near(t, excluded, tk, gap)  # taken, or not seen: not tried again
+        if not _reaches(amps, p, min_height):
+            continue
+        for c in range(2):
+            for i in range(n_t):
+                res[c, pad + i] = trial_res[i, c]
+        taus[p] = tk
+        taus2[p] = tk2
+        p += 1
+        chi = chi_new
+    out[0] = top
+    out[1] = chi
+    return p

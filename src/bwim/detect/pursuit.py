@@ -57,9 +57,12 @@ Contract
   0.5, 1)`` with ``Δ`` the smallest misfit reduction (level variances) of its axles;
   ``c_both`` the mean over its axles of ``exp(−½ (ln(A_2 / (ρ A_1)) / (2 s))²)``, ``s``
   the learned spread (at least ``MIN_RATIO_BOUND / RATIO_SPREADS``), at least 0.5.
-* Compiled (:mod:`bwim.detect.fit_kernels`, numba): the pursuit's trials and matcher and
-  the refinements' least squares (:mod:`bwim.detect.vehicle_fit`): the same equations,
-  numbers agreeing with a numpy version's to rounding.
+* Compiled (:mod:`bwim.detect.fit_kernels`, numba): the pursuit's whole loop
+  (:func:`~bwim.detect.fit_kernels.pursuit_loop`: the steps of :class:`_Matcher` and
+  :class:`_Pursuit`, the same numbers) and the refinements' least squares
+  (:mod:`bwim.detect.vehicle_fit`): the same equations, numbers agreeing with a numpy
+  version's to rounding.  A vehicle's few axles are tested in Python floats (numpy's
+  numbers: :meth:`~bwim.detect.vehicle_fit.Problem.log_ratios`).
 * Times in s, distances in m, speeds in m/s.
 """
 
@@ -71,7 +74,7 @@ import math
 import numpy as np
 
 from .assemble import VehicleEstimate
-from .fit_kernels import best_match, pursuit_trial
+from .fit_kernels import best_match, pursuit_loop, pursuit_trial
 from .groups import choose_groups
 from .response import LearnedResponses, band_pass, xcorr_lag
 from .signals import median
@@ -140,8 +143,8 @@ class _Matcher:
         energy = 0.0
         for c, (u, k, _) in enumerate(pb.grids):
             d = pb.shift[c]
-            m_lo = int(np.floor((u[0] + d) / v * pb.fs)) - 1
-            m_hi = int(np.ceil((u[-1] + d) / v * pb.fs)) + 1
+            m_lo = math.floor((u[0] + d) / v * pb.fs) - 1
+            m_hi = math.ceil((u[-1] + d) / v * pb.fs) + 1
             scale = pb.w[c] * (pb.ratio if c else 1.0)
             atom = np.interp(v * np.arange(m_lo, m_hi + 1) / pb.fs - d, u, k, left=0.0,
                              right=0.0) * scale
@@ -211,24 +214,13 @@ def pursue_axles(record_time: np.ndarray, y: np.ndarray, learned: LearnedRespons
     pb = make_problem(t, y, gauges, learned, v0, fs=fs,
                       bending=None if gauges is None else bend)
     thr2 = snr_threshold**2
-    min_sp = max(min_axle_spacing, MIN_SPACING_WIDTH * float(np.mean(
-        [r.fwhm for r in learned.responses])))
+    widths = [float(r.fwhm) for r in learned.responses]  # their mean as np.mean makes it
+    min_sp = max(min_axle_spacing, MIN_SPACING_WIDTH * ((0.0 + widths[0] + widths[1]) / 2))
     lag = learned.distance / v0
-    slack = int(np.ceil(SPEED_SLACK * lag * fs))
+    slack = math.ceil(SPEED_SLACK * lag * fs)
     matcher = _Matcher(pb, v0, slack, EXCLUDE * min_sp)
     omp = _Pursuit(pb, v0, matcher.pad)
-    first = 0.0
-    for _ in range(2 * MAX_AXLES):
-        tk, tk2 = matcher.best(omp.res)
-        amps, chi_new, state = omp.trial(tk, tk2)
-        gain = omp.chi - chi_new
-        first = max(first, gain)
-        if gain < max(thr2, PURSUIT_SHARE * first) or omp.taus.size >= MAX_AXLES:
-            break
-        matcher.exclude(tk)  # taken, or one detector does not see it: not tried again
-        if not _acceptable(pb, amps, min_height):
-            continue
-        omp.accept(tk, tk2, chi_new, state)
+    first = omp.pursue(matcher, thr2, min_height)
     order = np.argsort(omp.taus)
     taus = omp.taus[order]
     lags = lag + omp.taus2[order] - taus  # each axle's own lag between the detectors
@@ -236,18 +228,19 @@ def pursue_axles(record_time: np.ndarray, y: np.ndarray, learned: LearnedRespons
         return []
     limit = max(thr2, GAIN_SHARE * first)
     out = []
-    groups = np.split(np.arange(taus.size),
-                      ((taus[1:] - taus[:-1]) * v0 > max_axle_spacing).nonzero()[0] + 1)
+    # vehicles: the axles between gaps longer than max_axle_spacing (index ranges)
+    times = taus.tolist()
+    cuts = [0, *(i + 1 for i, (a, b) in enumerate(itertools.pairwise(times))
+                 if (b - a) * v0 > max_axle_spacing), len(times)]
     # each vehicle's axles may lie between the midpoints to its neighbours' (the pursuit
     # may have missed some: the axle groups are found again there)
-    edges = [t[0], *(0.5 * (taus[a[-1]] + taus[b[0]])
-                     for a, b in itertools.pairwise(groups)), t[-1]]
-    for k, group in enumerate(groups):
+    edges = [t[0], *(0.5 * (times[i - 1] + times[i]) for i in cuts[1:-1]), t[-1]]
+    for k, (a, b) in enumerate(itertools.pairwise(cuts)):
         # the vehicle's speed from its axles' lags
-        v = learned.distance / median(lags[group])
+        v = learned.distance / median(lags[a:b])
         if not speed_range[0] <= v <= speed_range[1]:
             v = v0
-        veh = _vehicle(pb, taus[group], v, limit, min_sp, min_height, snr_threshold,
+        veh = _vehicle(pb, taus[a:b], v, limit, min_sp, min_height, snr_threshold,
                        (edges[k], edges[k + 1]))
         if veh is not None:
             out.append(veh)
@@ -281,7 +274,8 @@ class _Pursuit:
         y = []
         for c in range(2):
             Q = pb.q_rest[c]
-            y.append(pb.y[:, c] - Q @ (Q.T @ pb.y[:, c]))
+            # no rest (Q n_t × 0): less zeros, the readings themselves
+            y.append(pb.y[:, c] - Q @ (Q.T @ pb.y[:, c]) if Q.shape[1] else pb.y[:, c])
         self.Q = np.array(pb.q_rest)  # (2, n_t, k)
         self._Qt = np.ascontiguousarray(self.Q.transpose(0, 2, 1))  # as the kernel reads
         self.y = np.array(y)[..., None]  # (2, n_t, 1)
@@ -315,6 +309,27 @@ class _Pursuit:
                             float(self.v), self._Qt, self.y[..., 0], self._Xt, self._G, p,
                             amps, res)
         return amps, chi, res
+
+    def pursue(self, matcher: _Matcher, thr2: float, min_height: float) -> float:
+        """The pursuit (compiled, :func:`~bwim.detect.fit_kernels.pursuit_loop`): up to
+        2 MAX_AXLES times the matcher's best new axle (:meth:`_Matcher.best`) and its
+        :meth:`trial`; stop when it lowers the misfit by less than ``thr2`` and
+        PURSUIT_SHARE of the strongest fall so far, or MAX_AXLES are taken; else no new
+        axle near it again (:meth:`_Matcher.exclude`) and, when it reaches
+        ``min_height`` at both detectors (:func:`_acceptable`), it is taken
+        (:meth:`accept`).  Returns the strongest fall."""
+        taus, taus2, out = np.empty(MAX_AXLES), np.empty(MAX_AXLES), np.zeros(2)
+        g = self.pb.table
+        m = matcher
+        count = pursuit_loop(g.scalars, g.first, g.values, self._t, float(self.v), self._Qt,
+                             self.y[..., 0], self._Xt, self._G, self._buffer, self.pad,
+                             m._atoms, m._lo, m._len, m.slack, m.energy, m.excluded, m._corr,
+                             m.gap, self.chi, thr2, PURSUIT_SHARE, min_height, MAX_AXLES,
+                             2 * MAX_AXLES, taus, taus2, out)
+        self.taus = np.concatenate((self.taus, taus[:count]))
+        self.taus2 = np.concatenate((self.taus2, taus2[:count]))
+        self.chi = float(out[1])
+        return float(out[0])
 
     def accept(self, tk: float, tk2: float, chi: float, state) -> None:
         """Keep the axle of the last :meth:`trial` (``state``: its residual)."""
@@ -412,9 +427,9 @@ def _vehicle(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp: floa
         break
     if fit.taus.size == 0 or not any(pb.seen(fit.amps)):
         return None
-    snr = float(np.sqrt(max(float(fit.gains.min()), 0.0)))
-    c_snr = float(np.clip(snr / (2.0 * snr_threshold), 0.5, 1.0))
-    lr = np.minimum(np.abs(pb.log_ratio(fit.amps)), 1e3)
+    snr = math.sqrt(max(float(fit.gains.min()), 0.0))  # (correctly rounded, as numpy's)
+    c_snr = min(max(snr / (2.0 * snr_threshold), 0.5), 1.0)  # np.clip's (a NaN stays)
+    lr = np.minimum(np.abs(np.array(pb.log_ratios(fit.amps))), 1e3)
     s = max(pb.spread, MIN_RATIO_BOUND / RATIO_SPREADS)
     c_both = max(0.5, float(np.mean(np.exp(-0.5 * (lr / (2 * s)) ** 2))))
     det_times = np.column_stack([fit.taus, fit.taus + pb.shift[1] / fit.v])
