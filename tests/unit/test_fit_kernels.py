@@ -255,8 +255,16 @@ def test_levenberg_marquardt_finds_the_model_s_times():
     case.update(y=y, taus=truth + 0.003, v=1.02 * v)
     got = _filled(case)
     params = np.append(truth + 0.003, 1.02 * v)
+    # the least squares at the start made by the kernel itself (fresh): the same run
+    fresh = {key: np.empty_like(val) for key, val in got.items()}
+    params_fresh = params.copy()
+    cost_fresh = K.levenberg_marquardt(tab.scalars, tab.first, tab.values, t, y,
+                                       case["rest_t"], params_fresh, 15, 2.0, 3e-3, 4.0, True,
+                                       *fresh.values())
     cost = K.levenberg_marquardt(tab.scalars, tab.first, tab.values, t, y, case["rest_t"],
-                                 params, 15, 2.0, 3e-3, 4.0, *got.values())
+                                 params, 15, 2.0, 3e-3, 4.0, False, *got.values())
+    assert cost_fresh == cost and params_fresh.tobytes() == params.tobytes()
+    assert all(fresh[key].tobytes() == got[key].tobytes() for key in got)
     np.testing.assert_allclose(params[:-1], truth, rtol=0, atol=5e-6)
     assert abs(params[-1] / v - 1) < 1.5e-5
     assert cost < 1e-9 * float(np.sum(y**2))

@@ -68,14 +68,15 @@ def grid_table(grids, steps, shift, w) -> GridTable:
     (K's differences, 0 after the last), shifts ``D_d`` and weights ``w``."""
     u = [g[0] for g in grids]
     du = [ui[1] - ui[0] for ui in u]
-    scalars = np.array([[shift[c] + u[c][0] for c in range(2)],
-                        [1.0 / d for d in du],
-                        [ui.size - 1.000001 for ui in u],
-                        [float(w[c]) for c in range(2)],
-                        [w[c] / du[c] for c in range(2)]], dtype=float)
+    scalars = np.empty((5, 2))
+    for c in range(2):
+        scalars[:, c] = (shift[c] + u[c][0], 1.0 / du[c], u[c].size - 1.000001, float(w[c]),
+                         w[c] / du[c])
     first = np.array([0, u[0].size], dtype=np.int64)
-    values = np.array([np.concatenate([g[1] for g in grids]), np.concatenate(steps)],
-                      dtype=float)
+    n0 = u[0].size
+    values = np.empty((2, n0 + u[1].size))
+    values[0, :n0], values[0, n0:] = grids[0][1], grids[1][1]
+    values[1, :n0], values[1, n0:] = steps[0], steps[1]
     return GridTable(scalars=scalars, first=first, values=values)
 
 
@@ -757,14 +758,15 @@ def sorted_copy(x):
 
 @njit(cache=True)
 def levenberg_marquardt(scalars, first, values, t, y, rest, params, iterations, k, converged,
-                        every, dtt, Mt, dXt, Ginv, a, res, amps, gains):
+                        every, fresh, dtt, Mt, dXt, Ginv, a, res, amps, gains):
     """Levenberg–Marquardt on (τ, v) over the variable projection of
     :func:`least_squares` (:func:`~bwim.detect.vehicle_fit.refine`): ``params`` (n + 1,)
     the sorted times and the speed, ``dtt`` … ``res`` their least squares with slopes
-    (as :func:`least_squares` writes them) on entry; on return the last accepted times
-    and speed and their least squares, with their amplitudes ``amps`` and removal costs
-    ``gains`` (left as they are when no trial was accepted; ``every`` the sampling
-    step).  Returns the misfit ``Σ res²``.
+    (as :func:`least_squares` writes them) on entry, or, with ``fresh``, made here
+    first (with ``amps`` and ``gains``: :func:`least_squares`' numbers); on return the
+    last accepted times and speed and their least squares, with their amplitudes
+    ``amps`` and removal costs ``gains`` (left as they are when no trial was accepted;
+    ``every`` the sampling step).  Returns the misfit ``Σ res²``.
 
     Per iteration: ``Js = J s`` (``s = 1 / v₀`` per column: metres), ``A = JsᵀJs``,
     ``g = Jsᵀ r``; up to 8 trials of ``(A + λ diag(diag(A) + 1e-12)) x = g``, step ``−x
@@ -776,19 +778,24 @@ def levenberg_marquardt(scalars, first, values, t, y, rest, params, iterations, 
     r = t.size
     q = rest.shape[1]
     p = n + q
+    # where the atoms may not be zero (zero_reach): the entry's by a look at its rows
+    # (or from _fill when made here), each trial's from _fill
+    flat = np.empty((2, 2), dtype=np.int64)
+    fast = zero_reach(scalars, first, values, t, y, rest, flat)
+    cur_lo = np.zeros((2, p), dtype=np.int64)
+    cur_hi = np.full((2, p), r, dtype=np.int64)
+    if fresh:
+        _fill(scalars, first, values, t, y, rest, params[:n], params[n], k, dtt, Mt, dXt,
+              Ginv, a, res, fast, flat, cur_lo, cur_hi)
+        _removal_costs(a, Ginv, every, amps, gains)
+    else:
+        _given_spans(Mt, dXt, dtt, n, cur_lo, cur_hi)
     cost = 0.0
     for i in range(2 * r):
         cost += res[i] * res[i]
     lam = 1e-3
     scale = 1.0 / params[n]  # τ in s, v in m/s: metres
     cur_dtt, cur_Mt, cur_dXt, cur_Ginv, cur_a, cur_res = dtt, Mt, dXt, Ginv, a, res
-    # where the atoms may not be zero (zero_reach): the entry's by a look at its rows,
-    # each trial's from _fill
-    flat = np.empty((2, 2), dtype=np.int64)
-    fast = zero_reach(scalars, first, values, t, y, rest, flat)
-    cur_lo = np.zeros((2, p), dtype=np.int64)
-    cur_hi = np.full((2, p), r, dtype=np.int64)
-    _given_spans(Mt, dXt, dtt, n, cur_lo, cur_hi)
     accepted = 0
     Jt = np.empty((n + 1, 2 * r))
     A = np.empty((n + 1, n + 1))

@@ -425,11 +425,12 @@ def _vehicle(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp: floa
                          start=fit.solution)
             continue
         break
-    if fit.taus.size == 0 or not any(pb.seen(fit.amps)):
+    ratios = pb.log_ratios(fit.amps)
+    if fit.taus.size == 0 or not any(abs(r) <= pb.bound for r in ratios):  # seen by both
         return None
     snr = math.sqrt(max(float(fit.gains.min()), 0.0))  # (correctly rounded, as numpy's)
     c_snr = min(max(snr / (2.0 * snr_threshold), 0.5), 1.0)  # np.clip's (a NaN stays)
-    lr = np.minimum(np.abs(np.array(pb.log_ratios(fit.amps))), 1e3)
+    lr = np.minimum(np.abs(np.array(ratios)), 1e3)
     s = max(pb.spread, MIN_RATIO_BOUND / RATIO_SPREADS)
     c_both = max(0.5, float(np.mean(np.exp(-0.5 * (lr / (2 * s)) ** 2))))
     det_times = np.column_stack([fit.taus, fit.taus + pb.shift[1] / fit.v])

@@ -261,13 +261,17 @@ def make_problem(t: np.ndarray, y: np.ndarray, gauges: np.ndarray | None,
             g = gauges - gauges.mean(axis=0)
             bending = np.column_stack([g @ r.bending for r in learned.responses])
         tc = t - t.mean()
-        tc = tc / max(float(np.ptp(tc)), 1e-300)
-        rest = tuple(np.column_stack([bending[:, c], np.ones_like(tc), tc]) * w[c]
-                     for c in range(2))
+        tc = tc / max(float(tc.max() - tc.min()), 1e-300)  # np.ptp's numbers
+        # per detector the columns (bending, 1, tc), weighted (np.column_stack's layout)
+        stack = np.empty((2, t.size, 3))
+        stack[:, :, 0] = bending.T
+        stack[:, :, 1] = 1.0
+        stack[:, :, 2] = tc
+        stack *= w[:, None, None]
         grids = tuple(r.padded() for r in learned.responses)
-        q = np.linalg.qr(np.array(rest))[0]  # both at once (each on its own: the same)
-        return Problem(y=(y - y.mean(axis=0)) * w, rest=rest, q_rest=(q[0], q[1]), grids=grids,
-                        steps=_steps(grids), **common)
+        q = np.linalg.qr(stack)[0]  # both at once (each on its own: the same)
+        return Problem(y=(y - y.mean(axis=0)) * w, rest=(stack[0], stack[1]),
+                       q_rest=(q[0], q[1]), grids=grids, steps=_steps(grids), **common)
     y_hp = high_pass(y, HIGH_PASS / v * fs) * w
     empty = np.zeros((t.size, 0))
     grids = tuple(r.high_passed() for r in learned.responses)
@@ -278,7 +282,16 @@ def make_problem(t: np.ndarray, y: np.ndarray, gauges: np.ndarray | None,
 def _steps(grids) -> tuple:
     """Per grid K's differences between ordinates, 0 after the last (np.diff and
     np.append's numbers, by slices)."""
-    return tuple(np.concatenate((k[1:] - k[:-1], [0.0])) for _, k, _ in grids)
+    out = []
+    for _, k, _ in grids:
+        if k.size == 0:
+            out.append(np.zeros(1))
+            continue
+        s = np.empty(k.size)
+        np.subtract(k[1:], k[:-1], out=s[:-1])
+        s[-1] = 0.0
+        out.append(s)
+    return tuple(out)
 
 
 def relative(amps: np.ndarray) -> np.ndarray:
@@ -428,24 +441,31 @@ def solution(pb: Problem, taus: np.ndarray, v: float, start: Solution | None = N
     """The least squares with slopes of the axles ``taus`` (ascending) at speed ``v`` on
     their window: ``start`` when it is that one (the same numbers, not made again); when
     ``start`` is on the same window, its rows are read again (not copied again)."""
+    same, w = _start_or_rows(pb, taus, v, start)
+    return same if same is not None else Solution(pb, taus, v, w, True)
+
+
+def _start_or_rows(pb: Problem, taus: np.ndarray, v: float, start: Solution | None
+                   ) -> tuple[Solution | None, Rows]:
+    """``start`` if it is the least squares with slopes of ``taus`` at ``v`` on their
+    window (else None), and that window's rows (``start``'s when the same)."""
     lo, hi = _bounds(pb, taus, v)
     step = pb.step
     size = len(range(lo, hi, step))
     if start is not None and start.w.key is not None and size and start.w.key == (
             lo, size, step):
-        w = start.w
         # the same times (np.array_equal: NaN differs, −0 equals 0) and speed
         if start.v == v and start.slopes and taus.shape == start.taus.shape and (
                 taus.tolist() == start.taus.tolist()):
-            return start
-    else:
-        rows = np.arange(lo, hi, step)
-        if (start is not None and start.v == v and np.array_equal(start.taus, taus)
-                and start.slopes and np.array_equal(start.w.rows, rows)):
-            return start
-        # the window is every step-th sample from its first: a slice selects the same rows
-        w = Rows(pb, rows, slice(lo, hi, step) if size else None)
-    return Solution(pb, taus, v, w, True)
+            return start, start.w
+        return None, start.w
+    rows = np.arange(lo, hi, step)
+    if (start is not None and start.w.key is None and start.v == v
+            and np.array_equal(start.taus, taus) and start.slopes
+            and np.array_equal(start.w.rows, rows)):
+        return start, start.w
+    # the window is every step-th sample from its first: a slice selects the same rows
+    return None, Rows(pb, rows, slice(lo, hi, step) if size else None)
 
 
 def refine(pb: Problem, taus: np.ndarray, v: float, iterations: int = MAX_LM, *,
@@ -454,26 +474,30 @@ def refine(pb: Problem, taus: np.ndarray, v: float, iterations: int = MAX_LM, *,
     projection (amplitudes and rest by least squares inside), on a fixed window: the
     whole loop compiled (:func:`~bwim.detect.fit_kernels.levenberg_marquardt`: A = JsᵀJs,
     trials of (A + λ diag(diag(A) + 1e-12)) x = Jsᵀr, λ ×10 on a rejected trial, /3 on
-    an accepted one, the stops of the module contract).  ``start``: the :class:`Solution`
-    with slopes at these times and speed on their window when already made (the same
-    numbers, not made again), or one on the same window (its rows read again)."""
+    an accepted one, the stops of the module contract), the least squares at the start
+    too when not given.  ``start``: the :class:`Solution` with slopes at these times and
+    speed on their window when already made (the same numbers, not made again), or one
+    on the same window (its rows read again)."""
     taus = np.sort(np.asarray(taus, dtype=float))
     n = taus.size
     p = np.empty(n + 1)
     p[:n] = taus
     p[n] = v
-    sol = solution(pb, taus, v, start)
-    # the kernel starts from (copies of) sol's arrays and leaves the last accepted
-    # trial's in them, with their amplitudes and removal costs
-    last = sol.copy()
+    sol, w = _start_or_rows(pb, taus, v, start)
+    if sol is not None:
+        # the kernel starts from (copies of) sol's arrays and leaves the last accepted
+        # trial's in them, with their amplitudes and removal costs
+        last = sol.copy()
+    else:  # the kernel makes the least squares at the start (least_squares' numbers)
+        last = Solution.__new__(Solution)
+        last._empty(pb, taus, v, w, True)
     g = pb.table
-    w = sol.w
     before = p.tobytes()
     cost = levenberg_marquardt(g.scalars, g.first, g.values, w.t, w.y2, w.rest_t, p,
-                               int(iterations), sol.k, CONVERGED, float(sol.step), last.dtt,
-                               last.Mt, last.dXt, last.Ginv, last.a, last.res, last.amps,
-                               last.gains)
-    if p.tobytes() == before:
+                               int(iterations), last.k, CONVERGED, float(last.step),
+                               sol is None, last.dtt, last.Mt, last.dXt, last.Ginv, last.a,
+                               last.res, last.amps, last.gains)
+    if sol is not None and p.tobytes() == before:
         last = sol  # no trial accepted (an accepted one lowers the misfit: moves)
     else:
         last.taus, last.v = p[:-1].copy(), float(p[-1])
