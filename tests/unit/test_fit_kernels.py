@@ -328,3 +328,22 @@ def test_symmetric_pinv_is_numpy_s():
         K.symmetric_pinv(G, out)
         ref = np.linalg.pinv(G)
         np.testing.assert_allclose(out, ref, rtol=0, atol=4e-14 * np.abs(ref).max())
+
+
+def test_gram_and_inverse_are_the_plain_loops():
+    """The refinement's Gram matrix (rows four by four) is every sum in its order, and the
+    least squares' inverse (all columns at once) is each column of the identity solved
+    with the LU factors (in plain Python), byte for byte; sizes around the blocks'."""
+    rng = np.random.default_rng(21)
+    for n in (1, 3, 4, 5, 8, 11, 30):
+        A = rng.standard_normal((n, 57))
+        G = np.empty((n, n))
+        K._gram(A, n, G)
+        ref = np.array([[_in_order(A[i] * A[j]) for i in range(n)] for j in range(n)])
+        assert G.tobytes() == ref.tobytes()
+        S = ref + n * np.eye(n)
+        LU, piv = S.copy(), np.empty(n, dtype=np.int64)
+        assert K._lu(LU, piv)
+        inv = np.empty((n, n))
+        K._inverse_columns(LU, piv, inv)
+        assert inv.tobytes() == _lu_solve_columns(S).tobytes()

@@ -192,6 +192,43 @@ def _lu_solve(LU, piv, b):
 
 
 @njit(cache=True)
+def _inverse_columns(LU, piv, E):
+    """``E`` (n, n) the inverse of :func:`_lu`'s factored matrix: :func:`_lu_solve` of
+    each column of the identity, all columns at once (the identity's rows swapped as it
+    swaps each right-hand side, then the forward and back substitutions row by row across
+    the columns: each element gets its column's operations in their order, the same
+    numbers, the loops over the columns independent)."""
+    n = LU.shape[0]
+    for i in range(n):
+        _fill_with(E[i], 0.0)
+        E[i, i] = 1.0
+    for k in range(n):
+        m = piv[k]
+        if m != k:
+            for col in range(n):
+                tmp = E[k, col]
+                E[k, col] = E[m, col]
+                E[m, col] = tmp
+    for i in range(n):
+        ei = E[i]
+        for j in range(i):
+            lij = LU[i, j]
+            ej = E[j]
+            for col in range(n):
+                ei[col] -= lij * ej[col]
+    for i in range(n - 1, -1, -1):
+        ei = E[i]
+        for j in range(i + 1, n):
+            uij = LU[i, j]
+            ej = E[j]
+            for col in range(n):
+                ei[col] -= uij * ej[col]
+        d = LU[i, i]
+        for col in range(n):
+            ei[col] = ei[col] / d
+
+
+@njit(cache=True)
 def _fill_with(x, value):
     """Every element of the 1-D ``x`` set to ``value`` (a loop: slice assignment costs
     seconds of compilation)."""
@@ -265,9 +302,45 @@ def _dots(A, na, b, out):
 
 @njit(cache=True)
 def _gram(A, n, G):
-    """``G[i, j] = Σ_m A[i, m] A[j, m]`` for i, j < ``n`` (:func:`_dots`; symmetric:
-    a product is the same number either way round)."""
-    for j in range(n):
+    """``G[i, j] = Σ_m A[i, m] A[j, m]`` for i, j < ``n``, each sum from 0 in the order
+    of m (:func:`_dots`' numbers; symmetric: a product is the same number either way
+    round): four rows by four at a time (sixteen sums side by side), the rows left over
+    by :func:`_dots`."""
+    r = A.shape[1]
+    nb = n // 4 * 4
+    for jb in range(0, nb, 4):
+        b0, b1, b2, b3 = A[jb], A[jb + 1], A[jb + 2], A[jb + 3]
+        for ib in range(0, jb + 4, 4):
+            a0, a1, a2, a3 = A[ib], A[ib + 1], A[ib + 2], A[ib + 3]
+            s00 = s01 = s02 = s03 = s10 = s11 = s12 = s13 = 0.0
+            s20 = s21 = s22 = s23 = s30 = s31 = s32 = s33 = 0.0
+            for m in range(r):
+                x0, x1, x2, x3 = a0[m], a1[m], a2[m], a3[m]
+                y0, y1, y2, y3 = b0[m], b1[m], b2[m], b3[m]
+                s00 += x0 * y0
+                s01 += x0 * y1
+                s02 += x0 * y2
+                s03 += x0 * y3
+                s10 += x1 * y0
+                s11 += x1 * y1
+                s12 += x1 * y2
+                s13 += x1 * y3
+                s20 += x2 * y0
+                s21 += x2 * y1
+                s22 += x2 * y2
+                s23 += x2 * y3
+                s30 += x3 * y0
+                s31 += x3 * y1
+                s32 += x3 * y2
+                s33 += x3 * y3
+            G[jb, ib], G[jb + 1, ib], G[jb + 2, ib], G[jb + 3, ib] = s00, s01, s02, s03
+            G[jb, ib + 1], G[jb + 1, ib + 1] = s10, s11
+            G[jb + 2, ib + 1], G[jb + 3, ib + 1] = s12, s13
+            G[jb, ib + 2], G[jb + 1, ib + 2] = s20, s21
+            G[jb + 2, ib + 2], G[jb + 3, ib + 2] = s22, s23
+            G[jb, ib + 3], G[jb + 1, ib + 3] = s30, s31
+            G[jb + 2, ib + 3], G[jb + 3, ib + 3] = s32, s33
+    for j in range(nb, n):
         _dots(A, j + 1, A[j], G[j])
     for j in range(n):
         for i in range(j):
@@ -580,7 +653,6 @@ def _fill(scalars, first, values, t, y, rest, taus, v, k, dtt, Mt, dXt, Ginv, a,
     want = dXt.size > 0
     G = np.empty((p, p))
     b = np.empty(p)
-    e = np.empty(p)
     piv = np.empty(p, dtype=np.int64)
     coef = np.empty(p)
     acc = np.empty(r)
@@ -615,12 +687,7 @@ def _fill(scalars, first, values, t, y, rest, taus, v, k, dtt, Mt, dXt, Ginv, a,
         span_dots(Mt[c], p, yc, 0, r, lo[c], hi[c], b)
         _ridge(G, p)
         if _lu(G, piv):  # (MᵀM)⁻¹ column by column
-            for j in range(p):
-                _fill_with(e, 0.0)
-                e[j] = 1.0
-                _lu_solve(G, piv, e)
-                for i in range(p):
-                    Ginv[c, i, j] = e[i]
+            _inverse_columns(G, piv, Ginv[c])
         else:  # an exact zero pivot (numpy's inv raising): the pseudo-inverse
             _span_gram(Mt[c], p, lo[c], hi[c], G, n)
             _ridge(G, p)
@@ -694,7 +761,9 @@ def _jacobian(Mt, Ginv, a, dXt, dtt, v, k, Jt, lo, hi):
     dhi = np.empty(n + 1, dtype=np.int64)
     every_lo = np.zeros(p, dtype=np.int64)
     every_hi = np.full(p, r, dtype=np.int64)
+    cols = np.empty(p, dtype=np.int64)
     for c in range(2):
+        g_finite = _all_finite(Ginv[c])
         # spans of the atoms' rows and of D's columns (a zero slope times a finite
         # amplitude is ±0); all rows where an amplitude or the speed is not finite
         sparse = v - v == 0.0
@@ -718,9 +787,17 @@ def _jacobian(Mt, Ginv, a, dXt, dtt, v, k, Jt, lo, hi):
         for j in range(n + 1):
             # Mᵀ D, each sum in the rows' order (the terms of zeros left out)
             span_dots(Mt[c], p, Dt[j], dlo[j], dhi[j], mlo, mhi, Et[j])
-            for i in range(p):  # F = (MᵀM)⁻¹ Mᵀ D
+            # F = (MᵀM)⁻¹ Mᵀ D, each sum in the columns' order; Mᵀ D's zeros (rows out
+            # of D's reach) left out when (MᵀM)⁻¹ is finite: the same numbers
+            nz = 0
+            for m in range(p):
+                if not (g_finite and Et[j, m] == 0.0):
+                    cols[nz] = m
+                    nz += 1
+            for i in range(p):
                 s = 0.0
-                for m in range(p):
+                for q_ in range(nz):
+                    m = cols[q_]
                     s += Ginv[c, i, m] * Et[j, m]
                 F[i] = s
             _span_combination(Mt[c], p, F, mlo, mhi, acc)  # M F (sums in the columns' order)
