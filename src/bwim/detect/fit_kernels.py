@@ -50,8 +50,8 @@ import numpy as np
 from numba import njit
 
 __all__ = ["GridTable", "best_match", "grid_atoms", "grid_table", "jacobian", "least_squares",
-           "levenberg_marquardt", "pursuit_loop", "pursuit_trial", "search_sorted", "sorted_copy", "span_dots",
-           "symmetric_pinv", "zero_reach"]
+           "levenberg_marquardt", "matcher_atom", "pursuit_loop", "pursuit_trial",
+           "search_sorted", "sorted_copy", "span_dots", "symmetric_pinv", "zero_reach"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -113,15 +113,20 @@ def grid_atoms(scalars, first, values, v, dt, out, slopes):
     flat = np.empty((2, 2), dtype=np.int64)
     fast = _grid_zeros(scalars, first, values, flat) and v > 0.0 and v - v == 0.0
     n_rows = dt.shape[1]
+    # an axle's rows beyond its response's reach (its times ascending and finite): +0 ×
+    # weight, what _atom gives there (zero_reach)
+    sorted_col = np.zeros((dt.shape[0], dt.shape[2]), dtype=np.bool_)
+    if fast:
+        for d in range(dt.shape[0]):
+            for j in range(dt.shape[2]):
+                sorted_col[d, j] = _finite_ascending(dt[d, :, j])
     for c in range(2):
         d = c if dt.shape[0] > 1 else 0
         zero, zero_slope = 0.0 * scalars[3, c], 0.0 * scalars[4, c]
         for j in range(dt.shape[2]):
-            # an axle's rows beyond its response's reach (its times ascending and
-            # finite): +0 × weight, what _atom gives there (zero_reach)
             col = dt[d, :, j]
             i0, i1 = 0, n_rows
-            if fast and _ascending(col) and _all_finite_1d(col):
+            if sorted_col[d, j]:
                 i0, i1 = _reach(v, col, c, scalars, flat)
             for i in range(i0):
                 out[c, i, j] = zero
@@ -515,12 +520,14 @@ def _all_finite(x):
 
 
 @njit(cache=True)
-def _all_finite_1d(x):
-    """Whether every value of the 1-D ``x`` (any strides) is finite."""
-    bad = False
-    for i in range(x.size):
-        bad |= not x[i] - x[i] == 0.0
-    return not bad
+def _finite_ascending(x):
+    """Whether every value of the 1-D ``x`` (any strides) is finite and none falls."""
+    if x.size and not x[0] - x[0] == 0.0:
+        return False
+    for i in range(1, x.size):
+        if not (x[i] >= x[i - 1] and x[i] - x[i] == 0.0):
+            return False
+    return True
 
 
 @njit(cache=True)
@@ -1055,12 +1062,20 @@ def best_match(res, atoms, lo, length, pad, slack, energy, excluded, corr, picke
     writes ``picked`` (2,): its argmax ``m`` (the first of equals) and where the second
     detector's best within ±slack of ``m`` was (the first of equals)."""
     n = corr.shape[1]
+    finite = _all_finite(res)
     for c in range(2):
-        # each sum in the atom's order (the loop over the samples m innermost)
+        # each sum in the atom's order (the loop over the samples m innermost); the
+        # atom's leading and trailing zeros left out when the residual is finite (a
+        # zero times it is ±0, and a sum from +0 never becomes −0: the same numbers)
         out = corr[c]
         _fill_with(out, 0.0)
         L = length[c]
         i = 0
+        if finite:
+            while i < L and atoms[c, i] == 0.0:
+                i += 1
+            while L > i and atoms[c, L - 1] == 0.0:
+                L -= 1
         while i < L:  # four terms a pass, added one after the other
             base = pad + lo[c] + i
             if i + 4 <= L:
@@ -1213,3 +1228,37 @@ def pursuit_loop(scalars, first, values, t, v, Qt, y, Xt, G, res, pad, atoms, lo
     out[0] = top
     out[1] = chi
     return p
+
+
+@njit(cache=True)
+def matcher_atom(u, k, scale, v, fs, d, m_lo, out):
+    """The matcher's atom of one detector (:mod:`bwim.detect.pursuit` ``_Matcher``):
+    ``out[i] = numpy.interp(v (m_lo + i) / fs − d, u, k, left=0, right=0) × scale``
+    for every i < ``out.size``: numpy's operations (the sample's distance, then
+    numpy.interp's interval, slope and value, written out as its C loop makes them,
+    NaN retries included), the same numbers."""
+    n = u.size
+    j = 0
+    for i in range(out.size):
+        x = v * float(m_lo + i) / fs - d
+        if x != x:
+            y = x
+        elif x < u[0]:
+            y = 0.0
+        elif x > u[n - 1]:
+            y = 0.0
+        else:
+            if x < u[j]:
+                j = 0
+            while j < n - 1 and u[j + 1] <= x:
+                j += 1
+            if j == n - 1 or x == u[j]:
+                y = k[j]
+            else:
+                slope = (k[j + 1] - k[j]) / (u[j + 1] - u[j])
+                y = slope * (x - u[j]) + k[j]
+                if math.isnan(y):
+                    y = slope * (x - u[j + 1]) + k[j + 1]
+                    if math.isnan(y) and k[j] == k[j + 1]:
+                        y = k[j]
+        out[i] = y * scale

@@ -74,7 +74,7 @@ import math
 import numpy as np
 
 from .assemble import VehicleEstimate
-from .fit_kernels import best_match, pursuit_loop, pursuit_trial
+from .fit_kernels import best_match, matcher_atom, pursuit_loop, pursuit_trial
 from .groups import choose_groups
 from .response import LearnedResponses, band_pass, xcorr_lag
 from .signals import median
@@ -139,28 +139,31 @@ class _Matcher:
 
     def __init__(self, pb: Problem, v: float, slack: int, min_gap: float):
         self.pb, self.v, self.slack = pb, v, slack
+        bounds = []
+        for c, (u, _, _) in enumerate(pb.grids):
+            d = pb.shift[c]
+            bounds.append((math.floor((u[0] + d) / v * pb.fs) - 1,
+                           math.ceil((u[-1] + d) / v * pb.fs) + 1))
+        # the atoms as the kernel reads them: end-padded rows, first offsets, lengths;
+        # each np.interp(v (m_lo … m_hi) / fs − d, u, k, left=0, right=0) × w_d (× the
+        # gain ratio at the second), compiled (fit_kernels.matcher_atom: the same numbers)
+        self._atoms = np.zeros((2, max(hi - lo + 1 for lo, hi in bounds)))
         self.parts = []
         energy = 0.0
         for c, (u, k, _) in enumerate(pb.grids):
-            d = pb.shift[c]
-            m_lo = math.floor((u[0] + d) / v * pb.fs) - 1
-            m_hi = math.ceil((u[-1] + d) / v * pb.fs) + 1
-            scale = pb.w[c] * (pb.ratio if c else 1.0)
-            atom = np.interp(v * np.arange(m_lo, m_hi + 1) / pb.fs - d, u, k, left=0.0,
-                             right=0.0) * scale
+            m_lo, m_hi = bounds[c]
+            atom = np.empty(m_hi - m_lo + 1)  # an array of its own, as np.interp's (BLAS)
+            matcher_atom(u, k, float(pb.w[c] * (pb.ratio if c else 1.0)), float(v),
+                         float(pb.fs), float(pb.shift[c]), m_lo, atom)
             energy += float(atom @ atom)
             self.parts.append((m_lo, m_hi, atom))
+            self._atoms[c, :atom.size] = atom
         self.energy = max(energy, 1e-300)
-        self.pad = max(0, *(-m_lo for m_lo, _, _ in self.parts),
-                       *(m_hi for _, m_hi, _ in self.parts))
+        self.pad = max(0, *(-m_lo for m_lo, _ in bounds), *(m_hi for _, m_hi in bounds))
         self.gap = min_gap / v
         self.excluded = np.zeros(pb.t.size, dtype=bool)
-        # the atoms as the kernel reads them: end-padded rows, first offsets, lengths
-        self._atoms = np.zeros((2, max(a.size for _, _, a in self.parts)))
-        for c, (_, _, atom) in enumerate(self.parts):
-            self._atoms[c, :atom.size] = atom
-        self._lo = np.array([m_lo for m_lo, _, _ in self.parts], dtype=np.int64)
-        self._len = np.array([a.size for _, _, a in self.parts], dtype=np.int64)
+        self._lo = np.array([m_lo for m_lo, _ in bounds], dtype=np.int64)
+        self._len = np.array([m_hi - m_lo + 1 for m_lo, m_hi in bounds], dtype=np.int64)
         self._corr = np.empty((2, pb.t.size))
         self._picked = np.zeros(2, dtype=np.int64)
 
@@ -202,7 +205,7 @@ def pursue_axles(record_time: np.ndarray, y: np.ndarray, learned: LearnedRespons
         gauges = None
     if gauges is not None:
         g = np.asarray(gauges, dtype=float)
-        g = g - g.mean(axis=0)
+        g = g - np.add.reduce(g, axis=0) / g.shape[0]  # g.mean(axis=0): its sum / count
         bend = np.column_stack([g @ r.bending for r in learned.responses])
         y0 = y - bend
     else:
@@ -287,7 +290,7 @@ class _Pursuit:
         self._t = np.ascontiguousarray(pb.t, dtype=float)
         self._buffer = np.zeros((2, n + 2 * pad))
         self._buffer[:, pad:pad + n] = self.y[..., 0]
-        self.chi = float(np.sum(np.column_stack(y) ** 2))
+        self.chi = float(np.add.reduce(np.column_stack(y) ** 2, axis=None))  # np.sum's
 
     @property
     def res(self) -> np.ndarray:

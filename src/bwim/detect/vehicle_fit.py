@@ -260,7 +260,7 @@ def make_problem(t: np.ndarray, y: np.ndarray, gauges: np.ndarray | None,
         if bending is None:
             g = gauges - gauges.mean(axis=0)
             bending = np.column_stack([g @ r.bending for r in learned.responses])
-        tc = t - t.mean()
+        tc = t - np.add.reduce(t) / t.size  # t.mean(): its sum / count
         tc = tc / max(float(tc.max() - tc.min()), 1e-300)  # np.ptp's numbers
         # per detector the columns (bending, 1, tc), weighted (np.column_stack's layout)
         stack = np.empty((2, t.size, 3))
@@ -270,7 +270,8 @@ def make_problem(t: np.ndarray, y: np.ndarray, gauges: np.ndarray | None,
         stack *= w[:, None, None]
         grids = tuple(r.padded() for r in learned.responses)
         q = np.linalg.qr(stack)[0]  # both at once (each on its own: the same)
-        return Problem(y=(y - y.mean(axis=0)) * w, rest=(stack[0], stack[1]),
+        return Problem(y=(y - np.add.reduce(y, axis=0) / y.shape[0]) * w,
+                       rest=(stack[0], stack[1]),
                        q_rest=(q[0], q[1]), grids=grids, steps=_steps(grids), **common)
     y_hp = high_pass(y, HIGH_PASS / v * fs) * w
     empty = np.zeros((t.size, 0))
