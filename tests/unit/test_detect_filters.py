@@ -90,6 +90,21 @@ def test_xcorr_lag_is_the_direct_correlation(n):
     assert abs(lag - shift) < 1.0  # the pulses' shift, to a sample (measured 0.5 at most)
 
 
+def test_xcorr_lag_s_spectra_are_one_call_each():
+    """xcorr_lag transforms both signals in one call (a (2, n) array): numpy transforms
+    each row on its own, so the product of the spectra is that of one call each, byte
+    for byte (lengths 2 … 299 and the records' few hundred samples)."""
+    import scipy.fft
+
+    rng = np.random.default_rng(8)
+    for n in (*range(2, 300), 677, 749, 896):
+        y1, y2 = rng.standard_normal(n), rng.standard_normal(n)
+        size = scipy.fft.next_fast_len(2 * n, real=True)
+        one_each = np.fft.rfft(y1[::-1], size) * np.fft.rfft(y2, size)
+        spec = np.fft.rfft(np.array([y1[::-1], y2]), size)
+        assert (spec[0] * spec[1]).tobytes() == one_each.tobytes()
+
+
 def test_median_is_numpys():
     """:func:`bwim.detect.signals.median` (one partial sort) equals ``numpy.median``
     exactly (the same float), odd and even counts, repeated values (a uniform clock's

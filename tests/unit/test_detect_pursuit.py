@@ -458,3 +458,112 @@ def test_the_smallest_spacing_is_sparrows_limit():
     below, above = two(limit * (1 - 1e-3)), two(limit * (1 + 1e-3))
     assert below.argmax() == x.size // 2  # one peak at the midpoint
     assert above.argmin() == x.size // 2  # a dip at the midpoint
+
+
+def test_python_float_steps_are_numpy_s():
+    """The per-axle tests the pursuit makes in Python floats give numpy's numbers: the
+    log gain ratios (special values too: zero, negative, NaN and infinite amplitudes) and
+    who is seen by both detectors, the shares below the smallest height, argmins (the
+    first NaN, else the first smallest)."""
+    import warnings
+
+    from bwim.detect.pursuit import _argmin, _low, _weakest
+    from bwim.detect.vehicle_fit import make_problem, relative
+
+    v = 21.0
+    taus = np.array([0.30, 0.45])
+    t, y, g, learned = _same_model(taus, v, np.array([[20.0, 5.0], [30.0, 8.0]]))
+    pb = make_problem(t, y, g, learned, v)
+    rng = np.random.default_rng(5)
+    special = np.array([0.0, -0.0, -3.0, np.nan, np.inf, 1e-310, 1e300])
+    for n in (1, 2, 5, 9, 17):
+        for _ in range(40):
+            amps = rng.standard_normal((n, 2)) * 10.0 ** rng.integers(-3, 3, (n, 2))
+            mask = rng.random((n, 2)) < 0.3
+            amps[mask] = rng.choice(special, mask.sum())
+            with warnings.catch_warnings():  # numpy's overflow in the quotient
+                warnings.simplefilter("ignore", RuntimeWarning)
+                ref = pb.log_ratio(amps)
+                seen = pb.seen_by_both(amps)
+                share = relative(amps)
+                low = np.minimum(share[:, 0], share[:, 1]) < 0.3
+            assert np.array(pb.log_ratios(amps)).tobytes() == ref.tobytes()
+            assert pb.seen(amps) == seen.tolist()
+            assert _low(amps, 0.3) == low.tolist()
+            gains = amps[:, 0].copy()
+            assert _argmin(gains.tolist()) == int(gains.argmin())
+            weak = (amps[:, 1] > 0).tolist()
+            assert _weakest(weak, gains.tolist()) == int(np.where(weak, gains, np.inf).argmin())
+
+
+@pytest.mark.parametrize("gauges", [True, False])
+def test_compiled_pursuit_is_the_steps_one_by_one(gauges):
+    """The compiled pursuit (``_Pursuit.pursue``: its trials over the atoms' reach alone,
+    the products with the readings kept) takes the axles the steps one by one take
+    (``_Matcher.best``, ``_Pursuit.trial``, ``_Matcher.exclude``, ``_acceptable``,
+    ``_Pursuit.accept``, written out as the pursuit ran them), byte for byte: times,
+    strongest fall, misfit, residual; with and without gauges (the rest projected out or
+    none); noisy readings, a height that turns some axles down."""
+    from bwim.detect.pursuit import (MAX_AXLES, PURSUIT_SHARE, _acceptable, _Matcher,
+                                     _Pursuit)
+    from bwim.detect.vehicle_fit import make_problem
+
+    v = 21.0
+    taus = np.array([0.30, 0.45, 0.52, 0.80, 1.4])
+    amps = np.array([[20.0, 5.0], [30.0, 8.0], [28.0, 7.5], [25.0, 6.0], [13.5, 3.6]])
+    t, y, g, learned = _same_model(taus, v, amps)
+    y = y + 0.02 * np.abs(amps).max() * np.random.default_rng(3).standard_normal(y.shape)
+    pb = make_problem(t, y, g if gauges else None, learned, v)
+    thr2, min_height = 4.0, 0.5  # the last axle (0.45 of the largest) turned down
+    runs = []
+    for compiled in (True, False):
+        matcher = _Matcher(pb, v, 6, 0.4)
+        omp = _Pursuit(pb, v, matcher.pad)
+        if compiled:
+            first = omp.pursue(matcher, thr2, min_height)
+        else:
+            first = 0.0
+            for _ in range(2 * MAX_AXLES):
+                tk, tk2 = matcher.best(omp.res)
+                a, chi_new, state = omp.trial(tk, tk2)
+                gain = omp.chi - chi_new
+                first = max(first, gain)
+                if gain < max(thr2, PURSUIT_SHARE * first) or omp.taus.size >= MAX_AXLES:
+                    break
+                matcher.exclude(tk)
+                if not _acceptable(pb, a, min_height):
+                    continue
+                omp.accept(tk, tk2, chi_new, state)
+        runs.append((omp.taus.tobytes(), omp.taus2.tobytes(), first, omp.chi,
+                     omp.res.tobytes(), matcher.excluded.tobytes()))
+    assert runs[0] == runs[1]
+    assert len(runs[0][0]) >= 4 * 8
+
+
+def test_compiled_searches_are_numpy_s():
+    """``search_sorted`` is ``numpy.searchsorted`` (both sides, equal values, NaN last,
+    keys beyond either end) and the grid atoms at ascending times (an axle's rows beyond
+    its reach not evaluated) are those at the same times in any order, byte for byte."""
+    from bwim.detect import fit_kernels as K
+
+    rng = np.random.default_rng(9)
+    t = np.sort(np.round(rng.uniform(0, 10, 60), 1))
+    t[-3:] = np.nan
+    for x in (*rng.uniform(-1, 11, 40), 0.0, 5.0, t[10], t[11], np.nan, np.inf):
+        for right in (False, True):
+            assert K.search_sorted(t, x, right) == t.searchsorted(x, "right" if right else "left")
+    u = np.linspace(-1.5, 1.5, 61)
+    k = np.exp(-4 * np.log(2) * (u / 1.1) ** 2)
+    k[[0, 1, -2, -1]] = 0.0
+    grids = [(u, k, None), (u, 2 * k, None)]
+    steps = [np.append(np.diff(kk), 0.0) for _, kk, _ in grids]
+    tab = K.grid_table(grids, steps, (0.0, 3.0), np.array([0.7, 2.5]))
+    rows = np.arange(400) / 128.0
+    dt = rows[:, None] - np.array([0.5, 1.1, 2.0])[None, :]  # ascending: reach only
+    order = rng.permutation(400)  # the same times in no order: every one evaluated
+    out, der = np.empty((2, 400, 3)), np.empty((2, 400, 3))
+    out2, der2 = np.empty((2, 400, 3)), np.empty((2, 400, 3))
+    K.grid_atoms(tab.scalars, tab.first, tab.values, 19.0, dt[None], out, der)
+    K.grid_atoms(tab.scalars, tab.first, tab.values, 19.0, dt[order][None], out2, der2)
+    assert out[:, order].tobytes() == out2.tobytes() and der[:, order].tobytes() == der2.tobytes()
+    assert np.mean(out == 0.0) > 0.5

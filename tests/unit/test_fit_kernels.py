@@ -65,8 +65,9 @@ def _filled(case, slopes=True):
     n, q, r = taus.size, rest_t.shape[1], t.size
     arrays = dict(dtt=np.empty((n, r)), Mt=np.empty((2, n + q, r)),
                   dXt=np.empty((2, n, r)) if slopes else np.empty((0, 0, 0)),
-                  Ginv=np.empty((2, n + q, n + q)), a=np.empty((2, n)), res=np.empty(2 * r))
-    K.least_squares(tab.scalars, tab.first, tab.values, t, y, rest_t, taus, v, 2.0,
+                  Ginv=np.empty((2, n + q, n + q)), a=np.empty((2, n)), res=np.empty(2 * r),
+                  amps=np.empty((n, 2)), gains=np.empty(n))
+    K.least_squares(tab.scalars, tab.first, tab.values, t, y, rest_t, taus, v, 2.0, 4.0,
                     *arrays.values())
     return arrays
 
@@ -106,6 +107,138 @@ def test_least_squares_and_jacobian_match_numpy():
     assert plain["res"].tobytes() == got["res"].tobytes()
 
 
+def _in_order(products: np.ndarray) -> float:
+    """A sum from 0, one term after the other (the kernels' sums): np.add.accumulate."""
+    return float(np.add.accumulate(np.concatenate(([0.0], products)))[-1])
+
+
+def _lu_solve_columns(G: np.ndarray) -> np.ndarray:
+    """``G``'s inverse as the kernels make it: LU with partial pivoting (the first
+    largest |pivot|), then each column of the identity solved, in plain Python."""
+    A = G.copy()
+    p = A.shape[0]
+    piv = np.zeros(p, dtype=int)
+    for k in range(p):
+        m = k + int(np.argmax(np.abs(A[k:, k])))
+        piv[k] = m
+        A[[k, m]] = A[[m, k]]
+        for i in range(k + 1, p):
+            f = A[i, k] / A[k, k]
+            A[i, k] = f
+            for j in range(k + 1, p):
+                A[i, j] -= f * A[k, j]
+    inv = np.empty((p, p))
+    for col in range(p):
+        b = np.zeros(p)
+        b[col] = 1.0
+        for k in range(p):
+            b[[k, piv[k]]] = b[[piv[k], k]]
+        for i in range(p):
+            s = b[i]
+            for j in range(i):
+                s -= A[i, j] * b[j]
+            b[i] = s
+        for i in range(p - 1, -1, -1):
+            s = b[i]
+            for j in range(i + 1, p):
+                s -= A[i, j] * b[j]
+            b[i] = s / A[i, i]
+        inv[:, col] = b
+    return inv
+
+
+def _reference(case, k=2.0, step=4.0):
+    """The least squares and Jacobian with every term summed, in the kernels' orders
+    (plain numpy and Python, no term left out)."""
+    t, taus, v, rest_t, y = (case[key] for key in ("t", "taus", "v", "rest_t", "y"))
+    n, r = taus.size, t.size
+    dtt = t[None, :] - taus[:, None]
+    out = dict(dtt=dtt, Mt=[], dXt=[], Ginv=[], a=[], res=[], J=[])
+    for c in range(2):
+        X, dX = _atoms_of(case, dtt.T, c)
+        M = np.column_stack([X, rest_t[c].T])
+        p = M.shape[1]
+        G = np.array([[_in_order(M[:, i] * M[:, j]) for i in range(p)] for j in range(p)])
+        b = np.array([_in_order(M[:, i] * y[c]) for i in range(p)])
+        ridge = 1e-12 * (_in_order(np.diag(G)) / p + 1e-300)
+        G[np.diag_indices(p)] += ridge
+        Ginv = _lu_solve_columns(G)
+        coef = np.array([_in_order(Ginv[i] * b) for i in range(p)])
+        acc = np.zeros(r)
+        for j in range(p):
+            acc = acc + M[:, j] * coef[j]
+        out["res"].append((y[c] - acc) * k)
+        D = [-v * dX[:, j] * coef[j] for j in range(n)]
+        dv = np.zeros(r)
+        for j in range(n):
+            dv = dv + dX[:, j] * dtt[j] * coef[j]
+        for Dj in (*D, dv):
+            E = np.array([_in_order(M[:, m] * Dj) for m in range(p)])
+            F = np.array([_in_order(Ginv[i] * E) for i in range(p)])
+            acc = np.zeros(r)
+            for m in range(p):
+                acc = acc + M[:, m] * F[m]
+            out["J"].append((acc - Dj) * k)
+        out["Mt"].append(M.T)
+        out["dXt"].append(dX.T)
+        out["Ginv"].append(Ginv)
+        out["a"].append(coef[:n])
+    out = {key: np.array(val) if key != "dtt" else val for key, val in out.items()}
+    out["res"] = out["res"].reshape(-1)
+    out["J"] = np.concatenate([out["J"][:n + 1], out["J"][n + 1:]], axis=1)
+    out["amps"] = out["a"].T.copy()
+    g = out["a"] ** 2 / np.maximum(out["Ginv"].diagonal(axis1=1, axis2=2)[:, :n], 1e-300)
+    out["gains"] = (g[0] + g[1]) * step
+    return out
+
+
+def test_least_squares_and_jacobian_are_every_term_summed_in_order():
+    """The kernels leave out the terms of the atoms' zeros (rows beyond a response's
+    reach: :func:`~bwim.detect.fit_kernels.zero_reach`): byte for byte the numbers of
+    every term summed in their order (plain numpy), on windows the atoms cover, where they
+    cover a few rows (r = 400), without the rest, and with the rows' times descending
+    (nothing left out then)."""
+    for seed, r, q, order in ((3, 150, 3, 1), (5, 400, 3, 1), (6, 400, 0, 1), (8, 300, 2, -1)):
+        case = _case(seed=seed, q=q, r=r)
+        case["t"] = np.ascontiguousarray(case["t"][::order])
+        got = _filled(case)
+        ref = _reference(case)
+        for key in ("dtt", "Mt", "dXt", "Ginv", "a", "res", "amps", "gains"):
+            assert got[key].tobytes() == ref[key].tobytes(), (seed, key)
+        J = np.empty((case["taus"].size + 1, 2 * r))
+        K.jacobian(got["Mt"], got["Ginv"], got["a"], got["dXt"], got["dtt"], case["v"], 2.0,
+                   J)
+        assert J.tobytes() == ref["J"].tobytes(), seed
+        # what is left out: the atoms' zero rows (some where r = 400)
+        flat = np.empty((2, 2), dtype=np.int64)
+        fast = K.zero_reach(case["tab"].scalars, case["tab"].first, case["tab"].values,
+                            case["t"], case["y"], case["rest_t"], flat)
+        assert fast == (order == 1)
+        if r == 400:
+            assert np.mean(got["Mt"][:, :case["taus"].size] == 0.0) > 0.8
+
+
+def test_span_dots_leave_out_only_zero_terms():
+    """``span_dots`` summing only where both factors may be nonzero: the sums of every
+    term in order, byte for byte (rows with spans of their own, empty ones, −0 values)."""
+    rng = np.random.default_rng(12)
+    r, na = 90, 15  # rows eight, four and one at a time
+    A = np.zeros((na, r))
+    lo = rng.integers(0, r, na)
+    hi = np.minimum(lo + rng.integers(0, 40, na), r)
+    lo[3], hi[3] = 0, 0  # a row of zeros
+    lo[[0, 9, 13]], hi[[0, 9, 13]] = 0, r  # rows reaching past b's span
+    for i in range(na):
+        A[i, lo[i]:hi[i]] = rng.standard_normal(hi[i] - lo[i])
+    A[5, :lo[5]] = -0.0
+    b = np.zeros(r)
+    b[20:70] = rng.standard_normal(50)
+    out = np.empty(na)
+    K.span_dots(A, na, b, 20, 70, lo.astype(np.int64), hi.astype(np.int64), out)
+    ref = np.array([_in_order(A[i] * b) for i in range(na)])
+    assert out.tobytes() == ref.tobytes()
+
+
 def test_levenberg_marquardt_finds_the_model_s_times():
     """Readings made of the model itself (no noise): the refinement from times 3 ms off
     and a speed 2 % off returns the true ones (to its stop: the misfit falling by less
@@ -122,8 +255,16 @@ def test_levenberg_marquardt_finds_the_model_s_times():
     case.update(y=y, taus=truth + 0.003, v=1.02 * v)
     got = _filled(case)
     params = np.append(truth + 0.003, 1.02 * v)
+    # the least squares at the start made by the kernel itself (fresh): the same run
+    fresh = {key: np.empty_like(val) for key, val in got.items()}
+    params_fresh = params.copy()
+    cost_fresh = K.levenberg_marquardt(tab.scalars, tab.first, tab.values, t, y,
+                                       case["rest_t"], params_fresh, 15, 2.0, 3e-3, 4.0, True,
+                                       *fresh.values())
     cost = K.levenberg_marquardt(tab.scalars, tab.first, tab.values, t, y, case["rest_t"],
-                                 params, 15, 2.0, 3e-3, *got.values())
+                                 params, 15, 2.0, 3e-3, 4.0, False, *got.values())
+    assert cost_fresh == cost and params_fresh.tobytes() == params.tobytes()
+    assert all(fresh[key].tobytes() == got[key].tobytes() for key in got)
     np.testing.assert_allclose(params[:-1], truth, rtol=0, atol=5e-6)
     assert abs(params[-1] / v - 1) < 1.5e-5
     assert cost < 1e-9 * float(np.sum(y**2))
@@ -187,3 +328,45 @@ def test_symmetric_pinv_is_numpy_s():
         K.symmetric_pinv(G, out)
         ref = np.linalg.pinv(G)
         np.testing.assert_allclose(out, ref, rtol=0, atol=4e-14 * np.abs(ref).max())
+
+
+def test_gram_and_inverse_are_the_plain_loops():
+    """The refinement's Gram matrix (rows four by four) is every sum in its order, and the
+    least squares' inverse (all columns at once) is each column of the identity solved
+    with the LU factors (in plain Python), byte for byte; sizes around the blocks'."""
+    rng = np.random.default_rng(21)
+    for n in (1, 3, 4, 5, 8, 11, 30):
+        A = rng.standard_normal((n, 57))
+        G = np.empty((n, n))
+        K._gram(A, n, G)
+        ref = np.array([[_in_order(A[i] * A[j]) for i in range(n)] for j in range(n)])
+        assert G.tobytes() == ref.tobytes()
+        S = ref + n * np.eye(n)
+        LU, piv = S.copy(), np.empty(n, dtype=np.int64)
+        assert K._lu(LU, piv)
+        inv = np.empty((n, n))
+        K._inverse_columns(LU, piv, inv)
+        assert inv.tobytes() == _lu_solve_columns(S).tobytes()
+
+
+def test_matcher_atoms_are_numpys_interp():
+    """The matcher's atoms (``matcher_atom``) are ``np.interp(v m / fs − d, u, k,
+    left=0, right=0) × scale`` byte for byte: uneven and even grids, zero ends, samples
+    beyond both ends of the grid."""
+    import math
+
+    rng = np.random.default_rng(13)
+    for trial in range(200):
+        n = int(rng.integers(2, 300))
+        u = np.linspace(-2.5, 2.7, n) if trial % 3 == 0 else np.sort(rng.uniform(-3, 3, n))
+        k = rng.standard_normal(n)
+        k[:3], k[-3:] = 0.0, 0.0
+        v, fs = rng.uniform(5.0, 40.0), float(rng.choice([256.0, 512.0, 1000.0]))
+        d, scale = float(rng.choice([0.0, 3.1])), rng.uniform(0.1, 3.0)
+        m_lo = math.floor((u[0] + d) / v * fs) - 1 - int(rng.integers(0, 3))
+        m_hi = math.ceil((u[-1] + d) / v * fs) + 1 + int(rng.integers(0, 3))
+        ref = np.interp(v * np.arange(m_lo, m_hi + 1) / fs - d, u, k, left=0.0,
+                        right=0.0) * scale
+        out = np.empty(m_hi - m_lo + 1)
+        K.matcher_atom(u, k, scale, v, fs, d, m_lo, out)
+        assert out.tobytes() == ref.tobytes()

@@ -53,7 +53,7 @@ from .group_kernels import (
     response_on_samples,
     segment_bounds,
 )
-from .vehicle_fit import REACH, Problem, Rows, ridged_normal
+from .vehicle_fit import REACH, Problem, ridged_normal
 
 __all__ = ["GROUP_AXLES", "GROUP_DIP", "GROUP_EXTENT", "GROUP_SPACING", "LEVEL_GAIN",
            "PEAK_FLOOR", "RARE_GROUP", "SEGMENT_MARGIN", "choose_groups", "evenly_explained",
@@ -113,17 +113,20 @@ def choose_groups(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp:
     taus = np.sort(taus)
     lo = int(pb.t.searchsorted(span[0] - REACH / v))
     hi = int(pb.t.searchsorted(span[1] + (pb.shift[1] + REACH) / v, side="right"))
-    w = Rows(pb, np.arange(lo, hi), slice(lo, hi))
+    # the window's rows (C order: the arrays numpy's products and the kernel read)
+    y_all, rest_all = pb.stacked
+    t, y, rest = pb.t[lo:hi], np.ascontiguousarray(y_all[:, lo:hi]), np.ascontiguousarray(
+        rest_all[:, lo:hi])
     # both detectors' least squares as one stack of two (the same numbers as two)
-    X = pb.both_atoms(v, w.t[:, None] - taus[None, :])[0]
-    Mt, G = ridged_normal(np.concatenate([X, w.rest], axis=2))
-    coef = np.linalg.solve(G, Mt @ w.y)
+    X = pb.both_atoms(v, t[:, None] - taus[None, :])[0]
+    Mt, G = ridged_normal(np.concatenate([X, rest], axis=2))
+    coef = np.linalg.solve(G, Mt @ y)
     st = pb.step  # hypotheses on every st-th sample
     (u0, k0, _), (u1, k1, _) = pb.grids
     # the rest taken off, the segments, their correlations and choices, compiled (see the
     # module contract)
     new, changed = choose_in_window(
-        pb.t, lo, taus, w.y, w.rest, X, coef, u0, k0, u1, k1, pb.w, float(pb.shift[0]),
+        pb.t, lo, taus, y, rest, X, coef, u0, k0, u1, k1, pb.w, float(pb.shift[0]),
         float(pb.shift[1]), float(v), float(pb.fs), st, round(pb.shift[1] / v * pb.fs),
         round(SEGMENT_MARGIN / v * pb.fs), max(1, math.ceil(min_sp / v * pb.fs / st)),
         math.floor(GROUP_SPACING / v * pb.fs / st), float(pb.ratio), float(pb.bound),

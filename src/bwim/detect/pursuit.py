@@ -57,20 +57,24 @@ Contract
   0.5, 1)`` with ``Δ`` the smallest misfit reduction (level variances) of its axles;
   ``c_both`` the mean over its axles of ``exp(−½ (ln(A_2 / (ρ A_1)) / (2 s))²)``, ``s``
   the learned spread (at least ``MIN_RATIO_BOUND / RATIO_SPREADS``), at least 0.5.
-* Compiled (:mod:`bwim.detect.fit_kernels`, numba): the pursuit's trials and matcher and
-  the refinements' least squares (:mod:`bwim.detect.vehicle_fit`): the same equations,
-  numbers agreeing with a numpy version's to rounding.
+* Compiled (:mod:`bwim.detect.fit_kernels`, numba): the pursuit's whole loop
+  (:func:`~bwim.detect.fit_kernels.pursuit_loop`: the steps of :class:`_Matcher` and
+  :class:`_Pursuit`, the same numbers) and the refinements' least squares
+  (:mod:`bwim.detect.vehicle_fit`): the same equations, numbers agreeing with a numpy
+  version's to rounding.  A vehicle's few axles are tested in Python floats (numpy's
+  numbers: :meth:`~bwim.detect.vehicle_fit.Problem.log_ratios`).
 * Times in s, distances in m, speeds in m/s.
 """
 
 from __future__ import annotations
 
 import itertools
+import math
 
 import numpy as np
 
 from .assemble import VehicleEstimate
-from .fit_kernels import best_match, pursuit_trial
+from .fit_kernels import best_match, matcher_atom, pursuit_loop, pursuit_trial
 from .groups import choose_groups
 from .response import LearnedResponses, band_pass, xcorr_lag
 from .signals import median
@@ -82,7 +86,6 @@ from .vehicle_fit import (
     VehicleFit,
     make_problem,
     refine,
-    relative,
     solution,
 )
 
@@ -136,28 +139,31 @@ class _Matcher:
 
     def __init__(self, pb: Problem, v: float, slack: int, min_gap: float):
         self.pb, self.v, self.slack = pb, v, slack
+        bounds = []
+        for c, (u, _, _) in enumerate(pb.grids):
+            d = pb.shift[c]
+            bounds.append((math.floor((u[0] + d) / v * pb.fs) - 1,
+                           math.ceil((u[-1] + d) / v * pb.fs) + 1))
+        # the atoms as the kernel reads them: end-padded rows, first offsets, lengths;
+        # each np.interp(v (m_lo … m_hi) / fs − d, u, k, left=0, right=0) × w_d (× the
+        # gain ratio at the second), compiled (fit_kernels.matcher_atom: the same numbers)
+        self._atoms = np.zeros((2, max(hi - lo + 1 for lo, hi in bounds)))
         self.parts = []
         energy = 0.0
         for c, (u, k, _) in enumerate(pb.grids):
-            d = pb.shift[c]
-            m_lo = int(np.floor((u[0] + d) / v * pb.fs)) - 1
-            m_hi = int(np.ceil((u[-1] + d) / v * pb.fs)) + 1
-            scale = pb.w[c] * (pb.ratio if c else 1.0)
-            atom = np.interp(v * np.arange(m_lo, m_hi + 1) / pb.fs - d, u, k, left=0.0,
-                             right=0.0) * scale
+            m_lo, m_hi = bounds[c]
+            atom = np.empty(m_hi - m_lo + 1)  # an array of its own, as np.interp's (BLAS)
+            matcher_atom(u, k, float(pb.w[c] * (pb.ratio if c else 1.0)), float(v),
+                         float(pb.fs), float(pb.shift[c]), m_lo, atom)
             energy += float(atom @ atom)
             self.parts.append((m_lo, m_hi, atom))
+            self._atoms[c, :atom.size] = atom
         self.energy = max(energy, 1e-300)
-        self.pad = max(0, *(-m_lo for m_lo, _, _ in self.parts),
-                       *(m_hi for _, m_hi, _ in self.parts))
+        self.pad = max(0, *(-m_lo for m_lo, _ in bounds), *(m_hi for _, m_hi in bounds))
         self.gap = min_gap / v
         self.excluded = np.zeros(pb.t.size, dtype=bool)
-        # the atoms as the kernel reads them: end-padded rows, first offsets, lengths
-        self._atoms = np.zeros((2, max(a.size for _, _, a in self.parts)))
-        for c, (_, _, atom) in enumerate(self.parts):
-            self._atoms[c, :atom.size] = atom
-        self._lo = np.array([m_lo for m_lo, _, _ in self.parts], dtype=np.int64)
-        self._len = np.array([a.size for _, _, a in self.parts], dtype=np.int64)
+        self._lo = np.array([m_lo for m_lo, _ in bounds], dtype=np.int64)
+        self._len = np.array([m_hi - m_lo + 1 for m_lo, m_hi in bounds], dtype=np.int64)
         self._corr = np.empty((2, pb.t.size))
         self._picked = np.zeros(2, dtype=np.int64)
 
@@ -199,7 +205,7 @@ def pursue_axles(record_time: np.ndarray, y: np.ndarray, learned: LearnedRespons
         gauges = None
     if gauges is not None:
         g = np.asarray(gauges, dtype=float)
-        g = g - g.mean(axis=0)
+        g = g - np.add.reduce(g, axis=0) / g.shape[0]  # g.mean(axis=0): its sum / count
         bend = np.column_stack([g @ r.bending for r in learned.responses])
         y0 = y - bend
     else:
@@ -211,24 +217,13 @@ def pursue_axles(record_time: np.ndarray, y: np.ndarray, learned: LearnedRespons
     pb = make_problem(t, y, gauges, learned, v0, fs=fs,
                       bending=None if gauges is None else bend)
     thr2 = snr_threshold**2
-    min_sp = max(min_axle_spacing, MIN_SPACING_WIDTH * float(np.mean(
-        [r.fwhm for r in learned.responses])))
+    widths = [float(r.fwhm) for r in learned.responses]  # their mean as np.mean makes it
+    min_sp = max(min_axle_spacing, MIN_SPACING_WIDTH * ((0.0 + widths[0] + widths[1]) / 2))
     lag = learned.distance / v0
-    slack = int(np.ceil(SPEED_SLACK * lag * fs))
+    slack = math.ceil(SPEED_SLACK * lag * fs)
     matcher = _Matcher(pb, v0, slack, EXCLUDE * min_sp)
     omp = _Pursuit(pb, v0, matcher.pad)
-    first = 0.0
-    for _ in range(2 * MAX_AXLES):
-        tk, tk2 = matcher.best(omp.res)
-        amps, chi_new, state = omp.trial(tk, tk2)
-        gain = omp.chi - chi_new
-        first = max(first, gain)
-        if gain < max(thr2, PURSUIT_SHARE * first) or omp.taus.size >= MAX_AXLES:
-            break
-        matcher.exclude(tk)  # taken, or one detector does not see it: not tried again
-        if not _acceptable(pb, amps, min_height):
-            continue
-        omp.accept(tk, tk2, chi_new, state)
+    first = omp.pursue(matcher, thr2, min_height)
     order = np.argsort(omp.taus)
     taus = omp.taus[order]
     lags = lag + omp.taus2[order] - taus  # each axle's own lag between the detectors
@@ -236,18 +231,19 @@ def pursue_axles(record_time: np.ndarray, y: np.ndarray, learned: LearnedRespons
         return []
     limit = max(thr2, GAIN_SHARE * first)
     out = []
-    groups = np.split(np.arange(taus.size),
-                      ((taus[1:] - taus[:-1]) * v0 > max_axle_spacing).nonzero()[0] + 1)
+    # vehicles: the axles between gaps longer than max_axle_spacing (index ranges)
+    times = taus.tolist()
+    cuts = [0, *(i + 1 for i, (a, b) in enumerate(itertools.pairwise(times))
+                 if (b - a) * v0 > max_axle_spacing), len(times)]
     # each vehicle's axles may lie between the midpoints to its neighbours' (the pursuit
     # may have missed some: the axle groups are found again there)
-    edges = [t[0], *(0.5 * (taus[a[-1]] + taus[b[0]])
-                     for a, b in itertools.pairwise(groups)), t[-1]]
-    for k, group in enumerate(groups):
+    edges = [t[0], *(0.5 * (times[i - 1] + times[i]) for i in cuts[1:-1]), t[-1]]
+    for k, (a, b) in enumerate(itertools.pairwise(cuts)):
         # the vehicle's speed from its axles' lags
-        v = learned.distance / median(lags[group])
+        v = learned.distance / median(lags[a:b])
         if not speed_range[0] <= v <= speed_range[1]:
             v = v0
-        veh = _vehicle(pb, taus[group], v, limit, min_sp, min_height, snr_threshold,
+        veh = _vehicle(pb, taus[a:b], v, limit, min_sp, min_height, snr_threshold,
                        (edges[k], edges[k + 1]))
         if veh is not None:
             out.append(veh)
@@ -281,7 +277,8 @@ class _Pursuit:
         y = []
         for c in range(2):
             Q = pb.q_rest[c]
-            y.append(pb.y[:, c] - Q @ (Q.T @ pb.y[:, c]))
+            # no rest (Q n_t × 0): less zeros, the readings themselves
+            y.append(pb.y[:, c] - Q @ (Q.T @ pb.y[:, c]) if Q.shape[1] else pb.y[:, c])
         self.Q = np.array(pb.q_rest)  # (2, n_t, k)
         self._Qt = np.ascontiguousarray(self.Q.transpose(0, 2, 1))  # as the kernel reads
         self.y = np.array(y)[..., None]  # (2, n_t, 1)
@@ -293,7 +290,7 @@ class _Pursuit:
         self._t = np.ascontiguousarray(pb.t, dtype=float)
         self._buffer = np.zeros((2, n + 2 * pad))
         self._buffer[:, pad:pad + n] = self.y[..., 0]
-        self.chi = float(np.sum(np.column_stack(y) ** 2))
+        self.chi = float(np.add.reduce(np.column_stack(y) ** 2, axis=None))  # np.sum's
 
     @property
     def res(self) -> np.ndarray:
@@ -316,6 +313,27 @@ class _Pursuit:
                             amps, res)
         return amps, chi, res
 
+    def pursue(self, matcher: _Matcher, thr2: float, min_height: float) -> float:
+        """The pursuit (compiled, :func:`~bwim.detect.fit_kernels.pursuit_loop`): up to
+        2 MAX_AXLES times the matcher's best new axle (:meth:`_Matcher.best`) and its
+        :meth:`trial`; stop when it lowers the misfit by less than ``thr2`` and
+        PURSUIT_SHARE of the strongest fall so far, or MAX_AXLES are taken; else no new
+        axle near it again (:meth:`_Matcher.exclude`) and, when it reaches
+        ``min_height`` at both detectors (:func:`_acceptable`), it is taken
+        (:meth:`accept`).  Returns the strongest fall."""
+        taus, taus2, out = np.empty(MAX_AXLES), np.empty(MAX_AXLES), np.zeros(2)
+        g = self.pb.table
+        m = matcher
+        count = pursuit_loop(g.scalars, g.first, g.values, self._t, float(self.v), self._Qt,
+                             self.y[..., 0], self._Xt, self._G, self._buffer, self.pad,
+                             m._atoms, m._lo, m._len, m.slack, m.energy, m.excluded, m._corr,
+                             m.gap, self.chi, thr2, PURSUIT_SHARE, min_height, MAX_AXLES,
+                             2 * MAX_AXLES, taus, taus2, out)
+        self.taus = np.concatenate((self.taus, taus[:count]))
+        self.taus2 = np.concatenate((self.taus2, taus2[:count]))
+        self.chi = float(out[1])
+        return float(out[0])
+
     def accept(self, tk: float, tk2: float, chi: float, state) -> None:
         """Keep the axle of the last :meth:`trial` (``state``: its residual)."""
         res = state
@@ -330,17 +348,55 @@ def _without(taus: np.ndarray, i: int) -> np.ndarray:
     return np.concatenate((taus[:i], taus[i + 1:]))
 
 
+def _argmin(values: list[float]) -> int:
+    """``np.argmin`` of a few Python floats: the first NaN, else the first smallest."""
+    best = 0
+    for i, x in enumerate(values):
+        if x != x:
+            return i
+        if x < values[best]:
+            best = i
+    return best
+
+
+def _weakest(weak: list[bool], gains: list[float]) -> int:
+    """``np.where(weak, gains, np.inf).argmin()`` (:func:`_argmin`)."""
+    return _argmin([g if w else math.inf for w, g in zip(weak, gains, strict=True)])
+
+
 def _drop_close(fit: VehicleFit, min_sp: float) -> np.ndarray | None:
     """The times without the weaker of the closest pair closer than ``min_sp``; None if
     none is that close."""
     if fit.taus.size < 2:
         return None
-    d = (fit.taus[1:] - fit.taus[:-1]) * fit.v
-    i = int(d.argmin())
+    taus, v = fit.taus.tolist(), fit.v
+    d = [(b - a) * v for a, b in itertools.pairwise(taus)]  # numpy's operations
+    i = _argmin(d)
     if d[i] >= min_sp:
         return None
-    weaker = i if fit.gains[i] < fit.gains[i + 1] else i + 1
+    gains = fit.gains.tolist()
+    weaker = i if gains[i] < gains[i + 1] else i + 1
     return _without(fit.taus, weaker)
+
+
+def _low(amps: np.ndarray, min_height: float) -> list[bool]:
+    """Per axle whether its lower share of a detector's largest amplitude is below
+    ``min_height``: ``np.minimum(s[:, 0], s[:, 1]) < min_height``, ``s =
+    relative(amps)``, in Python floats (the same IEEE operations; a NaN makes the
+    largest NaN, divided by 1, and the share's minimum NaN: not low)."""
+    rows = amps.tolist()
+    tops = []
+    for c in range(2):
+        col = [r[c] for r in rows]
+        top = max(col) if col else 0.0
+        if math.isnan(sum(col)) and any(x != x for x in col):
+            top = math.nan
+        tops.append(top if top > 0 else 1.0)
+    out = []
+    for a0, a1 in rows:
+        s0, s1 = a0 / tops[0], a1 / tops[1]
+        out.append(s0 == s0 and s1 == s1 and (s0 < min_height or s1 < min_height))
+    return out
 
 
 def _vehicle(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp: float,
@@ -362,21 +418,22 @@ def _vehicle(pb: Problem, taus: np.ndarray, v: float, limit: float, min_sp: floa
     for _ in range(MAX_AXLES):
         close = _drop_close(fit, min_sp)
         if close is not None:
-            fit = refine(pb, close, fit.v)
+            fit = refine(pb, close, fit.v, start=fit.solution)
             continue
-        share = relative(fit.amps)  # each axle's lower (np.minimum: the min over its row)
-        weak = ((fit.gains < limit) | (np.minimum(share[:, 0], share[:, 1]) < min_height)
-                | ~pb.seen_by_both(fit.amps))
-        if weak.any() and fit.taus.size > 1:
-            i = int(np.where(weak, fit.gains, np.inf).argmin())
-            fit = refine(pb, _without(fit.taus, i), fit.v)
+        gains = fit.gains.tolist()
+        weak = [g < limit or low or not seen for g, low, seen in zip(
+            gains, _low(fit.amps, min_height), pb.seen(fit.amps), strict=True)]
+        if any(weak) and fit.taus.size > 1:
+            fit = refine(pb, _without(fit.taus, _weakest(weak, gains)), fit.v,
+                         start=fit.solution)
             continue
         break
-    if fit.taus.size == 0 or not pb.seen_by_both(fit.amps).any():
+    ratios = pb.log_ratios(fit.amps)
+    if fit.taus.size == 0 or not any(abs(r) <= pb.bound for r in ratios):  # seen by both
         return None
-    snr = float(np.sqrt(max(float(fit.gains.min()), 0.0)))
-    c_snr = float(np.clip(snr / (2.0 * snr_threshold), 0.5, 1.0))
-    lr = np.minimum(np.abs(pb.log_ratio(fit.amps)), 1e3)
+    snr = math.sqrt(max(float(fit.gains.min()), 0.0))  # (correctly rounded, as numpy's)
+    c_snr = min(max(snr / (2.0 * snr_threshold), 0.5), 1.0)  # np.clip's (a NaN stays)
+    lr = np.minimum(np.abs(np.array(ratios)), 1e3)
     s = max(pb.spread, MIN_RATIO_BOUND / RATIO_SPREADS)
     c_both = max(0.5, float(np.mean(np.exp(-0.5 * (lr / (2 * s)) ** 2))))
     det_times = np.column_stack([fit.taus, fit.taus + pb.shift[1] / fit.v])
@@ -396,10 +453,11 @@ def _prune(pb: Problem, taus: np.ndarray, v: float, limit: float, both: bool = F
     sol = None
     while taus.size > 1:
         sol = solution(pb, taus, v, start)
-        weak = sol.gains < limit
+        gains = sol.gains.tolist()
+        weak = [g < limit for g in gains]
         if both:
-            weak |= ~pb.seen_by_both(sol.amps)
-        if not weak.any():
+            weak = [w or not seen for w, seen in zip(weak, pb.seen(sol.amps), strict=True)]
+        if not any(weak):
             return taus, sol
-        taus = _without(taus, int(np.where(weak, sol.gains, np.inf).argmin()))
+        taus = _without(taus, _weakest(weak, gains))
     return taus, None

@@ -285,8 +285,13 @@ def xcorr_lag(y1: np.ndarray, y2: np.ndarray, lo: int, hi: int) -> float | None:
     if hi - lo < 2:
         return None
     size = scipy.fft.next_fast_len(2 * n, real=True)  # ≥ 2n − 1: linear, not circular
-    spec = np.fft.rfft(y1[::-1], size) * np.fft.rfft(y2, size)
-    full = np.fft.irfft(spec, size)  # index n-1+L  <->  lag L
+    # both spectra from one call (numpy transforms each row on its own, with the plan of
+    # its length: the numbers of one call each)
+    both = np.empty((2, n))
+    both[0] = y1[::-1]
+    both[1] = y2
+    spec = np.fft.rfft(both, size)
+    full = np.fft.irfft(spec[0] * spec[1], size)  # index n-1+L  <->  lag L
     r = full[n - 1 + lo:n - 1 + hi + 1]
     k = int(np.argmax(r))
     if k == 0 or k == r.size - 1 or r[k] <= 0:

@@ -31,11 +31,15 @@ Contract
   showed, and at least :data:`MIN_RATIO_BOUND`.
 * Compiled (:mod:`bwim.detect.fit_kernels`, numba): the atoms (element by element the
   operations of :meth:`Problem.atoms`: the same numbers), a :class:`Solution`'s least
-  squares and Jacobian, and :func:`refine`'s whole Levenberg–Marquardt loop.  The same
+  squares, amplitudes, removal costs (numpy's ``a**2 / maximum(diag, 1e-300)``, the same
+  operations) and Jacobian, and :func:`refine`'s whole Levenberg–Marquardt loop.  The same
   equations; their sums run in orders of their own, as numpy's BLAS and LAPACK run in
   theirs, so the numbers agree with a numpy version's to rounding.  A fit of coincident
   axles (singular but for the 1e-12 ridge) turns that rounding into differences of any
   size, in numpy as much (its results then change with the BLAS kernel).
+* A vehicle's per-axle tests for the pursuit in Python floats (:meth:`Problem.log_ratios`,
+  :meth:`Problem.seen`): numpy's numbers (the same IEEE operations; the logarithms
+  numpy's own, on an array of the same size) without a dozen numpy calls on a few values.
 * Times in s, distances in m, speeds in m/s; amplitudes in each detector's reading units.
 """
 
@@ -176,6 +180,48 @@ class Problem:
     def seen_by_both(self, amps: np.ndarray) -> np.ndarray:
         return np.abs(self.log_ratio(amps)) <= self.bound
 
+    def log_ratios(self, amps: np.ndarray) -> list[float]:
+        """:meth:`log_ratio`'s numbers as Python floats (for a few axles: one numpy call,
+        the logarithm's, on an array of the same size).  ``max(A, 0)`` and ``ratio A_1``
+        and the quotient are the same IEEE operations in Python; a quotient of 0 gives
+        −inf, a zero divisor, a NaN or a negative quotient +inf (what the logarithm and
+        :meth:`log_ratio`'s NaN → inf make of them); only the positive finite quotients
+        are numpy's logarithms (at their places in the array: numpy's own routines)."""
+        ratio = self.ratio
+        out = []
+        q = []
+        for a1, a2 in amps.tolist():
+            a1 = a1 if a1 != a1 or a1 > 0.0 else 0.0  # np.maximum(·, 0): NaN stays
+            a2 = a2 if a2 != a2 or a2 > 0.0 else 0.0
+            den = ratio * a1
+            x = a2 / den if den != 0.0 else math.nan
+            if x == 0.0:
+                out.append(-math.inf)
+            elif 0.0 < x < math.inf:
+                out.append(None)  # a logarithm
+                q.append(x)
+                continue
+            else:  # NaN, inf or negative: log gives inf or NaN, NaN counts inf
+                out.append(math.inf)
+            q.append(1.0)
+        if None in out:
+            logs = np.log(np.array(q)).tolist()
+            out = [logs[i] if r is None else r for i, r in enumerate(out)]
+        return out
+
+    def seen(self, amps: np.ndarray) -> list[bool]:
+        """:meth:`seen_by_both` as Python bools (:meth:`log_ratios`)."""
+        bound = self.bound
+        return [abs(r) <= bound for r in self.log_ratios(amps)]
+
+    @cached_property
+    def rows_source(self) -> tuple[np.ndarray, np.ndarray]:
+        """The readings (2, n_t) and the rest's columns transposed (2, k, n_t), each C
+        order: what :class:`Rows` copies a window's rows from."""
+        y, rest = self.stacked
+        return (np.ascontiguousarray(y[..., 0]),
+                np.ascontiguousarray(rest.transpose(0, 2, 1)))
+
 
 @dataclass(frozen=True, eq=False)
 class VehicleFit:
@@ -214,14 +260,19 @@ def make_problem(t: np.ndarray, y: np.ndarray, gauges: np.ndarray | None,
         if bending is None:
             g = gauges - gauges.mean(axis=0)
             bending = np.column_stack([g @ r.bending for r in learned.responses])
-        tc = t - t.mean()
-        tc = tc / max(float(np.ptp(tc)), 1e-300)
-        rest = tuple(np.column_stack([bending[:, c], np.ones_like(tc), tc]) * w[c]
-                     for c in range(2))
+        tc = t - np.add.reduce(t) / t.size  # t.mean(): its sum / count
+        tc = tc / max(float(tc.max() - tc.min()), 1e-300)  # np.ptp's numbers
+        # per detector the columns (bending, 1, tc), weighted (np.column_stack's layout)
+        stack = np.empty((2, t.size, 3))
+        stack[:, :, 0] = bending.T
+        stack[:, :, 1] = 1.0
+        stack[:, :, 2] = tc
+        stack *= w[:, None, None]
         grids = tuple(r.padded() for r in learned.responses)
-        q = np.linalg.qr(np.array(rest))[0]  # both at once (each on its own: the same)
-        return Problem(y=(y - y.mean(axis=0)) * w, rest=rest, q_rest=(q[0], q[1]), grids=grids,
-                        steps=_steps(grids), **common)
+        q = np.linalg.qr(stack)[0]  # both at once (each on its own: the same)
+        return Problem(y=(y - np.add.reduce(y, axis=0) / y.shape[0]) * w,
+                       rest=(stack[0], stack[1]),
+                       q_rest=(q[0], q[1]), grids=grids, steps=_steps(grids), **common)
     y_hp = high_pass(y, HIGH_PASS / v * fs) * w
     empty = np.zeros((t.size, 0))
     grids = tuple(r.high_passed() for r in learned.responses)
@@ -232,7 +283,16 @@ def make_problem(t: np.ndarray, y: np.ndarray, gauges: np.ndarray | None,
 def _steps(grids) -> tuple:
     """Per grid K's differences between ordinates, 0 after the last (np.diff and
     np.append's numbers, by slices)."""
-    return tuple(np.concatenate((k[1:] - k[:-1], [0.0])) for _, k, _ in grids)
+    out = []
+    for _, k, _ in grids:
+        if k.size == 0:
+            out.append(np.zeros(1))
+            continue
+        s = np.empty(k.size)
+        np.subtract(k[1:], k[:-1], out=s[:-1])
+        s[-1] = 0.0
+        out.append(s)
+    return tuple(out)
 
 
 def relative(amps: np.ndarray) -> np.ndarray:
@@ -244,30 +304,59 @@ def relative(amps: np.ndarray) -> np.ndarray:
 def window(pb: Problem, taus: np.ndarray, v: float) -> np.ndarray:
     """Samples from REACH m of travel before the first axle reaches detector 1 to REACH m
     after the last leaves detector 2."""
-    lo = pb.t.searchsorted(taus.min() - REACH / v)
-    hi = pb.t.searchsorted(taus.max() + (pb.shift[1] + REACH) / v, side="right")
+    lo, hi = _bounds(pb, taus, v)
     return np.arange(lo, hi, pb.step)
+
+
+def _bounds(pb: Problem, taus: np.ndarray, v: float) -> tuple[int, int]:
+    """:func:`window`'s first sample and the end of its range (``np.arange(lo, hi,
+    step)``); the axles' first and last time as Python floats (the same numbers as
+    numpy's min and max, which a NaN makes NaN: left to numpy then)."""
+    times = taus.tolist()
+    first, last = min(times), max(times)
+    if math.isnan(sum(times)):
+        first, last = taus.min(), taus.max()
+    t = pb.t
+    return (int(t.searchsorted(first - REACH / v)),
+            int(t.searchsorted(last + (pb.shift[1] + REACH) / v, side="right")))
 
 
 class Rows:
     """What every fit on one vehicle's window reads: the sampled rows' times, readings
-    (2, n_rows, 1) and rest columns (2, n_rows, k; and transposed, :attr:`rest_t`, as
-    the compiled kernels read them), copied once per window."""
+    (:attr:`y2`, 2 × n_rows) and rest columns transposed (:attr:`rest_t`, 2 × k ×
+    n_rows), in C order as the compiled kernels read them, copied once per window;
+    :attr:`y` (2, n_rows, 1) and :attr:`rest` (2, n_rows, k) are views of them."""
 
     def __init__(self, pb: Problem, rows: np.ndarray, index: slice | None = None):
         """``index``: a slice selecting the same rows (read through views rather than
         gathered by the index array: the same numbers, faster)."""
-        y, rest = pb.stacked
+        y, rest_t = pb.rows_source
         at = rows if index is None else index
         self.rows = rows
+        #: (first row, number of rows, step) when the rows are a window's (a slice),
+        #: else None: two windows' rows are the same when these are
+        self.key = None
+        if index is not None and rows.size:
+            self.key = (int(rows[0]), rows.size, pb.step)
         self.t = np.ascontiguousarray(pb.t[at])  # C order, as the compiled kernels read
-        self.y = np.ascontiguousarray(y[:, at])
-        self.rest = np.ascontiguousarray(rest[:, at])
+        self.y2 = np.ascontiguousarray(y[:, at])
+        self.rest_t = np.ascontiguousarray(rest_t[:, :, at])
 
-    @cached_property
-    def rest_t(self) -> np.ndarray:
-        """The rest columns transposed, (2, k, n_rows), C order (made when read)."""
-        return np.ascontiguousarray(self.rest.transpose(0, 2, 1))
+    @property
+    def y(self) -> np.ndarray:
+        """The readings (2, n_rows, 1)."""
+        return self.y2[..., None]
+
+    @property
+    def rest(self) -> np.ndarray:
+        """The rest columns (2, n_rows, k)."""
+        return self.rest_t.transpose(0, 2, 1)
+
+    def same(self, other: Rows) -> bool:
+        """Whether ``other`` holds the same rows (``np.array_equal`` of theirs)."""
+        if self.key is not None and other.key is not None:
+            return self.key == other.key
+        return np.array_equal(self.rows, other.rows)
 
 
 class Solution:
@@ -279,27 +368,42 @@ class Solution:
     atoms' slopes (None without), ``dtt`` (n, n_rows) the rows' times less each axle's,
     ``Ginv`` ``(MᵀM + ridge)⁻¹`` (the ridge of :func:`ridged_normal`; the pseudo-inverse
     where singular), ``a`` (2, n) the amplitudes, ``res`` the residual of both
-    detectors end to end."""
+    detectors end to end, :attr:`amps` and :attr:`gains`."""
 
     def __init__(self, pb: Problem, taus: np.ndarray, v: float, w: Rows, slopes: bool):
         taus = np.ascontiguousarray(taus, dtype=float)
         self._empty(pb, taus, v, w, slopes)
         g = pb.table
-        least_squares(g.scalars, g.first, g.values, w.t, w.y[..., 0], w.rest_t, taus,
-                      float(v), self.k, self.dtt, self.Mt,
+        least_squares(g.scalars, g.first, g.values, w.t, w.y2, w.rest_t, taus, float(v),
+                      self.k, float(self.step), self.dtt, self.Mt,
                       self.dXt if slopes else np.empty((0, 0, 0)), self.Ginv, self.a,
-                      self.res)
+                      self.res, self.amps, self.gains)
 
     def _empty(self, pb: Problem, taus: np.ndarray, v: float, w: Rows, slopes: bool):
         """Its times, speed, rows and arrays to be written."""
         n, r = taus.size, w.t.size
-        p = n + w.rest.shape[2]
+        p = n + w.rest_t.shape[1]
         self.taus, self.v, self.w, self.slopes = taus, v, w, slopes
         # every step-th sample: scaled to the misfit of all samples
         self.k, self.step = math.sqrt(pb.step), pb.step
         self.dtt, self.Mt = np.empty((n, r)), np.empty((2, p, r))
         self.dXt = np.empty((2, n, r)) if slopes else None
         self.Ginv, self.a, self.res = np.empty((2, p, p)), np.empty((2, n)), np.empty(2 * r)
+        #: the axles' amplitudes (n, 2)
+        self.amps = np.empty((n, 2))
+        #: each axle's removal cost (level variances of all samples): removing regressor
+        #: i raises the misfit by coef_i² / [(MᵀM)⁻¹]_ii (compiled with the least squares)
+        self.gains = np.empty(n)
+
+    def copy(self) -> Solution:
+        """The same solution with arrays of its own (its times, speed and rows shared)."""
+        out = Solution.__new__(Solution)
+        out.__dict__.update(self.__dict__)
+        out.dtt, out.Mt, out.dXt = self.dtt.copy(), self.Mt.copy(), (
+            None if self.dXt is None else self.dXt.copy())
+        out.Ginv, out.a, out.res = self.Ginv.copy(), self.a.copy(), self.res.copy()
+        out.amps, out.gains = self.amps.copy(), self.gains.copy()
+        return out
 
     @property
     def M(self) -> np.ndarray:
@@ -315,20 +419,6 @@ class Solution:
     def dt(self) -> np.ndarray:
         """The rows' times less the axles' (n_rows, n)."""
         return self.dtt.T
-
-    # amplitudes and removal costs when read (a refinement's rejected trials never are)
-    @cached_property
-    def amps(self) -> np.ndarray:
-        """The axles' amplitudes (n, 2)."""
-        return self.a.T.copy()
-
-    @cached_property
-    def gains(self) -> np.ndarray:
-        """Each axle's removal cost (level variances of all samples)."""
-        # removing regressor i raises the misfit by coef_i² / [(MᵀM)⁻¹]_ii
-        n = self.taus.size
-        gains = self.a**2 / np.maximum(self.Ginv.diagonal(axis1=1, axis2=2)[:, :n], 1e-300)
-        return (gains[0] + gains[1]) * self.step
 
     def jacobian(self) -> np.ndarray:
         """The variable-projection Jacobian (Kaufman) of the residual in (τ_1 … τ_n, v)
@@ -350,14 +440,33 @@ def solve(pb: Problem, taus: np.ndarray, v: float, rows: np.ndarray, slopes: boo
 def solution(pb: Problem, taus: np.ndarray, v: float, start: Solution | None = None
              ) -> Solution:
     """The least squares with slopes of the axles ``taus`` (ascending) at speed ``v`` on
-    their window: ``start`` when it is that one (the same numbers, not made again)."""
-    rows = window(pb, taus, v)
-    if (start is not None and start.v == v and np.array_equal(start.taus, taus)
-            and start.slopes and np.array_equal(start.w.rows, rows)):
-        return start
+    their window: ``start`` when it is that one (the same numbers, not made again); when
+    ``start`` is on the same window, its rows are read again (not copied again)."""
+    same, w = _start_or_rows(pb, taus, v, start)
+    return same if same is not None else Solution(pb, taus, v, w, True)
+
+
+def _start_or_rows(pb: Problem, taus: np.ndarray, v: float, start: Solution | None
+                   ) -> tuple[Solution | None, Rows]:
+    """``start`` if it is the least squares with slopes of ``taus`` at ``v`` on their
+    window (else None), and that window's rows (``start``'s when the same)."""
+    lo, hi = _bounds(pb, taus, v)
+    step = pb.step
+    size = len(range(lo, hi, step))
+    if start is not None and start.w.key is not None and size and start.w.key == (
+            lo, size, step):
+        # the same times (np.array_equal: NaN differs, −0 equals 0) and speed
+        if start.v == v and start.slopes and taus.shape == start.taus.shape and (
+                taus.tolist() == start.taus.tolist()):
+            return start, start.w
+        return None, start.w
+    rows = np.arange(lo, hi, step)
+    if (start is not None and start.w.key is None and start.v == v
+            and np.array_equal(start.taus, taus) and start.slopes
+            and np.array_equal(start.w.rows, rows)):
+        return start, start.w
     # the window is every step-th sample from its first: a slice selects the same rows
-    index = slice(int(rows[0]), int(rows[-1]) + 1, pb.step) if rows.size else None
-    return Solution(pb, taus, v, Rows(pb, rows, index), True)
+    return None, Rows(pb, rows, slice(lo, hi, step) if size else None)
 
 
 def refine(pb: Problem, taus: np.ndarray, v: float, iterations: int = MAX_LM, *,
@@ -366,30 +475,32 @@ def refine(pb: Problem, taus: np.ndarray, v: float, iterations: int = MAX_LM, *,
     projection (amplitudes and rest by least squares inside), on a fixed window: the
     whole loop compiled (:func:`~bwim.detect.fit_kernels.levenberg_marquardt`: A = JsᵀJs,
     trials of (A + λ diag(diag(A) + 1e-12)) x = Jsᵀr, λ ×10 on a rejected trial, /3 on
-    an accepted one, the stops of the module contract).  ``start``: the :class:`Solution`
-    with slopes at these times and speed on their window when already made (the same
-    numbers, not made again)."""
+    an accepted one, the stops of the module contract), the least squares at the start
+    too when not given.  ``start``: the :class:`Solution` with slopes at these times and
+    speed on their window when already made (the same numbers, not made again), or one
+    on the same window (its rows read again)."""
     taus = np.sort(np.asarray(taus, dtype=float))
-    p = np.concatenate((taus, [v]))
-    sol = solution(pb, taus, v, start)
-    # the kernel starts from (copies of) sol's arrays and leaves the last accepted
-    # trial's in them
-    last = Solution.__new__(Solution)
-    last.__dict__.update(sol.__dict__)
-    for name in ("dtt", "Mt", "dXt", "Ginv", "a", "res"):
-        setattr(last, name, getattr(sol, name).copy())
-    for name in ("amps", "gains"):  # cached properties of sol's arrays
-        last.__dict__.pop(name, None)
+    n = taus.size
+    p = np.empty(n + 1)
+    p[:n] = taus
+    p[n] = v
+    sol, w = _start_or_rows(pb, taus, v, start)
+    if sol is not None:
+        # the kernel starts from (copies of) sol's arrays and leaves the last accepted
+        # trial's in them, with their amplitudes and removal costs
+        last = sol.copy()
+    else:  # the kernel makes the least squares at the start (least_squares' numbers)
+        last = Solution.__new__(Solution)
+        last._empty(pb, taus, v, w, True)
     g = pb.table
-    w = sol.w
     before = p.tobytes()
-    cost = levenberg_marquardt(g.scalars, g.first, g.values, w.t, w.y[..., 0], w.rest_t, p,
-                               int(iterations), sol.k, CONVERGED, last.dtt, last.Mt, last.dXt,
-                               last.Ginv, last.a, last.res)
-    if p.tobytes() == before:
+    cost = levenberg_marquardt(g.scalars, g.first, g.values, w.t, w.y2, w.rest_t, p,
+                               int(iterations), last.k, CONVERGED, float(last.step),
+                               sol is None, last.dtt, last.Mt, last.dXt, last.Ginv, last.a,
+                               last.res, last.amps, last.gains)
+    if sol is not None and p.tobytes() == before:
         last = sol  # no trial accepted (an accepted one lowers the misfit: moves)
     else:
         last.taus, last.v = p[:-1].copy(), float(p[-1])
-    # the last accepted solution's amplitudes and removal costs (made once, when read)
     return VehicleFit(taus=p[:-1], v=float(p[-1]), amps=last.amps, chi=cost,
                       gains=last.gains, solution=last)
