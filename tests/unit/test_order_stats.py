@@ -18,6 +18,7 @@ from bwim.detect.order_stats import (
     mad_of,
     median_of,
     outside_activity,
+    window_peaks,
 )
 from bwim.detect.signals import (
     MAD_TO_SIGMA,
@@ -176,3 +177,45 @@ def test_column_medians_of_are_numpys():
             assert np.array_equal(got, ref, equal_nan=True), (a, rows, got, ref)
             assert zero == bool(np.any(ref == 0))
     assert n_zero > 300
+
+
+def _reference_peaks(t, data, lo, hi, level, threshold):
+    """lateral_positions' peak weights of one window, written with numpy (the code
+    before the kernel): (status, weights) as window_peaks gives them."""
+    inside = (t >= lo) & (t <= hi)
+    if not inside.any():
+        return 0, None
+    w = np.maximum(data[inside].max(axis=0) - level, 0.0)
+    if not (w > 0).any():
+        return 1, None
+    return 2, np.maximum(w - threshold * w.max(), 0.0)
+
+
+def test_window_peaks_are_numpys():
+    """2000 tables (ties, NaN, ±inf; windows inside, across the ends, empty): the same
+    status, and the same weights (equal as numbers, NaN where numpy's is)."""
+    rng = np.random.default_rng(17)
+    counts = [0, 0, 0]
+    for trial in range(2000):
+        n, k = int(rng.integers(1, 80)), int(rng.integers(1, 14))
+        t = np.arange(n) / 256.0 + float(rng.normal())
+        data = rng.normal(size=(n, k))
+        if trial % 3 == 0:
+            data = np.round(data * 0.7)
+        if trial % 7 == 0:
+            data[rng.integers(0, n), rng.integers(0, k)] = np.nan
+        if trial % 11 == 0:
+            data[rng.integers(0, n), rng.integers(0, k)] = np.inf
+        level = rng.normal(size=k) * (0.0 if trial % 5 == 0 else 1.0) + (
+            3.0 if trial % 4 == 0 else 0.0)  # some windows without a positive weight
+        lo = float(rng.uniform(t[0] - 0.1, t[-1] + 0.02))
+        hi = lo + float(rng.uniform(0.0, 0.2))
+        thr = float(rng.choice([0.0, 0.5, rng.uniform(0, 1)]))
+        status, w = window_peaks(t, data, lo, hi, level, thr)
+        with np.errstate(invalid="ignore"):
+            ref_status, ref = _reference_peaks(t, data, lo, hi, level, thr)
+        assert status == ref_status, (trial, status, ref_status)
+        if ref is not None:
+            assert np.array_equal(w, ref, equal_nan=True), (trial, w, ref)
+        counts[status] += 1
+    assert min(counts) > 100, counts

@@ -30,6 +30,7 @@ from bwim.errors import InputError, require_range
 from bwim.records import Record
 from bwim.sensors import Sensor, SensorKind
 
+from .order_stats import window_peaks
 from .signals import channel_data, column_medians, median
 
 __all__ = ["LateralPosition", "in_metres", "lateral_position", "lateral_positions",
@@ -174,33 +175,53 @@ def lateral_positions(
         quiet = np.zeros(t.size, dtype=bool)
         quiet[:edge] = quiet[-edge:] = True
     quiet = np.asarray(quiet, dtype=bool)
+    coord = (np.asarray([s.y for s in sens], dtype=float) if metres
+             else np.arange(1.0, len(sens) + 1.0))
+    peaks = weight == "peak"
+    if peaks:  # the kernel's arguments: float64, C-contiguous
+        t = np.ascontiguousarray(t, dtype=float)
+        data = np.ascontiguousarray(data, dtype=float)
     out = []
     level = None
     for window in windows:
-        inside = np.ones(t.size, dtype=bool) if window is None else (
-            (t >= window[0]) & (t <= window[1]))
-        if not inside.any():
-            out.append(LateralPosition(value=float("nan"), unit=unit,
-                                       weights=np.zeros(len(sens)), gauges=names))
-            continue
+        lo, hi = (-np.inf, np.inf) if window is None else (float(window[0]),
+                                                            float(window[1]))
         if level is None:
+            if not _any_inside(t, lo, hi):
+                out.append(_nowhere(unit, len(sens), names))
+                continue
             if quiet.shape != t.shape or not quiet.any():
                 raise InputError("quiet must be a boolean mask of the record's samples with "
                                  "at least one True")
             level = column_medians(data, quiet)  # those of data[quiet]
-        if weight == "peak":
+        if peaks:
             # the largest deviation: the largest reading less the level (a subtraction
-            # rounds monotonically: the same number as the largest of the differences)
-            w = np.maximum(data[inside].max(axis=0) - level, 0.0)
+            # rounds monotonically: the same number as the largest of the differences),
+            # thresholded (bwim.detect.order_stats.window_peaks)
+            status, w = window_peaks(t, data, lo, hi, level, thr)
+            if status < 2:
+                out.append(_nowhere(unit, len(sens), names))
+                continue
         else:
+            inside = (t >= lo) & (t <= hi)
+            if not inside.any():
+                out.append(_nowhere(unit, len(sens), names))
+                continue
             w = np.maximum(data[inside] - level, 0.0).sum(axis=0) * median(np.diff(t))
-        if not (w > 0).any():
-            out.append(LateralPosition(value=float("nan"), unit=unit,
-                                       weights=np.zeros(len(sens)), gauges=names))
-            continue
-        w = np.maximum(w - thr * w.max(), 0.0)
-        coord = (np.asarray([s.y for s in sens], dtype=float) if metres
-                 else np.arange(1.0, len(sens) + 1.0))
+            if not (w > 0).any():
+                out.append(_nowhere(unit, len(sens), names))
+                continue
+            w = np.maximum(w - thr * w.max(), 0.0)
         out.append(LateralPosition(value=float(w @ coord / w.sum()), unit=unit, weights=w,
                                    gauges=names))
     return out
+
+
+def _any_inside(t: np.ndarray, lo: float, hi: float) -> bool:
+    """Whether a sample's time lies in ``[lo, hi]``."""
+    return bool(((t >= lo) & (t <= hi)).any())
+
+
+def _nowhere(unit: str, n: int, names: tuple[str, ...]) -> LateralPosition:
+    """The position of a window without a sample or without a gauge that responded."""
+    return LateralPosition(value=float("nan"), unit=unit, weights=np.zeros(n), gauges=names)

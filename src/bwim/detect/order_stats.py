@@ -27,6 +27,12 @@ Contract
   MAD) and the range of its running medians, and the spikes: deviations beyond
   ``sigmas`` × σ and ``share`` × that range.  It says when a reading is not finite
   (the caller then takes the numpy and scipy path, whose NaN handling it does not copy).
+* :func:`window_peaks` is :func:`bwim.detect.lateral.lateral_positions`' arithmetic of
+  one window with peak weights: over the samples whose time lies in ``[lo, hi]``, each
+  column's largest reading (numpy's ``max(axis=0)``: NaN when one is), less its quiet
+  level, floored at 0 (``numpy.maximum``), then, when one is positive, less
+  ``threshold`` × the largest of them, floored at 0 again.  It says when no sample lies
+  in the window, or no weight is positive.
 * :func:`outside_activity` is :func:`bwim.detect.presence.unexplained_activity`'s
   arithmetic for a finite signal: the samples inside a window widened by ``margin``,
   the quiet level (median outside), the noise (1.4826 MAD of the first difference over
@@ -40,7 +46,7 @@ import numpy as np
 from numba import njit
 
 __all__ = ["column_medians_of", "despike_columns", "mad_of", "median_of",
-           "outside_activity"]
+           "outside_activity", "window_peaks"]
 
 
 @njit(cache=True)
@@ -261,3 +267,49 @@ def outside_activity(t, s, windows, margin, fraction, snr, mad_to_sigma):
         if not inside[i] and abs(s[i] - level) > limit:
             active[i] = True
     return 1, active
+
+
+@njit(cache=True)
+def _floored(x):
+    """``numpy.maximum(x, 0.0)`` of one value (x itself when NaN)."""
+    return x if (x >= 0.0 or x != x) else 0.0
+
+
+@njit(cache=True)
+def window_peaks(t, data, lo, hi, level, threshold):
+    """The peak weights of the window ``[lo, hi]`` (see the module docstring): ``t``
+    (n,), ``data`` (n, k), ``level`` (k,) (float64, C-contiguous).  Returns (status,
+    weights (k,)): status 0 when no sample lies in the window, 1 when no weight is
+    positive (the weights then not thresholded), 2 with the thresholded weights."""
+    n, k = data.shape
+    top = np.empty(k)
+    w = np.zeros(k)
+    seen = False
+    for i in range(n):
+        if t[i] >= lo and t[i] <= hi:
+            if not seen:
+                for c in range(k):
+                    top[c] = data[i, c]
+                seen = True
+            else:
+                for c in range(k):
+                    x = data[i, c]
+                    if x > top[c] or x != x:  # numpy's max: a NaN stays
+                        top[c] = x
+    if not seen:
+        return 0, w
+    positive = False
+    for c in range(k):
+        w[c] = _floored(top[c] - level[c])
+        if w[c] > 0.0:
+            positive = True
+    if not positive:
+        return 1, w
+    largest = w[0]
+    for c in range(1, k):
+        if w[c] > largest or w[c] != w[c]:
+            largest = w[c]
+    cut = threshold * largest
+    for c in range(k):
+        w[c] = _floored(w[c] - cut)
+    return 2, w
