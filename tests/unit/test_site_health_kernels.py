@@ -9,6 +9,7 @@ from bwim.site.health_kernels import (
     gain_stats,
     held_extremes,
     loo_lines,
+    residuals,
     step_noise,
 )
 
@@ -115,3 +116,26 @@ def test_held_extremes_are_runs_at_the_maximum_or_minimum():
             a = rng.normal(size=(n, nc))
             a[n // 3:n // 3 + run, 0] = a.max() + 1.0
         assert np.array_equal(held_extremes(a, run), _held_reference(a, run)), trial
+
+
+def test_residuals_are_numpys():
+    """``r = readings - offsets; r[on] -= fitted`` (the gauge check's residual before the
+    kernel): equal bit for bit, signed zeros included, also for F-ordered readings (a
+    record's columns) and no sample or every sample fitted."""
+    rng = np.random.default_rng(21)
+    for trial in range(500):
+        n, nc = int(rng.integers(1, 300)), int(rng.integers(1, 13))
+        readings = rng.normal(size=(n, nc)) * 1e-4
+        if trial % 2:
+            readings = np.asfortranarray(readings)
+        if trial % 5 == 0:
+            readings = np.round(readings * 1e4) * 0.0  # zeros, some negative
+        offsets = rng.normal(size=nc) * 1e-4 * (trial % 3 != 0)
+        on = rng.random(n) < (0.0 if trial % 17 == 0 else 1.0 if trial % 19 == 0 else 0.5)
+        fitted = rng.normal(size=(int(on.sum()), nc)) * 1e-4
+        ref = readings - offsets
+        ref[on] -= fitted
+        got = residuals(readings, offsets, on, fitted)
+        assert np.array_equal(got, ref) and np.array_equal(np.signbit(got), np.signbit(ref))
+    with pytest.raises(ValueError, match="one fitted row"):
+        residuals(np.zeros((4, 2)), np.zeros(2), np.ones(4, dtype=bool), np.zeros((3, 2)))

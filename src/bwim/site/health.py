@@ -90,7 +90,13 @@ import numpy as np
 from bwim.errors import DATA_ERRORS, InputError
 from bwim.plausibility import ordered_flags, quality_of
 from bwim.records import Passage, Record
-from bwim.site.health_kernels import gain_stats, held_extremes, loo_lines, step_noise
+from bwim.site.health_kernels import (
+    gain_stats,
+    held_extremes,
+    loo_lines,
+    residuals,
+    step_noise,
+)
 from bwim.wim import Weighing
 from bwim.wim.influence_line import read_channels
 from bwim.wim.multirun import MultiRunCalibration
@@ -219,8 +225,9 @@ def restrict_lines(lines: MultiRunCalibration, names: Sequence[str]) -> MultiRun
     """The calibration with only the channels ``names`` (in the calibration's order):
     their lines, lateral slopes, residual deviations, covariance and noise.  The runs'
     misfit medians are kept (each channel's misfit is in units of its own deviation)."""
-    keep = [k for k, c in enumerate(lines.channels) if c.name in set(names)]
-    if len(keep) != len(set(names)):
+    wanted = set(names)
+    keep = [k for k, c in enumerate(lines.channels) if c.name in wanted]
+    if len(keep) != len(wanted):
         unknown = sorted(set(names) - {c.name for c in lines.channels})
         raise InputError(f"not channels of the calibration: {', '.join(unknown)}")
     if len(keep) == len(lines.channels):
@@ -250,7 +257,7 @@ def check_gauges(record: Record, passage: Passage, lines: MultiRunCalibration, *
     model = None  # the last comparison's, when it weighed the healthy channels
     while len(names) - len(bad) >= MIN_COMPARED and 2 * len(bad) < len(names):
         fault, ratios, model = _worst(record, passage, lines,
-                                      [n for n in names if n not in bad], combine)
+                                      [n for n in names if n not in bad], combine, readings)
         if fault is None:
             break
         model = None
@@ -362,14 +369,18 @@ def _clipped(readings: np.ndarray, lines: MultiRunCalibration, record: Record,
 
 
 def _worst(record: Record, passage: Passage, lines: MultiRunCalibration,
-           names: list[str], combine: str
+           names: list[str], combine: str, readings: np.ndarray
            ) -> tuple[GaugeFault | None, dict[str, float], WeighingModel | None]:
     """Step 3: the most significant gain or drift fault among ``names`` (None when every
     one passes or the weighing fails), every channel's ratio (empty when it fails) and
-    the weighing's model (None when it could not be made)."""
+    the weighing's model (None when it could not be made).  ``readings``: those of every
+    channel of ``lines`` (:func:`~bwim.wim.influence_line.read_channels`)."""
     sub = restrict_lines(lines, names)
+    if sub is not lines:  # the columns of the channels kept
+        kept = set(names)
+        readings = readings[:, [k for k, c in enumerate(lines.channels) if c.name in kept]]
     try:
-        model = weighing_model(record, passage, sub, combine=combine)
+        model = weighing_model(record, passage, sub, combine=combine, readings=readings)
     except DATA_ERRORS:
         return None, {}, None
     try:
@@ -381,13 +392,14 @@ def _worst(record: Record, passage: Passage, lines: MultiRunCalibration,
     c = _compare(w, sub)
     if c is None:
         return None, {}, model
-    trend = _trends(record, w, model.readings)
+    trend = _trends(record, w, model.readings, model.on_support)
     noise = sub.channel_noise
     y = _positions(sub)
     expected = _predicted(y, c.gain, c.snr)
     ratios = _ratios(names, c.gain, expected)
     worst, score = None, SIGNIFICANCE
     drifting, excess = None, 1.0
+    off = np.log(GAIN_TOLERANCE)
     shown = _predicted(y, trend / c.rms, c.snr) * c.rms
     # each channel's significance, and its drift: the residual's change over the record
     # beyond what the others' show (their changes in proportion to their signals, on a
@@ -399,7 +411,7 @@ def _worst(record: Record, passage: Passage, lines: MultiRunCalibration,
         significance = significances[g]
         if names[g] in ratios and significance > score:
             ratio = ratios[names[g]]
-            if ratio <= 0 or abs(np.log(ratio)) > np.log(GAIN_TOLERANCE):  # off
+            if ratio <= 0 or abs(np.log(ratio)) > off:  # off
                 kind = ("silent" if abs(c.corr[g]) < SILENT_CORRELATION
                         else "reversed" if ratio < 0 else "gain")
                 worst, score = GaugeFault(
@@ -416,42 +428,38 @@ def _worst(record: Record, passage: Passage, lines: MultiRunCalibration,
     if worst is None:  # a gain fault first: its residual has a trend too...
         worst = drifting
     elif drifting is not None and drifting.gauge == worst.gauge and \
-            _explains_drift(record, w, model.readings, names.index(worst.gauge)):
+            _explains_drift(record, w, model.readings, model.on_support,
+                            names.index(worst.gauge)):
         worst = drifting  # ... unless a baseline change explains its residual better
     return worst, ratios, model
 
 
-def _residuals(record: Record, w: Weighing, readings: np.ndarray) -> np.ndarray:
+def _residuals(w: Weighing, readings: np.ndarray, on: np.ndarray) -> np.ndarray:
     """Each channel's residual over the whole record: reading (``readings``, the
     weighing's channels) − offset − fitted static reading (0 with no axle on the
-    support), logger units, shape (n_t, n_channels)."""
-    r = readings - w.offsets
-    r[_samples(record, w)] -= w.fitted
-    return r
+    support), logger units, shape (n_t, n_channels).  ``on``: the samples ``w`` fitted
+    (:attr:`~bwim.wim.weigh.WeighingModel.on_support` of its model; numpy's
+    ``readings - offsets`` less the fitted readings there, the same numbers:
+    :func:`bwim.site.health_kernels.residuals`)."""
+    return residuals(readings, w.offsets, on, w.fitted)
 
 
-def _samples(record: Record, w: Weighing) -> np.ndarray:
-    """The record's samples that ``w`` fitted (its times: some of the record's, whose time
-    axis is strictly increasing), as a boolean mask."""
-    on = np.zeros(record.time.size, dtype=bool)
-    on[np.searchsorted(record.time, w.time)] = True
-    return on
-
-
-def _trends(record: Record, w: Weighing, readings: np.ndarray) -> np.ndarray:
+def _trends(record: Record, w: Weighing, readings: np.ndarray, on: np.ndarray
+            ) -> np.ndarray:
     """Each channel's residual's least-squares straight line in time: its change from the
     first sample to the last, logger units."""
     t = record.time - record.time.mean()
-    return (t @ _residuals(record, w, readings)) / (t @ t) * float(record.time[-1] - record.time[0])
+    return (t @ _residuals(w, readings, on)) / (t @ t) * float(record.time[-1] - record.time[0])
 
 
-def _explains_drift(record: Record, w: Weighing, readings: np.ndarray, g: int) -> bool:
+def _explains_drift(record: Record, w: Weighing, readings: np.ndarray, on: np.ndarray,
+                    g: int) -> bool:
     """Whether channel ``g``'s residual is explained better by a straight line in time (a
     baseline change) than by a multiple of its fitted static reading (a gain error): the
     larger sum of squares explained by the one regressor."""
-    r = _residuals(record, w, readings)[:, g]
+    r = _residuals(w, readings, on)[:, g]
     f = np.zeros_like(r)
-    f[_samples(record, w)] = w.fitted[:, g]
+    f[on] = w.fitted[:, g]
     t = record.time - record.time.mean()
     return bool((r @ t) ** 2 / (t @ t) > (r @ f) ** 2 / max(f @ f, 1e-300))
 
@@ -475,7 +483,7 @@ def _compare(w: Weighing, sub: MultiRunCalibration) -> _Comparison | None:
     st = gain_stats(m, f)
     if np.any(st.power <= 0):
         return None
-    sd = np.sqrt(np.clip(np.diag(sub.error_covariance(w.gvw)), np.finfo(float).tiny, None))
+    sd = np.sqrt(np.clip(sub.error_variance(w.gvw), np.finfo(float).tiny, None))
     return _Comparison(gain=st.gain, corr=st.corr, snr=st.rms / sd, rms=st.rms)
 
 

@@ -17,6 +17,10 @@ Contract
   ``std(diff(reading)) / √2`` (numpy's ``std``: the mean, the squared deviations'
   mean, its root), and :func:`held_extremes` whether a channel holds its maximum or its
   minimum over the record for at least ``run`` consecutive samples.
+* :func:`residuals` gives each channel's residual over the record: ``readings −
+  offsets``, less the fitted readings (one row per sample of ``on``, in order) at the
+  samples of ``on``: numpy's ``r = readings - offsets; r[on] -= fitted``, the same
+  numbers (each a difference of two, then of that and the fit).
 * **The numbers of numpy, bit for bit**: every sum is numpy's for the same vector
   (:func:`bwim.pairwise.pairwise_sum`: its pairwise summation, from 0), every column sum
   of a table numpy's ``sum(axis=0)`` of a C-ordered table (row after row, from 0), and
@@ -36,7 +40,8 @@ import numpy as np
 
 from bwim.pairwise import pairwise_sum
 
-__all__ = ["GainStats", "gain_stats", "held_extremes", "loo_lines", "step_noise"]
+__all__ = ["GainStats", "gain_stats", "held_extremes", "loo_lines", "residuals",
+           "step_noise"]
 
 
 @numba.njit(cache=True)
@@ -193,3 +198,30 @@ def held_extremes(readings: np.ndarray, run: int) -> np.ndarray:
     """Per channel of ``readings`` (n_t, n_c; finite) whether it holds its maximum or its
     minimum for at least ``run`` ≥ 1 consecutive samples (module docstring)."""
     return _held_extremes(np.ascontiguousarray(readings, dtype=float), int(run))
+
+
+@numba.njit(cache=True)
+def _residuals(readings, offsets, on, fitted, out):  # pragma: no cover - compiled
+    n, nc = readings.shape
+    j = 0
+    for k in range(n):
+        for c in range(nc):
+            out[k, c] = readings[k, c] - offsets[c]
+        if on[k]:
+            for c in range(nc):
+                out[k, c] = out[k, c] - fitted[j, c]
+            j += 1
+
+
+def residuals(readings: np.ndarray, offsets: np.ndarray, on: np.ndarray,
+              fitted: np.ndarray) -> np.ndarray:
+    """Each channel's residual (module docstring): ``readings`` (n_t, n_c), ``offsets``
+    (n_c,), ``on`` bool (n_t,), ``fitted`` (count of ``on``, n_c); shape (n_t, n_c)."""
+    readings = np.ascontiguousarray(readings, dtype=float)
+    on = np.ascontiguousarray(on, dtype=bool)
+    fitted = np.ascontiguousarray(fitted, dtype=float)
+    if fitted.shape != (int(np.count_nonzero(on)), readings.shape[1]):
+        raise ValueError("residuals: one fitted row per sample of on")
+    out = np.empty(readings.shape)
+    _residuals(readings, np.ascontiguousarray(offsets, dtype=float), on, fitted, out)
+    return out

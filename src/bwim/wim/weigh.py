@@ -84,7 +84,13 @@ from bwim.records import Passage, Record
 from bwim.wim.influence_line import Channel, read_channels
 from bwim.wim.moses import AxleGroups, group_axles, group_share
 from bwim.wim.multirun import MultiRunCalibration
-from bwim.wim.weigh_kernels import channel_products, fit_residual, group_readings
+from bwim.wim.weigh_kernels import (
+    channel_products,
+    column_centred,
+    fit_residual,
+    group_readings,
+    on_support,
+)
 
 __all__ = ["HARD_FLAGS", "NORMAL_CONDITION", "SOFT_FLAGS", "Limits", "Weighing",
            "WeighingModel", "weigh", "weighing_model"]
@@ -180,22 +186,26 @@ def _groups(groups: Any, passage: Passage) -> AxleGroups:
 
 def _whitener(C: np.ndarray, combine: str) -> np.ndarray | None:
     """Matrix T (n_c', n_c) applied to the channel axis: ``T C Tᵀ = I`` for "blue"; for
-    "gls" its diagonal version, given as the vector of its diagonal (n_c,); None for the
-    plain sum."""
+    "gls" its diagonal version, given as the vector of its diagonal (n_c,), from C's
+    diagonal (:func:`_gls_whitener`); None for the plain sum."""
     if combine == "sum":
         return None
     if combine == "gls":
-        var = np.diag(C)
-        if np.any(var <= 0):
-            raise InputError("combine='gls' needs a positive residual variance per channel "
-                             "(the calibration fitted a channel exactly); use 'sum'")
-        return 1.0 / np.sqrt(var)
+        return _gls_whitener(np.diag(C))
     try:
         L = np.linalg.cholesky(C)
     except np.linalg.LinAlgError:
         raise InputError("combine='blue' needs a positive definite channel covariance; "
                          "use 'gls' or 'sum'") from None
     return scipy.linalg.solve_triangular(L, np.eye(L.shape[0]), lower=True)
+
+
+def _gls_whitener(var: np.ndarray) -> np.ndarray:
+    """The diagonal whitener of "gls" (n_c,) from each channel's residual variance."""
+    if np.any(var <= 0):
+        raise InputError("combine='gls' needs a positive residual variance per channel "
+                         "(the calibration fitted a channel exactly); use 'sum'")
+    return 1.0 / np.sqrt(var)
 
 
 #: Fits whose design is conditioned better than this (ratio of its largest to its smallest
@@ -235,7 +245,12 @@ def _solve(centred: _Centred, s: float, T: np.ndarray | None
         G, rhs = (s * s) * centred.sum_gram, s * centred.sum_rhs
     elif T.ndim == 1:
         w = T * T
-        G, rhs = (s * s) * np.tensordot(w, centred.gram, 1), s * (w @ centred.rhs)
+        # numpy.tensordot(w, gram, 1)'s own product: (1, n_c) @ (n_c, n_g²), gram
+        # C-contiguous (channel_products)
+        n_c = w.shape[0]
+        Gw = np.dot(w.reshape(1, n_c), centred.gram.reshape(n_c, -1)).reshape(
+            centred.gram.shape[1:])
+        G, rhs = (s * s) * Gw, s * (w @ centred.rhs)
     else:
         A, b = _system(Ec, Mc, s, T)
         G, rhs = A.T @ A, A.T @ b
@@ -319,21 +334,31 @@ def weighing_model(
     lateral: float | None = None,
     baseline: str = "fit",
     limits: Limits | None = None,
+    readings: np.ndarray | None = None,
 ) -> WeighingModel:
     """What :func:`weigh` makes before the scale: the checked options, the readings and
     the lines' readings of a unit weight on each axle group, offsets removed; the
     arguments are :func:`weigh`'s.  Its :meth:`WeighingModel.weigh` gives the weighing
     (the numbers of :func:`weigh` with the same arguments) for any scale: two weighings
     of one vehicle that differ by their scale only (the gauge check's and the drift
-    corrected one, :mod:`bwim.site.event`) make the model once."""
-    return _model(record, calibration, _inputs(
-        record, passage, calibration, groups=groups, combine=combine, lateral=lateral,
-        baseline=baseline, limits=limits))
+    corrected one, :mod:`bwim.site.event`) make the model once.  ``readings``: the
+    calibration's channels' readings of ``record``, (n_t, n_channels), as
+    :func:`~bwim.wim.influence_line.read_channels` gives them, when already read (not
+    to be changed afterwards)."""
+    event = _inputs(record, passage, calibration, groups=groups, combine=combine,
+                    lateral=lateral, baseline=baseline, limits=limits)
+    if readings is not None:
+        readings = np.asarray(readings, dtype=float)
+        shape = (record.time.size, len(calibration.channels))
+        if readings.shape != shape:
+            raise InputError(f"readings must have shape (n_t, n_channels) = {shape}, got "
+                             f"{readings.shape}")
+    return _model(record, calibration, event, readings)
 
 
-def _model(record: Record, calibration: MultiRunCalibration, event: _Inputs
-           ) -> WeighingModel:
-    design = _design(record, event, calibration)
+def _model(record: Record, calibration: MultiRunCalibration, event: _Inputs,
+           readings: np.ndarray | None = None) -> WeighingModel:
+    design = _design(record, event, calibration, readings)
     return WeighingModel(record=record, calibration=calibration, event=event,
                          design=design, centred=_centred(design, event))
 
@@ -353,6 +378,12 @@ class WeighingModel:
         """The calibration's channels' readings over the record, (n_t, n_channels), as
         :func:`bwim.wim.influence_line.read_channels` gives them (not to be changed)."""
         return self.design.readings
+
+    @property
+    def on_support(self) -> np.ndarray:
+        """The samples with an axle on the lines' support, bool (n_t,): those its
+        weighings fit (their ``time``, ``measured`` and ``fitted``; not to be changed)."""
+        return self.design.on
 
     def weigh(self, *, scale_correction: bool = True, scale: float | None = None
               ) -> Weighing:
@@ -436,18 +467,20 @@ class _Design:
     trend_used: bool  # the factor is the scale trend's at clock_time
 
 
-def _design(record: Record, event: _Inputs, calibration: MultiRunCalibration) -> _Design:
-    """The model of the readings: the lines at the vehicle's lateral covariate under each
-    axle, summed by group (the scale factor 1: :func:`_scaled` sets it)."""
+def _design(record: Record, event: _Inputs, calibration: MultiRunCalibration,
+            readings: np.ndarray | None = None) -> _Design:
+    """The model of the readings (``readings`` when already read): the lines at the
+    vehicle's lateral covariate under each axle, summed by group (the scale factor 1:
+    :func:`_scaled` sets it)."""
     line = calibration.line
-    E = read_channels(record, line.channels)  # (n_t, n_c)
+    E = read_channels(record, line.channels) if readings is None else readings  # (n_t, n_c)
     ords = calibration.ordinates_at(event.lateral)[1:-1]  # interior ordinates (m, n_c)
     pos = event.passage.axle_x(record.time)  # (n_t, n_axles)
     # (n_t, n_groups, n_c): Σ_i share_ig M_kic, M the readings under each axle
     Mg = group_readings(pos, ords, line.x[0], line.spacing, line.x.size - 1,
                         event.groups.share)
     lo, hi = line.support
-    on = ((pos > lo) & (pos < hi)).any(axis=1)
+    on = on_support(pos, lo, hi)  # ((pos > lo) & (pos < hi)).any(axis=1)
     return _Design(readings=E, positions=pos, groups=Mg, on=on, support=(lo, hi),
                    clock_time=record.clock_seconds(), scale=1.0, trend_used=False)
 
@@ -496,7 +529,8 @@ def _centred(design: _Design, event: _Inputs) -> _Centred:
     if event.baseline == "fit":
         if np.count_nonzero(~design.on) < limits.min_baseline:
             flags.append("no_baseline")
-        return _centred_of(E - E.mean(axis=0), Mg - Mg.mean(axis=0), None, tuple(flags))
+        # Mg - Mg.mean(axis=0) (group_readings' table is C-ordered: the kernel's sums)
+        return _centred_of(E - E.mean(axis=0), column_centred(Mg), None, tuple(flags))
     if event.baseline == "pretrigger":
         pre = design.positions[:, 0] <= design.support[0]
         n_pre = int(np.argmin(pre)) if not pre.all() else E.shape[0]
@@ -534,9 +568,14 @@ def _fit(design: _Design, centred: _Centred, event: _Inputs,
     s, share, combine = design.scale, event.groups.share, event.combine
     n_g = share.shape[1]
     sol, rank, sv = _solve(centred, s, None)
-    C = calibration.error_covariance(float(np.nansum(share @ sol)) if rank == n_g else None)
-    if combine != "sum":
-        sol, rank, sv = _solve(centred, s, _whitener(C, combine))
+    weight = float(np.nansum(share @ sol)) if rank == n_g else None
+    if combine == "gls":  # the channels' variances alone (error_covariance's diagonal)
+        var = calibration.error_variance(weight)
+        sol, rank, sv = _solve(centred, s, _gls_whitener(var))
+    else:
+        C = calibration.error_covariance(weight)
+        if combine != "sum":
+            sol, rank, sv = _solve(centred, s, _whitener(C, combine))
     condition = float(sv[0] / sv[-1]) if sv[-1] > 0 else float("inf")
     if rank < n_g:
         sol = np.full(n_g, np.nan)
@@ -549,7 +588,8 @@ def _fit(design: _Design, centred: _Centred, event: _Inputs,
         sd = np.sqrt(max(float(np.sum(C)), np.finfo(float).tiny))
         misfit_ref = calibration.sum_misfit_median
     else:
-        sd = np.sqrt(np.clip(np.diag(C), np.finfo(float).tiny, None))
+        sd = np.sqrt(np.clip(var if combine == "gls" else np.diag(C), np.finfo(float).tiny,
+                             None))
         misfit_ref = calibration.misfit_median
     # fitted readings, offsets (fitted: the mean of reading − fit), the sums of squares
     finite = group_w if np.isfinite(group_w).all() else np.nan_to_num(group_w)

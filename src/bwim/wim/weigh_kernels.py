@@ -23,6 +23,14 @@ Contract
   squares of the readings, of the residual, and of the residual in units of each
   channel's expected deviation (or, for the channels' sum, of the summed residual in
   units of its own).
+* :func:`on_support` gives the samples at which an axle lies strictly inside the lines'
+  support ``(lo, hi)``: ``((pos > lo) & (pos < hi)).any(axis=1)``, the same booleans.
+* :func:`column_centred` gives a C-contiguous array (e.g. the design ``X``, (n_t,
+  n_groups, n_c)) less its mean over the first axis, bit for bit ``X - X.mean(axis=0)``:
+  numpy's column sums of a C-ordered table (sample after sample, from 0; a single
+  column, a contiguous vector, by numpy's pairwise sum: :func:`bwim.pairwise.pairwise_sum`)
+  divided by the count, then each difference.  (Of another layout numpy sums in another order: the
+  readings a record's columns give, Fortran-ordered, by its pairwise sums.)
 * Sums run in plain order (sample after sample): the numbers of the numpy expressions
   they replace to rounding, not bit for bit (tests/unit/test_weigh_kernels.py holds them
   to those expressions within 1e-13 relative on random data, and the unit readings to the
@@ -38,8 +46,10 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-__all__ = ["ChannelProducts", "FitResidual", "channel_products", "fit_residual",
-           "group_readings"]
+from bwim.pairwise import pairwise_sum
+
+__all__ = ["ChannelProducts", "FitResidual", "channel_products", "column_centred",
+           "fit_residual", "group_readings", "on_support"]
 
 
 @numba.njit(cache=True)
@@ -75,6 +85,65 @@ def group_readings(pos: np.ndarray, ords: np.ndarray, x0: float, h: float, n: in
     return _group_readings(np.ascontiguousarray(pos, dtype=float),
                            np.ascontiguousarray(ords, dtype=float), float(x0), float(h),
                            int(n), np.ascontiguousarray(share, dtype=float))
+
+
+@numba.njit(cache=True)
+def _on_support(pos, lo, hi):  # pragma: no cover - compiled
+    n_t, n_a = pos.shape
+    on = np.zeros(n_t, dtype=np.bool_)
+    for k in range(n_t):
+        for i in range(n_a):
+            x = pos[k, i]
+            if x > lo and x < hi:
+                on[k] = True
+                break
+    return on
+
+
+def on_support(pos: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    """Whether an axle lies strictly inside ``(lo, hi)`` at each sample (module
+    docstring): ``pos`` (n_t, n_axles) axle positions, m."""
+    return _on_support(np.ascontiguousarray(pos, dtype=float), float(lo), float(hi))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _column_means(a, out):  # pragma: no cover - compiled
+    """numpy's ``a.mean(axis=0)`` of a C-ordered table (n, m) into ``out`` (m,): the sums
+    sample after sample from 0, over the count (one column: a contiguous vector, numpy's
+    pairwise sum)."""
+    n, m = a.shape
+    if m == 1:
+        out[0] = pairwise_sum(a.reshape(-1), 0, n)
+    else:
+        for j in range(m):
+            out[j] = 0.0
+        for k in range(n):
+            for j in range(m):
+                out[j] += a[k, j]
+    for j in range(m):
+        out[j] /= n
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _column_centred(X, out):  # pragma: no cover - compiled
+    n = X.shape[0]
+    flat = X.reshape(n, -1)
+    flat_out = out.reshape(n, -1)
+    m = np.empty(flat.shape[1])
+    _column_means(flat, m)
+    for k in range(n):
+        for j in range(flat.shape[1]):
+            flat_out[k, j] = flat[k, j] - m[j]
+
+
+def column_centred(X: np.ndarray) -> np.ndarray:
+    """``X - X.mean(axis=0)`` of a C-contiguous float64 array (module docstring), the same
+    numbers (numpy's for that layout: another one sums in another order)."""
+    if X.dtype != np.float64 or not X.flags.c_contiguous:
+        raise ValueError("column_centred: a C-contiguous float64 array")
+    out = np.empty(X.shape)
+    _column_centred(X, out)
+    return out
 
 
 @numba.njit(cache=True)
@@ -119,7 +188,7 @@ def _channel_products(X, e):  # pragma: no cover - compiled
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class ChannelProducts:
-    """:func:`channel_products`' result."""
+    """:func:`channel_products`' result (``gram`` C-contiguous)."""
 
     gram: np.ndarray  # (n_c, n_groups, n_groups)
     rhs: np.ndarray  # (n_c, n_groups)
@@ -133,7 +202,7 @@ def channel_products(X: np.ndarray, e: np.ndarray) -> ChannelProducts:
     out = _channel_products(np.ascontiguousarray(X, dtype=float),
                             np.ascontiguousarray(e, dtype=float))
     n_c, n_g = X.shape[2], X.shape[1]
-    return ChannelProducts(gram=out[:n_c, :, :n_g], rhs=out[:n_c, :, n_g],
+    return ChannelProducts(gram=np.ascontiguousarray(out[:n_c, :, :n_g]), rhs=out[:n_c, :, n_g],
                            sum_gram=out[n_c, :, :n_g], sum_rhs=out[n_c, :, n_g])
 
 
