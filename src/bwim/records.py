@@ -28,10 +28,12 @@ Contract
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from datetime import datetime
 from datetime import time as dtime
+from itertools import accumulate
 
 import numpy as np
 
@@ -97,7 +99,12 @@ def local_seconds(t: datetime) -> float:
 
 
 def axle_offsets(spacings: np.ndarray) -> np.ndarray:
-    """Distance of each axle behind the first, m, from the axle spacings."""
+    """Distance of each axle behind the first, m, from the axle spacings: 0, then their
+    running sums (``numpy.cumsum``'s, one after the other; a float vector's summed as
+    Python floats, the same numbers without numpy's calls)."""
+    if isinstance(spacings, np.ndarray) and spacings.dtype == np.float64 \
+            and spacings.ndim == 1:
+        return np.array([0.0, *accumulate(spacings.tolist())])
     return np.concatenate([[0.0], np.cumsum(spacings)])
 
 
@@ -146,7 +153,8 @@ class Passage(AxleLayout):
         object.__setattr__(self, "speed", require_positive("speed", self.speed))
         object.__setattr__(self, "lane", require_finite("lane", self.lane))
         sp = np.array(self.axle_spacings, dtype=float, ndmin=1)
-        if sp.ndim != 1 or not np.all(np.isfinite(sp)) or np.any(sp <= 0):
+        # finite and positive (NaN fails both comparisons)
+        if sp.ndim != 1 or not all(0.0 < x < math.inf for x in sp.tolist()):
             raise InputError(f"axle_spacings must be positive distances, got {sp.tolist()}")
         object.__setattr__(self, "axle_spacings", sp)
         if self.track_width is not None:
