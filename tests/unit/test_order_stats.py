@@ -20,6 +20,7 @@ from bwim.detect.order_stats import (
     outside_activity,
     window_peaks,
 )
+from bwim.detect.presence import signal_noise, unexplained_activity
 from bwim.detect.signals import (
     MAD_TO_SIGMA,
     SPIKE_SHARE,
@@ -136,19 +137,49 @@ def test_outside_activity_is_numpys():
         lo = rng.uniform(t[0] - 0.2, t[-1] + 0.1, size=m)
         w = np.column_stack([lo, lo + rng.uniform(0.0, 0.4, size=m)])
         margin, fraction, snr = 0.05, float(rng.uniform(0.05, 0.5)), float(rng.uniform(2, 10))
-        status, active = outside_activity(t, s, w, margin, fraction, snr, MAD_TO_SIGMA)
+        status, active = outside_activity(t, s, w, margin, fraction, snr, MAD_TO_SIGMA,
+                                          np.nan)
+        # the noise made once (presence.signal_noise) and given: the same samples
+        given = outside_activity(t, s, w, margin, fraction, snr, MAD_TO_SIGMA,
+                                 signal_noise(s))
         ref = _reference_activity(t, s, w, margin, fraction, snr)
         if ref is None:
-            assert status == 0
+            assert status == 0 and given[0] == 0
             n_none += 1
         else:
             assert status == 1 and np.array_equal(active, ref), (trial, active, ref)
+            assert given[0] == 1 and np.array_equal(given[1], ref), trial
             n_active += int(ref.any())
     assert n_active > 200 and n_none > 200
     s = np.ones(50)
     s[3] = np.nan
     assert outside_activity(np.arange(50.0), s, np.array([[10.0, 20.0]]), 0.05, 0.2, 8.0,
-                            MAD_TO_SIGMA)[0] == 2
+                            MAD_TO_SIGMA, np.nan)[0] == 2
+
+
+def test_unexplained_activity_with_its_noise_and_step_given():
+    """unexplained_activity with the signal's noise and the median time step made once
+    (a signal judged against several sets of windows): the same intervals."""
+    rng = np.random.default_rng(23)
+    n_found = 0
+    for trial in range(600):
+        n = int(rng.integers(2, 400))
+        t = np.arange(n) / 512.0 + float(rng.normal())
+        s = rng.normal(size=n) * 0.1
+        for _ in range(int(rng.integers(0, 4))):
+            i = int(rng.integers(0, n))
+            s[i:i + int(rng.integers(1, 60))] += float(rng.normal()) * 10
+        if trial % 9 == 0:
+            s[int(rng.integers(0, n))] = np.nan  # numpy's path
+        lo = rng.uniform(t[0], t[-1], size=int(rng.integers(1, 3)))
+        w = np.column_stack([lo, lo + rng.uniform(0.0, 0.2, size=lo.size)])
+        with np.errstate(invalid="ignore"):
+            ref = unexplained_activity(t, s, w)
+            got = unexplained_activity(t, s, w, noise=signal_noise(s),
+                                       step=median(np.diff(t)))
+        assert np.array_equal(got, ref), trial
+        n_found += len(ref) > 0
+    assert n_found > 50
 
 
 def test_column_medians_of_are_numpys():

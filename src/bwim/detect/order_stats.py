@@ -37,7 +37,8 @@ Contract
   arithmetic for a finite signal: the samples inside a window widened by ``margin``,
   the quiet level (median outside), the noise (1.4826 MAD of the first difference over
   √2), the limit (the larger of ``fraction`` × the largest departure inside and ``snr``
-  × the noise, as Python's ``max`` takes it) and the samples outside beyond it.
+  × the noise, as Python's ``max`` takes it) and the samples outside beyond it; the
+  noise may be given (the same number computed once for several calls).
 """
 
 from __future__ import annotations
@@ -209,13 +210,14 @@ def despike_columns(y, sigmas, share, mad_to_sigma):
 
 
 @njit(cache=True)
-def outside_activity(t, s, windows, margin, fraction, snr, mad_to_sigma):
+def outside_activity(t, s, windows, margin, fraction, snr, mad_to_sigma, noise):
     """:func:`~bwim.detect.presence.unexplained_activity`'s samples of activity (see the
-    module docstring): ``t``, ``s`` (n,), ``windows`` (m, 2) (float64, C-contiguous).
-    Returns (status, active): status 0 when nothing can be reported (quiet samples
-    fewer than 10 % of the record, or none inside a window), 1 with ``active`` (bool,
-    (n,)) the samples outside every widened window departing beyond the limit, 2 when
-    a reading is not finite (nothing computed)."""
+    module docstring): ``t``, ``s`` (n,), ``windows`` (m, 2) (float64, C-contiguous);
+    ``noise`` the signal's noise when known (1.4826 MAD of its first difference over √2,
+    as computed here), NaN to compute it.  Returns (status, active): status 0 when
+    nothing can be reported (quiet samples fewer than 10 % of the record, or none inside
+    a window), 1 with ``active`` (bool, (n,)) the samples outside every widened window
+    departing beyond the limit, 2 when a reading is not finite (nothing computed)."""
     n = t.size
     active = np.zeros(n, dtype=np.bool_)
     for i in range(n):
@@ -243,7 +245,9 @@ def outside_activity(t, s, windows, margin, fraction, snr, mad_to_sigma):
             k += 1
     level = _median_inplace(buf, n_out)
     # the noise: 1.4826 MAD of the first difference, over √2
-    if n > 1:
+    if noise == noise:  # given
+        pass
+    elif n > 1:
         diff = np.empty(n - 1)
         for i in range(n - 1):
             diff[i] = s[i + 1] - s[i]
