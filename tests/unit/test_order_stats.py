@@ -17,7 +17,10 @@ from bwim.detect.order_stats import (
     despike_columns,
     mad_of,
     median_of,
+    end_excursion,
     outside_activity,
+    outside_windows,
+    row_medians_of,
     window_peaks,
 )
 from bwim.detect.presence import signal_noise, unexplained_activity
@@ -242,7 +245,7 @@ def test_window_peaks_are_numpys():
         lo = float(rng.uniform(t[0] - 0.1, t[-1] + 0.02))
         hi = lo + float(rng.uniform(0.0, 0.2))
         thr = float(rng.choice([0.0, 0.5, rng.uniform(0, 1)]))
-        status, w = window_peaks(t, data, lo, hi, level, thr)
+        status, w = window_peaks(t, np.ascontiguousarray(data.T), lo, hi, level, thr)
         with np.errstate(invalid="ignore"):
             ref_status, ref = _reference_peaks(t, data, lo, hi, level, thr)
         assert status == ref_status, (trial, status, ref_status)
@@ -250,3 +253,58 @@ def test_window_peaks_are_numpys():
             assert np.array_equal(w, ref, equal_nan=True), (trial, w, ref)
         counts[status] += 1
     assert min(counts) > 100, counts
+
+
+def test_row_medians_are_column_medians_of_the_transpose():
+    """A table's columns one after the other (a Fortran-ordered table's transpose, no
+    copy): the medians of its columns, numpy's."""
+    rng = np.random.default_rng(29)
+    for trial in range(1000):
+        n, k = int(rng.integers(1, 80)), int(rng.integers(1, 14))
+        a = np.asfortranarray(rng.normal(size=(n, k)))
+        if trial % 3 == 0:
+            a = np.asfortranarray(np.round(a * 0.7))
+        if trial % 7 == 0:
+            a[rng.integers(0, n), rng.integers(0, k)] = np.nan
+        rows = rng.random(n) < 0.7
+        rows[rng.integers(0, n)] = True
+        with np.errstate(invalid="ignore"):
+            ref = np.median(a[rows], axis=0)
+        got, zero = row_medians_of(a.T, rows)
+        assert np.array_equal(got, ref, equal_nan=True), (trial, got, ref)
+        assert zero == bool(np.any(ref == 0))
+
+
+def test_outside_windows_are_numpys():
+    rng = np.random.default_rng(31)
+    for _ in range(500):
+        n = int(rng.integers(1, 300))
+        t = np.arange(n) / 512.0 + float(rng.normal())
+        lo = rng.uniform(t[0] - 0.2, t[-1] + 0.1, size=int(rng.integers(0, 4)))
+        w = np.column_stack([lo, lo + rng.uniform(0.0, 0.4, size=lo.size)])
+        inside = np.zeros(n, dtype=bool)
+        for a, b in w:
+            inside |= (t >= a - 0.05) & (t <= b + 0.05)
+        outside, count = outside_windows(t, w.reshape(-1, 2), 0.05)
+        assert np.array_equal(outside, ~inside) and count == int((~inside).sum())
+
+
+def test_end_excursion_is_numpys():
+    """ends_loaded's means (numpy's pairwise sums: stretches beyond 8 and 128 values)
+    and its argmax of the excursion (ties, a NaN)."""
+    rng = np.random.default_rng(37)
+    for trial in range(1500):
+        n = int(rng.integers(2, 300))
+        y = rng.normal(size=int(rng.integers(2 * n, 5 * n))) * 10.0 ** rng.uniform(-8, 2)
+        if trial % 4 == 0:
+            y = np.round(y / np.abs(y).max() * 3)  # ties
+        if trial % 23 == 0:
+            y[rng.integers(0, y.size)] = np.nan
+        start, end, middle, k, excursion = end_excursion(y, n)
+        ref_start = float(y[:n].mean())
+        assert start == ref_start or (start != start and ref_start != ref_start)
+        assert end == float(y[-n:].mean()) or np.isnan(end)
+        assert middle == float(y[n:2 * n].mean()) or np.isnan(middle)
+        dev = y - ref_start
+        assert k == int(np.argmax(np.abs(dev)))
+        assert excursion == dev[k] or (np.isnan(excursion) and np.isnan(dev[k]))

@@ -31,6 +31,7 @@ Contract
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -41,6 +42,7 @@ from bwim.records import Passage, Record
 from bwim.sensors import Sensor
 
 from .lateral import lateral_positions
+from .order_stats import end_excursion, outside_windows
 from .presence import overlapping, signal_noise, span_windows, unexplained_activity
 from .result import (
     FLAG_MULTIPLE_PRESENCE,
@@ -83,17 +85,17 @@ def ends_loaded(time: np.ndarray, total: np.ndarray,
     gauges' baseline moving (a drift over the record), not a load.  ``step``: the
     median time step, when already made."""
     t = np.asarray(time, dtype=float)
-    y = np.asarray(total, dtype=float)
+    y = np.ascontiguousarray(total, dtype=float)
     n = max(2, round(END_SPAN / (median(np.diff(t)) if step is None else step)))
     if y.size < 4 * n:
         return False
-    start, end = float(y[:n].mean()), float(y[-n:].mean())
-    dev = y - start
-    k = int(np.argmax(np.abs(dev)))
-    swing = float(abs(dev[k]))
+    # the first, last and second n values' means and the largest excursion from the
+    # first mean (numpy's mean and argmax: bwim.detect.order_stats.end_excursion)
+    start, end, middle, _, excursion = end_excursion(y, n)
+    swing = abs(excursion)
     change = end - start
-    steady = abs(float(y[n:2 * n].mean()) - start) <= STEADY_SHARE * swing
-    if quiet_start and steady and change * dev[k] < 0:
+    steady = abs(middle - start) <= STEADY_SHARE * swing
+    if quiet_start and steady and change * excursion < 0:
         return False
     return swing > 0 and abs(change) > END_SHARE * swing
 
@@ -192,8 +194,11 @@ def assemble_detection(
     est = sorted(estimates, key=lambda e: float(e.times[0]))
     passages = []
     for e in est:
-        times = np.asarray(e.times, dtype=float)
-        spacings = np.maximum(np.diff(times) * e.speed, 1e-6)
+        # the spacings as numpy's maximum(diff(times) * speed, 1e-6) makes them, one
+        # Python float at a time (the same operations)
+        times = np.asarray(e.times, dtype=float).tolist()
+        speed = float(e.speed)
+        spacings = [max((b - a) * speed, 1e-6) for a, b in itertools.pairwise(times)]
         passages.append(Passage(speed=e.speed, axle_spacings=spacings,
                                 delay=float(times[0] - position / e.speed)))
     rec_flags = set(flags)
@@ -214,11 +219,10 @@ def assemble_detection(
                              f"the record ({t[0]:.3f}–{t[-1]:.3f} s)")
     quiet = None
     if windows is not None:
-        inside = np.zeros(t.size, dtype=bool)
-        for a, b in windows:
-            inside |= (t >= a - QUIET_MARGIN) & (t <= b + QUIET_MARGIN)
-        if (~inside).sum() >= 0.1 * t.size:
-            quiet = ~inside
+        outside, count = outside_windows(np.ascontiguousarray(t, dtype=float), windows,
+                                         QUIET_MARGIN)
+        if count >= 0.1 * t.size:
+            quiet = outside
     if quiet is None:
         edge = max(1, t.size // 10)
         quiet = np.zeros(t.size, dtype=bool)

@@ -178,9 +178,10 @@ def lateral_positions(
     coord = (np.asarray([s.y for s in sens], dtype=float) if metres
              else np.arange(1.0, len(sens) + 1.0))
     peaks = weight == "peak"
-    if peaks:  # the kernel's arguments: float64, C-contiguous
+    if peaks:  # the kernel's arguments: float64, C-contiguous; the table's columns one
+        # after the other (a record's columns, Fortran-ordered, without a copy)
         t = np.ascontiguousarray(t, dtype=float)
-        data = np.ascontiguousarray(data, dtype=float)
+        cols = np.ascontiguousarray(np.asarray(data, dtype=float).T)
     out = []
     level = None
     for window in windows:
@@ -198,7 +199,7 @@ def lateral_positions(
             # the largest deviation: the largest reading less the level (a subtraction
             # rounds monotonically: the same number as the largest of the differences),
             # thresholded (bwim.detect.order_stats.window_peaks)
-            status, w = window_peaks(t, data, lo, hi, level, thr)
+            status, w = window_peaks(t, cols, lo, hi, level, thr)
             if status < 2:
                 out.append(_nowhere(unit, len(sens), names))
                 continue

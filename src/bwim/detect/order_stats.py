@@ -32,7 +32,16 @@ Contract
   column's largest reading (numpy's ``max(axis=0)``: NaN when one is), less its quiet
   level, floored at 0 (``numpy.maximum``), then, when one is positive, less
   ``threshold`` × the largest of them, floored at 0 again.  It says when no sample lies
-  in the window, or no weight is positive.
+  in the window, or no weight is positive.  It and :func:`row_medians_of` take a
+  table's columns one after the other (its transpose, C-contiguous: a record's columns
+  as :func:`~bwim.detect.signals.channel_data` gives them, Fortran-ordered, without a
+  copy); :func:`column_medians_of` is :func:`row_medians_of` of a C-ordered table's
+  transpose.
+* :func:`outside_windows` is the samples outside every window widened by a margin
+  (:func:`bwim.detect.assemble.assemble_detection`'s quiet samples), and
+  :func:`end_excursion` :func:`bwim.detect.assemble.ends_loaded`'s means of a record's
+  first, second and last stretch (numpy's pairwise sums,
+  :func:`bwim.pairwise.pairwise_sum`) and its largest excursion from the first.
 * :func:`outside_activity` is :func:`bwim.detect.presence.unexplained_activity`'s
   arithmetic for a finite signal: the samples inside a window widened by ``margin``,
   the quiet level (median outside), the noise (1.4826 MAD of the first difference over
@@ -46,8 +55,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["column_medians_of", "despike_columns", "mad_of", "median_of",
-           "outside_activity", "window_peaks"]
+from bwim.pairwise import pairwise_sum
+
+__all__ = ["column_medians_of", "despike_columns", "end_excursion", "mad_of", "median_of",
+           "outside_activity", "outside_windows", "row_medians_of", "window_peaks"]
 
 
 @njit(cache=True)
@@ -128,12 +139,12 @@ def mad_of(v):
 
 
 @njit(cache=True)
-def column_medians_of(v, rows):
-    """The median of each column of ``v[rows]`` (``v`` (n, k) float64, C-contiguous;
-    ``rows`` bool (n,), at least one True), shape (k,), NaN for a column holding one;
-    and whether a median is zero (its sign, numpy's, rests on the order of equal values:
-    the caller then takes numpy's partial sort)."""
-    n, k = v.shape
+def row_medians_of(a, rows):
+    """The median of each row of ``a[:, rows]`` (``a`` (k, n) float64, C-contiguous: a
+    table's columns one after the other; ``rows`` bool (n,), at least one True), shape
+    (k,), NaN for a row holding one; and whether a median is zero (its sign, numpy's,
+    rests on the order of equal values: the caller then takes numpy's partial sort)."""
+    k, n = a.shape
     out = np.empty(k)
     buf = np.empty(n)
     zero = False
@@ -142,7 +153,7 @@ def column_medians_of(v, rows):
         m = 0
         for i in range(n):
             if rows[i]:
-                x = v[i, c]
+                x = a[c, i]
                 if x != x:
                     nan = True
                     break
@@ -152,6 +163,14 @@ def column_medians_of(v, rows):
         if out[c] == 0.0:
             zero = True
     return out, zero
+
+
+@njit(cache=True)
+def column_medians_of(v, rows):
+    """The median of each column of ``v[rows]`` (``v`` (n, k) float64, C-contiguous;
+    ``rows`` bool (n,), at least one True), shape (k,), NaN for a column holding one;
+    and whether a median is zero (:func:`row_medians_of` of its transpose)."""
+    return row_medians_of(np.ascontiguousarray(v.T), rows)
 
 
 @njit(cache=True)
@@ -280,31 +299,35 @@ def _floored(x):
 
 
 @njit(cache=True)
-def window_peaks(t, data, lo, hi, level, threshold):
+def window_peaks(t, cols, lo, hi, level, threshold):
     """The peak weights of the window ``[lo, hi]`` (see the module docstring): ``t``
-    (n,), ``data`` (n, k), ``level`` (k,) (float64, C-contiguous).  Returns (status,
-    weights (k,)): status 0 when no sample lies in the window, 1 when no weight is
-    positive (the weights then not thresholded), 2 with the thresholded weights."""
-    n, k = data.shape
-    top = np.empty(k)
+    (n,), ``cols`` (k, n) the table's columns one after the other (the transpose of a
+    table (n, k)), ``level`` (k,) (float64, C-contiguous).  Returns (status, weights
+    (k,)): status 0 when no sample lies in the window, 1 when no weight is positive (the
+    weights then not thresholded), 2 with the thresholded weights."""
+    k, n = cols.shape
     w = np.zeros(k)
+    inside = np.empty(n, dtype=np.bool_)
     seen = False
     for i in range(n):
-        if t[i] >= lo and t[i] <= hi:
-            if not seen:
-                for c in range(k):
-                    top[c] = data[i, c]
-                seen = True
-            else:
-                for c in range(k):
-                    x = data[i, c]
-                    if x > top[c] or x != x:  # numpy's max: a NaN stays
-                        top[c] = x
+        inside[i] = t[i] >= lo and t[i] <= hi
+        if inside[i]:
+            seen = True
     if not seen:
         return 0, w
     positive = False
     for c in range(k):
-        w[c] = _floored(top[c] - level[c])
+        top = 0.0
+        first = True
+        for i in range(n):
+            if inside[i]:
+                x = cols[c, i]
+                if first:
+                    top = x
+                    first = False
+                elif x > top or x != x:  # numpy's max: a NaN stays
+                    top = x
+        w[c] = _floored(top - level[c])
         if w[c] > 0.0:
             positive = True
     if not positive:
@@ -317,3 +340,48 @@ def window_peaks(t, data, lo, hi, level, threshold):
     for c in range(k):
         w[c] = _floored(w[c] - cut)
     return 2, w
+
+
+@njit(cache=True)
+def outside_windows(t, windows, margin):
+    """The samples outside every window widened by ``margin`` (``t`` (n,), ``windows``
+    (m, 2), float64, C-contiguous): numpy's ``~inside`` of ``inside |= (t >= a - margin)
+    & (t <= b + margin)`` over the windows, and their count."""
+    n = t.size
+    outside = np.ones(n, dtype=np.bool_)
+    for j in range(windows.shape[0]):
+        lo = windows[j, 0] - margin
+        hi = windows[j, 1] + margin
+        for i in range(n):
+            if t[i] >= lo and t[i] <= hi:
+                outside[i] = False
+    count = 0
+    for i in range(n):
+        if outside[i]:
+            count += 1
+    return outside, count
+
+
+@njit(cache=True)
+def end_excursion(y, n):
+    """:func:`bwim.detect.assemble.ends_loaded`'s numbers of ``y`` (float64,
+    C-contiguous, at least 2 ``n`` values): the means of its first ``n``, its last
+    ``n`` and its second ``n`` values (numpy's: the pairwise sum over the count), and
+    the first index of the largest ``|y − first mean|`` (numpy's argmax: a NaN first)
+    with that difference."""
+    size = y.size
+    start = pairwise_sum(y, 0, n) / n
+    end = pairwise_sum(y, size - n, n) / n
+    middle = pairwise_sum(y, n, n) / n
+    k = 0
+    best = abs(y[0] - start)
+    if best == best:
+        for i in range(1, size):
+            a = abs(y[i] - start)
+            if a != a:
+                k = i
+                break
+            if a > best:
+                best = a
+                k = i
+    return start, end, middle, k, y[k] - start

@@ -13,7 +13,8 @@ Contract
   ties of signed zeros may give -0.0); :func:`column_medians` is
   ``numpy.median(values, axis=0)`` of a 2-D array (or of some of its rows), the same
   numbers bit for bit, by one compiled selection in each column
-  (:func:`bwim.detect.order_stats.column_medians_of`), or, when a median is zero (whose
+  (:func:`bwim.detect.order_stats.row_medians_of` of the columns one after the other:
+  no copy of a Fortran-ordered table, a record's columns), or, when a median is zero (whose
   sign rests on numpy's order of equal values), by numpy's partial sort of each column
   laid out contiguously.
 * :func:`last_axis_sum` is ``values.sum(axis=-1)``, the same numbers: numpy adds a last
@@ -57,7 +58,7 @@ from scipy.ndimage import median_filter
 from bwim.records import Record
 from bwim.sensors import Sensor
 
-from .order_stats import column_medians_of, despike_columns, mad_of, median_of
+from .order_stats import despike_columns, mad_of, median_of, row_medians_of
 
 __all__ = ["SPIKE_SHARE", "SPIKE_SIGMAS", "Despiked", "channel_data", "column_medians",
            "despike", "gaussian_average", "gaussian_kernel", "last_axis_sum", "median",
@@ -120,14 +121,15 @@ def column_medians(values: np.ndarray, rows: np.ndarray | None = None) -> np.nda
     """The median of each column of a 2-D array (n, k), shape (k,) (see the module
     docstring); NaN for a column holding one, and for every column when n = 0.  With
     ``rows`` (bool, (n,)): of ``values[rows]``, without copying them first."""
-    v = np.ascontiguousarray(values, dtype=float)
+    v = np.asarray(values, dtype=float)
     if rows is None:
         rows = np.ones(v.shape[0], dtype=bool)
     else:
         rows = np.ascontiguousarray(rows, dtype=bool)
     if not rows.any():
         return np.full(v.shape[1], np.nan)
-    out, zero = column_medians_of(v, rows)
+    # the columns one after the other: a record's columns (Fortran-ordered) as they are
+    out, zero = row_medians_of(np.ascontiguousarray(v.T), rows)
     if not zero:
         return out
     cols = np.ascontiguousarray(v[rows].T)  # each column's values one after the other
