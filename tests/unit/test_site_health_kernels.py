@@ -104,6 +104,8 @@ def test_step_noise_is_numpys_std_of_the_steps():
             a[:, 0] = 1.5
         ref = np.std(np.diff(np.ascontiguousarray(a.T), axis=1), axis=1) / np.sqrt(2.0)
         assert step_noise(a).tobytes() == ref.tobytes(), trial
+        # a record's columns (Fortran-ordered: taken as they lie)
+        assert step_noise(np.asfortranarray(a)).tobytes() == ref.tobytes(), trial
 
 
 def test_held_extremes_are_runs_at_the_maximum_or_minimum():
@@ -116,6 +118,8 @@ def test_held_extremes_are_runs_at_the_maximum_or_minimum():
             a = rng.normal(size=(n, nc))
             a[n // 3:n // 3 + run, 0] = a.max() + 1.0
         assert np.array_equal(held_extremes(a, run), _held_reference(a, run)), trial
+        assert np.array_equal(held_extremes(np.asfortranarray(a), run),
+                              _held_reference(a, run)), trial
 
 
 def test_residuals_are_numpys():

@@ -148,13 +148,14 @@ def loo_lines(x: np.ndarray, values: np.ndarray, weight: np.ndarray, at: np.ndar
 
 
 @numba.njit(cache=True)
-def _step_noise(a):  # pragma: no cover - compiled
-    n, nc = a.shape
+def _step_noise(cols):  # pragma: no cover - compiled
+    nc, n = cols.shape  # the channels one after the other
     out = np.empty(nc)
     d = np.empty(n - 1)
     for c in range(nc):
+        a = cols[c]
         for k in range(n - 1):
-            d[k] = a[k + 1, c] - a[k, c]
+            d[k] = a[k + 1] - a[k]
         mean = _vsum(d) / (n - 1)
         for k in range(n - 1):
             x = d[k] - mean
@@ -166,38 +167,45 @@ def _step_noise(a):  # pragma: no cover - compiled
 def step_noise(readings: np.ndarray) -> np.ndarray:
     """Each channel's ``std(diff(reading)) / √2`` (module docstring); ``readings``
     (n_t ≥ 2, n_c)."""
-    return _step_noise(np.ascontiguousarray(readings, dtype=float))
+    return _step_noise(_columns(readings))
 
 
 @numba.njit(cache=True)
-def _held_extremes(a, run):  # pragma: no cover - compiled
-    n, nc = a.shape
+def _held_extremes(cols, run):  # pragma: no cover - compiled
+    nc, n = cols.shape  # the channels one after the other
     out = np.zeros(nc, dtype=np.bool_)
     if n < run:
         return out
-    hi = a[0].copy()
-    lo = a[0].copy()
-    for k in range(1, n):
-        for c in range(nc):
-            if a[k, c] > hi[c]:
-                hi[c] = a[k, c]
-            if a[k, c] < lo[c]:
-                lo[c] = a[k, c]
-    at_hi = np.zeros(nc, dtype=np.int64)  # the current run at each extreme
-    at_lo = np.zeros(nc, dtype=np.int64)
-    for k in range(n):
-        for c in range(nc):
-            at_hi[c] = at_hi[c] + 1 if a[k, c] == hi[c] else 0
-            at_lo[c] = at_lo[c] + 1 if a[k, c] == lo[c] else 0
-            if at_hi[c] >= run or at_lo[c] >= run:
+    for c in range(nc):
+        a = cols[c]
+        hi = a[0]
+        lo = a[0]
+        for k in range(1, n):
+            if a[k] > hi:
+                hi = a[k]
+            if a[k] < lo:
+                lo = a[k]
+        at_hi = 0  # the current run at each extreme
+        at_lo = 0
+        for k in range(n):
+            at_hi = at_hi + 1 if a[k] == hi else 0
+            at_lo = at_lo + 1 if a[k] == lo else 0
+            if at_hi >= run or at_lo >= run:
                 out[c] = True
+                break
     return out
 
 
 def held_extremes(readings: np.ndarray, run: int) -> np.ndarray:
     """Per channel of ``readings`` (n_t, n_c; finite) whether it holds its maximum or its
     minimum for at least ``run`` ≥ 1 consecutive samples (module docstring)."""
-    return _held_extremes(np.ascontiguousarray(readings, dtype=float), int(run))
+    return _held_extremes(_columns(readings), int(run))
+
+
+def _columns(readings: np.ndarray) -> np.ndarray:
+    """The channels of ``readings`` (n_t, n_c) one after the other, C-contiguous (n_c,
+    n_t): a record's columns (Fortran-ordered) without a copy."""
+    return np.ascontiguousarray(np.asarray(readings, dtype=float).T)
 
 
 @numba.njit(cache=True)
