@@ -8,11 +8,14 @@ import numpy as np
 import pytest
 
 from bwim.wim.influence_line import hat_design
+from bwim.records import Passage
 from bwim.wim.weigh_kernels import (
+    axle_positions,
     channel_products,
     column_centred,
     fit_residual,
     group_readings,
+    nan_sum,
     on_support,
 )
 
@@ -127,3 +130,29 @@ def test_channel_products_gram_is_contiguous():
     w = rng.random(4)
     assert np.array_equal(np.dot(w.reshape(1, 4), p.gram.reshape(4, -1)).reshape(3, 3),
                           np.tensordot(w, p.gram, 1))
+
+
+def test_axle_positions_are_the_passages():
+    """Passage.axle_x's positions bit for bit (record times from 0 and clock times of
+    day, many axles and one)."""
+    rng = np.random.default_rng(12)
+    for trial in range(300):
+        n_ax = int(rng.integers(1, 10))
+        p = Passage(speed=rng.uniform(3, 40), axle_spacings=rng.uniform(0.9, 9.0, n_ax - 1),
+                    delay=rng.uniform(-2, 5) + (30000.0 if trial % 2 else 0.0))
+        t = p.delay + rng.uniform(-1, 0, 1) + np.arange(int(rng.integers(1, 900))) / 512.0
+        got = axle_positions(t, p.speed, p.delay, p.axle_offsets)
+        assert got.flags.c_contiguous and np.array_equal(got, p.axle_x(t))
+
+
+def test_nan_sum_is_numpys():
+    rng = np.random.default_rng(14)
+    for trial in range(2000):
+        a = rng.normal(size=int(rng.integers(0, 300))) * 10.0 ** rng.uniform(-5, 5)
+        if a.size and trial % 3 == 0:
+            a[rng.random(a.size) < 0.3] = np.nan
+        if trial % 11 == 0:
+            a = -0.0 * np.abs(a)  # zeros of one sign: numpy's sum starts from +0
+        ref = np.nansum(a)
+        got = nan_sum(a)
+        assert got == ref and np.signbit(got) == np.signbit(ref), (trial, got, ref)

@@ -64,7 +64,6 @@ axle reaches the support.  ``baseline="none"``: readings are taken as offset-fre
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
@@ -85,10 +84,12 @@ from bwim.wim.influence_line import Channel, read_channels
 from bwim.wim.moses import AxleGroups, group_axles, group_share
 from bwim.wim.multirun import MultiRunCalibration
 from bwim.wim.weigh_kernels import (
+    axle_positions,
     channel_products,
     column_centred,
     fit_residual,
     group_readings,
+    nan_sum,
     on_support,
 )
 
@@ -390,24 +391,26 @@ class WeighingModel:
         """The weighing with :func:`weigh`'s ``scale_correction`` and ``scale``."""
         _check_scale(scale)
         record, calibration, event = self.record, self.calibration, self.event
-        design = _scaled(self.design, calibration, scale_correction, scale)
+        design = self.design
+        s, trend_used = _scale(design, calibration, scale_correction, scale)
         centred = self.centred
-        fit = _fit(design, centred, event, calibration)
-        flags = _flags(event, design, centred, fit, calibration)
-        return _weighing(record, calibration, event, design, fit, flags)
+        fit = _fit(design, centred, event, calibration, s)
+        flags = _flags(event, design, centred, fit, calibration, trend_used)
+        return _weighing(record, calibration, event, design, fit, flags, s)
 
 
 def _weighing(record: Record, calibration: MultiRunCalibration, event: _Inputs,
-              design: _Design, fit: _Fit, flags: tuple[str, ...]) -> Weighing:
+              design: _Design, fit: _Fit, flags: tuple[str, ...], s: float) -> Weighing:
+    on = design.on_index  # the samples on the support (numpy's [design.on]'s rows)
     return Weighing(
         axle_weights=fit.axle_weights, group_weights=fit.group_weights,
         groups=event.groups.groups, gvw=float(fit.axle_weights.sum()), residual=fit.residual,
-        misfit=fit.misfit, condition=fit.condition, scale_factor=design.scale, flags=flags,
+        misfit=fit.misfit, condition=fit.condition, scale_factor=s, flags=flags,
         quality=quality_of(flags), passage=event.passage, lateral=event.lateral,
         clock_time=design.clock_time, combine=event.combine, baseline=event.baseline,
         offsets=fit.offsets, channels=calibration.line.channels,
-        time=record.time[design.on], measured=fit.measured[design.on],
-        fitted=fit.fitted[design.on],
+        time=record.time.take(on), measured=fit.measured.take(on, axis=0),
+        fitted=fit.fitted.take(on, axis=0),
     )
 
 
@@ -461,42 +464,42 @@ class _Design:
     positions: np.ndarray  # (n_t, n_axles) axle positions, m
     groups: np.ndarray  # (n_t, n_groups, n_c) static readings of a unit group weight
     on: np.ndarray  # (n_t,) an axle on the lines' support
+    on_index: np.ndarray  # (n_on,) those samples' indices, in order
     support: tuple[float, float]  # the lines' support, m
     clock_time: float  # record.clock_seconds(), s
-    scale: float  # the factor the readings are divided by (1 without correction)
-    trend_used: bool  # the factor is the scale trend's at clock_time
 
 
 def _design(record: Record, event: _Inputs, calibration: MultiRunCalibration,
             readings: np.ndarray | None = None) -> _Design:
     """The model of the readings (``readings`` when already read): the lines at the
-    vehicle's lateral covariate under each axle, summed by group (the scale factor 1:
-    :func:`_scaled` sets it)."""
+    vehicle's lateral covariate under each axle, summed by group (at the scale factor 1:
+    :func:`_scale` gives a weighing's)."""
     line = calibration.line
     E = read_channels(record, line.channels) if readings is None else readings  # (n_t, n_c)
     ords = calibration.ordinates_at(event.lateral)[1:-1]  # interior ordinates (m, n_c)
-    pos = event.passage.axle_x(record.time)  # (n_t, n_axles)
+    p = event.passage  # (n_t, n_axles): Passage.axle_x's numbers
+    pos = axle_positions(record.time, p.speed, p.delay, p.axle_offsets)
     # (n_t, n_groups, n_c): Σ_i share_ig M_kic, M the readings under each axle
     Mg = group_readings(pos, ords, line.x[0], line.spacing, line.x.size - 1,
                         event.groups.share)
     lo, hi = line.support
     on = on_support(pos, lo, hi)  # ((pos > lo) & (pos < hi)).any(axis=1)
-    return _Design(readings=E, positions=pos, groups=Mg, on=on, support=(lo, hi),
-                   clock_time=record.clock_seconds(), scale=1.0, trend_used=False)
+    return _Design(readings=E, positions=pos, groups=Mg, on=on, on_index=np.flatnonzero(on),
+                   support=(lo, hi), clock_time=record.clock_seconds())
 
 
-def _scaled(design: _Design, calibration: MultiRunCalibration, scale_correction: bool,
-            scale: float | None) -> _Design:
-    """``design`` with the day's scale factor: ``scale`` when given, else the scale
-    trend's at the clock time with ``scale_correction``, else 1."""
+def _scale(design: _Design, calibration: MultiRunCalibration, scale_correction: bool,
+           scale: float | None) -> tuple[float, bool]:
+    """The factor a weighing divides ``design``'s readings by: ``scale`` when given, else
+    the scale trend's at the clock time with ``scale_correction``, else 1; and whether it
+    is the trend's."""
     trend = calibration.scale_trend
     if scale is not None:
         s = float(scale)
     else:
         s = float(trend(design.clock_time)) if (scale_correction and trend is not None) \
             else 1.0
-    return dataclasses.replace(design, scale=s, trend_used=scale is None and scale_correction
-                               and trend is not None)
+    return s, scale is None and scale_correction and trend is not None
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -559,16 +562,17 @@ class _Fit:
 
 
 def _fit(design: _Design, centred: _Centred, event: _Inputs,
-         calibration: MultiRunCalibration) -> _Fit:
+         calibration: MultiRunCalibration, s: float) -> _Fit:
     """Least squares of the combined channels, then the residual and the misfit.
 
     The error covariance depends on the vehicle's weight, so a first solve with the plain
     sum gives the weight for the second.
     """
-    s, share, combine = design.scale, event.groups.share, event.combine
+    share, combine = event.groups.share, event.combine
     n_g = share.shape[1]
     sol, rank, sv = _solve(centred, s, None)
-    weight = float(np.nansum(share @ sol)) if rank == n_g else None
+    # numpy.nansum's number (weigh_kernels.nan_sum)
+    weight = float(nan_sum(share @ sol)) if rank == n_g else None
     if combine == "gls":  # the channels' variances alone (error_covariance's diagonal)
         var = calibration.error_variance(weight)
         sol, rank, sv = _solve(centred, s, _gls_whitener(var))
@@ -606,7 +610,7 @@ def _fit(design: _Design, centred: _Centred, event: _Inputs,
 
 
 def _flags(event: _Inputs, design: _Design, centred: _Centred, fit: _Fit,
-           calibration: MultiRunCalibration) -> tuple[str, ...]:
+           calibration: MultiRunCalibration, trend_used: bool) -> tuple[str, ...]:
     """The plausibility flags of the weighing, in the canonical order."""
     limits, pos = event.limits, design.positions
     # a lobe beyond the line's zeros (support_lobes) may be cut by the record's ends
@@ -623,7 +627,7 @@ def _flags(event: _Inputs, design: _Design, centred: _Centred, fit: _Fit,
     if not fit.misfit <= limits.misfit * fit.misfit_ref:
         flags.append("residual_high")
     t_lo, t_hi = calibration.time_span
-    if design.trend_used and not t_lo <= design.clock_time <= t_hi:
+    if trend_used and not t_lo <= design.clock_time <= t_hi:
         flags.append("outside_calibration_time")
     if not event.lateral_ok:
         flags.append("lateral_extrapolated")

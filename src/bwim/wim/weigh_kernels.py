@@ -31,6 +31,10 @@ Contract
   column, a contiguous vector, by numpy's pairwise sum: :func:`bwim.pairwise.pairwise_sum`)
   divided by the count, then each difference.  (Of another layout numpy sums in another order: the
   readings a record's columns give, Fortran-ordered, by its pairwise sums.)
+* :func:`axle_positions` gives :meth:`bwim.records.Passage.axle_x`'s positions,
+  ``speed (t − delay) − offsets``, the same numbers (each a difference, a product and a
+  difference); :func:`nan_sum` is ``numpy.nansum`` of a vector (its NaN as 0, then
+  numpy's pairwise sum: :func:`bwim.pairwise.pairwise_sum`).
 * Sums run in plain order (sample after sample): the numbers of the numpy expressions
   they replace to rounding, not bit for bit (tests/unit/test_weigh_kernels.py holds them
   to those expressions within 1e-13 relative on random data, and the unit readings to the
@@ -48,8 +52,8 @@ import numpy as np
 
 from bwim.pairwise import pairwise_sum
 
-__all__ = ["ChannelProducts", "FitResidual", "channel_products", "column_centred",
-           "fit_residual", "group_readings", "on_support"]
+__all__ = ["ChannelProducts", "FitResidual", "axle_positions", "channel_products",
+           "column_centred", "fit_residual", "group_readings", "nan_sum", "on_support"]
 
 
 @numba.njit(cache=True)
@@ -85,6 +89,39 @@ def group_readings(pos: np.ndarray, ords: np.ndarray, x0: float, h: float, n: in
     return _group_readings(np.ascontiguousarray(pos, dtype=float),
                            np.ascontiguousarray(ords, dtype=float), float(x0), float(h),
                            int(n), np.ascontiguousarray(share, dtype=float))
+
+
+@numba.njit(cache=True)
+def _axle_positions(t, speed, delay, offsets):  # pragma: no cover - compiled
+    n_t, n_a = t.size, offsets.size
+    out = np.empty((n_t, n_a))
+    for k in range(n_t):
+        x = speed * (t[k] - delay)
+        for i in range(n_a):
+            out[k, i] = x - offsets[i]
+    return out
+
+
+def axle_positions(time: np.ndarray, speed: float, delay: float, offsets: np.ndarray
+                   ) -> np.ndarray:
+    """Each axle's position at each time, m, (n_t, n_axles): ``speed (t − delay) −
+    offsets`` (module docstring)."""
+    return _axle_positions(np.ascontiguousarray(time, dtype=float).reshape(-1), float(speed),
+                           float(delay), np.ascontiguousarray(offsets, dtype=float))
+
+
+@numba.njit(cache=True)
+def _nan_sum(a):  # pragma: no cover - compiled
+    b = a.copy()
+    for i in range(b.size):
+        if b[i] != b[i]:
+            b[i] = 0.0
+    return pairwise_sum(b, 0, b.size)
+
+
+def nan_sum(a: np.ndarray) -> float:
+    """``numpy.nansum`` of a float vector (module docstring)."""
+    return _nan_sum(np.ascontiguousarray(a, dtype=float).reshape(-1))
 
 
 @numba.njit(cache=True)
