@@ -21,6 +21,7 @@ from bwim.detect.order_stats import (
     outside_activity,
     outside_windows,
     row_medians_of,
+    signed_extremes,
     window_peaks,
 )
 from bwim.detect.presence import signal_noise, unexplained_activity
@@ -308,3 +309,22 @@ def test_end_excursion_is_numpys():
         dev = y - ref_start
         assert k == int(np.argmax(np.abs(dev)))
         assert excursion == dev[k] or (np.isnan(excursion) and np.isnan(dev[k]))
+
+
+def test_signed_extremes_are_numpys():
+    """diagnose's excursions: ``z = (y - rest) * signs``, ``z.max(axis=0)`` and
+    ``-z.min(axis=0)`` (ties, NaN anywhere, one row)."""
+    rng = np.random.default_rng(41)
+    for trial in range(1500):
+        n = int(rng.integers(1, 200))
+        y = rng.normal(size=(n, 2)) * 10.0 ** rng.uniform(-6, 2)
+        if trial % 3 == 0:
+            y = np.round(y / np.abs(y).max() * 3)
+        if trial % 13 == 0:
+            y[rng.integers(0, n), rng.integers(0, 2)] = np.nan
+        rest = rng.normal(size=2) * (trial % 2)
+        signs = rng.choice([-1.0, 1.0], size=2)
+        z = (y - rest) * signs
+        up, down = signed_extremes(y, rest, signs)
+        assert np.array_equal(up, z.max(axis=0), equal_nan=True), trial
+        assert np.array_equal(down, -z.min(axis=0), equal_nan=True), trial

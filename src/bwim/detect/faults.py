@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .order_stats import signed_extremes
 from .response import LearnedResponses
 from .signals import column_medians
 
@@ -68,8 +69,10 @@ def diagnose(y: np.ndarray, learned: LearnedResponses) -> DetectorFault:
     rest = column_medians(y[:max(1, int(REST_SHARE * y.shape[0]))])  # numpy.median's
     names = learned.channels
     scale = np.array([1.0, learned.gain_ratio])
-    z = (y - rest) * np.array([r.sign for r in learned.responses])
-    up, down = z.max(axis=0), -z.min(axis=0)
+    # z = (y - rest) * signs; up, down = z.max(axis=0), -z.min(axis=0)
+    # (bwim.detect.order_stats.signed_extremes: the same numbers)
+    up, down = signed_extremes(np.ascontiguousarray(y), rest,
+                               np.array([float(r.sign) for r in learned.responses]))
     level = np.array([max(r.level, 1e-300) for r in learned.responses])
     peak = up / scale  # in the first detector's units
     sees = (up >= SEEN * level) & (up > down)

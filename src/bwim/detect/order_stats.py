@@ -41,7 +41,9 @@ Contract
   (:func:`bwim.detect.assemble.assemble_detection`'s quiet samples), and
   :func:`end_excursion` :func:`bwim.detect.assemble.ends_loaded`'s means of a record's
   first, second and last stretch (numpy's pairwise sums,
-  :func:`bwim.pairwise.pairwise_sum`) and its largest excursion from the first.
+  :func:`bwim.pairwise.pairwise_sum`) and its largest excursion from the first;
+  :func:`signed_extremes` :func:`bwim.detect.faults.diagnose`'s largest excursions up
+  and down from a level at rest.
 * :func:`outside_activity` is :func:`bwim.detect.presence.unexplained_activity`'s
   arithmetic for a finite signal: the samples inside a window widened by ``margin``,
   the quiet level (median outside), the noise (1.4826 MAD of the first difference over
@@ -58,7 +60,8 @@ from numba import njit
 from bwim.pairwise import pairwise_sum
 
 __all__ = ["column_medians_of", "despike_columns", "end_excursion", "mad_of", "median_of",
-           "outside_activity", "outside_windows", "row_medians_of", "window_peaks"]
+           "outside_activity", "outside_windows", "row_medians_of", "signed_extremes",
+           "window_peaks"]
 
 
 @njit(cache=True)
@@ -385,3 +388,26 @@ def end_excursion(y, n):
                 best = a
                 k = i
     return start, end, middle, k, y[k] - start
+
+
+@njit(cache=True)
+def signed_extremes(y, rest, signs):
+    """:func:`bwim.detect.faults.diagnose`'s excursions: with ``z = (y − rest) × signs``
+    (``y`` (n ≥ 1, k) float64 C-contiguous, ``rest`` and ``signs`` (k,)), each column's
+    largest ``z`` and the negative of its smallest (numpy's ``max`` and ``min``: NaN
+    when a value is)."""
+    n, k = y.shape
+    up = np.empty(k)
+    down = np.empty(k)
+    for c in range(k):
+        hi = (y[0, c] - rest[c]) * signs[c]
+        lo = hi
+        for i in range(1, n):
+            z = (y[i, c] - rest[c]) * signs[c]
+            if z > hi or z != z:  # a NaN stays (hi NaN: no comparison holds)
+                hi = z
+            if z < lo or z != z:
+                lo = z
+        up[c] = hi
+        down[c] = -lo
+    return up, down
