@@ -15,9 +15,9 @@ from scipy.ndimage import median_filter
 from bwim.detect.order_stats import (
     column_medians_of,
     despike_columns,
+    end_excursion,
     mad_of,
     median_of,
-    end_excursion,
     outside_activity,
     outside_windows,
     row_medians_of,

@@ -44,7 +44,7 @@ def events(small_site_calibrated):
 
 
 def test_section_readings_are_the_gauges_read(events):
-    site, records = events
+    _, records = events
     for record in records:
         names = gauge_names(record)
         s = section_readings(record, names)

@@ -7,8 +7,8 @@ tests/unit/test_wim.py."""
 import numpy as np
 import pytest
 
-from bwim.wim.influence_line import hat_design
 from bwim.records import Passage
+from bwim.wim.influence_line import hat_design
 from bwim.wim.weigh_kernels import (
     axle_positions,
     channel_products,

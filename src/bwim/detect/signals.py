@@ -26,7 +26,10 @@ Contract
 * :func:`split_vehicles` cuts a sequence of axles into vehicles at gaps longer than a
   plausible axle spacing.
 * :func:`channel_data` is a record's readings of some channels, (n_t, k): those of
-  :meth:`bwim.Record.channels` without making a new record.
+  :meth:`bwim.Record.channels` without making a new record (Fortran-ordered, as numpy's
+  indexing of the columns gives them: its reductions sum in that order);
+  :func:`channel_rows` those of some samples only, in one gather (C-ordered, as
+  ``channel_data(...)[rows]``).
 * :func:`gaussian_average` is the Gaussian average along axis 0 of
   ``scipy.ndimage.gaussian_filter1d(y, sigma, axis=0, mode="nearest")`` (the same kernel:
   ``exp(−x²/2σ²)`` over ``|x| ≤ int(4σ + 0.5)`` samples, normalised to sum 1; the ends
@@ -60,10 +63,10 @@ from bwim.sensors import Sensor
 
 from .order_stats import despike_columns, mad_of, median_of, row_medians_of
 
-__all__ = ["SPIKE_SHARE", "SPIKE_SIGMAS", "Despiked", "channel_data", "column_medians",
-           "despike", "gaussian_average", "gaussian_kernel", "last_axis_sum", "median",
-           "parabolic_vertex",
-           "remove_baseline", "robust_sigma", "split_vehicles"]
+__all__ = ["SPIKE_SHARE", "SPIKE_SIGMAS", "Despiked", "channel_data", "channel_rows",
+           "column_medians", "despike", "gaussian_average", "gaussian_kernel",
+           "last_axis_sum", "median", "parabolic_vertex", "remove_baseline", "robust_sigma",
+           "split_vehicles"]
 
 #: Gaussian kernels reach this many standard deviations (scipy.ndimage's default).
 TRUNCATE = 4.0
@@ -211,6 +214,14 @@ def channel_data(record: Record, sensors: Sequence[str | Sensor]) -> np.ndarray:
     order: ``record.channels(sensors).data`` without making a record; InputError for a
     channel the record does not have."""
     return record.data[:, record.channel_indices(sensors)]
+
+
+def channel_rows(record: Record, sensors: Sequence[str | Sensor], rows: np.ndarray
+                 ) -> np.ndarray:
+    """``channel_data(record, sensors)[rows]`` (``rows``: sample indices, in order) read
+    in one gather: the same numbers, a new C-ordered table (n_rows, k)."""
+    return record.data[np.ix_(np.asarray(rows, dtype=np.intp),
+                              record.channel_indices(sensors))]
 
 
 def gaussian_kernel(sigma: float) -> np.ndarray:
