@@ -117,8 +117,15 @@ def test_column_centred_is_numpys_bit_for_bit():
         got = column_centred(X)
         assert np.array_equal(got, ref, equal_nan=True)
         assert np.array_equal(np.signbit(got), np.signbit(ref))
+        if X.ndim == 2:  # a record's columns, Fortran-ordered: numpy's pairwise sums
+            F = np.asfortranarray(X)
+            ref = F - F.mean(axis=0)
+            got = column_centred(F)
+            assert np.array_equal(got, ref, equal_nan=True)
+            assert np.array_equal(np.signbit(got), np.signbit(ref))
+            assert got.flags.f_contiguous == ref.flags.f_contiguous
     with pytest.raises(ValueError, match="C-contiguous"):
-        column_centred(np.asfortranarray(np.ones((3, 2))))
+        column_centred(np.ones((6, 4))[::2])
 
 
 def test_channel_products_gram_is_contiguous():

@@ -219,8 +219,10 @@ def lateral_positions(
 
 
 def _any_inside(t: np.ndarray, lo: float, hi: float) -> bool:
-    """Whether a sample's time lies in ``[lo, hi]``."""
-    return bool(((t >= lo) & (t <= hi)).any())
+    """Whether a sample's time (a record's: increasing) lies in ``[lo, hi]``: the first
+    one from ``lo`` on is not beyond ``hi``."""
+    i = int(t.searchsorted(lo))
+    return i < t.size and bool(t[i] <= hi)
 
 
 def _nowhere(unit: str, n: int, names: tuple[str, ...]) -> LateralPosition:

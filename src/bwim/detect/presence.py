@@ -43,10 +43,14 @@ def resolve_span(span: float | Sequence[float] | InfluenceLine | None
         return None
     if isinstance(span, InfluenceLine):
         return span.support
-    if np.ndim(span) == 0:
+    if isinstance(span, tuple) and len(span) == 2 and all(
+            isinstance(v, float) for v in span):  # a pair of floats: as numpy reads it
+        vals = span
+    elif np.ndim(span) == 0:
         return 0.0, require_positive("span", span)
-    vals = np.asarray(span, dtype=float).ravel()
-    if vals.size != 2:
+    else:
+        vals = np.asarray(span, dtype=float).ravel()
+    if len(vals) != 2:
         raise InputError(f"span must be a length, a pair (x_start, x_end) or an "
                          f"InfluenceLine, got {span!r}")
     lo, hi = require_finite("span[0]", vals[0]), require_finite("span[1]", vals[1])

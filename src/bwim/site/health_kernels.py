@@ -209,12 +209,12 @@ def _columns(readings: np.ndarray) -> np.ndarray:
 
 
 @numba.njit(cache=True)
-def _residuals(readings, offsets, on, fitted, out):  # pragma: no cover - compiled
-    n, nc = readings.shape
+def _residuals(cols, offsets, on, fitted, out):  # pragma: no cover - compiled
+    nc, n = cols.shape  # the readings' channels one after the other
     j = 0
     for k in range(n):
         for c in range(nc):
-            out[k, c] = readings[k, c] - offsets[c]
+            out[k, c] = cols[c, k] - offsets[c]
         if on[k]:
             for c in range(nc):
                 out[k, c] = out[k, c] - fitted[j, c]
@@ -225,11 +225,11 @@ def residuals(readings: np.ndarray, offsets: np.ndarray, on: np.ndarray,
               fitted: np.ndarray) -> np.ndarray:
     """Each channel's residual (module docstring): ``readings`` (n_t, n_c), ``offsets``
     (n_c,), ``on`` bool (n_t,), ``fitted`` (count of ``on``, n_c); shape (n_t, n_c)."""
-    readings = np.ascontiguousarray(readings, dtype=float)
+    cols = _columns(readings)
     on = np.ascontiguousarray(on, dtype=bool)
     fitted = np.ascontiguousarray(fitted, dtype=float)
-    if fitted.shape != (int(np.count_nonzero(on)), readings.shape[1]):
+    if fitted.shape != (int(np.count_nonzero(on)), cols.shape[0]):
         raise ValueError("residuals: one fitted row per sample of on")
-    out = np.empty(readings.shape)
-    _residuals(readings, np.ascontiguousarray(offsets, dtype=float), on, fitted, out)
+    out = np.empty(cols.shape[::-1])
+    _residuals(cols, np.ascontiguousarray(offsets, dtype=float), on, fitted, out)
     return out

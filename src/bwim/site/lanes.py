@@ -470,5 +470,6 @@ def _presence(vehicles: list[LaneVehicle]) -> list[LaneVehicle]:
         veh = v.vehicle
         if others and FLAG_MULTIPLE_PRESENCE not in veh.flags:
             veh = dataclasses.replace(veh, flags=(*veh.flags, FLAG_MULTIPLE_PRESENCE))
-        out.append(dataclasses.replace(v, vehicle=veh, others=others))
+        same = veh is v.vehicle and others == v.others  # nothing to change: v itself
+        out.append(v if same else dataclasses.replace(v, vehicle=veh, others=others))
     return sorted(out, key=lambda w: (w.window or (np.inf,))[0])

@@ -171,9 +171,11 @@ def group_share(groups, n_axles: int) -> AxleGroups:
     indices (from 0) listing every axle once.
     """
     out = _check_groups(groups, n_axles)
-    share = np.zeros((n_axles, len(out)))
+    rows = [[0.0] * len(out) for _ in range(n_axles)]
     for k, g in enumerate(out):
-        share[list(g), k] = 1.0 / len(g)
+        for i in g:
+            rows[i][k] = 1.0 / len(g)
+    share = np.array(rows, dtype=float).reshape(n_axles, len(out))
     return AxleGroups(groups=out, share=share)
 
 

@@ -532,8 +532,12 @@ def _centred(design: _Design, event: _Inputs) -> _Centred:
     if event.baseline == "fit":
         if np.count_nonzero(~design.on) < limits.min_baseline:
             flags.append("no_baseline")
-        # Mg - Mg.mean(axis=0) (group_readings' table is C-ordered: the kernel's sums)
-        return _centred_of(E - E.mean(axis=0), column_centred(Mg), None, tuple(flags))
+        # E - E.mean(axis=0), Mg - Mg.mean(axis=0) (group_readings' table C-ordered, the
+        # readings mostly a record's Fortran-ordered columns: the kernel sums as numpy)
+        Ec = (column_centred(E) if E.dtype == np.float64 and (
+            E.flags.c_contiguous or (E.ndim == 2 and E.flags.f_contiguous))
+            else E - E.mean(axis=0))
+        return _centred_of(Ec, column_centred(Mg), None, tuple(flags))
     if event.baseline == "pretrigger":
         pre = design.positions[:, 0] <= design.support[0]
         n_pre = int(np.argmin(pre)) if not pre.all() else E.shape[0]

@@ -26,11 +26,12 @@ Contract
 * :func:`on_support` gives the samples at which an axle lies strictly inside the lines'
   support ``(lo, hi)``: ``((pos > lo) & (pos < hi)).any(axis=1)``, the same booleans.
 * :func:`column_centred` gives a C-contiguous array (e.g. the design ``X``, (n_t,
-  n_groups, n_c)) less its mean over the first axis, bit for bit ``X - X.mean(axis=0)``:
+  n_groups, n_c)) or a Fortran-ordered table (the readings, a record's columns) less its
+  mean over the first axis, bit for bit ``X - X.mean(axis=0)`` in the same layout:
   numpy's column sums of a C-ordered table (sample after sample, from 0; a single
-  column, a contiguous vector, by numpy's pairwise sum: :func:`bwim.pairwise.pairwise_sum`)
-  divided by the count, then each difference.  (Of another layout numpy sums in another order: the
-  readings a record's columns give, Fortran-ordered, by its pairwise sums.)
+  column, a contiguous vector, by numpy's pairwise sum:
+  :func:`bwim.pairwise.pairwise_sum`), of a Fortran-ordered one each column's pairwise
+  sum, divided by the count, then each difference.
 * :func:`axle_positions` gives :meth:`bwim.records.Passage.axle_x`'s positions,
   ``speed (t − delay) − offsets``, the same numbers (each a difference, a product and a
   difference); :func:`nan_sum` is ``numpy.nansum`` of a vector (its NaN as 0, then
@@ -173,13 +174,29 @@ def _column_centred(X, out):  # pragma: no cover - compiled
             flat_out[k, j] = flat[k, j] - m[j]
 
 
+@numba.njit(cache=True, error_model="numpy")
+def _rows_centred(Xt, out_t):  # pragma: no cover - compiled
+    m, n = Xt.shape  # a Fortran-ordered table's columns one after the other
+    for j in range(m):
+        mean = pairwise_sum(Xt[j], 0, n) / n
+        for k in range(n):
+            out_t[j, k] = Xt[j, k] - mean
+
+
 def column_centred(X: np.ndarray) -> np.ndarray:
-    """``X - X.mean(axis=0)`` of a C-contiguous float64 array (module docstring), the same
-    numbers (numpy's for that layout: another one sums in another order)."""
-    if X.dtype != np.float64 or not X.flags.c_contiguous:
-        raise ValueError("column_centred: a C-contiguous float64 array")
-    out = np.empty(X.shape)
-    _column_centred(X, out)
+    """``X - X.mean(axis=0)`` of a C-contiguous float64 array, or of a Fortran-ordered
+    table (a record's columns), in the same layout (module docstring): the same numbers
+    (numpy's for that layout: the sums in its order)."""
+    if X.dtype != np.float64:
+        raise ValueError("column_centred: a float64 array")
+    if X.flags.c_contiguous:
+        out = np.empty(X.shape)
+        _column_centred(X, out)
+    elif X.ndim == 2 and X.flags.f_contiguous:  # numpy sums each column pairwise
+        out = np.empty(X.shape, order="F")
+        _rows_centred(X.T, out.T)
+    else:
+        raise ValueError("column_centred: a C-contiguous array or a Fortran-ordered table")
     return out
 
 
@@ -244,9 +261,9 @@ def channel_products(X: np.ndarray, e: np.ndarray) -> ChannelProducts:
 
 
 @numba.njit(cache=True, error_model="numpy")
-def _fit_residual(E, X, w, s, fit_offsets, offsets, sd, summed, fitted, meas
+def _fit_residual(Et, X, w, s, fit_offsets, offsets, sd, summed, fitted, meas
                   ):  # pragma: no cover - compiled
-    n_t, n_g, n_c = X.shape
+    n_t, n_g, n_c = X.shape  # Et: the readings' channels one after the other
     acc = np.empty(n_c)
     for k in range(n_t):  # each sum over the groups in order, from 0 (channel last)
         for c in range(n_c):
@@ -256,35 +273,42 @@ def _fit_residual(E, X, w, s, fit_offsets, offsets, sd, summed, fitted, meas
                 acc[c] += X[k, g, c] * w[g]
         for c in range(n_c):
             fitted[k, c] = s * acc[c]
-    if fit_offsets:
+    if fit_offsets:  # each channel's sum over the samples in order, from 0
         for c in range(n_c):
-            offsets[c] = 0.0
-        for k in range(n_t):
-            for c in range(n_c):
-                offsets[c] += E[k, c] - fitted[k, c]
-        for c in range(n_c):
-            offsets[c] /= n_t
-    # per channel Σ meas², Σ residual², Σ (residual / deviation)² (the channel last: the
-    # inner loops run along a sample's row), then summed over the channels
+            e = Et[c]
+            o = 0.0
+            for k in range(n_t):
+                o += e[k] - fitted[k, c]
+            offsets[c] = o / n_t
+    # per channel Σ meas², Σ residual², Σ (residual / deviation)² (each over the samples
+    # in order), then summed over the channels
     sq = np.zeros((3, n_c))
-    misfit = 0.0  # the channels' summed residual's
-    for k in range(n_t):
-        for c in range(n_c):
-            m = E[k, c] - offsets[c]
+    for c in range(n_c):
+        e = Et[c]
+        o = offsets[c]
+        s0 = 0.0
+        s1 = 0.0
+        s2 = 0.0
+        for k in range(n_t):
+            m = e[k] - o
             meas[k, c] = m
             r = m - fitted[k, c]
-            sq[0, c] += m * m
-            sq[1, c] += r * r
-        if summed:
+            s0 += m * m
+            s1 += r * r
+            if not summed:
+                z = r / sd[c]
+                s2 += z * z
+        sq[0, c] = s0
+        sq[1, c] = s1
+        sq[2, c] = s2
+    misfit = 0.0  # the channels' summed residual's
+    if summed:
+        for k in range(n_t):
             rs = 0.0
             for c in range(n_c):
                 rs += meas[k, c] - fitted[k, c]
             z = rs / sd[0]
             misfit += z * z
-        else:
-            for c in range(n_c):
-                z = (meas[k, c] - fitted[k, c]) / sd[c]
-                sq[2, c] += z * z
     out = np.zeros(3)
     for c in range(n_c):
         out[0] += sq[0, c]
@@ -315,12 +339,13 @@ def fit_residual(E: np.ndarray, X: np.ndarray, weights: np.ndarray, scale: float
     as the residual's mean when ``offsets`` is None), offset-free readings and the sums of
     squares (module docstring); ``deviation``: each channel's expected residual deviation
     (n_c,), or with ``summed`` one number, that of the channels' summed residual."""
-    E = np.ascontiguousarray(E, dtype=float)
-    n_t, n_c = E.shape
+    # the channels one after the other (a record's Fortran-ordered columns: no copy)
+    Et = np.ascontiguousarray(np.asarray(E, dtype=float).T)
+    n_c, n_t = Et.shape
     off = np.zeros(n_c) if offsets is None else np.array(offsets, dtype=float)
     sd = np.atleast_1d(np.asarray(deviation, dtype=float))
     fitted, meas = np.empty((n_t, n_c)), np.empty((n_t, n_c))
-    sums = _fit_residual(E, np.ascontiguousarray(X, dtype=float),
+    sums = _fit_residual(Et, np.ascontiguousarray(X, dtype=float),
                          np.ascontiguousarray(weights, dtype=float), float(scale),
                          offsets is None, off, sd, bool(summed), fitted, meas)
     return FitResidual(fitted=fitted, offsets=off, measured=meas,
