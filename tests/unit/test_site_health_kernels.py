@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from bwim.site.health_kernels import (
+    comparison,
     gain_stats,
     held_extremes,
     loo_lines,
@@ -143,3 +144,57 @@ def test_residuals_are_numpys():
         assert np.array_equal(got, ref) and np.array_equal(np.signbit(got), np.signbit(ref))
     with pytest.raises(ValueError, match="one fitted row"):
         residuals(np.zeros((4, 2)), np.zeros(2), np.ones(4, dtype=bool), np.zeros((3, 2)))
+
+
+def _comparison_reference(m, f, var, y, trend, noise):
+    """The gauge check's comparison as bwim.site.health wrote it with numpy (before the
+    kernel): gain statistics, snr, the others' prediction, ratios, significances, and
+    the drift beyond the others'."""
+    st = gain_stats(m, f)
+    if np.any(st.power <= 0):
+        return None
+    snr = st.rms / np.sqrt(np.clip(var, np.finfo(float).tiny, None))
+    expected = loo_lines(y, st.gain, snr ** 2, y)
+    keep = expected > 0
+    ratio = np.divide(st.gain, expected, out=np.zeros(len(y)), where=keep)
+    significance = np.abs(st.gain - expected) * snr
+    shown = loo_lines(y, trend / st.rms, snr ** 2, y) * st.rms
+    change = np.divide(np.abs(trend - shown), noise, out=np.zeros(len(y)), where=noise > 0)
+    return st, snr, ratio, keep, significance, change
+
+
+def test_comparison_is_the_numpy_check():
+    """The check's comparison in one kernel: every number bit for bit (ratios where the
+    prediction is positive, zero noise, tiny and nan variances, a channel without
+    power refused)."""
+    rng = np.random.default_rng(33)
+    n_none = 0
+    for trial in range(600):
+        n, nc = int(rng.integers(1, 300)), int(rng.integers(2, 14))
+        f = rng.normal(size=(n, nc)) * 10.0 ** rng.uniform(-6, -3, nc)
+        m = f * rng.uniform(-1.5, 2.5, nc) + rng.normal(size=(n, nc)) * 1e-6
+        if trial % 17 == 0:
+            f[:, int(rng.integers(0, nc))] = 0.0  # no power: refused
+        var = rng.uniform(1e-14, 1e-10, nc)
+        var[rng.random(nc) < 0.1] = 0.0  # clipped to tiny
+        if trial % 7 == 0:
+            var[int(rng.integers(0, nc))] = np.nan
+        y = np.sort(rng.uniform(0, 12, nc)) if trial % 4 else np.arange(nc, dtype=float)
+        trend = rng.normal(size=nc) * 1e-6
+        noise = rng.uniform(0, 1e-7, nc)
+        noise[rng.random(nc) < 0.2] = 0.0
+        with np.errstate(all="ignore"):
+            ref = _comparison_reference(m, f, var, y, trend, noise)
+            got = comparison(m, f, var, y, trend, noise)
+            plain = comparison(m, f, var, y)
+        if ref is None:
+            assert got is None and plain is None
+            n_none += 1
+            continue
+        st, snr, ratio, keep, significance, change = ref
+        for a, b in ((got.gain, st.gain), (got.corr, st.corr), (got.rms, st.rms),
+                     (got.snr, snr), (got.ratio, ratio), (got.kept, keep),
+                     (got.significance, significance), (got.change, change),
+                     (plain.ratio, ratio), (plain.significance, significance)):
+            assert a.tobytes() == b.tobytes(), trial
+    assert n_none > 10

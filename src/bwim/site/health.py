@@ -91,9 +91,9 @@ from bwim.errors import DATA_ERRORS, InputError
 from bwim.plausibility import ordered_flags, quality_of
 from bwim.records import Passage, Record
 from bwim.site.health_kernels import (
-    gain_stats,
+    Comparison,
+    comparison,
     held_extremes,
-    loo_lines,
     residuals,
     step_noise,
 )
@@ -387,26 +387,21 @@ def _worst(record: Record, passage: Passage, lines: MultiRunCalibration,
         w = model.weigh(scale_correction=False)
     except DATA_ERRORS:
         return None, {}, model
-    if not np.isfinite(w.gvw) or w.gvw <= 0:
-        return None, {}, model
-    c = _compare(w, sub)
-    if c is None:
+    if not np.isfinite(w.gvw) or w.gvw <= 0 or w.measured.shape[0] == 0:
         return None, {}, model
     trend = _trends(record, w, model.readings, model.on_support)
-    noise = sub.channel_noise
-    y = _positions(sub)
-    expected = _predicted(y, c.gain, c.snr)
-    ratios = _ratios(names, c.gain, expected)
+    # each channel's ratio and its significance, and its drift: the residual's change
+    # over the record beyond what the others' show (their changes in proportion to their
+    # signals, on a line across the deck), in units of its noise (0 without noise)
+    c = _compare(w, sub, trend)
+    if c is None:
+        return None, {}, model
+    ratios = _ratios(names, c)
     worst, score = None, SIGNIFICANCE
     drifting, excess = None, 1.0
     off = np.log(GAIN_TOLERANCE)
-    shown = _predicted(y, trend / c.rms, c.snr) * c.rms
-    # each channel's significance, and its drift: the residual's change over the record
-    # beyond what the others' show (their changes in proportion to their signals, on a
-    # line across the deck), in units of its noise (0 without noise)
-    significances = (np.abs(c.gain - expected) * c.snr).tolist()
-    changes = np.divide(np.abs(trend - shown), noise, out=np.zeros(len(names)),
-                        where=noise > 0).tolist()
+    significances = c.significance.tolist()
+    changes = c.change.tolist()
     for g in range(len(names)):
         significance = significances[g]
         if names[g] in ratios and significance > score:
@@ -464,35 +459,20 @@ def _explains_drift(record: Record, w: Weighing, readings: np.ndarray, on: np.nd
     return bool((r @ t) ** 2 / (t @ t) > (r @ f) ** 2 / max(f @ f, 1e-300))
 
 
-@dataclass(frozen=True, kw_only=True)
-class _Comparison:
-    gain: np.ndarray  # a_g = <m_g, f_g> / <f_g, f_g>
-    corr: np.ndarray  # the correlation of m_g with f_g
-    snr: np.ndarray  # rms(f_g) / σ_g
-    rms: np.ndarray  # rms(f_g)
-
-
-def _compare(w: Weighing, sub: MultiRunCalibration) -> _Comparison | None:
+def _compare(w: Weighing, sub: MultiRunCalibration, trend: np.ndarray | None = None
+             ) -> Comparison | None:
     """Each channel's gain ratio, correlation and signal against its fitted static
-    reading over the samples with an axle on the support (None when degenerate).  The
-    correlation takes the shape alone (both centred): a channel that does not respond
-    is uncorrelated with its fit (:func:`bwim.site.health_kernels.gain_stats`)."""
-    m, f = w.measured, w.fitted
-    if m.shape[0] == 0:
+    reading over the samples with an axle on the support (None when degenerate), its
+    ratio to the gain the others predict (the weighted straight line through their gains
+    against their positions, weights ``snr²``, at its own position: nan when the others
+    have no weight) and that difference's significance; with ``trend``, its drift beyond
+    the others' (module docstring).  The correlation takes the shape alone (both
+    centred): a channel that does not respond is uncorrelated with its fit.  One
+    compiled call, numpy's numbers (:func:`bwim.site.health_kernels.comparison`)."""
+    if w.measured.shape[0] == 0:
         return None
-    st = gain_stats(m, f)
-    if np.any(st.power <= 0):
-        return None
-    sd = np.sqrt(np.clip(sub.error_variance(w.gvw), np.finfo(float).tiny, None))
-    return _Comparison(gain=st.gain, corr=st.corr, snr=st.rms / sd, rms=st.rms)
-
-
-def _predicted(y: np.ndarray, values: np.ndarray, snr: np.ndarray) -> np.ndarray:
-    """For each channel, the weighted straight line through the other channels' values
-    against their positions ``y`` (weights ``snr²``), at its own position (nan when the
-    others have no weight; :func:`bwim.site.health_kernels.loo_lines`: each line's sums
-    are numpy's over that channel's others alone)."""
-    return loo_lines(y, values, snr ** 2, y)
+    return comparison(w.measured, w.fitted, sub.error_variance(w.gvw), _positions(sub),
+                      trend, None if trend is None else sub.channel_noise)
 
 
 def gain_ratios(weighing: Weighing, lines: MultiRunCalibration) -> dict[str, float]:
@@ -510,13 +490,11 @@ def gain_ratios(weighing: Weighing, lines: MultiRunCalibration) -> dict[str, flo
     c = _compare(weighing, sub)
     if c is None:
         return {}
-    return _ratios(names, c.gain, _predicted(_positions(sub), c.gain, c.snr))
+    return _ratios(names, c)
 
 
-def _ratios(names: Sequence[str], gain: np.ndarray, expected: np.ndarray
-            ) -> dict[str, float]:
+def _ratios(names: Sequence[str], c: Comparison) -> dict[str, float]:
     """Each channel's gain over its prediction, ``a_g / â_g``, where the prediction is
     positive."""
-    keep = expected > 0
-    ratio = np.divide(gain, expected, out=np.zeros(len(names)), where=keep).tolist()
-    return {names[g]: ratio[g] for g in np.flatnonzero(keep).tolist()}
+    ratio = c.ratio.tolist()
+    return {names[g]: ratio[g] for g in np.flatnonzero(c.kept).tolist()}

@@ -17,6 +17,17 @@ Contract
   ``std(diff(reading)) / √2`` (numpy's ``std``: the mean, the squared deviations'
   mean, its root), and :func:`held_extremes` whether a channel holds its maximum or its
   minimum over the record for at least ``run`` consecutive samples.
+* :func:`comparison` gives the gauge check's comparison of a weighing's channels
+  (:mod:`bwim.site.health`) in one call: :func:`gain_stats`; None when a channel's
+  power is not positive; each channel's signal-to-noise ratio ``rms / √max(var, tiny)``
+  (``var`` its expected residual variance); its prediction from the others' gains
+  (:func:`loo_lines` with weights ``snr²`` at the positions ``y``), its ratio to it
+  where the prediction is positive (0 elsewhere), the difference's significance
+  ``|gain − prediction| snr``; with a ``trend`` per channel, the others' trends in
+  proportion to their signals (:func:`loo_lines` of ``trend / rms``, times ``rms``) and
+  the difference from it in units of ``noise`` (0 where the noise is not positive).
+  Each number is the one numpy's elementwise expressions of :mod:`bwim.site.health`
+  made (``numpy.clip``, ``**2`` as a product, ``numpy.divide`` with ``where``).
 * :func:`residuals` gives each channel's residual over the record: ``readings −
   offsets``, less the fitted readings (one row per sample of ``on``, in order) at the
   samples of ``on``: numpy's ``r = readings - offsets; r[on] -= fitted``, the same
@@ -40,8 +51,8 @@ import numpy as np
 
 from bwim.pairwise import pairwise_sum
 
-__all__ = ["GainStats", "gain_stats", "held_extremes", "loo_lines", "residuals",
-           "step_noise"]
+__all__ = ["Comparison", "GainStats", "comparison", "gain_stats", "held_extremes",
+           "loo_lines", "residuals", "step_noise"]
 
 
 @numba.njit(cache=True)
@@ -145,6 +156,84 @@ def loo_lines(x: np.ndarray, values: np.ndarray, weight: np.ndarray, at: np.ndar
         return np.ascontiguousarray(a, dtype=float).reshape(-1)
 
     return _loo_lines(vec(x), vec(values), vec(weight), vec(at))
+
+
+@numba.njit(cache=True, error_model="numpy")
+def _comparison(m, f, var, tiny, y, trend, noise, with_trend
+                ):  # pragma: no cover - compiled
+    st = _gain_stats(m, f)
+    nc = st.shape[1]
+    out = np.zeros((8, nc))  # gain, corr, snr, rms, ratio, kept, significance, change
+    for c in range(nc):
+        if st[0, c] <= 0.0:  # numpy.any(power <= 0): a nan power passes
+            return False, out
+    gain = np.empty(nc)
+    snr = np.empty(nc)
+    w2 = np.empty(nc)
+    for c in range(nc):
+        v = var[c]
+        if not (v >= tiny or v != v):  # numpy.clip(var, tiny, None)
+            v = tiny
+        gain[c] = st[1, c]
+        snr[c] = st[3, c] / np.sqrt(v)
+        w2[c] = snr[c] * snr[c]  # snr ** 2
+    expected = _loo_lines(y, gain, w2, y)
+    for c in range(nc):
+        out[0, c] = gain[c]
+        out[1, c] = st[2, c]
+        out[2, c] = snr[c]
+        out[3, c] = st[3, c]
+        e = expected[c]
+        if e > 0:  # numpy.divide(gain, expected, where=expected > 0), else 0
+            out[4, c] = gain[c] / e
+            out[5, c] = 1.0
+        out[6, c] = abs(gain[c] - e) * snr[c]
+    if with_trend:
+        tr = np.empty(nc)
+        for c in range(nc):
+            tr[c] = trend[c] / st[3, c]
+        shown = _loo_lines(y, tr, w2, y)
+        for c in range(nc):
+            d = abs(trend[c] - shown[c] * st[3, c])
+            out[7, c] = d / noise[c] if noise[c] > 0 else 0.0
+    return True, out
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Comparison:
+    """:func:`comparison`'s result, one entry per channel."""
+
+    gain: np.ndarray  # Σ m f / Σ f²
+    corr: np.ndarray  # correlation of m with f
+    snr: np.ndarray  # rms / σ
+    rms: np.ndarray  # √(Σ f² / n_w)
+    ratio: np.ndarray  # gain over its prediction from the others (0 where not positive)
+    kept: np.ndarray  # bool: the prediction is positive
+    significance: np.ndarray  # |gain − prediction| snr
+    change: np.ndarray  # the trend beyond the others', in units of the noise (trend given)
+
+
+def comparison(m: np.ndarray, f: np.ndarray, var: np.ndarray, y: np.ndarray,
+               trend: np.ndarray | None = None, noise: np.ndarray | None = None
+               ) -> Comparison | None:
+    """The gauge check's comparison of each channel (module docstring): ``m``, ``f``
+    measured and fitted readings (n_w ≥ 1, n_c ≥ 2), ``var`` each channel's expected
+    residual variance, ``y`` its position; ``trend`` and ``noise`` (n_c,) for the drift
+    comparison.  None when a channel's fitted reading has no power."""
+    def vec(a):
+        return np.ascontiguousarray(a, dtype=float).reshape(-1)
+
+    with_trend = trend is not None
+    nc = np.shape(m)[1]
+    ok, out = _comparison(np.ascontiguousarray(m, dtype=float),
+                          np.ascontiguousarray(f, dtype=float), vec(var),
+                          float(np.finfo(float).tiny), vec(y),
+                          vec(trend) if with_trend else np.zeros(nc),
+                          vec(noise) if with_trend else np.zeros(nc), with_trend)
+    if not ok:
+        return None
+    return Comparison(gain=out[0], corr=out[1], snr=out[2], rms=out[3], ratio=out[4],
+                      kept=out[5] > 0, significance=out[6], change=out[7])
 
 
 @numba.njit(cache=True)
