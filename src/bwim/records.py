@@ -394,6 +394,23 @@ class Record:
             idx.append(names.index(key))
         return idx
 
+    def samples(self, keep: np.ndarray) -> Record:
+        """The record of the samples ``keep`` (a boolean mask of its samples), its clock,
+        sensors, settings and convergence kept, its passages and truths dropped.  Two or
+        more samples of a valid record make a valid record: they are not checked again
+        (as ``dataclasses.replace`` would)."""
+        time, data = self.time[keep], self.data[keep]
+        if time.size < 2:  # the checks name what is wrong
+            return dataclasses.replace(self, time=time, data=data, passages=(), truths=())
+        part = object.__new__(type(self))
+        for f in dataclasses.fields(self):
+            object.__setattr__(part, f.name, getattr(self, f.name))
+        object.__setattr__(part, "time", time)
+        object.__setattr__(part, "data", data)
+        object.__setattr__(part, "passages", ())
+        object.__setattr__(part, "truths", ())
+        return part
+
     def channels(self, sensors: Sequence[str | Sensor]) -> Record:
         """A record with a subset of the channels (by name or Sensor), in that order."""
         idx = self.channel_indices(sensors)
