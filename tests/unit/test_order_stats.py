@@ -328,3 +328,36 @@ def test_signed_extremes_are_numpys():
         up, down = signed_extremes(y, rest, signs)
         assert np.array_equal(up, z.max(axis=0), equal_nan=True), trial
         assert np.array_equal(down, -z.min(axis=0), equal_nan=True), trial
+
+
+def test_medians_of_long_and_patterned_vectors_are_numpys():
+    """The selection on long vectors (its partitions, not only its final insertion
+    sort): sorted, reversed, organ-pipe, constant, two values, quantised, ±inf; the
+    median, the MAD and the column medians equal numpy's."""
+    rng = np.random.default_rng(43)
+    for trial in range(600):
+        n = int(rng.integers(17, 2500))
+        v = rng.normal(size=n) * 10.0 ** rng.uniform(-6, 3)
+        kind = trial % 8
+        if kind == 1:
+            v = np.sort(v)
+        elif kind == 2:
+            v = np.sort(v)[::-1].copy()
+        elif kind == 3:
+            s = np.sort(v)
+            v = np.concatenate([s[::2], s[1::2][::-1]])  # organ pipe
+        elif kind == 4:
+            v = np.full(n, float(rng.normal()))
+        elif kind == 5:
+            v = rng.choice([-1.5, 2.0], size=n)
+        elif kind == 6:
+            v = np.round(v / np.abs(v).max() * 4)
+        elif kind == 7:
+            v[rng.integers(0, n, 3)] = [np.inf, -np.inf, np.inf]
+        assert median_of(v) == np.median(v), trial
+        assert mad_of(v) == np.median(np.abs(v - np.median(v))), trial
+        rows = rng.random(n) < 0.7
+        rows[0] = True
+        a = np.vstack([v, v[::-1]])
+        got, _ = row_medians_of(a, rows)
+        assert np.array_equal(got, np.median(a[:, rows], axis=1)), trial

@@ -6,8 +6,9 @@ Contract
 --------
 * Each kernel is a numba function (``njit(cache=True)``, no fastmath, no parallelism)
   that computes what :mod:`bwim.detect.signals` describes with numpy or scipy calls,
-  the same numbers: an order statistic is one of the values (found by selection,
-  Hoare's, on a copy; a running median by minima and maxima), the mean of the two
+  the same numbers: an order statistic is one of the values (found by selection on a
+  copy: quickselect with branchless partitions; a running median by minima and
+  maxima), the mean of the two
   middle values of an even count is ``(a + b) / 2`` as
   :func:`bwim.detect.signals.median` makes it, and every other
   operation is the same single IEEE operation numpy applies element by element.
@@ -65,32 +66,60 @@ __all__ = ["column_medians_of", "despike_columns", "end_excursion", "mad_of", "m
 
 
 @njit(cache=True)
+def _below(buf, lo, hi, pivot):
+    """Move the values of ``buf[lo:hi]`` below ``pivot`` to its front (their count from
+    ``lo`` returned), without a branch on the values: every value is swapped into the
+    front and the front grows only past those below (the others are swapped back out by
+    the next one).  A quickselect's partitions over noisy readings mispredict half of
+    their branches; these have none."""
+    j = lo
+    for i in range(lo, hi):
+        x = buf[i]
+        buf[i] = buf[j]
+        buf[j] = x
+        j += x < pivot
+    return j
+
+
+@njit(cache=True)
+def _not_above(buf, lo, hi, pivot):
+    """:func:`_below` for the values not above ``pivot``."""
+    j = lo
+    for i in range(lo, hi):
+        x = buf[i]
+        buf[i] = buf[j]
+        buf[j] = x
+        j += not (pivot < x)
+    return j
+
+
+@njit(cache=True)
 def _select(buf, lo, hi, k):
     """Rearrange ``buf[lo:hi]`` so that ``buf[k]`` holds the value of rank ``k`` (sorted
-    order) with no larger value before it and no smaller after it: Hoare's selection
-    (Wirth's form: both scans stop at values equal to the pivot, which keeps runs of
-    equal values, common in quantised readings, balanced), the pivot the median of the
-    first, middle and last values.  The values are finite or ±inf (no NaN)."""
-    left, right = lo, hi - 1
-    while left < right:
-        a, b, c = buf[left], buf[(left + right) // 2], buf[right]
+    order) with no larger value before it and no smaller after it: quickselect, the
+    pivot the median of the first, middle and last values, each step a branchless
+    partition into the values below the pivot, those equal to it (a second partition of
+    the rest: runs of equal values, common in quantised readings, end the search at
+    once) and those above; below 17 values an insertion sort.  The values are finite or
+    ±inf (no NaN)."""
+    while hi - lo > 16:
+        a, b, c = buf[lo], buf[(lo + hi) // 2], buf[hi - 1]
         pivot = max(min(a, b), min(max(a, b), c))  # the middle one of three
-        i, j = left, right
-        while i <= j:
-            while buf[i] < pivot:
-                i += 1
-            while pivot < buf[j]:
-                j -= 1
-            if i <= j:
-                x = buf[i]
-                buf[i] = buf[j]
-                buf[j] = x
-                i += 1
-                j -= 1
-        if j < k:
-            left = i
-        if k < i:
-            right = j
+        j = _below(buf, lo, hi, pivot)  # the pivot's own value is not below it: j < hi
+        if k < j:
+            hi = j
+            continue
+        j = _not_above(buf, j, hi, pivot)  # the pivot's value is: the rest shrinks
+        if k < j:  # buf[k] is the pivot's value
+            return
+        lo = j
+    for i in range(lo + 1, hi):
+        x = buf[i]
+        j = i - 1
+        while j >= lo and buf[j] > x:
+            buf[j + 1] = buf[j]
+            j -= 1
+        buf[j + 1] = x
 
 
 @njit(cache=True)
