@@ -287,11 +287,12 @@ def _flat(readings: np.ndarray, lines: MultiRunCalibration) -> list[GaugeFault]:
     if readings.shape[0] < 3:
         return []
     # numpy's std of each channel's steps alone (bwim.site.health_kernels.step_noise)
-    noises = step_noise(readings)
+    noises = step_noise(readings).tolist()
+    refs = lines.channel_noise.tolist()
     out = []
     for k, c in enumerate(lines.channels):
-        ref = float(lines.channel_noise[k])
-        noise = float(noises[k])
+        ref = refs[k]
+        noise = noises[k]
         if ref > 0 and noise < FLAT_NOISE * ref:
             out.append(GaugeFault(
                 gauge=c.name, kind="flat", ratio=float("nan"),

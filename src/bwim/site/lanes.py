@@ -208,8 +208,8 @@ def detect_lanes(record: Record, setup: SiteSetup, *,
             notes.append(f"lane {pair.lane}: {det.message}")
         for v in det.vehicles:
             parts = split_long(v, lane_span, max_length=pair.max_length)
-            length = float(np.sum(v.passage.axle_spacings))
             if len(parts) > 1:
+                length = float(np.sum(v.passage.axle_spacings))
                 notes.append(f"lane {pair.lane}: {v.n_axles} axles over {length:.1f} m, "
                              f"longer than any vehicle ({pair.max_length:g} m): "
                              f"{len(parts)} vehicles following each other")

@@ -125,13 +125,17 @@ def group_laterals(record: Record, passage: Passage, *, gauge_line: float,
             quiet = None
     windows = []
     t_first, t_last = float(t[0]), float(t[-1])
+    off = offsets.tolist()  # the same numbers as Python floats
     for k, g in enumerate(groups):
-        centre = float(np.mean(offsets[g]))
+        vals = [off[i] for i in g]
+        # numpy.mean's number: below 8 values numpy adds them one after the other (the
+        # offsets are 0 or positive: as Python's sum), else its pairwise sum
+        centre = sum(vals) / len(vals) if len(vals) < 8 else float(np.mean(offsets[g]))
         gaps = []
         if k > 0:
-            gaps.append(offsets[g[0]] - offsets[groups[k - 1][-1]])
+            gaps.append(off[g[0]] - off[groups[k - 1][-1]])
         if k + 1 < len(groups):
-            gaps.append(offsets[groups[k + 1][0]] - offsets[g[-1]])
+            gaps.append(off[groups[k + 1][0]] - off[g[-1]])
         half = min([HALF_WINDOW, *(0.25 * gp for gp in gaps)]) / passage.speed
         tg = passage.delay + (x_line + centre) / passage.speed
         if tg - half < t_first or tg + half > t_last:

@@ -139,7 +139,7 @@ def group_axles(spacings: Passage | np.ndarray, max_spacing: float = 2.0
         spacings, dtype=float, ndmin=1)
     limit = require_finite("max_spacing", max_spacing)
     groups: list[list[int]] = [[0]]
-    for i, s in enumerate(sp, start=1):
+    for i, s in enumerate(sp.tolist() if sp.ndim == 1 else sp, start=1):
         if s < limit:
             groups[-1].append(i)
         else:
