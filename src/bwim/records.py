@@ -15,6 +15,8 @@ Contract
   date and time at record time 0 when the file gave one (a logger's time column often
   starts at 0 in every file and the clock is in the file name); :meth:`Record.clock_seconds`
   puts every record on one clock axis (s).
+* :meth:`Record.samples` is the record of some of its samples (its clock and sensors
+  kept, its passages and truths dropped): a part of a valid record, not checked again.
 * :class:`SimulationSettings` is how a crossing was simulated (run-up ``approach`` in m,
   free vibration ``tail`` in s): what re-simulating it needs (calibration's dynamic
   stages).  :func:`bwim.simulate` sets it on its records; measured records may carry the

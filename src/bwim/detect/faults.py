@@ -19,6 +19,8 @@ Contract
   reversed, too weakly to be seen), both are named (one of them changed gain: one record
   cannot tell which).  Otherwise nothing is said ("").
 * The result is one line for a detection's message.
+* Compiled: the excursions (:func:`bwim.detect.order_stats.signed_extremes`, numpy's max
+  and min of ``(y − rest) × sign``); the rest is numpy's arithmetic on float64 scalars.
 """
 
 from __future__ import annotations

@@ -17,6 +17,9 @@ Contract
   1 = the first gauge as listed, n = the last (gauges evenly spread give
   ``y ≈ y_1 + (index − 1) × gauge pitch``).
 * The quiet level of each gauge is its median over the ``quiet`` samples.
+* Compiled: the quiet levels (:func:`bwim.detect.signals.column_medians`, numpy's
+  medians) and each window's peak weights (:func:`bwim.detect.order_stats.window_peaks`:
+  numpy's max, maximum and threshold, the same numbers); the centroid is numpy's.
 """
 
 from __future__ import annotations
