@@ -15,6 +15,8 @@ Contract
   date and time at record time 0 when the file gave one (a logger's time column often
   starts at 0 in every file and the clock is in the file name); :meth:`Record.clock_seconds`
   puts every record on one clock axis (s).
+* :meth:`Record.samples` is the record of some of its samples (its clock and sensors
+  kept, its passages and truths dropped): a part of a valid record, not checked again.
 * :class:`SimulationSettings` is how a crossing was simulated (run-up ``approach`` in m,
   free vibration ``tail`` in s): what re-simulating it needs (calibration's dynamic
   stages).  :func:`bwim.simulate` sets it on its records; measured records may carry the
@@ -28,10 +30,12 @@ Contract
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from datetime import datetime
 from datetime import time as dtime
+from itertools import accumulate
 
 import numpy as np
 
@@ -97,7 +101,12 @@ def local_seconds(t: datetime) -> float:
 
 
 def axle_offsets(spacings: np.ndarray) -> np.ndarray:
-    """Distance of each axle behind the first, m, from the axle spacings."""
+    """Distance of each axle behind the first, m, from the axle spacings: 0, then their
+    running sums (``numpy.cumsum``'s, one after the other; a float vector's summed as
+    Python floats, the same numbers without numpy's calls)."""
+    if isinstance(spacings, np.ndarray) and spacings.dtype == np.float64 \
+            and spacings.ndim == 1:
+        return np.array([0.0, *accumulate(spacings.tolist())])
     return np.concatenate([[0.0], np.cumsum(spacings)])
 
 
@@ -146,7 +155,8 @@ class Passage(AxleLayout):
         object.__setattr__(self, "speed", require_positive("speed", self.speed))
         object.__setattr__(self, "lane", require_finite("lane", self.lane))
         sp = np.array(self.axle_spacings, dtype=float, ndmin=1)
-        if sp.ndim != 1 or not np.all(np.isfinite(sp)) or np.any(sp <= 0):
+        # finite and positive (NaN fails both comparisons)
+        if sp.ndim != 1 or not all(0.0 < x < math.inf for x in sp.tolist()):
             raise InputError(f"axle_spacings must be positive distances, got {sp.tolist()}")
         object.__setattr__(self, "axle_spacings", sp)
         if self.track_width is not None:
@@ -385,6 +395,23 @@ class Record:
                 raise InputError(f"no channel {key!r} in this record; channels: {names}")
             idx.append(names.index(key))
         return idx
+
+    def samples(self, keep: np.ndarray) -> Record:
+        """The record of the samples ``keep`` (a boolean mask of its samples), its clock,
+        sensors, settings and convergence kept, its passages and truths dropped.  Two or
+        more samples of a valid record make a valid record: they are not checked again
+        (as ``dataclasses.replace`` would)."""
+        time, data = self.time[keep], self.data[keep]
+        if time.size < 2:  # the checks name what is wrong
+            return dataclasses.replace(self, time=time, data=data, passages=(), truths=())
+        part = object.__new__(type(self))
+        for f in dataclasses.fields(self):
+            object.__setattr__(part, f.name, getattr(self, f.name))
+        object.__setattr__(part, "time", time)
+        object.__setattr__(part, "data", data)
+        object.__setattr__(part, "passages", ())
+        object.__setattr__(part, "truths", ())
+        return part
 
     def channels(self, sensors: Sequence[str | Sensor]) -> Record:
         """A record with a subset of the channels (by name or Sensor), in that order."""

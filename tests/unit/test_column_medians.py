@@ -86,3 +86,26 @@ def test_lateral_position_is_the_formula_with_numpys_median(small_site_truck, we
             assert got.value == value and np.array_equal(got.weights, w)
             n += 1
     assert n == 8
+
+
+def test_channel_rows_are_channel_datas_rows():
+    """channel_rows: channel_data(record, names)[rows].astype(float) in one gather, the
+    same numbers and the same C-ordered layout (what BLAS then reads); a missing channel
+    is named as channel_data names it."""
+    from bwim.detect.signals import channel_rows
+    from bwim.errors import InputError
+    from bwim.records import Record
+    from bwim.sensors import Sensor
+
+    rng = np.random.default_rng(3)
+    sensors = tuple(Sensor(x=1.0, y=float(k), name=f"g{k}") for k in range(7))
+    rec = Record(time=np.arange(300) / 256.0, data=rng.normal(size=(300, 7)),
+                 sensors=sensors)
+    for names in (["g2", "g3", "g4"], ["g6", "g0"], ["g1"]):
+        for m in (rng.random(300) < 0.5, np.ones(300, dtype=bool)):
+            ref = channel_data(rec, names)[m].astype(float)
+            got = channel_rows(rec, names, np.flatnonzero(m))
+            assert np.array_equal(got, ref) and got.strides == ref.strides
+            assert got.flags.c_contiguous and got.flags.owndata
+    with pytest.raises(InputError, match="no channel 'g9'"):
+        channel_rows(rec, ["g1", "g9"], np.arange(3))

@@ -15,10 +15,16 @@ from scipy.ndimage import median_filter
 from bwim.detect.order_stats import (
     column_medians_of,
     despike_columns,
+    end_excursion,
     mad_of,
     median_of,
     outside_activity,
+    outside_windows,
+    row_medians_of,
+    signed_extremes,
+    window_peaks,
 )
+from bwim.detect.presence import signal_noise, unexplained_activity
 from bwim.detect.signals import (
     MAD_TO_SIGMA,
     SPIKE_SHARE,
@@ -135,19 +141,49 @@ def test_outside_activity_is_numpys():
         lo = rng.uniform(t[0] - 0.2, t[-1] + 0.1, size=m)
         w = np.column_stack([lo, lo + rng.uniform(0.0, 0.4, size=m)])
         margin, fraction, snr = 0.05, float(rng.uniform(0.05, 0.5)), float(rng.uniform(2, 10))
-        status, active = outside_activity(t, s, w, margin, fraction, snr, MAD_TO_SIGMA)
+        status, active = outside_activity(t, s, w, margin, fraction, snr, MAD_TO_SIGMA,
+                                          np.nan)
+        # the noise made once (presence.signal_noise) and given: the same samples
+        given = outside_activity(t, s, w, margin, fraction, snr, MAD_TO_SIGMA,
+                                 signal_noise(s))
         ref = _reference_activity(t, s, w, margin, fraction, snr)
         if ref is None:
-            assert status == 0
+            assert status == 0 and given[0] == 0
             n_none += 1
         else:
             assert status == 1 and np.array_equal(active, ref), (trial, active, ref)
+            assert given[0] == 1 and np.array_equal(given[1], ref), trial
             n_active += int(ref.any())
     assert n_active > 200 and n_none > 200
     s = np.ones(50)
     s[3] = np.nan
     assert outside_activity(np.arange(50.0), s, np.array([[10.0, 20.0]]), 0.05, 0.2, 8.0,
-                            MAD_TO_SIGMA)[0] == 2
+                            MAD_TO_SIGMA, np.nan)[0] == 2
+
+
+def test_unexplained_activity_with_its_noise_and_step_given():
+    """unexplained_activity with the signal's noise and the median time step made once
+    (a signal judged against several sets of windows): the same intervals."""
+    rng = np.random.default_rng(23)
+    n_found = 0
+    for trial in range(600):
+        n = int(rng.integers(2, 400))
+        t = np.arange(n) / 512.0 + float(rng.normal())
+        s = rng.normal(size=n) * 0.1
+        for _ in range(int(rng.integers(0, 4))):
+            i = int(rng.integers(0, n))
+            s[i:i + int(rng.integers(1, 60))] += float(rng.normal()) * 10
+        if trial % 9 == 0:
+            s[int(rng.integers(0, n))] = np.nan  # numpy's path
+        lo = rng.uniform(t[0], t[-1], size=int(rng.integers(1, 3)))
+        w = np.column_stack([lo, lo + rng.uniform(0.0, 0.2, size=lo.size)])
+        with np.errstate(invalid="ignore"):
+            ref = unexplained_activity(t, s, w)
+            got = unexplained_activity(t, s, w, noise=signal_noise(s),
+                                       step=median(np.diff(t)))
+        assert np.array_equal(got, ref), trial
+        n_found += len(ref) > 0
+    assert n_found > 50
 
 
 def test_column_medians_of_are_numpys():
@@ -176,3 +212,152 @@ def test_column_medians_of_are_numpys():
             assert np.array_equal(got, ref, equal_nan=True), (a, rows, got, ref)
             assert zero == bool(np.any(ref == 0))
     assert n_zero > 300
+
+
+def _reference_peaks(t, data, lo, hi, level, threshold):
+    """lateral_positions' peak weights of one window, written with numpy (the code
+    before the kernel): (status, weights) as window_peaks gives them."""
+    inside = (t >= lo) & (t <= hi)
+    if not inside.any():
+        return 0, None
+    w = np.maximum(data[inside].max(axis=0) - level, 0.0)
+    if not (w > 0).any():
+        return 1, None
+    return 2, np.maximum(w - threshold * w.max(), 0.0)
+
+
+def test_window_peaks_are_numpys():
+    """2000 tables (ties, NaN, ±inf; windows inside, across the ends, empty): the same
+    status, and the same weights (equal as numbers, NaN where numpy's is)."""
+    rng = np.random.default_rng(17)
+    counts = [0, 0, 0]
+    for trial in range(2000):
+        n, k = int(rng.integers(1, 80)), int(rng.integers(1, 14))
+        t = np.arange(n) / 256.0 + float(rng.normal())
+        data = rng.normal(size=(n, k))
+        if trial % 3 == 0:
+            data = np.round(data * 0.7)
+        if trial % 7 == 0:
+            data[rng.integers(0, n), rng.integers(0, k)] = np.nan
+        if trial % 11 == 0:
+            data[rng.integers(0, n), rng.integers(0, k)] = np.inf
+        level = rng.normal(size=k) * (0.0 if trial % 5 == 0 else 1.0) + (
+            3.0 if trial % 4 == 0 else 0.0)  # some windows without a positive weight
+        lo = float(rng.uniform(t[0] - 0.1, t[-1] + 0.02))
+        hi = lo + float(rng.uniform(0.0, 0.2))
+        thr = float(rng.choice([0.0, 0.5, rng.uniform(0, 1)]))
+        status, w = window_peaks(t, np.ascontiguousarray(data.T), lo, hi, level, thr)
+        with np.errstate(invalid="ignore"):
+            ref_status, ref = _reference_peaks(t, data, lo, hi, level, thr)
+        assert status == ref_status, (trial, status, ref_status)
+        if ref is not None:
+            assert np.array_equal(w, ref, equal_nan=True), (trial, w, ref)
+        counts[status] += 1
+    assert min(counts) > 100, counts
+
+
+def test_row_medians_are_column_medians_of_the_transpose():
+    """A table's columns one after the other (a Fortran-ordered table's transpose, no
+    copy): the medians of its columns, numpy's."""
+    rng = np.random.default_rng(29)
+    for trial in range(1000):
+        n, k = int(rng.integers(1, 80)), int(rng.integers(1, 14))
+        a = np.asfortranarray(rng.normal(size=(n, k)))
+        if trial % 3 == 0:
+            a = np.asfortranarray(np.round(a * 0.7))
+        if trial % 7 == 0:
+            a[rng.integers(0, n), rng.integers(0, k)] = np.nan
+        rows = rng.random(n) < 0.7
+        rows[rng.integers(0, n)] = True
+        with np.errstate(invalid="ignore"):
+            ref = np.median(a[rows], axis=0)
+        got, zero = row_medians_of(a.T, rows)
+        assert np.array_equal(got, ref, equal_nan=True), (trial, got, ref)
+        assert zero == bool(np.any(ref == 0))
+
+
+def test_outside_windows_are_numpys():
+    rng = np.random.default_rng(31)
+    for _ in range(500):
+        n = int(rng.integers(1, 300))
+        t = np.arange(n) / 512.0 + float(rng.normal())
+        lo = rng.uniform(t[0] - 0.2, t[-1] + 0.1, size=int(rng.integers(0, 4)))
+        w = np.column_stack([lo, lo + rng.uniform(0.0, 0.4, size=lo.size)])
+        inside = np.zeros(n, dtype=bool)
+        for a, b in w:
+            inside |= (t >= a - 0.05) & (t <= b + 0.05)
+        outside, count = outside_windows(t, w.reshape(-1, 2), 0.05)
+        assert np.array_equal(outside, ~inside) and count == int((~inside).sum())
+
+
+def test_end_excursion_is_numpys():
+    """ends_loaded's means (numpy's pairwise sums: stretches beyond 8 and 128 values)
+    and its argmax of the excursion (ties, a NaN)."""
+    rng = np.random.default_rng(37)
+    for trial in range(1500):
+        n = int(rng.integers(2, 300))
+        y = rng.normal(size=int(rng.integers(2 * n, 5 * n))) * 10.0 ** rng.uniform(-8, 2)
+        if trial % 4 == 0:
+            y = np.round(y / np.abs(y).max() * 3)  # ties
+        if trial % 23 == 0:
+            y[rng.integers(0, y.size)] = np.nan
+        start, end, middle, k, excursion = end_excursion(y, n)
+        ref_start = float(y[:n].mean())
+        assert start == ref_start or (start != start and ref_start != ref_start)
+        assert end == float(y[-n:].mean()) or np.isnan(end)
+        assert middle == float(y[n:2 * n].mean()) or np.isnan(middle)
+        dev = y - ref_start
+        assert k == int(np.argmax(np.abs(dev)))
+        assert excursion == dev[k] or (np.isnan(excursion) and np.isnan(dev[k]))
+
+
+def test_signed_extremes_are_numpys():
+    """diagnose's excursions: ``z = (y - rest) * signs``, ``z.max(axis=0)`` and
+    ``-z.min(axis=0)`` (ties, NaN anywhere, one row)."""
+    rng = np.random.default_rng(41)
+    for trial in range(1500):
+        n = int(rng.integers(1, 200))
+        y = rng.normal(size=(n, 2)) * 10.0 ** rng.uniform(-6, 2)
+        if trial % 3 == 0:
+            y = np.round(y / np.abs(y).max() * 3)
+        if trial % 13 == 0:
+            y[rng.integers(0, n), rng.integers(0, 2)] = np.nan
+        rest = rng.normal(size=2) * (trial % 2)
+        signs = rng.choice([-1.0, 1.0], size=2)
+        z = (y - rest) * signs
+        up, down = signed_extremes(y, rest, signs)
+        assert np.array_equal(up, z.max(axis=0), equal_nan=True), trial
+        assert np.array_equal(down, -z.min(axis=0), equal_nan=True), trial
+
+
+def test_medians_of_long_and_patterned_vectors_are_numpys():
+    """The selection on long vectors (its partitions, not only its final insertion
+    sort): sorted, reversed, organ-pipe, constant, two values, quantised, ±inf; the
+    median, the MAD and the column medians equal numpy's."""
+    rng = np.random.default_rng(43)
+    for trial in range(600):
+        n = int(rng.integers(17, 2500))
+        v = rng.normal(size=n) * 10.0 ** rng.uniform(-6, 3)
+        kind = trial % 8
+        if kind == 1:
+            v = np.sort(v)
+        elif kind == 2:
+            v = np.sort(v)[::-1].copy()
+        elif kind == 3:
+            s = np.sort(v)
+            v = np.concatenate([s[::2], s[1::2][::-1]])  # organ pipe
+        elif kind == 4:
+            v = np.full(n, float(rng.normal()))
+        elif kind == 5:
+            v = rng.choice([-1.5, 2.0], size=n)
+        elif kind == 6:
+            v = np.round(v / np.abs(v).max() * 4)
+        elif kind == 7:
+            v[rng.integers(0, n, 3)] = [np.inf, -np.inf, np.inf]
+        assert median_of(v) == np.median(v), trial
+        assert mad_of(v) == np.median(np.abs(v - np.median(v))), trial
+        rows = rng.random(n) < 0.7
+        rows[0] = True
+        a = np.vstack([v, v[::-1]])
+        got, _ = row_medians_of(a, rows)
+        assert np.array_equal(got, np.median(a[:, rows], axis=1)), trial

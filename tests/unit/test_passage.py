@@ -26,3 +26,32 @@ def test_axle_x_agrees_with_entry_and_exit_times():
     for i in range(p.n_axles):
         x = p.axle_x(on[i])[:, i]
         np.testing.assert_allclose(x, [0.0, length], atol=1e-9)
+
+
+def test_axle_offsets_are_numpys_running_sums():
+    """The offsets of float spacings (summed as Python floats) are numpy's cumsum after a
+    0, bit for bit; other inputs (lists, integers) as before."""
+    from bwim.records import axle_offsets
+
+    rng = np.random.default_rng(4)
+    for _ in range(3000):
+        sp = rng.uniform(0.01, 20.0, int(rng.integers(0, 30))) * 10.0 ** rng.uniform(-3, 3)
+        got = axle_offsets(sp)
+        assert got.dtype == np.float64
+        assert np.array_equal(got, np.concatenate([[0.0], np.cumsum(sp)]))
+    assert np.array_equal(axle_offsets([3.2, 1.3]), [0.0, 3.2, 4.5])
+    assert np.array_equal(axle_offsets(np.array([2, 3])), [0.0, 2.0, 5.0])
+    p = Passage(speed=10.0, axle_spacings=[3.2, 1.3])
+    assert np.array_equal(p.axle_offsets, np.concatenate([[0.0], np.cumsum([3.2, 1.3])]))
+
+
+def test_spacings_must_be_finite_and_positive():
+    import pytest
+
+    from bwim.errors import InputError
+
+    for bad in ([3.0, 0.0], [-1.0], [np.nan], [np.inf, 2.0], [2.0, -np.inf], [[1.0, 2.0]]):
+        with pytest.raises(InputError, match="axle_spacings must be positive distances"):
+            Passage(speed=10.0, axle_spacings=bad)
+    for good in ([], [1e-300], [5.0, 1.3, 1e300]):
+        assert Passage(speed=10.0, axle_spacings=good).n_axles == len(good) + 1

@@ -487,11 +487,15 @@ def test_a_large_drift_is_told_from_a_gain_error(site, truck, gauge):
 
 
 def test_predicted_lines_are_each_channels_line_through_the_others():
-    """The prediction of every channel at once (health._predicted) is, byte for byte, the
-    weighted least-squares line through the other channels alone (each's own 1-D sums,
-    written out here), and within 1e-9 the weighted fit of numpy.polyfit (the
-    reference line); nan for a channel whose others have no weight."""
-    from bwim.site.health import _predicted
+    """The prediction of every channel at once (the check's, health_kernels.loo_lines
+    with weights snr²) is, byte for byte, the weighted least-squares line through the
+    other channels alone (each's own 1-D sums, written out here), and within 1e-9 the
+    weighted fit of numpy.polyfit (the reference line); nan for a channel whose others
+    have no weight."""
+    from bwim.site.health_kernels import loo_lines
+
+    def _predicted(y, values, snr):
+        return loo_lines(y, values, snr ** 2, y)
 
     rng = np.random.default_rng(5)
     for n in (4, 7, 12, 13, 20):

@@ -6,9 +6,11 @@ import numpy as np
 import pytest
 
 from bwim.site.health_kernels import (
+    comparison,
     gain_stats,
     held_extremes,
     loo_lines,
+    residuals,
     step_noise,
 )
 
@@ -103,6 +105,8 @@ def test_step_noise_is_numpys_std_of_the_steps():
             a[:, 0] = 1.5
         ref = np.std(np.diff(np.ascontiguousarray(a.T), axis=1), axis=1) / np.sqrt(2.0)
         assert step_noise(a).tobytes() == ref.tobytes(), trial
+        # a record's columns (Fortran-ordered: taken as they lie)
+        assert step_noise(np.asfortranarray(a)).tobytes() == ref.tobytes(), trial
 
 
 def test_held_extremes_are_runs_at_the_maximum_or_minimum():
@@ -115,3 +119,82 @@ def test_held_extremes_are_runs_at_the_maximum_or_minimum():
             a = rng.normal(size=(n, nc))
             a[n // 3:n // 3 + run, 0] = a.max() + 1.0
         assert np.array_equal(held_extremes(a, run), _held_reference(a, run)), trial
+        assert np.array_equal(held_extremes(np.asfortranarray(a), run),
+                              _held_reference(a, run)), trial
+
+
+def test_residuals_are_numpys():
+    """``r = readings - offsets; r[on] -= fitted`` (the gauge check's residual before the
+    kernel): equal bit for bit, signed zeros included, also for F-ordered readings (a
+    record's columns) and no sample or every sample fitted."""
+    rng = np.random.default_rng(21)
+    for trial in range(500):
+        n, nc = int(rng.integers(1, 300)), int(rng.integers(1, 13))
+        readings = rng.normal(size=(n, nc)) * 1e-4
+        if trial % 2:
+            readings = np.asfortranarray(readings)
+        if trial % 5 == 0:
+            readings = np.round(readings * 1e4) * 0.0  # zeros, some negative
+        offsets = rng.normal(size=nc) * 1e-4 * (trial % 3 != 0)
+        on = rng.random(n) < (0.0 if trial % 17 == 0 else 1.0 if trial % 19 == 0 else 0.5)
+        fitted = rng.normal(size=(int(on.sum()), nc)) * 1e-4
+        ref = readings - offsets
+        ref[on] -= fitted
+        got = residuals(readings, offsets, on, fitted)
+        assert np.array_equal(got, ref) and np.array_equal(np.signbit(got), np.signbit(ref))
+    with pytest.raises(ValueError, match="one fitted row"):
+        residuals(np.zeros((4, 2)), np.zeros(2), np.ones(4, dtype=bool), np.zeros((3, 2)))
+
+
+def _comparison_reference(m, f, var, y, trend, noise):
+    """The gauge check's comparison as bwim.site.health wrote it with numpy (before the
+    kernel): gain statistics, snr, the others' prediction, ratios, significances, and
+    the drift beyond the others'."""
+    st = gain_stats(m, f)
+    if np.any(st.power <= 0):
+        return None
+    snr = st.rms / np.sqrt(np.clip(var, np.finfo(float).tiny, None))
+    expected = loo_lines(y, st.gain, snr ** 2, y)
+    keep = expected > 0
+    ratio = np.divide(st.gain, expected, out=np.zeros(len(y)), where=keep)
+    significance = np.abs(st.gain - expected) * snr
+    shown = loo_lines(y, trend / st.rms, snr ** 2, y) * st.rms
+    change = np.divide(np.abs(trend - shown), noise, out=np.zeros(len(y)), where=noise > 0)
+    return st, snr, ratio, keep, significance, change
+
+
+def test_comparison_is_the_numpy_check():
+    """The check's comparison in one kernel: every number bit for bit (ratios where the
+    prediction is positive, zero noise, tiny and nan variances, a channel without
+    power refused)."""
+    rng = np.random.default_rng(33)
+    n_none = 0
+    for trial in range(600):
+        n, nc = int(rng.integers(1, 300)), int(rng.integers(2, 14))
+        f = rng.normal(size=(n, nc)) * 10.0 ** rng.uniform(-6, -3, nc)
+        m = f * rng.uniform(-1.5, 2.5, nc) + rng.normal(size=(n, nc)) * 1e-6
+        if trial % 17 == 0:
+            f[:, int(rng.integers(0, nc))] = 0.0  # no power: refused
+        var = rng.uniform(1e-14, 1e-10, nc)
+        var[rng.random(nc) < 0.1] = 0.0  # clipped to tiny
+        if trial % 7 == 0:
+            var[int(rng.integers(0, nc))] = np.nan
+        y = np.sort(rng.uniform(0, 12, nc)) if trial % 4 else np.arange(nc, dtype=float)
+        trend = rng.normal(size=nc) * 1e-6
+        noise = rng.uniform(0, 1e-7, nc)
+        noise[rng.random(nc) < 0.2] = 0.0
+        with np.errstate(all="ignore"):
+            ref = _comparison_reference(m, f, var, y, trend, noise)
+            got = comparison(m, f, var, y, trend, noise)
+            plain = comparison(m, f, var, y)
+        if ref is None:
+            assert got is None and plain is None
+            n_none += 1
+            continue
+        st, snr, ratio, keep, significance, change = ref
+        for a, b in ((got.gain, st.gain), (got.corr, st.corr), (got.rms, st.rms),
+                     (got.snr, snr), (got.ratio, ratio), (got.kept, keep),
+                     (got.significance, significance), (got.change, change),
+                     (plain.ratio, ratio), (plain.significance, significance)):
+            assert a.tobytes() == b.tobytes(), trial
+    assert n_none > 10

@@ -184,3 +184,36 @@ def test_multiple_presence_stays_the_events_after_a_replacement():
 
     out = detected_alone(rec, event, unseen)
     assert _presence(out.vehicles[0]) == (True, ())
+
+
+def test_samples_are_the_replaced_record():
+    """Record.samples (own_part's cut) is the record dataclasses.replace makes of the
+    samples, field by field, without checking them again; fewer than two samples are
+    refused as replace refuses them."""
+    import dataclasses
+    from datetime import datetime
+
+    import numpy as np
+    import pytest
+
+    from bwim.errors import InputError
+    from bwim.records import Passage, Record
+    from bwim.sensors import Sensor
+
+    rng = np.random.default_rng(1)
+    rec = Record(time=np.arange(200) / 100.0, data=rng.normal(size=(200, 3)),
+                 sensors=tuple(Sensor(x=1.0, y=float(k), name=f"g{k}") for k in range(3)),
+                 passages=(Passage(speed=10.0, axle_spacings=[3.0]),),
+                 clock=datetime(2026, 7, 1, 8, 0, 0))
+    keep = (rec.time >= 0.37) & (rec.time <= 1.2)
+    got = rec.samples(keep)
+    ref = dataclasses.replace(rec, time=rec.time[keep], data=rec.data[keep], passages=(),
+                              truths=())
+    assert type(got) is Record
+    for f in dataclasses.fields(Record):
+        a, b = getattr(got, f.name), getattr(ref, f.name)
+        assert (np.array_equal(a, b) and a.dtype == b.dtype and a.strides == b.strides
+                if isinstance(a, np.ndarray) else a == b), f.name
+    one = rec.time <= 0.0
+    with pytest.raises(InputError, match="at least two"):
+        rec.samples(one)

@@ -210,3 +210,60 @@ def test_finish_day_runs_the_check_after_the_lanes_spread(day, small_site_calibr
     assert result.rows[-1].status == "refused"
     assert [r.record for r in result.rows] == [r.record for r in [*day, merged]]
     assert "PathCheck(" in repr(result)
+
+
+def _group_laterals_reference(record, passage, gauge_line, window, gauges=None):
+    """group_laterals as written before it read the gauges once per vehicle: each
+    group's window from numpy's mean of its offsets, lateral_position per group."""
+    from bwim.detect.lateral import lateral_position
+    from bwim.wim import group_axles
+
+    t = record.time
+    offsets = passage.axle_offsets
+    groups = [list(g) for g in group_axles(passage, 2.0)]
+    quiet = None
+    if window is not None:
+        quiet = (t < window[0]) | (t > window[1])
+        if quiet.sum() < max(3, t.size // 10):
+            quiet = None
+    out = []
+    for k, g in enumerate(groups):
+        centre = float(np.mean(offsets[g]))
+        gaps = []
+        if k > 0:
+            gaps.append(offsets[g[0]] - offsets[groups[k - 1][-1]])
+        if k + 1 < len(groups):
+            gaps.append(offsets[groups[k + 1][0]] - offsets[g[-1]])
+        half = min([0.6, *(0.25 * gp for gp in gaps)]) / passage.speed
+        tg = passage.delay + (gauge_line + centre) / passage.speed
+        if tg - half < t[0] or tg + half > t[-1]:
+            return ()
+        y = lateral_position(record, window=(tg - half, tg + half), quiet=quiet,
+                             gauges=gauges).value
+        if not np.isfinite(y):
+            return ()
+        out.append(float(y))
+    return tuple(out)
+
+
+def test_group_laterals_are_the_per_group_formula():
+    """One read of the gauges and their quiet levels per vehicle, the groups' centres as
+    Python sums: the numbers of the per-group formula bit for bit (groups of one to
+    nine axles, windows with and without quiet samples, no window)."""
+    rng = np.random.default_rng(8)
+    n = 0
+    for trial in range(60):
+        spacings = rng.choice([1.3, 1.35, 3.2, 5.9, 1.25], size=int(rng.integers(1, 9)))
+        if trial % 10 == 0:
+            # one group of nine axles: numpy's pairwise mean (another number than the
+            # values summed one after the other for these)
+            spacings = np.array([1.3, 1.35] * 4)
+        p = Passage(speed=float(rng.uniform(12, 25)), axle_spacings=spacings,
+                    delay=float(rng.uniform(0.3, 0.9)))
+        ys = rng.uniform(4.0, 7.5, p.n_axles).tolist()
+        rec = _record(p, ys, rng.uniform(40e3, 100e3, p.n_axles).tolist(), duration=4.0)
+        for window in ((0.4, 2.6), (0.05, 3.98), None):
+            got = group_laterals(rec, p, gauge_line=0.1, window=window)
+            assert got == _group_laterals_reference(rec, p, 0.1, window), (trial, window)
+            n += len(got) > 0
+    assert n > 60

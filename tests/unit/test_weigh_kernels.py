@@ -7,8 +7,17 @@ tests/unit/test_wim.py."""
 import numpy as np
 import pytest
 
+from bwim.records import Passage
 from bwim.wim.influence_line import hat_design
-from bwim.wim.weigh_kernels import channel_products, fit_residual, group_readings
+from bwim.wim.weigh_kernels import (
+    axle_positions,
+    channel_products,
+    column_centred,
+    fit_residual,
+    group_readings,
+    nan_sum,
+    on_support,
+)
 
 
 def _close(got, ref, rtol=1e-13):
@@ -75,3 +84,82 @@ def test_fit_residual_is_the_numpy_fit(summed, fitted_offsets):
         assert r.sum_residual == pytest.approx(np.linalg.norm(meas - fitted) ** 2, rel=1e-13)
         z = ((meas - fitted).sum(axis=1) / sd) if summed else (meas - fitted) / sd
         assert r.sum_misfit == pytest.approx(np.sum(z ** 2), rel=1e-13)
+
+
+def test_on_support_is_numpys():
+    """Any axle strictly inside the support: the same booleans as numpy's expression
+    (axles on the ends, NaN positions)."""
+    rng = np.random.default_rng(5)
+    for trial in range(300):
+        n_t, n_ax = int(rng.integers(1, 200)), int(rng.integers(1, 7))
+        lo, hi = sorted(rng.uniform(-5, 20, 2))
+        pos = rng.uniform(lo - 3, hi + 3, size=(n_t, n_ax))
+        pos[rng.random(pos.shape) < 0.1] = lo  # on the ends: not inside
+        pos[rng.random(pos.shape) < 0.1] = hi
+        if trial % 5 == 0:
+            pos[rng.random(pos.shape) < 0.1] = np.nan
+        ref = ((pos > lo) & (pos < hi)).any(axis=1)
+        got = on_support(pos, lo, hi)
+        assert got.dtype == bool and np.array_equal(got, ref)
+
+
+def test_column_centred_is_numpys_bit_for_bit():
+    """X - X.mean(axis=0) of C-ordered tables and designs (signed zeros, a row of one
+    sample, magnitudes apart): equal bit for bit, the sign of every zero included."""
+    rng = np.random.default_rng(9)
+    for trial in range(400):
+        shape = (int(rng.integers(1, 700)), *([int(rng.integers(1, 5))] if trial % 2 else []),
+                 int(rng.integers(1, 13)) if trial % 4 else 1)  # one column: pairwise
+        X = rng.normal(size=shape) * 10.0 ** rng.uniform(-10, 3)
+        if trial % 3 == 0:
+            X = np.round(X / np.abs(X).max() * 2) * -0.0 if trial % 9 == 0 else np.round(X)
+        ref = X - X.mean(axis=0)
+        got = column_centred(X)
+        assert np.array_equal(got, ref, equal_nan=True)
+        assert np.array_equal(np.signbit(got), np.signbit(ref))
+        if X.ndim == 2:  # a record's columns, Fortran-ordered: numpy's pairwise sums
+            F = np.asfortranarray(X)
+            ref = F - F.mean(axis=0)
+            got = column_centred(F)
+            assert np.array_equal(got, ref, equal_nan=True)
+            assert np.array_equal(np.signbit(got), np.signbit(ref))
+            assert got.flags.f_contiguous == ref.flags.f_contiguous
+    with pytest.raises(ValueError, match="C-contiguous"):
+        column_centred(np.ones((6, 4))[::2])
+
+
+def test_channel_products_gram_is_contiguous():
+    """The grams are one C-ordered block (numpy.tensordot's product of them is then a
+    plain dot of the same array)."""
+    rng = np.random.default_rng(2)
+    p = channel_products(rng.normal(size=(50, 3, 4)), rng.normal(size=(50, 4)))
+    assert p.gram.flags.c_contiguous and p.gram.shape == (4, 3, 3)
+    w = rng.random(4)
+    assert np.array_equal(np.dot(w.reshape(1, 4), p.gram.reshape(4, -1)).reshape(3, 3),
+                          np.tensordot(w, p.gram, 1))
+
+
+def test_axle_positions_are_the_passages():
+    """Passage.axle_x's positions bit for bit (record times from 0 and clock times of
+    day, many axles and one)."""
+    rng = np.random.default_rng(12)
+    for trial in range(300):
+        n_ax = int(rng.integers(1, 10))
+        p = Passage(speed=rng.uniform(3, 40), axle_spacings=rng.uniform(0.9, 9.0, n_ax - 1),
+                    delay=rng.uniform(-2, 5) + (30000.0 if trial % 2 else 0.0))
+        t = p.delay + rng.uniform(-1, 0, 1) + np.arange(int(rng.integers(1, 900))) / 512.0
+        got = axle_positions(t, p.speed, p.delay, p.axle_offsets)
+        assert got.flags.c_contiguous and np.array_equal(got, p.axle_x(t))
+
+
+def test_nan_sum_is_numpys():
+    rng = np.random.default_rng(14)
+    for trial in range(2000):
+        a = rng.normal(size=int(rng.integers(0, 300))) * 10.0 ** rng.uniform(-5, 5)
+        if a.size and trial % 3 == 0:
+            a[rng.random(a.size) < 0.3] = np.nan
+        if trial % 11 == 0:
+            a = -0.0 * np.abs(a)  # zeros of one sign: numpy's sum starts from +0
+        ref = np.nansum(a)
+        got = nan_sum(a)
+        assert got == ref and np.signbit(got) == np.signbit(ref), (trial, got, ref)

@@ -17,9 +17,11 @@ import dataclasses
 import numpy as np
 import pytest
 
+from bwim.errors import InputError
 from bwim.site import weigh_event
 from bwim.site.health import check_gauges
 from bwim.wim import weigh
+from bwim.wim.influence_line import read_channels
 from bwim.wim.weigh import weighing_model
 
 FIELDS = ("axle_weights", "group_weights", "groups", "gvw", "residual", "misfit",
@@ -95,3 +97,31 @@ def test_model_scale_divides_the_readings(truck):
     expected = 1.0 if trend is None else float(trend(record.clock_seconds()))
     assert model.weigh(scale_correction=True).scale_factor == expected
     assert model.weigh(scale_correction=False).scale_factor == 1.0
+
+
+def test_model_of_readings_already_read(truck):
+    """The readings given (the gauge check reads them once) make the same model: every
+    weighing bit for bit; the samples it fits are :attr:`on_support`'s; readings of
+    another shape are refused."""
+    site, record, passage = truck
+    lines, combine = site.lines, site.setup.combine
+    readings = read_channels(record, lines.channels)
+    model = weighing_model(record, passage, lines, combine=combine, readings=readings)
+    assert model.readings is readings
+    for scaling in ({"scale": 0.95}, {"scale_correction": False}):
+        w = model.weigh(**scaling)
+        _same(w, weigh(record, passage, lines, combine=combine, **scaling))
+        assert np.array_equal(w.time, record.time[model.on_support])
+    with pytest.raises(InputError, match="readings must have shape"):
+        weighing_model(record, passage, lines, readings=readings[:, :-1])
+
+
+def test_error_variance_is_the_covariance_diagonal(truck):
+    """:meth:`error_variance` is :meth:`error_covariance`'s diagonal bit for bit, for no
+    weight, weights below, at and above the truck's (and none at all), as a new array."""
+    lines = truck[0].lines
+    for weight in (None, 0.0, -5.0, 0.3, 0.999, 1.0, 2.5):
+        w = None if weight is None else weight * lines.truck_weight
+        var = lines.error_variance(w)
+        assert np.array_equal(var, np.diag(lines.error_covariance(w)))
+        assert var.flags.writeable and var.flags.owndata

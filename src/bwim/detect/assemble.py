@@ -17,6 +17,12 @@ Contract
   and the gauges start at rest (:data:`STEADY_SHARE`), only an end on the side the
   crossing loaded the gauges counts (an end below a quiet start is the gauges' baseline
   drifting).
+* :func:`section_readings` reads a record's section gauges once for every detection of
+  one record (the pairs of a site, :func:`bwim.site.lanes.detect_lanes`): their readings
+  (as :func:`~bwim.detect.signals.channel_data` gives them), their sum per sample, its
+  noise (:func:`~bwim.detect.presence.signal_noise`) and the record's median time step;
+  :func:`assemble_detection` given them (``section``) takes them instead of making them
+  again, the same numbers.
 * The quiet level of the gauges is taken outside every vehicle's time on the span (more
   than 50 ms from it) when the span is known and that leaves ≥ 10 % of the record, else
   from the first and last 10 % of the record.  Without a span, the lateral window of each
@@ -25,16 +31,19 @@ Contract
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from bwim.errors import InputError
 from bwim.records import Passage, Record
 from bwim.sensors import Sensor
 
 from .lateral import lateral_positions
-from .presence import overlapping, span_windows, unexplained_activity
+from .order_stats import end_excursion, outside_windows
+from .presence import overlapping, signal_noise, span_windows, unexplained_activity
 from .result import (
     FLAG_MULTIPLE_PRESENCE,
     FLAG_TRUNCATED,
@@ -44,8 +53,8 @@ from .result import (
 )
 from .signals import channel_data, median
 
-__all__ = ["END_SHARE", "END_SPAN", "STEADY_SHARE", "VehicleEstimate", "assemble_detection",
-           "ends_loaded"]
+__all__ = ["END_SHARE", "END_SPAN", "STEADY_SHARE", "SectionReadings", "VehicleEstimate",
+           "assemble_detection", "checked_section", "ends_loaded", "section_readings"]
 
 #: Margin around a vehicle's time on the span, s, before samples count as quiet.
 QUIET_MARGIN = 0.05
@@ -64,7 +73,7 @@ STEADY_SHARE = 0.05
 
 
 def ends_loaded(time: np.ndarray, total: np.ndarray,
-                quiet_start: bool = False) -> bool:
+                quiet_start: bool = False, *, step: float | None = None) -> bool:
     """Whether the gauges' sum ``total`` ends the record (mean over its last
     :data:`END_SPAN` s) further than :data:`END_SHARE` of its largest excursion from where
     it started (mean over its first :data:`END_SPAN` s): a record cut while a vehicle is
@@ -73,21 +82,73 @@ def ends_loaded(time: np.ndarray, total: np.ndarray,
     a vehicle the detection missed, already past the detectors, would be moving) only
     an end on the excursion's side counts: a vehicle on the span loads the gauges the
     way the crossing did, so an end beyond a quiet start on the other side is the
-    gauges' baseline moving (a drift over the record), not a load."""
+    gauges' baseline moving (a drift over the record), not a load.  ``step``: the
+    median time step, when already made."""
     t = np.asarray(time, dtype=float)
-    y = np.asarray(total, dtype=float)
-    n = max(2, round(END_SPAN / median(np.diff(t))))
+    y = np.ascontiguousarray(total, dtype=float)
+    n = max(2, round(END_SPAN / (median(np.diff(t)) if step is None else step)))
     if y.size < 4 * n:
         return False
-    start, end = float(y[:n].mean()), float(y[-n:].mean())
-    dev = y - start
-    k = int(np.argmax(np.abs(dev)))
-    swing = float(abs(dev[k]))
+    # the first, last and second n values' means and the largest excursion from the
+    # first mean (numpy's mean and argmax: bwim.detect.order_stats.end_excursion)
+    start, end, middle, _, excursion = end_excursion(y, n)
+    swing = abs(excursion)
     change = end - start
-    steady = abs(float(y[n:2 * n].mean()) - start) <= STEADY_SHARE * swing
-    if quiet_start and steady and change * dev[k] < 0:
+    steady = abs(middle - start) <= STEADY_SHARE * swing
+    if quiet_start and steady and change * excursion < 0:
         return False
     return swing > 0 and abs(change) > END_SHARE * swing
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class SectionReadings:
+    """A record's section gauges read once (:func:`section_readings`).
+
+    Attributes
+    ----------
+    gauges : tuple of str
+        The gauges' names, in order.
+    readings : ndarray, shape (n_t, n_gauges)
+        ``channel_data(record, gauges)`` (not to be changed).
+    total : ndarray, shape (n_t,)
+        ``readings.sum(axis=1)``.
+    noise : float
+        :func:`~bwim.detect.presence.signal_noise` of ``total``.
+    step : float
+        The record's median time step, s (:func:`~bwim.detect.signals.median` of
+        ``numpy.diff(record.time)``).
+    """
+
+    gauges: tuple[str, ...]
+    readings: np.ndarray
+    total: np.ndarray
+    noise: float
+    step: float
+
+
+def section_readings(record: Record, gauges: Sequence[str]) -> SectionReadings:
+    """The section ``gauges`` of ``record`` read once (module docstring); InputError for
+    a gauge the record does not have."""
+    names = tuple(gauges)
+    readings = channel_data(record, names)
+    total = readings.sum(axis=1)
+    return SectionReadings(gauges=names, readings=readings, total=total,
+                           noise=signal_noise(total), step=median(np.diff(record.time)))
+
+
+def checked_section(section: SectionReadings | None, record: Record, names: Sequence[str]
+                    ) -> SectionReadings | None:
+    """``section`` when it holds ``names`` of a record as long as ``record`` (else
+    InputError); None without it."""
+    if section is None:
+        return None
+    if not isinstance(section, SectionReadings):
+        raise InputError(f"section must be SectionReadings, got {type(section).__name__}")
+    if section.gauges != tuple(names) or section.readings.shape[0] != record.time.size:
+        raise InputError(f"section: the readings of {list(section.gauges)} over "
+                         f"{section.readings.shape[0]} samples, not of {list(names)} over "
+                         f"{record.time.size}")
+    return section
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -125,14 +186,19 @@ def assemble_detection(
     unexplained_fraction: float = 0.2,
     flags: Sequence[str] = (),
     notes: Sequence[str] = (),
+    section: SectionReadings | None = None,
 ) -> Detection:
-    """The Detection of ``estimates`` (in order of arrival) in ``record``."""
+    """The Detection of ``estimates`` (in order of arrival) in ``record``; ``section``:
+    the ``gauges`` of ``record`` already read (:func:`section_readings`)."""
     t = record.time
     est = sorted(estimates, key=lambda e: float(e.times[0]))
     passages = []
     for e in est:
-        times = np.asarray(e.times, dtype=float)
-        spacings = np.maximum(np.diff(times) * e.speed, 1e-6)
+        # the spacings as numpy's maximum(diff(times) * speed, 1e-6) makes them, one
+        # Python float at a time (the same operations)
+        times = np.asarray(e.times, dtype=float).tolist()
+        speed = float(e.speed)
+        spacings = [max((b - a) * speed, 1e-6) for a, b in itertools.pairwise(times)]
         passages.append(Passage(speed=e.speed, axle_spacings=spacings,
                                 delay=float(times[0] - position / e.speed)))
     rec_flags = set(flags)
@@ -153,11 +219,10 @@ def assemble_detection(
                              f"the record ({t[0]:.3f}–{t[-1]:.3f} s)")
     quiet = None
     if windows is not None:
-        inside = np.zeros(t.size, dtype=bool)
-        for a, b in windows:
-            inside |= (t >= a - QUIET_MARGIN) & (t <= b + QUIET_MARGIN)
-        if (~inside).sum() >= 0.1 * t.size:
-            quiet = ~inside
+        outside, count = outside_windows(np.ascontiguousarray(t, dtype=float), windows,
+                                         QUIET_MARGIN)
+        if count >= 0.1 * t.size:
+            quiet = outside
     if quiet is None:
         edge = max(1, t.size // 10)
         quiet = np.zeros(t.size, dtype=bool)
@@ -168,15 +233,19 @@ def assemble_detection(
         lat_windows = _segments([(float(e.times[0]), float(e.times[-1])) for e in est],
                                 float(t[0]), float(t[-1]))
     names = [s.name for s in gauges]
-    readings = channel_data(record, names) if names else None
+    section = checked_section(section, record, names) if names else None
+    readings = (None if not names else channel_data(record, names) if section is None
+                else section.readings)
     if windows is not None and names and len(est):
-        total = readings.sum(axis=1)
+        total = readings.sum(axis=1) if section is None else section.total
+        noise, step = (None, None) if section is None else (section.noise, section.step)
         extra = unexplained_activity(t, total, windows, margin=QUIET_MARGIN,
-                                     fraction=unexplained_fraction)
+                                     fraction=unexplained_fraction, noise=noise, step=step)
         # no detected vehicle on the span at the start: every vehicle's time on the span
         # begins after the record's first END_SPAN s (ends_loaded also asks the gauges
         # to start at rest before only an end on the crossing's side counts as a load)
-        if ends_loaded(t, total, quiet_start=bool(windows[:, 0].min() > t[0] + END_SPAN)):
+        if ends_loaded(t, total, quiet_start=bool(windows[:, 0].min() > t[0] + END_SPAN),
+                       step=step):
             last = int(np.argmax(windows[:, 1]))
             if FLAG_TRUNCATED not in veh_flags[last]:
                 veh_flags[last].append(FLAG_TRUNCATED)

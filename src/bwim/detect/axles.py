@@ -59,7 +59,7 @@ from scipy.signal import find_peaks
 from bwim.errors import InputError, require_finite, require_instance, require_positive
 from bwim.records import Record
 
-from .assemble import VehicleEstimate, assemble_detection
+from .assemble import SectionReadings, VehicleEstimate, assemble_detection, checked_section
 from .faults import diagnose
 from .lateral import section_gauges
 from .options import DetectOptions
@@ -192,6 +192,7 @@ def detect_axles(
     polarity: int | None = None,
     speed_tolerance: float = 0.02,
     responses: LearnedResponses | None = None,
+    section: SectionReadings | None = None,
     **options: Any,
 ) -> Detection:
     """Vehicles (speed, axles, spacings, arrival, lateral position) from two axle detectors.
@@ -225,6 +226,10 @@ def detect_axles(
         both detectors together (and, if the responses were learned with gauges, those
         gauges of the record for the span's bending); ``baseline_window`` and
         ``polarity`` do not apply.
+    section : SectionReadings, optional
+        The record's section gauges (those the options name) already read
+        (:func:`bwim.detect.assemble.section_readings`: one read for every detector pair
+        of a record); the same numbers as without.
     **options
         The keywords of :class:`~bwim.detect.options.DetectOptions`: ``speed_range``
         (bounds the lag between the detectors), ``min_axle_spacing`` (peaks closer than
@@ -259,11 +264,12 @@ def detect_axles(
     sp_tol = require_positive("speed_tolerance", speed_tolerance)
     span_x = resolve_span(opts.span)
     gauge_sens = section_gauges(record, opts.gauges, exclude=detectors)
+    section = checked_section(section, record, [s.name for s in gauge_sens])
 
     if responses is not None:
         return _detect_learned(record, detectors, dist, responses, position=pos,
                                span=span_x, gauges=gauge_sens, opts=opts,
-                               snr_threshold=snr_thr, min_height=rel)
+                               snr_threshold=snr_thr, min_height=rel, section=section)
     t = record.time
     fs = record.sampling_rate
     dt = 1.0 / fs
@@ -384,12 +390,13 @@ def detect_axles(
         record, vehicles, method=method, position=pos, span=span_x, gauges=gauge_sens,
         lateral_threshold=opts.lateral_threshold, unexplained_fraction=opts.unexplained_fraction,
         flags=(FLAG_COUNT_MISMATCH,) if orphans else (),
-        notes=_count_note(detectors, n1, n2, orphans))
+        notes=_count_note(detectors, n1, n2, orphans), section=section)
 
 
 def _detect_learned(record: Record, detectors: Sequence[str], distance: float,
                     responses: LearnedResponses, *, position: float, span, gauges, opts,
-                    snr_threshold: float, min_height: float) -> Detection:
+                    snr_threshold: float, min_height: float,
+                    section: SectionReadings | None = None) -> Detection:
     """:func:`detect_axles` with learned responses (matching pursuit)."""
     if not isinstance(responses, LearnedResponses):
         raise InputError(f"responses must be LearnedResponses, got {type(responses).__name__}")
@@ -405,7 +412,10 @@ def _detect_learned(record: Record, detectors: Sequence[str], distance: float,
     # than SPIKE_WIDTH samples: take spikes out first (their energy would otherwise set
     # the vehicle's residual level, and with it every axle group's count)
     # Record.sampling_rate's number, 1 / the median step
-    fs = 1.0 / median(np.diff(record.time)) if record.time.size > 1 else 0.0
+    if record.time.size < 2:
+        fs = 0.0
+    else:
+        fs = 1.0 / (median(np.diff(record.time)) if section is None else section.step)
     width = min(r.fwhm for r in responses.responses) / opts.speed_range[1] * fs
     spiked = False
     if width >= SPIKE_WIDTH:
@@ -443,7 +453,8 @@ def _detect_learned(record: Record, detectors: Sequence[str], distance: float,
         marked.append(dataclasses.replace(e, flags=(*e.flags, *extra)) if extra else e)
     det = assemble_detection(
         record, marked, method=method, position=position, span=span, gauges=gauges,
-        lateral_threshold=opts.lateral_threshold, unexplained_fraction=opts.unexplained_fraction)
+        lateral_threshold=opts.lateral_threshold, unexplained_fraction=opts.unexplained_fraction,
+        section=section)
     # axles found in both detectors' responses: only a gain change can still hide behind
     # them (a record cut with a vehicle on it has no level at rest to judge by)
     if diagnosis.kind != "gain" or any(FLAG_TRUNCATED in v.flags for v in det.vehicles):

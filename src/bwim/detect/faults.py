@@ -19,6 +19,8 @@ Contract
   reversed, too weakly to be seen), both are named (one of them changed gain: one record
   cannot tell which).  Otherwise nothing is said ("").
 * The result is one line for a detection's message.
+* Compiled: the excursions (:func:`bwim.detect.order_stats.signed_extremes`, numpy's max
+  and min of ``(y − rest) × sign``); the rest is numpy's arithmetic on float64 scalars.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .order_stats import signed_extremes
 from .response import LearnedResponses
 from .signals import column_medians
 
@@ -67,26 +70,30 @@ def diagnose(y: np.ndarray, learned: LearnedResponses) -> DetectorFault:
         return DetectorFault()
     rest = column_medians(y[:max(1, int(REST_SHARE * y.shape[0]))])  # numpy.median's
     names = learned.channels
-    scale = np.array([1.0, learned.gain_ratio])
-    z = (y - rest) * np.array([r.sign for r in learned.responses])
-    up, down = z.max(axis=0), -z.min(axis=0)
-    level = np.array([max(r.level, 1e-300) for r in learned.responses])
-    peak = up / scale  # in the first detector's units
-    sees = (up >= SEEN * level) & (up > down)
+    # z = (y - rest) * signs; up, down = z.max(axis=0), -z.min(axis=0)
+    # (bwim.detect.order_stats.signed_extremes: the same numbers); then each detector's
+    # numbers as numpy float64 scalars (numpy's arithmetic, a division by 0 included)
+    ups, downs = signed_extremes(np.ascontiguousarray(y), rest,
+                                 np.array([float(r.sign) for r in learned.responses]))
+    up, down = (ups[0], ups[1]), (downs[0], downs[1])
+    scale = (np.float64(1.0), np.float64(learned.gain_ratio))
+    level = [np.float64(max(r.level, 1e-300)) for r in learned.responses]
+    peak = (up[0] / scale[0], up[1] / scale[1])  # in the first detector's units
+    sees = [bool(up[c] >= SEEN * level[c]) and bool(up[c] > down[c]) for c in (0, 1)]
 
     def gain(ratio: float) -> DetectorFault:
         return DetectorFault(kind="gain", message=(
             f"{names[1]} reads the vehicle {ratio:.2g} × {names[0]} in their learned gain "
             f"ratio: {names[0]} or {names[1]} has changed gain"))
 
-    if sees.all():
+    if all(sees):
         ratio = peak[1] / peak[0]
         if ratio > GAIN_FACTOR or ratio < 1.0 / GAIN_FACTOR:
             return gain(ratio)
         return DetectorFault()
-    if not sees.any():
+    if not any(sees):
         return DetectorFault()
-    d = int(np.flatnonzero(sees)[0])  # the detector that sees it
+    d = sees.index(True)  # the detector that sees it
     o = 1 - d
     dip = down[o] / scale[o]
     if down[o] > up[o] and peak[d] / GAIN_FACTOR <= dip <= peak[d] * GAIN_FACTOR:

@@ -17,6 +17,9 @@ Contract
   1 = the first gauge as listed, n = the last (gauges evenly spread give
   ``y ≈ y_1 + (index − 1) × gauge pitch``).
 * The quiet level of each gauge is its median over the ``quiet`` samples.
+* Compiled: the quiet levels (:func:`bwim.detect.signals.column_medians`, numpy's
+  medians) and each window's peak weights (:func:`bwim.detect.order_stats.window_peaks`:
+  numpy's max, maximum and threshold, the same numbers); the centroid is numpy's.
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ from bwim.errors import InputError, require_range
 from bwim.records import Record
 from bwim.sensors import Sensor, SensorKind
 
+from .order_stats import window_peaks
 from .signals import channel_data, column_medians, median
 
 __all__ = ["LateralPosition", "in_metres", "lateral_position", "lateral_positions",
@@ -174,33 +178,56 @@ def lateral_positions(
         quiet = np.zeros(t.size, dtype=bool)
         quiet[:edge] = quiet[-edge:] = True
     quiet = np.asarray(quiet, dtype=bool)
+    coord = (np.asarray([s.y for s in sens], dtype=float) if metres
+             else np.arange(1.0, len(sens) + 1.0))
+    peaks = weight == "peak"
+    if peaks:  # the kernel's arguments: float64, C-contiguous; the table's columns one
+        # after the other (a record's columns, Fortran-ordered, without a copy)
+        t = np.ascontiguousarray(t, dtype=float)
+        cols = np.ascontiguousarray(np.asarray(data, dtype=float).T)
     out = []
     level = None
     for window in windows:
-        inside = np.ones(t.size, dtype=bool) if window is None else (
-            (t >= window[0]) & (t <= window[1]))
-        if not inside.any():
-            out.append(LateralPosition(value=float("nan"), unit=unit,
-                                       weights=np.zeros(len(sens)), gauges=names))
-            continue
+        lo, hi = (-np.inf, np.inf) if window is None else (float(window[0]),
+                                                            float(window[1]))
         if level is None:
+            if not _any_inside(t, lo, hi):
+                out.append(_nowhere(unit, len(sens), names))
+                continue
             if quiet.shape != t.shape or not quiet.any():
                 raise InputError("quiet must be a boolean mask of the record's samples with "
                                  "at least one True")
             level = column_medians(data, quiet)  # those of data[quiet]
-        if weight == "peak":
+        if peaks:
             # the largest deviation: the largest reading less the level (a subtraction
-            # rounds monotonically: the same number as the largest of the differences)
-            w = np.maximum(data[inside].max(axis=0) - level, 0.0)
+            # rounds monotonically: the same number as the largest of the differences),
+            # thresholded (bwim.detect.order_stats.window_peaks)
+            status, w = window_peaks(t, cols, lo, hi, level, thr)
+            if status < 2:
+                out.append(_nowhere(unit, len(sens), names))
+                continue
         else:
+            inside = (t >= lo) & (t <= hi)
+            if not inside.any():
+                out.append(_nowhere(unit, len(sens), names))
+                continue
             w = np.maximum(data[inside] - level, 0.0).sum(axis=0) * median(np.diff(t))
-        if not (w > 0).any():
-            out.append(LateralPosition(value=float("nan"), unit=unit,
-                                       weights=np.zeros(len(sens)), gauges=names))
-            continue
-        w = np.maximum(w - thr * w.max(), 0.0)
-        coord = (np.asarray([s.y for s in sens], dtype=float) if metres
-                 else np.arange(1.0, len(sens) + 1.0))
+            if not (w > 0).any():
+                out.append(_nowhere(unit, len(sens), names))
+                continue
+            w = np.maximum(w - thr * w.max(), 0.0)
         out.append(LateralPosition(value=float(w @ coord / w.sum()), unit=unit, weights=w,
                                    gauges=names))
     return out
+
+
+def _any_inside(t: np.ndarray, lo: float, hi: float) -> bool:
+    """Whether a sample's time (a record's: increasing) lies in ``[lo, hi]``: the first
+    one from ``lo`` on is not beyond ``hi``."""
+    i = int(t.searchsorted(lo))
+    return i < t.size and bool(t[i] <= hi)
+
+
+def _nowhere(unit: str, n: int, names: tuple[str, ...]) -> LateralPosition:
+    """The position of a window without a sample or without a gauge that responded."""
+    return LateralPosition(value=float("nan"), unit=unit, weights=np.zeros(n), gauges=names)

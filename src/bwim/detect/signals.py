@@ -13,7 +13,8 @@ Contract
   ties of signed zeros may give -0.0); :func:`column_medians` is
   ``numpy.median(values, axis=0)`` of a 2-D array (or of some of its rows), the same
   numbers bit for bit, by one compiled selection in each column
-  (:func:`bwim.detect.order_stats.column_medians_of`), or, when a median is zero (whose
+  (:func:`bwim.detect.order_stats.row_medians_of` of the columns one after the other:
+  no copy of a Fortran-ordered table, a record's columns), or, when a median is zero (whose
   sign rests on numpy's order of equal values), by numpy's partial sort of each column
   laid out contiguously.
 * :func:`last_axis_sum` is ``values.sum(axis=-1)``, the same numbers: numpy adds a last
@@ -25,7 +26,10 @@ Contract
 * :func:`split_vehicles` cuts a sequence of axles into vehicles at gaps longer than a
   plausible axle spacing.
 * :func:`channel_data` is a record's readings of some channels, (n_t, k): those of
-  :meth:`bwim.Record.channels` without making a new record.
+  :meth:`bwim.Record.channels` without making a new record (Fortran-ordered, as numpy's
+  indexing of the columns gives them: its reductions sum in that order);
+  :func:`channel_rows` those of some samples only, in one gather (C-ordered, as
+  ``channel_data(...)[rows]``).
 * :func:`gaussian_average` is the Gaussian average along axis 0 of
   ``scipy.ndimage.gaussian_filter1d(y, sigma, axis=0, mode="nearest")`` (the same kernel:
   ``exp(−x²/2σ²)`` over ``|x| ≤ int(4σ + 0.5)`` samples, normalised to sum 1; the ends
@@ -57,12 +61,12 @@ from scipy.ndimage import median_filter
 from bwim.records import Record
 from bwim.sensors import Sensor
 
-from .order_stats import column_medians_of, despike_columns, mad_of, median_of
+from .order_stats import despike_columns, mad_of, median_of, row_medians_of
 
-__all__ = ["SPIKE_SHARE", "SPIKE_SIGMAS", "Despiked", "channel_data", "column_medians",
-           "despike", "gaussian_average", "gaussian_kernel", "last_axis_sum", "median",
-           "parabolic_vertex",
-           "remove_baseline", "robust_sigma", "split_vehicles"]
+__all__ = ["SPIKE_SHARE", "SPIKE_SIGMAS", "Despiked", "channel_data", "channel_rows",
+           "column_medians", "despike", "gaussian_average", "gaussian_kernel",
+           "last_axis_sum", "median", "parabolic_vertex", "remove_baseline", "robust_sigma",
+           "split_vehicles"]
 
 #: Gaussian kernels reach this many standard deviations (scipy.ndimage's default).
 TRUNCATE = 4.0
@@ -120,14 +124,15 @@ def column_medians(values: np.ndarray, rows: np.ndarray | None = None) -> np.nda
     """The median of each column of a 2-D array (n, k), shape (k,) (see the module
     docstring); NaN for a column holding one, and for every column when n = 0.  With
     ``rows`` (bool, (n,)): of ``values[rows]``, without copying them first."""
-    v = np.ascontiguousarray(values, dtype=float)
+    v = np.asarray(values, dtype=float)
     if rows is None:
         rows = np.ones(v.shape[0], dtype=bool)
     else:
         rows = np.ascontiguousarray(rows, dtype=bool)
     if not rows.any():
         return np.full(v.shape[1], np.nan)
-    out, zero = column_medians_of(v, rows)
+    # the columns one after the other: a record's columns (Fortran-ordered) as they are
+    out, zero = row_medians_of(np.ascontiguousarray(v.T), rows)
     if not zero:
         return out
     cols = np.ascontiguousarray(v[rows].T)  # each column's values one after the other
@@ -209,6 +214,14 @@ def channel_data(record: Record, sensors: Sequence[str | Sensor]) -> np.ndarray:
     order: ``record.channels(sensors).data`` without making a record; InputError for a
     channel the record does not have."""
     return record.data[:, record.channel_indices(sensors)]
+
+
+def channel_rows(record: Record, sensors: Sequence[str | Sensor], rows: np.ndarray
+                 ) -> np.ndarray:
+    """``channel_data(record, sensors)[rows]`` (``rows``: sample indices, in order) read
+    in one gather: the same numbers, a new C-ordered table (n_rows, k)."""
+    cols = np.array(record.channel_indices(sensors), dtype=np.intp)
+    return record.data.take(np.asarray(rows, dtype=np.intp), axis=0).take(cols, axis=1)
 
 
 def gaussian_kernel(sigma: float) -> np.ndarray:

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from bwim.detect.response import GAUGE_RIDGE
-from bwim.detect.signals import channel_data, robust_sigma
+from bwim.detect.signals import channel_data, channel_rows, robust_sigma
 from bwim.errors import InputError
 from bwim.records import Record
 
@@ -91,8 +91,10 @@ class DetectorBending:
         if int(m.sum()) < 8:
             return float("nan")
         q = _trend_basis(t[m])
-        y = _detrended(q, channel_data(record, self.channels)[m].astype(float))
-        g = _detrended(q, channel_data(record, self.gauges)[m].astype(float))
+        # channel_data(record, ...)[m] as one gather (the same C-ordered table)
+        rows = np.flatnonzero(m)
+        y = _detrended(q, channel_rows(record, self.channels, rows))
+        g = _detrended(q, channel_rows(record, self.gauges, rows))
         share = 0.0
         for c in range(2):
             bend = g @ self.weights[c]

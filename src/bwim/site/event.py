@@ -335,17 +335,18 @@ def weigh_event(record: Record, calibration: SiteCalibration, *,
     setup = calibration.setup
     lines = calibration.lines
     span = lines.core_support or lines.support  # a lobe beyond the zeros may be cut
+    # the record's gauges (its parts have its channels: the names of every part's)
+    gauges = gauge_names(record)
     try:
         if setup.lanes:
             def detect(rec: Record) -> EventDetection:
                 return detect_lanes(rec, setup, responses=calibration.responses, span=span,
-                                    gauges=gauge_names(rec), bending=calibration.bending)
+                                    gauges=gauges, bending=calibration.bending)
 
             # vehicles one after the other, each detected again on its own part
             ev = detected_alone(record, detect(record), detect)
         else:
-            det = detect_from_strain(record, lines.line_at(), span=span,
-                                     gauges=gauge_names(record))
+            det = detect_from_strain(record, lines.line_at(), span=span, gauges=gauges)
             ev = _single_lane(det, calibration)
     except DATA_ERRORS as exc:
         return EventWeighing(weighed=False, reason=f"detection failed: {_why(exc)}", **base)
@@ -361,8 +362,8 @@ def weigh_event(record: Record, calibration: SiteCalibration, *,
         return EventWeighing(weighed=False, reason=why, detection=det, flags=flags, **base)
     model = (None if bridge is None else bridge if isinstance(bridge, SiteModel)
              else SiteModel.of_bridge(bridge))
-    outcomes = tuple(_vehicle(record, ev, k, calibration, model, identify_options or {})
-                     for k in range(len(ev.vehicles)))
+    outcomes = tuple(_vehicle(record, ev, k, calibration, model, identify_options or {},
+                              gauges) for k in range(len(ev.vehicles)))
     principal = next((o for o in outcomes if o.weighed), None) or next(
         (o for o in outcomes if o.lane == setup.calibration_lane), outcomes[0])
     pv = ev.vehicles[outcomes.index(principal)]
@@ -388,8 +389,10 @@ def _single_lane(det: Detection, calibration: SiteCalibration) -> EventDetection
 
 
 def _vehicle(record: Record, ev: EventDetection, k: int, calibration: SiteCalibration,
-             model: SiteModel | None, options: Mapping[str, Any]) -> VehicleWeighing:
-    """One vehicle's decision and weighing (see the module docstring)."""
+             model: SiteModel | None, options: Mapping[str, Any], gauges: list[str]
+             ) -> VehicleWeighing:
+    """One vehicle's decision and weighing (see the module docstring); ``gauges``: the
+    record's (:func:`bwim.site.calibrate.gauge_names`)."""
     setup = calibration.setup
     lv = ev.vehicles[k]
     v = lv.vehicle
@@ -484,7 +487,7 @@ def _vehicle(record: Record, ev: EventDetection, k: int, calibration: SiteCalibr
         if not out.weighed:
             return out
         return dataclasses.replace(out, group_laterals=_group_laterals(
-            record, lv, calibration, faulty))
+            record, lv, calibration, faulty, gauges))
     try:
         scaling = {"scale_correction": method == "trend",
                    "scale": None if method == "trend" else factor}
@@ -504,17 +507,18 @@ def _vehicle(record: Record, ev: EventDetection, k: int, calibration: SiteCalibr
         return VehicleWeighing(weighed=False, reason=f"implausible weighing ({hard})",
                                **common)
     return VehicleWeighing(weighed=True, group_laterals=_group_laterals(
-        record, lv, calibration, {f.gauge for f in health.faults}), **common)
+        record, lv, calibration, {f.gauge for f in health.faults}, gauges), **common)
 
 
 def _group_laterals(record: Record, lv: LaneVehicle, calibration: SiteCalibration,
-                    faulty: set[str]) -> tuple[float, ...]:
+                    faulty: set[str], gauges: list[str]) -> tuple[float, ...]:
     """A weighed vehicle's axle groups' lateral positions (empty when they cannot be
-    measured: :func:`bwim.site.wheelpath.group_laterals`), without the faulty gauges."""
+    measured: :func:`bwim.site.wheelpath.group_laterals`), without the faulty gauges
+    (``gauges``: the record's)."""
     try:
         return group_laterals(record, lv.vehicle.passage,
                               gauge_line=gauge_line(calibration.lines), window=lv.window,
-                              gauges=[g for g in gauge_names(record) if g not in faulty])
+                              gauges=[g for g in gauges if g not in faulty])
     except DATA_ERRORS:
         return ()
 
@@ -534,7 +538,9 @@ def _drift_factor(record: Record, passage: Passage, calibration: SiteCalibration
         return 1.0, "trend", ()
     gap: tuple[str, ...] = ()
     if method in ("temperature", "auto"):
-        channel = temperature_channel(record, setup)
+        # the channel matters only with the runs' temperature regression
+        channel = (temperature_channel(record, setup) if calibration.temperature is not None
+                   else None)
         if calibration.temperature is not None and channel is not None:
             temperature = record_temperature(record, channel)
             if temperature is not None:

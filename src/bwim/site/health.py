@@ -90,7 +90,13 @@ import numpy as np
 from bwim.errors import DATA_ERRORS, InputError
 from bwim.plausibility import ordered_flags, quality_of
 from bwim.records import Passage, Record
-from bwim.site.health_kernels import gain_stats, held_extremes, loo_lines, step_noise
+from bwim.site.health_kernels import (
+    Comparison,
+    comparison,
+    held_extremes,
+    residuals,
+    step_noise,
+)
 from bwim.wim import Weighing
 from bwim.wim.influence_line import read_channels
 from bwim.wim.multirun import MultiRunCalibration
@@ -219,8 +225,9 @@ def restrict_lines(lines: MultiRunCalibration, names: Sequence[str]) -> MultiRun
     """The calibration with only the channels ``names`` (in the calibration's order):
     their lines, lateral slopes, residual deviations, covariance and noise.  The runs'
     misfit medians are kept (each channel's misfit is in units of its own deviation)."""
-    keep = [k for k, c in enumerate(lines.channels) if c.name in set(names)]
-    if len(keep) != len(set(names)):
+    wanted = set(names)
+    keep = [k for k, c in enumerate(lines.channels) if c.name in wanted]
+    if len(keep) != len(wanted):
         unknown = sorted(set(names) - {c.name for c in lines.channels})
         raise InputError(f"not channels of the calibration: {', '.join(unknown)}")
     if len(keep) == len(lines.channels):
@@ -250,7 +257,7 @@ def check_gauges(record: Record, passage: Passage, lines: MultiRunCalibration, *
     model = None  # the last comparison's, when it weighed the healthy channels
     while len(names) - len(bad) >= MIN_COMPARED and 2 * len(bad) < len(names):
         fault, ratios, model = _worst(record, passage, lines,
-                                      [n for n in names if n not in bad], combine)
+                                      [n for n in names if n not in bad], combine, readings)
         if fault is None:
             break
         model = None
@@ -280,11 +287,12 @@ def _flat(readings: np.ndarray, lines: MultiRunCalibration) -> list[GaugeFault]:
     if readings.shape[0] < 3:
         return []
     # numpy's std of each channel's steps alone (bwim.site.health_kernels.step_noise)
-    noises = step_noise(readings)
+    noises = step_noise(readings).tolist()
+    refs = lines.channel_noise.tolist()
     out = []
     for k, c in enumerate(lines.channels):
-        ref = float(lines.channel_noise[k])
-        noise = float(noises[k])
+        ref = refs[k]
+        noise = noises[k]
         if ref > 0 and noise < FLAT_NOISE * ref:
             out.append(GaugeFault(
                 gauge=c.name, kind="flat", ratio=float("nan"),
@@ -362,44 +370,44 @@ def _clipped(readings: np.ndarray, lines: MultiRunCalibration, record: Record,
 
 
 def _worst(record: Record, passage: Passage, lines: MultiRunCalibration,
-           names: list[str], combine: str
+           names: list[str], combine: str, readings: np.ndarray
            ) -> tuple[GaugeFault | None, dict[str, float], WeighingModel | None]:
     """Step 3: the most significant gain or drift fault among ``names`` (None when every
     one passes or the weighing fails), every channel's ratio (empty when it fails) and
-    the weighing's model (None when it could not be made)."""
+    the weighing's model (None when it could not be made).  ``readings``: those of every
+    channel of ``lines`` (:func:`~bwim.wim.influence_line.read_channels`)."""
     sub = restrict_lines(lines, names)
+    if sub is not lines:  # the columns of the channels kept
+        kept = set(names)
+        readings = readings[:, [k for k, c in enumerate(lines.channels) if c.name in kept]]
     try:
-        model = weighing_model(record, passage, sub, combine=combine)
+        model = weighing_model(record, passage, sub, combine=combine, readings=readings)
     except DATA_ERRORS:
         return None, {}, None
     try:
         w = model.weigh(scale_correction=False)
     except DATA_ERRORS:
         return None, {}, model
-    if not np.isfinite(w.gvw) or w.gvw <= 0:
+    if not np.isfinite(w.gvw) or w.gvw <= 0 or w.measured.shape[0] == 0:
         return None, {}, model
-    c = _compare(w, sub)
+    trend = _trends(record, w, model.readings, model.on_support)
+    # each channel's ratio and its significance, and its drift: the residual's change
+    # over the record beyond what the others' show (their changes in proportion to their
+    # signals, on a line across the deck), in units of its noise (0 without noise)
+    c = _compare(w, sub, trend)
     if c is None:
         return None, {}, model
-    trend = _trends(record, w, model.readings)
-    noise = sub.channel_noise
-    y = _positions(sub)
-    expected = _predicted(y, c.gain, c.snr)
-    ratios = _ratios(names, c.gain, expected)
+    ratios = _ratios(names, c)
     worst, score = None, SIGNIFICANCE
     drifting, excess = None, 1.0
-    shown = _predicted(y, trend / c.rms, c.snr) * c.rms
-    # each channel's significance, and its drift: the residual's change over the record
-    # beyond what the others' show (their changes in proportion to their signals, on a
-    # line across the deck), in units of its noise (0 without noise)
-    significances = (np.abs(c.gain - expected) * c.snr).tolist()
-    changes = np.divide(np.abs(trend - shown), noise, out=np.zeros(len(names)),
-                        where=noise > 0).tolist()
+    off = np.log(GAIN_TOLERANCE)
+    significances = c.significance.tolist()
+    changes = c.change.tolist()
     for g in range(len(names)):
         significance = significances[g]
         if names[g] in ratios and significance > score:
             ratio = ratios[names[g]]
-            if ratio <= 0 or abs(np.log(ratio)) > np.log(GAIN_TOLERANCE):  # off
+            if ratio <= 0 or abs(np.log(ratio)) > off:  # off
                 kind = ("silent" if abs(c.corr[g]) < SILENT_CORRELATION
                         else "reversed" if ratio < 0 else "gain")
                 worst, score = GaugeFault(
@@ -416,75 +424,56 @@ def _worst(record: Record, passage: Passage, lines: MultiRunCalibration,
     if worst is None:  # a gain fault first: its residual has a trend too...
         worst = drifting
     elif drifting is not None and drifting.gauge == worst.gauge and \
-            _explains_drift(record, w, model.readings, names.index(worst.gauge)):
+            _explains_drift(record, w, model.readings, model.on_support,
+                            names.index(worst.gauge)):
         worst = drifting  # ... unless a baseline change explains its residual better
     return worst, ratios, model
 
 
-def _residuals(record: Record, w: Weighing, readings: np.ndarray) -> np.ndarray:
+def _residuals(w: Weighing, readings: np.ndarray, on: np.ndarray) -> np.ndarray:
     """Each channel's residual over the whole record: reading (``readings``, the
     weighing's channels) − offset − fitted static reading (0 with no axle on the
-    support), logger units, shape (n_t, n_channels)."""
-    r = readings - w.offsets
-    r[_samples(record, w)] -= w.fitted
-    return r
+    support), logger units, shape (n_t, n_channels).  ``on``: the samples ``w`` fitted
+    (:attr:`~bwim.wim.weigh.WeighingModel.on_support` of its model; numpy's
+    ``readings - offsets`` less the fitted readings there, the same numbers:
+    :func:`bwim.site.health_kernels.residuals`)."""
+    return residuals(readings, w.offsets, on, w.fitted)
 
 
-def _samples(record: Record, w: Weighing) -> np.ndarray:
-    """The record's samples that ``w`` fitted (its times: some of the record's, whose time
-    axis is strictly increasing), as a boolean mask."""
-    on = np.zeros(record.time.size, dtype=bool)
-    on[np.searchsorted(record.time, w.time)] = True
-    return on
-
-
-def _trends(record: Record, w: Weighing, readings: np.ndarray) -> np.ndarray:
+def _trends(record: Record, w: Weighing, readings: np.ndarray, on: np.ndarray
+            ) -> np.ndarray:
     """Each channel's residual's least-squares straight line in time: its change from the
     first sample to the last, logger units."""
     t = record.time - record.time.mean()
-    return (t @ _residuals(record, w, readings)) / (t @ t) * float(record.time[-1] - record.time[0])
+    return (t @ _residuals(w, readings, on)) / (t @ t) * float(record.time[-1] - record.time[0])
 
 
-def _explains_drift(record: Record, w: Weighing, readings: np.ndarray, g: int) -> bool:
+def _explains_drift(record: Record, w: Weighing, readings: np.ndarray, on: np.ndarray,
+                    g: int) -> bool:
     """Whether channel ``g``'s residual is explained better by a straight line in time (a
     baseline change) than by a multiple of its fitted static reading (a gain error): the
     larger sum of squares explained by the one regressor."""
-    r = _residuals(record, w, readings)[:, g]
+    r = _residuals(w, readings, on)[:, g]
     f = np.zeros_like(r)
-    f[_samples(record, w)] = w.fitted[:, g]
+    f[on] = w.fitted[:, g]
     t = record.time - record.time.mean()
     return bool((r @ t) ** 2 / (t @ t) > (r @ f) ** 2 / max(f @ f, 1e-300))
 
 
-@dataclass(frozen=True, kw_only=True)
-class _Comparison:
-    gain: np.ndarray  # a_g = <m_g, f_g> / <f_g, f_g>
-    corr: np.ndarray  # the correlation of m_g with f_g
-    snr: np.ndarray  # rms(f_g) / σ_g
-    rms: np.ndarray  # rms(f_g)
-
-
-def _compare(w: Weighing, sub: MultiRunCalibration) -> _Comparison | None:
+def _compare(w: Weighing, sub: MultiRunCalibration, trend: np.ndarray | None = None
+             ) -> Comparison | None:
     """Each channel's gain ratio, correlation and signal against its fitted static
-    reading over the samples with an axle on the support (None when degenerate).  The
-    correlation takes the shape alone (both centred): a channel that does not respond
-    is uncorrelated with its fit (:func:`bwim.site.health_kernels.gain_stats`)."""
-    m, f = w.measured, w.fitted
-    if m.shape[0] == 0:
+    reading over the samples with an axle on the support (None when degenerate), its
+    ratio to the gain the others predict (the weighted straight line through their gains
+    against their positions, weights ``snr²``, at its own position: nan when the others
+    have no weight) and that difference's significance; with ``trend``, its drift beyond
+    the others' (module docstring).  The correlation takes the shape alone (both
+    centred): a channel that does not respond is uncorrelated with its fit.  One
+    compiled call, numpy's numbers (:func:`bwim.site.health_kernels.comparison`)."""
+    if w.measured.shape[0] == 0:
         return None
-    st = gain_stats(m, f)
-    if np.any(st.power <= 0):
-        return None
-    sd = np.sqrt(np.clip(np.diag(sub.error_covariance(w.gvw)), np.finfo(float).tiny, None))
-    return _Comparison(gain=st.gain, corr=st.corr, snr=st.rms / sd, rms=st.rms)
-
-
-def _predicted(y: np.ndarray, values: np.ndarray, snr: np.ndarray) -> np.ndarray:
-    """For each channel, the weighted straight line through the other channels' values
-    against their positions ``y`` (weights ``snr²``), at its own position (nan when the
-    others have no weight; :func:`bwim.site.health_kernels.loo_lines`: each line's sums
-    are numpy's over that channel's others alone)."""
-    return loo_lines(y, values, snr ** 2, y)
+    return comparison(w.measured, w.fitted, sub.error_variance(w.gvw), _positions(sub),
+                      trend, None if trend is None else sub.channel_noise)
 
 
 def gain_ratios(weighing: Weighing, lines: MultiRunCalibration) -> dict[str, float]:
@@ -502,13 +491,11 @@ def gain_ratios(weighing: Weighing, lines: MultiRunCalibration) -> dict[str, flo
     c = _compare(weighing, sub)
     if c is None:
         return {}
-    return _ratios(names, c.gain, _predicted(_positions(sub), c.gain, c.snr))
+    return _ratios(names, c)
 
 
-def _ratios(names: Sequence[str], gain: np.ndarray, expected: np.ndarray
-            ) -> dict[str, float]:
+def _ratios(names: Sequence[str], c: Comparison) -> dict[str, float]:
     """Each channel's gain over its prediction, ``a_g / â_g``, where the prediction is
     positive."""
-    keep = expected > 0
-    ratio = np.divide(gain, expected, out=np.zeros(len(names)), where=keep).tolist()
-    return {names[g]: ratio[g] for g in np.flatnonzero(keep).tolist()}
+    ratio = c.ratio.tolist()
+    return {names[g]: ratio[g] for g in np.flatnonzero(c.kept).tolist()}

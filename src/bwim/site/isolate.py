@@ -66,9 +66,7 @@ def own_part(record: Record, window: tuple[float, float] | None,
             hi = min(hi, 0.5 * (end + a))
     if lo <= t[0] and hi >= t[-1]:
         return record
-    keep = (t >= lo) & (t <= hi)
-    return dataclasses.replace(record, time=t[keep], data=record.data[keep], passages=(),
-                               truths=())
+    return record.samples((t >= lo) & (t <= hi))
 
 
 def _apart(a: tuple[float, float] | None, b: tuple[float, float] | None) -> bool:

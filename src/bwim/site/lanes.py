@@ -73,6 +73,7 @@ import numpy as np
 
 from bwim.classify import DEFAULT_GROUP_SPACING
 from bwim.detect import Detection, LearnedResponses, VehicleDetection, detect_axles
+from bwim.detect.assemble import SectionReadings, section_readings
 from bwim.detect.presence import span_windows, unexplained_activity, windows_overlap
 from bwim.detect.result import FLAG_MULTIPLE_PRESENCE
 from bwim.detect.signals import channel_data
@@ -182,6 +183,12 @@ def detect_lanes(record: Record, setup: SiteSetup, *,
     joined: list[VehicleDetection] = []  # too long, and no room to cut them
     found: list[LaneVehicle] = []
     notes: list[str] = []
+    # the section gauges read once for every pair (a record without one of them: each
+    # pair's detection names it, as without)
+    try:
+        section = section_readings(record, gauges) if gauges else None
+    except DATA_ERRORS:
+        section = None
     for pair in setup.lanes:
         if lanes is not None and pair.lane not in lanes:
             continue
@@ -190,7 +197,8 @@ def detect_lanes(record: Record, setup: SiteSetup, *,
         try:
             det = detect_axles(record, pair.channels, pair.distance, position=position,
                                span=lane_span, gauges=list(gauges),
-                               responses=responses.get(pair.lane), **options)
+                               responses=responses.get(pair.lane), section=section,
+                               **options)
         except DATA_ERRORS as exc:
             notes.append(f"lane {pair.lane}: detection failed: {' '.join(str(exc).split())}")
             by_lane[pair.lane] = Detection(message=str(exc), method="")
@@ -200,8 +208,8 @@ def detect_lanes(record: Record, setup: SiteSetup, *,
             notes.append(f"lane {pair.lane}: {det.message}")
         for v in det.vehicles:
             parts = split_long(v, lane_span, max_length=pair.max_length)
-            length = float(np.sum(v.passage.axle_spacings))
             if len(parts) > 1:
+                length = float(np.sum(v.passage.axle_spacings))
                 notes.append(f"lane {pair.lane}: {v.n_axles} axles over {length:.1f} m, "
                              f"longer than any vehicle ({pair.max_length:g} m): "
                              f"{len(parts)} vehicles following each other")
@@ -240,7 +248,7 @@ def detect_lanes(record: Record, setup: SiteSetup, *,
                                  joined=any(v is w for w in joined)))
     vehicles = _deduplicated(found, setup)
     vehicles = _presence(vehicles)
-    vehicles = _unseen_neighbours(record, vehicles, gauges, notes)
+    vehicles = _unseen_neighbours(record, vehicles, gauges, notes, section)
     return EventDetection(vehicles=tuple(vehicles), by_lane=by_lane, message="; ".join(notes))
 
 
@@ -418,14 +426,21 @@ _ABUTS = 0.25
 
 
 def _unseen_neighbours(record: Record, vehicles: list[LaneVehicle], gauges: Sequence[str],
-                       notes: list[str]) -> list[LaneVehicle]:
+                       notes: list[str], section: SectionReadings | None
+                       ) -> list[LaneVehicle]:
     """Vehicles next to gauge activity no detected vehicle explains, flagged
-    ``multiple_presence`` (see the module docstring)."""
+    ``multiple_presence`` (see the module docstring); ``section``: the gauges already
+    read."""
     windows = [v.window for v in vehicles if v.window is not None]
     if not gauges or not windows:
         return vehicles
-    total = channel_data(record, gauges).sum(axis=1)
-    extra = unexplained_activity(record.time, total, np.asarray(windows, dtype=float))
+    if section is None:
+        extra = unexplained_activity(record.time, channel_data(record, gauges).sum(axis=1),
+                                     np.asarray(windows, dtype=float))
+    else:
+        extra = unexplained_activity(record.time, section.total,
+                                     np.asarray(windows, dtype=float), noise=section.noise,
+                                     step=section.step)
     if not extra.size:
         return vehicles
     out = []
@@ -455,5 +470,6 @@ def _presence(vehicles: list[LaneVehicle]) -> list[LaneVehicle]:
         veh = v.vehicle
         if others and FLAG_MULTIPLE_PRESENCE not in veh.flags:
             veh = dataclasses.replace(veh, flags=(*veh.flags, FLAG_MULTIPLE_PRESENCE))
-        out.append(dataclasses.replace(v, vehicle=veh, others=others))
+        same = veh is v.vehicle and others == v.others  # nothing to change: v itself
+        out.append(v if same else dataclasses.replace(v, vehicle=veh, others=others))
     return sorted(out, key=lambda w: (w.window or (np.inf,))[0])

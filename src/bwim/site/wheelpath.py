@@ -54,7 +54,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from bwim.classify import DEFAULT_GROUP_SPACING
-from bwim.detect.lateral import lateral_position
+from bwim.detect.lateral import lateral_position, lateral_positions, section_gauges
 from bwim.detect.signals import robust_sigma
 from bwim.errors import InputError, require_positive
 from bwim.records import Passage, Record
@@ -123,23 +123,35 @@ def group_laterals(record: Record, passage: Passage, *, gauge_line: float,
         quiet = (t < window[0]) | (t > window[1])
         if quiet.sum() < max(3, t.size // 10):
             quiet = None
-    out = []
+    windows = []
+    t_first, t_last = float(t[0]), float(t[-1])
+    off = offsets.tolist()  # the same numbers as Python floats
     for k, g in enumerate(groups):
-        centre = float(np.mean(offsets[g]))
+        vals = [off[i] for i in g]
+        # numpy.mean's number: below 8 values numpy adds them one after the other (the
+        # offsets are 0 or positive: as Python's sum), else its pairwise sum
+        centre = sum(vals) / len(vals) if len(vals) < 8 else float(np.mean(offsets[g]))
         gaps = []
         if k > 0:
-            gaps.append(offsets[g[0]] - offsets[groups[k - 1][-1]])
+            gaps.append(off[g[0]] - off[groups[k - 1][-1]])
         if k + 1 < len(groups):
-            gaps.append(offsets[groups[k + 1][0]] - offsets[g[-1]])
+            gaps.append(off[groups[k + 1][0]] - off[g[-1]])
         half = min([HALF_WINDOW, *(0.25 * gp for gp in gaps)]) / passage.speed
         tg = passage.delay + (x_line + centre) / passage.speed
-        if tg - half < t[0] or tg + half > t[-1]:
+        if tg - half < t_first or tg + half > t_last:
+            if windows:  # the groups before it were measured: a gauge it lacks is named
+                section_gauges(record, gauges)
             return ()
-        y = lateral_position(record, window=(tg - half, tg + half), quiet=quiet,
-                             gauges=gauges).value
-        if not np.isfinite(y):
+        windows.append((tg - half, tg + half))
+    if quiet is not None:  # one quiet mask: the gauges read and their levels taken once
+        found = lateral_positions(record, windows, quiet=quiet, gauges=gauges)
+    else:  # each group's own quiet samples (lateral_position's default)
+        found = [lateral_position(record, window=w, gauges=gauges) for w in windows]
+    out = []
+    for p in found:
+        if not np.isfinite(p.value):
             return ()
-        out.append(float(y))
+        out.append(float(p.value))
     return tuple(out)
 
 

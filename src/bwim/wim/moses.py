@@ -139,7 +139,7 @@ def group_axles(spacings: Passage | np.ndarray, max_spacing: float = 2.0
         spacings, dtype=float, ndmin=1)
     limit = require_finite("max_spacing", max_spacing)
     groups: list[list[int]] = [[0]]
-    for i, s in enumerate(sp, start=1):
+    for i, s in enumerate(sp.tolist() if sp.ndim == 1 else sp, start=1):
         if s < limit:
             groups[-1].append(i)
         else:
@@ -171,9 +171,11 @@ def group_share(groups, n_axles: int) -> AxleGroups:
     indices (from 0) listing every axle once.
     """
     out = _check_groups(groups, n_axles)
-    share = np.zeros((n_axles, len(out)))
+    rows = [[0.0] * len(out) for _ in range(n_axles)]
     for k, g in enumerate(out):
-        share[list(g), k] = 1.0 / len(g)
+        for i in g:
+            rows[i][k] = 1.0 / len(g)
+    share = np.array(rows, dtype=float).reshape(n_axles, len(out))
     return AxleGroups(groups=out, share=share)
 
 

@@ -289,6 +289,18 @@ class MultiRunCalibration(OptimizeResult):
         N = np.diag(np.minimum(self.channel_noise**2, np.diag(C)))
         return N + rho * (C - N)
 
+    def error_variance(self, weight: float | None = None) -> np.ndarray:
+        """The diagonal of :meth:`error_covariance` (each channel's expected residual
+        variance), (n_c,): the same numbers, without the matrix."""
+        C = np.diag(self.channel_covariance)
+        if weight is None:
+            return C.copy()
+        rho = max(require_finite("weight", weight) / self.truck_weight, 0.0)
+        if rho >= 1.0:
+            return rho * C
+        N = np.minimum(self.channel_noise**2, C)
+        return N + rho * (C - N)
+
     def ordinates_at(self, lateral: float | None = None) -> np.ndarray:
         """``I0 + (y − ȳ) I1`` on ``line.x`` at lateral covariate ``y`` (default ȳ), shape
         (n_x, n_channels)."""

@@ -64,7 +64,6 @@ axle reaches the support.  ``baseline="none"``: readings are taken as offset-fre
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
@@ -84,7 +83,15 @@ from bwim.records import Passage, Record
 from bwim.wim.influence_line import Channel, read_channels
 from bwim.wim.moses import AxleGroups, group_axles, group_share
 from bwim.wim.multirun import MultiRunCalibration
-from bwim.wim.weigh_kernels import channel_products, fit_residual, group_readings
+from bwim.wim.weigh_kernels import (
+    axle_positions,
+    channel_products,
+    column_centred,
+    fit_residual,
+    group_readings,
+    nan_sum,
+    on_support,
+)
 
 __all__ = ["HARD_FLAGS", "NORMAL_CONDITION", "SOFT_FLAGS", "Limits", "Weighing",
            "WeighingModel", "weigh", "weighing_model"]
@@ -180,22 +187,26 @@ def _groups(groups: Any, passage: Passage) -> AxleGroups:
 
 def _whitener(C: np.ndarray, combine: str) -> np.ndarray | None:
     """Matrix T (n_c', n_c) applied to the channel axis: ``T C Tᵀ = I`` for "blue"; for
-    "gls" its diagonal version, given as the vector of its diagonal (n_c,); None for the
-    plain sum."""
+    "gls" its diagonal version, given as the vector of its diagonal (n_c,), from C's
+    diagonal (:func:`_gls_whitener`); None for the plain sum."""
     if combine == "sum":
         return None
     if combine == "gls":
-        var = np.diag(C)
-        if np.any(var <= 0):
-            raise InputError("combine='gls' needs a positive residual variance per channel "
-                             "(the calibration fitted a channel exactly); use 'sum'")
-        return 1.0 / np.sqrt(var)
+        return _gls_whitener(np.diag(C))
     try:
         L = np.linalg.cholesky(C)
     except np.linalg.LinAlgError:
         raise InputError("combine='blue' needs a positive definite channel covariance; "
                          "use 'gls' or 'sum'") from None
     return scipy.linalg.solve_triangular(L, np.eye(L.shape[0]), lower=True)
+
+
+def _gls_whitener(var: np.ndarray) -> np.ndarray:
+    """The diagonal whitener of "gls" (n_c,) from each channel's residual variance."""
+    if np.any(var <= 0):
+        raise InputError("combine='gls' needs a positive residual variance per channel "
+                         "(the calibration fitted a channel exactly); use 'sum'")
+    return 1.0 / np.sqrt(var)
 
 
 #: Fits whose design is conditioned better than this (ratio of its largest to its smallest
@@ -235,7 +246,12 @@ def _solve(centred: _Centred, s: float, T: np.ndarray | None
         G, rhs = (s * s) * centred.sum_gram, s * centred.sum_rhs
     elif T.ndim == 1:
         w = T * T
-        G, rhs = (s * s) * np.tensordot(w, centred.gram, 1), s * (w @ centred.rhs)
+        # numpy.tensordot(w, gram, 1)'s own product: (1, n_c) @ (n_c, n_g²), gram
+        # C-contiguous (channel_products)
+        n_c = w.shape[0]
+        Gw = np.dot(w.reshape(1, n_c), centred.gram.reshape(n_c, -1)).reshape(
+            centred.gram.shape[1:])
+        G, rhs = (s * s) * Gw, s * (w @ centred.rhs)
     else:
         A, b = _system(Ec, Mc, s, T)
         G, rhs = A.T @ A, A.T @ b
@@ -319,21 +335,31 @@ def weighing_model(
     lateral: float | None = None,
     baseline: str = "fit",
     limits: Limits | None = None,
+    readings: np.ndarray | None = None,
 ) -> WeighingModel:
     """What :func:`weigh` makes before the scale: the checked options, the readings and
     the lines' readings of a unit weight on each axle group, offsets removed; the
     arguments are :func:`weigh`'s.  Its :meth:`WeighingModel.weigh` gives the weighing
     (the numbers of :func:`weigh` with the same arguments) for any scale: two weighings
     of one vehicle that differ by their scale only (the gauge check's and the drift
-    corrected one, :mod:`bwim.site.event`) make the model once."""
-    return _model(record, calibration, _inputs(
-        record, passage, calibration, groups=groups, combine=combine, lateral=lateral,
-        baseline=baseline, limits=limits))
+    corrected one, :mod:`bwim.site.event`) make the model once.  ``readings``: the
+    calibration's channels' readings of ``record``, (n_t, n_channels), as
+    :func:`~bwim.wim.influence_line.read_channels` gives them, when already read (not
+    to be changed afterwards)."""
+    event = _inputs(record, passage, calibration, groups=groups, combine=combine,
+                    lateral=lateral, baseline=baseline, limits=limits)
+    if readings is not None:
+        readings = np.asarray(readings, dtype=float)
+        shape = (record.time.size, len(calibration.channels))
+        if readings.shape != shape:
+            raise InputError(f"readings must have shape (n_t, n_channels) = {shape}, got "
+                             f"{readings.shape}")
+    return _model(record, calibration, event, readings)
 
 
-def _model(record: Record, calibration: MultiRunCalibration, event: _Inputs
-           ) -> WeighingModel:
-    design = _design(record, event, calibration)
+def _model(record: Record, calibration: MultiRunCalibration, event: _Inputs,
+           readings: np.ndarray | None = None) -> WeighingModel:
+    design = _design(record, event, calibration, readings)
     return WeighingModel(record=record, calibration=calibration, event=event,
                          design=design, centred=_centred(design, event))
 
@@ -354,29 +380,37 @@ class WeighingModel:
         :func:`bwim.wim.influence_line.read_channels` gives them (not to be changed)."""
         return self.design.readings
 
+    @property
+    def on_support(self) -> np.ndarray:
+        """The samples with an axle on the lines' support, bool (n_t,): those its
+        weighings fit (their ``time``, ``measured`` and ``fitted``; not to be changed)."""
+        return self.design.on
+
     def weigh(self, *, scale_correction: bool = True, scale: float | None = None
               ) -> Weighing:
         """The weighing with :func:`weigh`'s ``scale_correction`` and ``scale``."""
         _check_scale(scale)
         record, calibration, event = self.record, self.calibration, self.event
-        design = _scaled(self.design, calibration, scale_correction, scale)
+        design = self.design
+        s, trend_used = _scale(design, calibration, scale_correction, scale)
         centred = self.centred
-        fit = _fit(design, centred, event, calibration)
-        flags = _flags(event, design, centred, fit, calibration)
-        return _weighing(record, calibration, event, design, fit, flags)
+        fit = _fit(design, centred, event, calibration, s)
+        flags = _flags(event, design, centred, fit, calibration, trend_used)
+        return _weighing(record, calibration, event, design, fit, flags, s)
 
 
 def _weighing(record: Record, calibration: MultiRunCalibration, event: _Inputs,
-              design: _Design, fit: _Fit, flags: tuple[str, ...]) -> Weighing:
+              design: _Design, fit: _Fit, flags: tuple[str, ...], s: float) -> Weighing:
+    on = design.on_index  # the samples on the support (numpy's [design.on]'s rows)
     return Weighing(
         axle_weights=fit.axle_weights, group_weights=fit.group_weights,
         groups=event.groups.groups, gvw=float(fit.axle_weights.sum()), residual=fit.residual,
-        misfit=fit.misfit, condition=fit.condition, scale_factor=design.scale, flags=flags,
+        misfit=fit.misfit, condition=fit.condition, scale_factor=s, flags=flags,
         quality=quality_of(flags), passage=event.passage, lateral=event.lateral,
         clock_time=design.clock_time, combine=event.combine, baseline=event.baseline,
         offsets=fit.offsets, channels=calibration.line.channels,
-        time=record.time[design.on], measured=fit.measured[design.on],
-        fitted=fit.fitted[design.on],
+        time=record.time.take(on), measured=fit.measured.take(on, axis=0),
+        fitted=fit.fitted.take(on, axis=0),
     )
 
 
@@ -430,40 +464,42 @@ class _Design:
     positions: np.ndarray  # (n_t, n_axles) axle positions, m
     groups: np.ndarray  # (n_t, n_groups, n_c) static readings of a unit group weight
     on: np.ndarray  # (n_t,) an axle on the lines' support
+    on_index: np.ndarray  # (n_on,) those samples' indices, in order
     support: tuple[float, float]  # the lines' support, m
     clock_time: float  # record.clock_seconds(), s
-    scale: float  # the factor the readings are divided by (1 without correction)
-    trend_used: bool  # the factor is the scale trend's at clock_time
 
 
-def _design(record: Record, event: _Inputs, calibration: MultiRunCalibration) -> _Design:
-    """The model of the readings: the lines at the vehicle's lateral covariate under each
-    axle, summed by group (the scale factor 1: :func:`_scaled` sets it)."""
+def _design(record: Record, event: _Inputs, calibration: MultiRunCalibration,
+            readings: np.ndarray | None = None) -> _Design:
+    """The model of the readings (``readings`` when already read): the lines at the
+    vehicle's lateral covariate under each axle, summed by group (at the scale factor 1:
+    :func:`_scale` gives a weighing's)."""
     line = calibration.line
-    E = read_channels(record, line.channels)  # (n_t, n_c)
+    E = read_channels(record, line.channels) if readings is None else readings  # (n_t, n_c)
     ords = calibration.ordinates_at(event.lateral)[1:-1]  # interior ordinates (m, n_c)
-    pos = event.passage.axle_x(record.time)  # (n_t, n_axles)
+    p = event.passage  # (n_t, n_axles): Passage.axle_x's numbers
+    pos = axle_positions(record.time, p.speed, p.delay, p.axle_offsets)
     # (n_t, n_groups, n_c): Σ_i share_ig M_kic, M the readings under each axle
     Mg = group_readings(pos, ords, line.x[0], line.spacing, line.x.size - 1,
                         event.groups.share)
     lo, hi = line.support
-    on = ((pos > lo) & (pos < hi)).any(axis=1)
-    return _Design(readings=E, positions=pos, groups=Mg, on=on, support=(lo, hi),
-                   clock_time=record.clock_seconds(), scale=1.0, trend_used=False)
+    on = on_support(pos, lo, hi)  # ((pos > lo) & (pos < hi)).any(axis=1)
+    return _Design(readings=E, positions=pos, groups=Mg, on=on, on_index=np.flatnonzero(on),
+                   support=(lo, hi), clock_time=record.clock_seconds())
 
 
-def _scaled(design: _Design, calibration: MultiRunCalibration, scale_correction: bool,
-            scale: float | None) -> _Design:
-    """``design`` with the day's scale factor: ``scale`` when given, else the scale
-    trend's at the clock time with ``scale_correction``, else 1."""
+def _scale(design: _Design, calibration: MultiRunCalibration, scale_correction: bool,
+           scale: float | None) -> tuple[float, bool]:
+    """The factor a weighing divides ``design``'s readings by: ``scale`` when given, else
+    the scale trend's at the clock time with ``scale_correction``, else 1; and whether it
+    is the trend's."""
     trend = calibration.scale_trend
     if scale is not None:
         s = float(scale)
     else:
         s = float(trend(design.clock_time)) if (scale_correction and trend is not None) \
             else 1.0
-    return dataclasses.replace(design, scale=s, trend_used=scale is None and scale_correction
-                               and trend is not None)
+    return s, scale is None and scale_correction and trend is not None
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -496,7 +532,12 @@ def _centred(design: _Design, event: _Inputs) -> _Centred:
     if event.baseline == "fit":
         if np.count_nonzero(~design.on) < limits.min_baseline:
             flags.append("no_baseline")
-        return _centred_of(E - E.mean(axis=0), Mg - Mg.mean(axis=0), None, tuple(flags))
+        # E - E.mean(axis=0), Mg - Mg.mean(axis=0) (group_readings' table C-ordered, the
+        # readings mostly a record's Fortran-ordered columns: the kernel sums as numpy)
+        Ec = (column_centred(E) if E.dtype == np.float64 and (
+            E.flags.c_contiguous or (E.ndim == 2 and E.flags.f_contiguous))
+            else E - E.mean(axis=0))
+        return _centred_of(Ec, column_centred(Mg), None, tuple(flags))
     if event.baseline == "pretrigger":
         pre = design.positions[:, 0] <= design.support[0]
         n_pre = int(np.argmin(pre)) if not pre.all() else E.shape[0]
@@ -525,18 +566,24 @@ class _Fit:
 
 
 def _fit(design: _Design, centred: _Centred, event: _Inputs,
-         calibration: MultiRunCalibration) -> _Fit:
+         calibration: MultiRunCalibration, s: float) -> _Fit:
     """Least squares of the combined channels, then the residual and the misfit.
 
     The error covariance depends on the vehicle's weight, so a first solve with the plain
     sum gives the weight for the second.
     """
-    s, share, combine = design.scale, event.groups.share, event.combine
+    share, combine = event.groups.share, event.combine
     n_g = share.shape[1]
     sol, rank, sv = _solve(centred, s, None)
-    C = calibration.error_covariance(float(np.nansum(share @ sol)) if rank == n_g else None)
-    if combine != "sum":
-        sol, rank, sv = _solve(centred, s, _whitener(C, combine))
+    # numpy.nansum's number (weigh_kernels.nan_sum)
+    weight = float(nan_sum(share @ sol)) if rank == n_g else None
+    if combine == "gls":  # the channels' variances alone (error_covariance's diagonal)
+        var = calibration.error_variance(weight)
+        sol, rank, sv = _solve(centred, s, _gls_whitener(var))
+    else:
+        C = calibration.error_covariance(weight)
+        if combine != "sum":
+            sol, rank, sv = _solve(centred, s, _whitener(C, combine))
     condition = float(sv[0] / sv[-1]) if sv[-1] > 0 else float("inf")
     if rank < n_g:
         sol = np.full(n_g, np.nan)
@@ -549,7 +596,8 @@ def _fit(design: _Design, centred: _Centred, event: _Inputs,
         sd = np.sqrt(max(float(np.sum(C)), np.finfo(float).tiny))
         misfit_ref = calibration.sum_misfit_median
     else:
-        sd = np.sqrt(np.clip(np.diag(C), np.finfo(float).tiny, None))
+        sd = np.sqrt(np.clip(var if combine == "gls" else np.diag(C), np.finfo(float).tiny,
+                             None))
         misfit_ref = calibration.misfit_median
     # fitted readings, offsets (fitted: the mean of reading − fit), the sums of squares
     finite = group_w if np.isfinite(group_w).all() else np.nan_to_num(group_w)
@@ -566,7 +614,7 @@ def _fit(design: _Design, centred: _Centred, event: _Inputs,
 
 
 def _flags(event: _Inputs, design: _Design, centred: _Centred, fit: _Fit,
-           calibration: MultiRunCalibration) -> tuple[str, ...]:
+           calibration: MultiRunCalibration, trend_used: bool) -> tuple[str, ...]:
     """The plausibility flags of the weighing, in the canonical order."""
     limits, pos = event.limits, design.positions
     # a lobe beyond the line's zeros (support_lobes) may be cut by the record's ends
@@ -583,7 +631,7 @@ def _flags(event: _Inputs, design: _Design, centred: _Centred, fit: _Fit,
     if not fit.misfit <= limits.misfit * fit.misfit_ref:
         flags.append("residual_high")
     t_lo, t_hi = calibration.time_span
-    if design.trend_used and not t_lo <= design.clock_time <= t_hi:
+    if trend_used and not t_lo <= design.clock_time <= t_hi:
         flags.append("outside_calibration_time")
     if not event.lateral_ok:
         flags.append("lateral_extrapolated")
