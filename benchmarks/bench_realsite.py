@@ -73,7 +73,7 @@ both (as ``bwim weigh`` does from files), as detection and weighing's cost over 
 (both measured in this run) and as times real time (the events' recorded duration over the
 CPU time of both).  Where the time goes: the detection alone
 (:func:`bwim.site.lanes.detect_lanes` on every event again after the batch, every detector
-pair once), the rest of the weighing (the batch less that) and the reading, ms an event,
+pair once, the faster of two passes too), the rest of the weighing (the batch less that) and the reading, ms an event,
 beside the 6.67 ms of 150 events/s.
 """
 
@@ -213,12 +213,14 @@ def weigh_day(day: Path, seed: int, support_lobes: bool | None = None) -> dict:
     # detection alone (every detector pair once, as weigh_event's first detection): where
     # detection + weighing's time goes
     lines = site.lines
-    t0 = time.process_time()
-    for e in events:
-        detect_lanes(e.source, site.setup, responses=site.responses,
-                     span=lines.core_support or lines.support, gauges=gauge_names(e.source),
-                     bending=site.bending)
-    t_detect = time.process_time() - t0
+    t_detect = float("inf")
+    for _ in range(SPEED_PASSES):  # (the fastest, as the batch's)
+        t0 = time.process_time()
+        for e in events:
+            detect_lanes(e.source, site.setup, responses=site.responses,
+                         span=lines.core_support or lines.support,
+                         gauges=gauge_names(e.source), bending=site.bending)
+        t_detect = min(t_detect, time.process_time() - t0)
     duration = sum(float(e.source.time[-1] - e.source.time[0]) for e in events)
     del events
     day_result = finish_day([r for o in outcomes for r in o.rows], site)
