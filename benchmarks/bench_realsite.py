@@ -73,8 +73,8 @@ both (as ``bwim weigh`` does from files), as detection and weighing's cost over 
 (both measured in this run) and as times real time (the events' recorded duration over the
 CPU time of both).  Where the time goes: the detection alone
 (:func:`bwim.site.lanes.detect_lanes` on every event again after the batch, every detector
-pair once, the faster of two passes too), the rest of the weighing (the batch less that) and the reading, ms an event,
-beside the 6.67 ms of 150 events/s.
+pair once, the faster of two passes too), the rest of the weighing (the batch less that)
+and the reading, ms an event, beside the 6.67 ms of 150 events/s.
 """
 
 from __future__ import annotations

@@ -504,8 +504,7 @@ def test_compiled_pursuit_is_the_steps_one_by_one(gauges):
     ``_Pursuit.accept``, written out as the pursuit ran them), byte for byte: times,
     strongest fall, misfit, residual; with and without gauges (the rest projected out or
     none); noisy readings, a height that turns some axles down."""
-    from bwim.detect.pursuit import (MAX_AXLES, PURSUIT_SHARE, _acceptable, _Matcher,
-                                     _Pursuit)
+    from bwim.detect.pursuit import MAX_AXLES, PURSUIT_SHARE, _acceptable, _Matcher, _Pursuit
     from bwim.detect.vehicle_fit import make_problem
 
     v = 21.0

@@ -1,9 +1,10 @@
 """bwim.io.field_kernels: the compiled scan of a logger chunk (rows, fields, plain decimals).
 
 References: Python's ``float`` (the correctly rounded reading of a decimal string, the
-reference of the logger reader's contract) for the numbers; ``str.split`` and ``str.strip`` (the line-by-line reader's rules) for the
-rows and fields, written out by hand for each case; the logger's line-by-line path for
-whole files (tests/unit/test_io_logger_fast.py).
+reference of the logger reader's contract) for the numbers; ``str.split`` and
+``str.strip`` (the line-by-line reader's rules) for the rows and fields, written out by
+hand for each case; the logger's line-by-line path for whole files
+(tests/unit/test_io_logger_fast.py).
 """
 
 import math

@@ -10,8 +10,9 @@ Contract
   one byte ``;``, ``,`` or tab, one empty field past the last column dropped), checks
   their count and lengths, and reads the time column's and the channels' fields that are
   **plain decimals** (an optional sign ``+`` or ``-``, 1 to :data:`MAX_DIGITS` digits,
-  at most one decimal mark, ``.`` or with ``comma`` ``,``, nothing else) while it looks for their ends; an empty or NaN field (``nan`` in any case, signs
-  before it, spaces and tabs around it) of a gap column (a temperature channel) is NaN.
+  at most one decimal mark, ``.`` or with ``comma`` ``,``, nothing else) while it looks
+  for their ends; an empty or NaN field (``nan`` in any case, signs before it, spaces
+  and tabs around it) of a gap column (a temperature channel) is NaN.
   Skipped and clock columns are never read as numbers.
 * **Exactness.**  A plain field's digits, the mark left out, form an integer ``m <
   10**14 < 2**53`` (built in 64 bits from at most ``MAX_DIGITS + 2`` bytes, so it never
