@@ -10,7 +10,8 @@ Contract
   recursion is walked with a stack of its own: numba's cache does not load a recursive
   function.  :func:`numpy_sum` is the same for a whole vector, from Python.
 * Used by the compiled kernels that must give numpy's numbers
-  (:mod:`bwim.detect.group_kernels`, :mod:`bwim.site.health_kernels`); tested against
+  (:mod:`bwim.detect.group_kernels`, :mod:`bwim.detect.order_stats`,
+  :mod:`bwim.site.health_kernels`, :mod:`bwim.wim.weigh_kernels`); tested against
   ``numpy.sum`` (tests/unit/test_pairwise.py).
 * Compiled with numba (``cache=True``).  numba's cache of a kernel does not follow the
   kernels it calls in other modules: after editing this one, delete the numba cache files
